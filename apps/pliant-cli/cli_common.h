@@ -1,0 +1,77 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+#pragma once
+
+// Shared pieces of the subcommands: global options, logging set-up, mapping errors to exit
+// codes, the bundled mesh and a terminal progress bar.
+
+#include <pliant/core/error.h>
+#include <pliant/core/progress.h>
+
+#include <CLI/CLI.hpp>
+
+#include <chrono>
+#include <filesystem>
+#include <string>
+
+namespace pliant::cli
+{
+
+/// Options every subcommand understands (given before or after the subcommand name).
+struct GlobalOptions
+{
+    bool verbose = false;
+    bool quiet = false;
+};
+
+/// Exit codes: 0 success, 1 bad input (the message says which rule), 2 usage error (CLI11),
+/// 3 internal or numerical failure.
+inline constexpr int k_exit_bad_input = 1;
+inline constexpr int k_exit_failure = 3;
+
+/// Sets spdlog's level from the global options (warn by default, debug with --verbose, error
+/// with --quiet). Messages go to stderr; results go to stdout.
+void configure_logging(const GlobalOptions& options);
+
+/// Logs an error and returns its exit code.
+int report(const core::Error& error);
+
+/// Wraps a subcommand body `int()` into a CLI11 callback: sets up logging, runs it, and turns a
+/// non-zero result into the process's exit code.
+template <typename Body>
+auto command_callback(const GlobalOptions& global, Body body)
+{
+    return [&global, body]()
+    {
+        configure_logging(global);
+        const int rc = body();
+        if (rc != 0)
+            throw CLI::RuntimeError(rc);
+    };
+}
+
+/// The bundled default mesh (data/spot.obj), found next to the executable's install or in the
+/// source tree.
+std::filesystem::path bundled_mesh();
+
+/// A progress bar on stderr: redrawn in place on a terminal, a line per 10 % otherwise, nothing
+/// with --quiet.
+class ProgressBar final : public core::ProgressSink
+{
+public:
+    explicit ProgressBar(const GlobalOptions& options);
+    ~ProgressBar() override;
+    ProgressBar(const ProgressBar&) = delete;
+    ProgressBar& operator=(const ProgressBar&) = delete;
+    void update(std::string_view phase, double fraction) noexcept override;
+
+private:
+    bool enabled_;
+    bool tty_;
+    std::string phase_;
+    int last_step_ = -1;
+    std::chrono::steady_clock::time_point phase_start_;
+    std::chrono::steady_clock::time_point last_draw_;
+};
+
+}  // namespace pliant::cli

@@ -1,0 +1,46 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+// `pliant`: the command-line front end. Subcommands live one per file (commands.h).
+#include "cli_common.h"
+#include "commands.h"
+
+#include <algorithm>
+
+namespace pliant::cli
+{
+
+std::vector<CommandSpec>& command_registry()
+{
+    static std::vector<CommandSpec> registry;
+    return registry;
+}
+
+}  // namespace pliant::cli
+
+int main(int argc, char** argv)
+{
+    CLI::App app{
+        "pliant " PLIANT_VERSION
+        " - real-time deformable objects for collaborative virtual environments.\n"
+        "Turns a closed genus-0 triangle mesh into a regular tetrahedral grid, refines it by\n"
+        "butterfly subdivision, simulates it as a membrane, and lets several people deform it\n"
+        "together over the network.\n\n"
+        "Start with `pliant demo`, or `pliant info MESH` to check a mesh.",
+        "pliant"};
+    app.require_subcommand(1);
+    app.fallthrough();  // global options may follow the subcommand
+    app.set_version_flag("--version", std::string("pliant ") + PLIANT_VERSION);
+
+    pliant::cli::GlobalOptions global;
+    app.add_flag("-v,--verbose", global.verbose, "Print debug details and timings");
+    app.add_flag("-q,--quiet", global.quiet, "Print only errors (no progress bars)");
+
+    auto& registry = pliant::cli::command_registry();
+    std::sort(registry.begin(), registry.end(),
+              [](const auto& a, const auto& b) { return a.order < b.order; });
+    for (const auto& spec : registry)
+        spec.add(app, global);
+
+    CLI11_PARSE(app, argc, argv);
+    return 0;
+}

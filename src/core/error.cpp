@@ -1,0 +1,35 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+#include <pliant/core/error.h>
+
+namespace pliant::core
+{
+
+std::string_view to_string(ErrorCode code) noexcept
+{
+    switch (code)
+    {
+    case ErrorCode::InvalidArgument: return "invalid-argument";
+    case ErrorCode::IoError: return "io-error";
+    case ErrorCode::UnsupportedFormat: return "unsupported-format";
+    case ErrorCode::ParseError: return "parse-error";
+    case ErrorCode::EmptyInput: return "empty-input";
+    case ErrorCode::NonFiniteCoordinate: return "non-finite-coordinate";
+    case ErrorCode::DegenerateFace: return "degenerate-face";
+    case ErrorCode::NotConnected: return "not-connected";
+    case ErrorCode::OpenBoundary: return "open-boundary";
+    case ErrorCode::NonManifoldEdge: return "non-manifold-edge";
+    case ErrorCode::NonManifoldVertex: return "non-manifold-vertex";
+    case ErrorCode::WrongGenus: return "wrong-genus";
+    case ErrorCode::InconsistentOrientation: return "inconsistent-orientation";
+    case ErrorCode::BadIndex: return "bad-index";
+    case ErrorCode::InvertedTriangles: return "inverted-triangles";
+    case ErrorCode::NotConverged: return "not-converged";
+    case ErrorCode::BadGrid: return "bad-grid";
+    case ErrorCode::BadScenario: return "bad-scenario";
+    case ErrorCode::NetworkError: return "network-error";
+    }
+    return "unknown";
+}
+
+}  // namespace pliant::core

@@ -1,0 +1,231 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+#include <pliant/core/grid_io.h>
+#include <pliant/core/hash.h>
+
+#include <bit>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+
+namespace pliant::core
+{
+namespace
+{
+
+static_assert(std::endian::native == std::endian::little,
+              "grid files are little-endian; add byte swapping for big-endian hosts");
+
+constexpr char k_magic[8] = {'P', 'L', 'I', 'A', 'N', 'T', 'G', '\0'};
+constexpr std::uint32_t k_version = 1;
+constexpr std::size_t k_name_bytes = 16;
+
+template <typename T>
+void put(std::vector<std::byte>& out, const T& v)
+{
+    const auto* p = reinterpret_cast<const std::byte*>(&v);
+    out.insert(out.end(), p, p + sizeof(T));
+}
+
+// A bounds-checked reader over the file's bytes.
+class Reader
+{
+public:
+    explicit Reader(std::span<const std::byte> bytes) : bytes_(bytes) {}
+    bool read(void* dst, std::size_t n)
+    {
+        if (n > bytes_.size() - pos_)
+            return false;
+        std::memcpy(dst, bytes_.data() + pos_, n);
+        pos_ += n;
+        return true;
+    }
+    [[nodiscard]] std::size_t pos() const { return pos_; }
+    [[nodiscard]] std::size_t remaining() const { return bytes_.size() - pos_; }
+
+private:
+    std::span<const std::byte> bytes_;
+    std::size_t pos_ = 0;
+};
+
+}  // namespace
+
+const Field<double>* GridFile::find(std::string_view name) const noexcept
+{
+    for (const NamedField& f : fields)
+        if (f.name == name)
+            return &f.values;
+    return nullptr;
+}
+
+Result<void> save_grid(const std::filesystem::path& path, const GridFile& file)
+{
+    auto grid = TetraGrid::create(file.level);
+    if (!grid)
+        return grid.error();
+    std::vector<std::byte> out;
+    out.insert(out.end(), reinterpret_cast<const std::byte*>(k_magic),
+               reinterpret_cast<const std::byte*>(k_magic) + sizeof(k_magic));
+    put(out, k_version);
+    put(out, static_cast<std::uint32_t>(file.level));
+    put(out, static_cast<std::uint32_t>(file.fields.size()));
+    std::vector<double> plane(grid->node_count());
+    for (const NamedField& f : file.fields)
+    {
+        if (f.name.empty() || f.name.size() >= k_name_bytes)
+            return fail(ErrorCode::InvalidArgument,
+                        "save_grid: channel name '" + f.name + "' must have 1..15 characters");
+        if (f.values.level() != file.level)
+            return fail(ErrorCode::InvalidArgument,
+                        "save_grid: channel '" + f.name + "' is of level " +
+                            std::to_string(f.values.level()) + ", the file of level " +
+                            std::to_string(file.level));
+        char name[k_name_bytes] = {};
+        std::memcpy(name, f.name.data(), f.name.size());
+        out.insert(out.end(), reinterpret_cast<const std::byte*>(name),
+                   reinterpret_cast<const std::byte*>(name) + k_name_bytes);
+        f.values.copy_to(plane);
+        const auto bytes = std::as_bytes(std::span<const double>(plane));
+        out.insert(out.end(), bytes.begin(), bytes.end());
+    }
+    put(out, hash_bytes(out));
+
+    std::ofstream os(path, std::ios::binary | std::ios::trunc);
+    if (!os)
+        return fail(ErrorCode::IoError, path.string() + ": cannot open for writing");
+    os.write(reinterpret_cast<const char*>(out.data()), static_cast<std::streamsize>(out.size()));
+    if (!os)
+        return fail(ErrorCode::IoError, path.string() + ": write failed (disk full?)");
+    return {};
+}
+
+Result<GridFile> load_grid(const std::filesystem::path& path)
+{
+    const std::string where = path.string() + ": ";
+    std::ifstream is(path, std::ios::binary);
+    if (!is)
+        return fail(ErrorCode::IoError, where + "cannot open for reading");
+    std::vector<char> raw((std::istreambuf_iterator<char>(is)), std::istreambuf_iterator<char>());
+    const std::span<const std::byte> bytes = std::as_bytes(std::span<const char>(raw));
+    if (bytes.size() < sizeof(k_magic) + 12 + 8)
+        return fail(ErrorCode::ParseError, where + "too short for a pliant grid file (" +
+                                               std::to_string(bytes.size()) + " bytes)");
+    if (std::memcmp(bytes.data(), k_magic, sizeof(k_magic)) != 0)
+        return fail(ErrorCode::ParseError, where + "not a pliant grid file (bad magic)");
+    std::uint64_t stored = 0;
+    std::memcpy(&stored, bytes.data() + bytes.size() - 8, 8);
+    if (stored != hash_bytes(bytes.first(bytes.size() - 8)))
+        return fail(ErrorCode::ParseError, where + "checksum mismatch (truncated or corrupted)");
+
+    Reader r(bytes.first(bytes.size() - 8));
+    char magic[8];
+    std::uint32_t version = 0, level = 0, channels = 0;
+    (void)r.read(magic, 8);
+    (void)r.read(&version, 4);
+    (void)r.read(&level, 4);
+    (void)r.read(&channels, 4);
+    if (version != k_version)
+        return fail(ErrorCode::ParseError,
+                    where + "version " + std::to_string(version) + ", this pliant reads version 1");
+    auto grid = TetraGrid::create(static_cast<int>(level));
+    if (!grid)
+        return fail(ErrorCode::BadGrid,
+                    where + "level " + std::to_string(level) + " is outside 1..10");
+    const std::size_t plane_bytes = grid->node_count() * sizeof(double);
+    if (channels > 64 || r.remaining() != channels * (k_name_bytes + plane_bytes))
+        return fail(ErrorCode::ParseError,
+                    where + std::to_string(channels) + " channels of level " +
+                        std::to_string(level) + " need " +
+                        std::to_string(channels * (k_name_bytes + plane_bytes)) +
+                        " bytes, the file has " + std::to_string(r.remaining()));
+    GridFile file;
+    file.level = static_cast<int>(level);
+    std::vector<double> plane(grid->node_count());
+    for (std::uint32_t c = 0; c < channels; ++c)
+    {
+        char name[k_name_bytes + 1] = {};
+        (void)r.read(name, k_name_bytes);
+        (void)r.read(plane.data(), plane_bytes);
+        NamedField f{std::string(name), Field<double>(*grid)};
+        for (std::size_t i = 0; i < plane.size(); ++i)
+            if (!std::isfinite(plane[i]))
+                return fail(ErrorCode::BadGrid, where + "channel '" + f.name +
+                                                    "' has a non-finite value at node " +
+                                                    std::to_string(i));
+        f.values.copy_from(plane);
+        for (const TwinPair& t : grid->twins())
+            if (f.values[t.twin] != f.values[t.canonical])
+            {
+                const GridCoord a = grid->coord(t.twin), b = grid->coord(t.canonical);
+                return fail(ErrorCode::BadGrid,
+                            where + "channel '" + f.name + "': twin node (" + std::to_string(a.x) +
+                                "," + std::to_string(a.y) + ") differs from its canonical node (" +
+                                std::to_string(b.x) + "," + std::to_string(b.y) + ")");
+            }
+        file.fields.push_back(std::move(f));
+    }
+    return file;
+}
+
+GridFile make_geometry_file(const TetraGrid& grid, const Vec3Field<double>& positions)
+{
+    GridFile file;
+    file.level = grid.level();
+    const char* names[3] = {"px", "py", "pz"};
+    for (int k = 0; k < 3; ++k)
+    {
+        Field<double> f(grid);
+        for (int y = 0; y < grid.ny(); ++y)
+            for (int x = 0; x < grid.nx(); ++x)
+                f.at(x, y) = positions[static_cast<std::size_t>(k)].at(x, y);
+        file.fields.push_back(NamedField{names[k], std::move(f)});
+    }
+    return file;
+}
+
+Result<Vec3Field<double>> geometry_of(const TetraGrid& grid, const GridFile& file, int ghost)
+{
+    if (file.level != grid.level())
+        return fail(ErrorCode::BadGrid, "geometry_of: file of level " + std::to_string(file.level) +
+                                            ", grid of level " + std::to_string(grid.level()));
+    Vec3Field<double> out;
+    const char* names[3] = {"px", "py", "pz"};
+    for (int k = 0; k < 3; ++k)
+    {
+        const Field<double>* src = file.find(names[k]);
+        if (src == nullptr)
+            return fail(ErrorCode::BadGrid,
+                        std::string("geometry_of: the grid file has no channel '") + names[k] +
+                            "' (not a geometry file)");
+        Field<double> f(grid, ghost);
+        for (int y = 0; y < grid.ny(); ++y)
+            for (int x = 0; x < grid.nx(); ++x)
+                f.at(x, y) = src->at(x, y);
+        fill_ghosts(grid, f);
+        out[static_cast<std::size_t>(k)] = std::move(f);
+    }
+    return out;
+}
+
+Result<void> save_pfm(const std::filesystem::path& path, const Vec3Field<double>& positions)
+{
+    std::ofstream os(path, std::ios::binary | std::ios::trunc);
+    if (!os)
+        return fail(ErrorCode::IoError, path.string() + ": cannot open for writing");
+    const int nx = positions[0].nx(), ny = positions[0].ny();
+    os << "PF\n" << nx << " " << ny << "\n-1.0\n";  // negative scale: little-endian
+    // PFM rows run bottom to top, which is the grid's y order.
+    for (int y = 0; y < ny; ++y)
+        for (int x = 0; x < nx; ++x)
+            for (int k = 0; k < 3; ++k)
+            {
+                const auto v = static_cast<float>(positions[static_cast<std::size_t>(k)].at(x, y));
+                os.write(reinterpret_cast<const char*>(&v), sizeof v);
+            }
+    if (!os)
+        return fail(ErrorCode::IoError, path.string() + ": write failed");
+    return {};
+}
+
+}  // namespace pliant::core

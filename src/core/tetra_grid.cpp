@@ -1,0 +1,197 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+#include <pliant/core/tetra_grid.h>
+
+#include <numeric>
+#include <string>
+
+namespace pliant::core
+{
+namespace
+{
+
+std::uint32_t find_root(std::vector<std::uint32_t>& parent, std::uint32_t i)
+{
+    while (parent[i] != i)
+    {
+        parent[i] = parent[parent[i]];
+        i = parent[i];
+    }
+    return i;
+}
+
+// Joins two classes, keeping the smaller index as root (the canonical twin).
+void unite(std::vector<std::uint32_t>& parent, std::uint32_t a, std::uint32_t b)
+{
+    a = find_root(parent, a);
+    b = find_root(parent, b);
+    if (a == b)
+        return;
+    if (a < b)
+        parent[b] = a;
+    else
+        parent[a] = b;
+}
+
+}  // namespace
+
+Result<TetraGrid> TetraGrid::create(int level)
+{
+    if (level < k_min_level || level > k_max_level)
+        return fail(ErrorCode::InvalidArgument,
+                    "TetraGrid::create: level " + std::to_string(level) + " is outside " +
+                        std::to_string(k_min_level) + ".." + std::to_string(k_max_level));
+    TetraGrid g;
+    g.level_ = level;
+    g.w_ = 1 << level;
+    const int w = g.w_;
+    const auto n = static_cast<std::uint32_t>(g.node_count());
+
+    // Twins from the three gluing rules of DESIGN §1, merged with a union-find.
+    std::vector<std::uint32_t> parent(n);
+    std::iota(parent.begin(), parent.end(), 0U);
+    for (int y = 0; y <= w; ++y)
+        unite(parent, g.index(0, y).value, g.index(2 * w, y).value);
+    for (int x = 0; x <= 2 * w; ++x)
+    {
+        unite(parent, g.index(x, 0).value, g.index(2 * w - x, 0).value);
+        unite(parent, g.index(x, w).value, g.index(2 * w - x, w).value);
+    }
+    g.canonical_.resize(n);
+    g.unique_of_node_.resize(n);
+    for (std::uint32_t i = 0; i < n; ++i)
+    {
+        const std::uint32_t c = find_root(parent, i);
+        g.canonical_[i] = c;
+        if (c == i)
+        {
+            g.unique_of_node_[i] = static_cast<std::uint32_t>(g.node_of_unique_.size());
+            g.node_of_unique_.push_back(NodeIndex{i});
+        }
+        else
+        {
+            g.unique_of_node_[i] = g.unique_of_node_[c];  // c < i: already numbered
+            g.twins_.push_back(TwinPair{NodeIndex{i}, NodeIndex{c}});
+        }
+    }
+
+    for (int width = 1; width <= k_max_ghost; ++width)
+    {
+        const std::int64_t stride = g.nx() + 2 * width;
+        auto padded = [&](int x, int y)
+        { return static_cast<std::int64_t>(y + width) * stride + (x + width); };
+        std::vector<GhostCopy>& table = g.ghost_tables_[static_cast<std::size_t>(width)];
+        for (int y = -width; y < g.ny() + width; ++y)
+            for (int x = -width; x < g.nx() + width; ++x)
+            {
+                if (g.in_range(x, y))
+                    continue;
+                const GridCoord src = g.coord(g.image(x, y));
+                table.push_back(GhostCopy{padded(x, y), padded(src.x, src.y)});
+            }
+    }
+    return g;
+}
+
+GridCoord TetraGrid::fold(int x, int y) const noexcept
+{
+    const int w = w_;
+    // Each rule is an isometry of the grid keeping the diagonal direction. The x rule is a
+    // translation; the two y rules compose to a translation by 2W in y, so repeating them
+    // brings any position inside.
+    for (;;)
+    {
+        if (x < 0)
+            x += 2 * w;
+        else if (x > 2 * w)
+            x -= 2 * w;
+        else if (y < 0)
+        {
+            x = 2 * w - x;  // point reflection through b = (W, 0)
+            y = -y;
+        }
+        else if (y > w)
+        {
+            x = 2 * w - x;  // point reflection through c = (W, W)
+            y = 2 * w - y;
+        }
+        else
+            return {x, y};
+    }
+}
+
+NodeIndex TetraGrid::image(int x, int y) const noexcept
+{
+    const GridCoord c = fold(x, y);
+    return canonical(index(c.x, c.y));
+}
+
+std::array<NodeIndex, 4> TetraGrid::corners() const noexcept
+{
+    return {index(0, 0), index(w_, 0), index(w_, w_), index(0, w_)};
+}
+
+std::vector<std::array<std::uint32_t, 3>> TetraGrid::node_triangles() const
+{
+    std::vector<std::array<std::uint32_t, 3>> tris;
+    tris.reserve(face_count());
+    for (int y = 0; y < w_; ++y)
+        for (int x = 0; x < 2 * w_; ++x)
+        {
+            const std::uint32_t n00 = index(x, y).value;
+            const std::uint32_t n10 = index(x + 1, y).value;
+            const std::uint32_t n11 = index(x + 1, y + 1).value;
+            const std::uint32_t n01 = index(x, y + 1).value;
+            tris.push_back({n00, n10, n11});
+            tris.push_back({n00, n11, n01});
+        }
+    return tris;
+}
+
+std::vector<std::array<std::uint32_t, 3>> TetraGrid::triangles() const
+{
+    std::vector<std::array<std::uint32_t, 3>> tris = node_triangles();
+    for (auto& t : tris)
+        for (auto& v : t)
+            v = unique_of_node_[v];
+    return tris;
+}
+
+std::span<const GhostCopy> TetraGrid::ghost_table(int width) const noexcept
+{
+    PLIANT_ASSERT(width >= 1 && width <= k_max_ghost, "TetraGrid::ghost_table: bad width");
+    return ghost_tables_[static_cast<std::size_t>(width)];
+}
+
+Region TetraGrid::leaf_region(LeafId leaf) const noexcept
+{
+    PLIANT_ASSERT(leaf.square <= 1 && leaf.depth <= level_, "leaf_region: bad leaf");
+    const int size = w_ >> leaf.depth;
+    PLIANT_ASSERT(leaf.ix < (1 << leaf.depth) && leaf.iy < (1 << leaf.depth),
+                  "leaf_region: leaf position outside its square");
+    Region r;
+    r.x0 = leaf.square * w_ + leaf.ix * size;
+    r.x1 = r.x0 + size;
+    r.y0 = leaf.iy * size;
+    r.y1 = r.y0 + size;
+    if (r.y1 == w_)
+        r.y1 = w_ + 1;  // the top row belongs to the upper leaves
+    return r;
+}
+
+std::vector<LeafId> TetraGrid::leaves(int depth) const
+{
+    PLIANT_ASSERT(depth >= 0 && depth <= level_, "TetraGrid::leaves: bad depth");
+    std::vector<LeafId> out;
+    const int per_side = 1 << depth;
+    out.reserve(2U * static_cast<std::size_t>(per_side) * static_cast<std::size_t>(per_side));
+    for (int s = 0; s < 2; ++s)
+        for (int iy = 0; iy < per_side; ++iy)
+            for (int ix = 0; ix < per_side; ++ix)
+                out.push_back(LeafId{static_cast<std::uint8_t>(s), static_cast<std::uint8_t>(depth),
+                                     static_cast<std::uint16_t>(ix),
+                                     static_cast<std::uint16_t>(iy)});
+    return out;
+}
+
+}  // namespace pliant::core

@@ -1,0 +1,100 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+#include <pliant/core/grid_io.h>
+
+#include <gtest/gtest.h>
+
+#include "support/test_paths.h"
+
+#include <cmath>
+#include <fstream>
+#include <limits>
+
+namespace pliant::core
+{
+namespace
+{
+
+Vec3Field<double> some_positions(const TetraGrid& g)
+{
+    Vec3Field<double> p{Field<double>(g), Field<double>(g), Field<double>(g)};
+    for (int y = 0; y < g.ny(); ++y)
+        for (int x = 0; x < g.nx(); ++x)
+        {
+            const NodeIndex c = g.canonical(g.index(x, y));
+            const double t = static_cast<double>(c.value);
+            p[0].at(x, y) = std::sin(t) / 3.0;  // values that are not exact in float
+            p[1].at(x, y) = std::cos(t) * 1e-7;
+            p[2].at(x, y) = t * 1.1;
+        }
+    return p;
+}
+
+TEST(GridIo, RoundTripIsBitExact)
+{
+    const auto dir = test::scratch_dir("grid_io_round_trip");
+    const TetraGrid g = TetraGrid::create(5).value();
+    const GridFile out = make_geometry_file(g, some_positions(g));
+    ASSERT_TRUE(save_grid(dir / "a.pgrid", out).has_value());
+    auto in = load_grid(dir / "a.pgrid");
+    ASSERT_TRUE(in.has_value()) << in.error().message;
+    ASSERT_EQ(in->level, 5);
+    ASSERT_EQ(in->fields.size(), 3U);
+    for (std::size_t k = 0; k < 3; ++k)
+    {
+        EXPECT_EQ(in->fields[k].name, out.fields[k].name);
+        EXPECT_TRUE(in->fields[k].values == out.fields[k].values);  // bit for bit
+    }
+    auto geo = geometry_of(g, *in, 2);
+    ASSERT_TRUE(geo.has_value());
+    EXPECT_EQ((*geo)[2].at(-1, -1), (*geo)[2][g.image(-1, -1)]);
+}
+
+TEST(GridIo, RefusesCorruptTruncatedAndForeignFiles)
+{
+    const auto dir = test::scratch_dir("grid_io_bad");
+    const TetraGrid g = TetraGrid::create(2).value();
+    ASSERT_TRUE(save_grid(dir / "good.pgrid", make_geometry_file(g, some_positions(g))));
+    std::ifstream is(dir / "good.pgrid", std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(is)), std::istreambuf_iterator<char>());
+
+    auto write = [&](const char* name, const std::string& content)
+    {
+        std::ofstream os(dir / name, std::ios::binary);
+        os << content;
+        return dir / name;
+    };
+    auto truncated = load_grid(write("trunc.pgrid", bytes.substr(0, bytes.size() / 2)));
+    ASSERT_FALSE(truncated.has_value());
+    EXPECT_EQ(truncated.error().code, ErrorCode::ParseError);
+
+    std::string flipped = bytes;
+    flipped[100] = static_cast<char>(flipped[100] ^ 0x10);
+    auto corrupt = load_grid(write("flip.pgrid", flipped));
+    ASSERT_FALSE(corrupt.has_value());
+    EXPECT_NE(corrupt.error().message.find("checksum"), std::string::npos);
+
+    auto foreign = load_grid(write("foreign.pgrid", "P3\n2 2\n255\n0 0 0 0 0 0 0 0 0 0 0 0\n"));
+    ASSERT_FALSE(foreign.has_value());
+    EXPECT_NE(foreign.error().message.find("foreign.pgrid"), std::string::npos);
+
+    auto missing = load_grid(dir / "missing.pgrid");
+    ASSERT_FALSE(missing.has_value());
+    EXPECT_EQ(missing.error().code, ErrorCode::IoError);
+}
+
+TEST(GridIo, RefusesTwinsThatDiffer)
+{
+    const auto dir = test::scratch_dir("grid_io_twins");
+    const TetraGrid g = TetraGrid::create(2).value();
+    auto p = some_positions(g);
+    p[0].at(2 * g.w(), 1) += 1.0;  // a twin that no longer equals its canonical node
+    ASSERT_TRUE(save_grid(dir / "t.pgrid", make_geometry_file(g, p)));
+    auto in = load_grid(dir / "t.pgrid");
+    ASSERT_FALSE(in.has_value());
+    EXPECT_EQ(in.error().code, ErrorCode::BadGrid);
+    EXPECT_NE(in.error().message.find("twin"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace pliant::core
