@@ -41,8 +41,7 @@ TEST(Hash, DependsOnEveryByteAndIsStable)
     EXPECT_NE(h, hash_span<double>(a));
     // a golden value guards against accidental changes of the function itself
     const char text[] = "pliant";
-    EXPECT_EQ(hash_bytes(std::as_bytes(std::span(text, 6))),
-              hash_bytes(std::as_bytes(std::span(text, 6))));
+    EXPECT_EQ(hash_bytes(std::as_bytes(std::span(text, 6))), 15553383032119672127ULL);
 }
 
 }  // namespace
