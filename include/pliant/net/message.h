@@ -1,0 +1,328 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+#pragma once
+
+/// \file
+/// The messages pliant peers exchange, as plain structs (docs/protocol.md §6 gives their bytes).
+///
+/// Design: a `Message` is a header plus a `std::variant` of body structs, one per message type, in
+/// type-number order (variant index + 1 is the wire type). Bodies own their variable parts
+/// (`std::vector`, `std::string`), so a decoded message outlives the datagram; decoding allocates
+/// once or twice per datagram, which is per packet, never per node. Values are `double` in memory
+/// whatever the wire encoding, so the session never sees `f32` arithmetic; with
+/// `ValueEncoding::F32` the encoder rounds to nearest. Rejected alternative: views into the
+/// datagram buffer (zero-copy) would tie a message's lifetime to the transport's packet and make
+/// the fuzz round trip awkward; at 6,000 datagrams/s the copies cost nothing measurable.
+
+#include <pliant/net/types.h>
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <variant>
+#include <vector>
+
+namespace pliant::net
+{
+
+inline constexpr std::uint32_t k_protocol_magic = 0x544E4C50;  ///< bytes "PLNT"
+inline constexpr std::uint8_t k_protocol_version = 1;
+inline constexpr std::size_t k_header_size = 24;
+/// The largest body of a LeafState or Halo (one leaf per datagram, no IP fragmentation).
+inline constexpr std::size_t k_max_state_payload = 1200;
+/// The largest datagram: a depth-7 Partition (8 + 4 * 4^7 bytes of body).
+inline constexpr std::size_t k_max_datagram_size = k_header_size + 8 + 4 * 16384;
+inline constexpr std::size_t k_max_name_length = 32;
+inline constexpr std::size_t k_max_welcome_peers = 64;
+inline constexpr std::size_t k_max_blob_chunk = 32768;
+inline constexpr std::uint32_t k_max_blob_size = 256u << 20;
+inline constexpr std::size_t k_max_points = 16;  ///< points of interest and forces per message
+inline constexpr std::size_t k_max_halo_ranges = 32;
+inline constexpr std::size_t k_max_acks = 64;
+inline constexpr int k_max_partition_depth = 7;
+inline constexpr int k_max_grid_level = 10;
+inline constexpr std::uint32_t k_max_face_index = 4u << 20;       ///< 4 * 4^10 faces at level 10
+inline constexpr std::uint32_t k_max_grid_nodes = 2049u * 1025u;  ///< nodes at level 10
+inline constexpr std::uint8_t k_max_halo_stage = 6;
+/// Fixed bytes of a LeafState body before the values.
+inline constexpr std::size_t k_leaf_state_fixed = 24;
+/// Nodes (u and v each) that fit one LeafState: 73 with f64, 147 with f32.
+inline constexpr std::size_t k_max_leaf_nodes_f64 = (k_max_state_payload - k_leaf_state_fixed) / 16;
+inline constexpr std::size_t k_max_leaf_nodes_f32 = (k_max_state_payload - k_leaf_state_fixed) / 8;
+static_assert(k_max_leaf_nodes_f64 == 73 && k_max_leaf_nodes_f32 == 147);
+
+/// Wire message types (docs/protocol.md §6); the order matches `Body`.
+enum class MessageType : std::uint8_t
+{
+    Hello = 1,
+    Welcome = 2,
+    Reject = 3,
+    PeerJoined = 4,
+    PeerLeft = 5,
+    Blob = 6,
+    PointsOfInterest = 7,
+    Partition = 8,
+    Force = 9,
+    Leave = 10,
+    LeafState = 11,
+    Halo = 12,
+    Heartbeat = 13,
+    Ping = 14,
+    Pong = 15,
+    Ack = 16,
+};
+inline constexpr std::uint8_t k_message_type_count = 16;
+
+/// How node values are written (docs/protocol.md §5.4).
+enum class ValueEncoding : std::uint8_t
+{
+    F32 = 1,
+    F64 = 2,
+};
+
+/// A quad-tree node (docs/protocol.md §5.2); the same fields as `core::LeafId`, kept separate so
+/// the wire layout does not change if core's does.
+struct WireLeafId
+{
+    std::uint8_t square = 0;
+    std::uint8_t depth = 0;
+    std::uint16_t ix = 0;
+    std::uint16_t iy = 0;
+    friend bool operator==(const WireLeafId&, const WireLeafId&) = default;
+};
+
+/// A peer as the master lists it (docs/protocol.md §5.1). IPv4 only (ENet has no IPv6).
+struct PeerInfo
+{
+    PeerId id{0};
+    Role role = Role::Participant;
+    std::array<std::uint8_t, 4> ipv4{};  ///< a.b.c.d
+    std::uint16_t port = 0;              ///< 1..65535
+    std::string name;                    ///< 1..32 printable ASCII bytes
+    friend bool operator==(const PeerInfo&, const PeerInfo&) = default;
+};
+
+struct Hello
+{
+    Role role = Role::Participant;
+    std::uint16_t listen_port = 0;  ///< 0 = "the port you see me on"
+    std::string name;
+    friend bool operator==(const Hello&, const Hello&) = default;
+};
+
+struct Welcome
+{
+    PeerId your_id{0};
+    PeerId master_id{0};
+    std::uint8_t grid_level = 1;  ///< 1..10
+    std::uint8_t leaf_depth = 0;  ///< 0..min(level, 7)
+    std::uint32_t epoch = 0;      ///< 0 = not partitioned yet
+    double time = 0.0;            ///< simulation time, s
+    std::uint32_t model_size = 1;
+    std::uint64_t model_hash = 0;
+    std::uint32_t state_size = 0;
+    std::uint64_t state_hash = 0;
+    std::vector<PeerInfo> peers;  ///< every peer, the joiner included
+    friend bool operator==(const Welcome&, const Welcome&) = default;
+};
+
+struct Reject
+{
+    DisconnectReason reason = DisconnectReason::Refused;
+    friend bool operator==(const Reject&, const Reject&) = default;
+};
+
+struct PeerJoined
+{
+    PeerInfo peer;
+    friend bool operator==(const PeerJoined&, const PeerJoined&) = default;
+};
+
+struct PeerLeft
+{
+    PeerId peer{0};
+    DisconnectReason reason = DisconnectReason::Quit;
+    friend bool operator==(const PeerLeft&, const PeerLeft&) = default;
+};
+
+enum class BlobKind : std::uint8_t
+{
+    Model = 1,
+    State = 2,
+};
+
+/// One chunk of an opaque byte string (the session's model or state encoding).
+struct Blob
+{
+    BlobKind kind = BlobKind::Model;
+    std::uint32_t total_size = 0;
+    std::uint32_t offset = 0;
+    std::vector<std::byte> data;  ///< 1..32768 bytes, offset + size <= total_size
+    friend bool operator==(const Blob&, const Blob&) = default;
+};
+
+enum class TargetKind : std::uint8_t
+{
+    Face = 1,      ///< a grid face index
+    Position = 2,  ///< a point in space
+};
+
+/// Where a user acts: a face or a position, with a radius.
+struct Target
+{
+    TargetKind kind = TargetKind::Face;
+    std::uint32_t face = 0;                   ///< kind Face; 0 otherwise
+    std::array<double, 3> position{0, 0, 0};  ///< m; kind Position; zero otherwise
+    double radius = 0.0;                      ///< m, >= 0
+    friend bool operator==(const Target&, const Target&) = default;
+};
+
+struct PointsOfInterest
+{
+    std::vector<Target> points;  ///< 0..16; replaces the sender's previous list
+    friend bool operator==(const PointsOfInterest&, const PointsOfInterest&) = default;
+};
+
+struct Partition
+{
+    std::uint32_t epoch = 1;      ///< >= 1
+    std::uint8_t leaf_depth = 0;  ///< 0..7
+    std::vector<PeerId> owners;   ///< 2 * 4^depth, index (square * 2^d + iy) * 2^d + ix
+    friend bool operator==(const Partition&, const Partition&) = default;
+};
+
+struct UserForce
+{
+    Target target;
+    std::uint16_t grab_id = 0;
+    std::array<double, 3> force{0, 0, 0};  ///< N
+    friend bool operator==(const UserForce&, const UserForce&) = default;
+};
+
+struct Force
+{
+    std::vector<UserForce> forces;  ///< 0..16; applies from the header's tick on
+    friend bool operator==(const Force&, const Force&) = default;
+};
+
+struct Leave
+{
+    DisconnectReason reason = DisconnectReason::Quit;
+    friend bool operator==(const Leave&, const Leave&) = default;
+};
+
+/// State of (part of) one leaf at the header's tick: `u` and `v` of the same length.
+struct LeafState
+{
+    std::uint32_t epoch = 0;
+    WireLeafId leaf;
+    ValueEncoding encoding = ValueEncoding::F64;
+    std::uint16_t node_offset = 0;
+    double time = 0.0;      ///< s
+    std::vector<double> u;  ///< m; 1..73 (f64) or 1..147 (f32) values
+    std::vector<double> v;  ///< m/s; as many as u
+    friend bool operator==(const LeafState&, const LeafState&) = default;
+};
+
+struct NodeRange
+{
+    std::uint32_t first = 0;  ///< grid node index (y * nx + x)
+    std::uint16_t count = 1;
+    friend bool operator==(const NodeRange&, const NodeRange&) = default;
+};
+
+/// Halo values for one stage: `u` (if has_u) and `v` (if has_v) hold sum(count) values each, in
+/// range order; an absent field's vector is empty.
+struct Halo
+{
+    std::uint32_t epoch = 0;
+    std::uint8_t stage = 0;  ///< 0..5 RKF45 stages, 6 the accepted step
+    ValueEncoding encoding = ValueEncoding::F64;
+    double time = 0.0;              ///< s
+    std::vector<NodeRange> ranges;  ///< 1..32, increasing and disjoint
+    bool has_u = true;
+    bool has_v = false;
+    std::vector<double> u;
+    std::vector<double> v;
+    friend bool operator==(const Halo&, const Halo&) = default;
+};
+
+struct Heartbeat
+{
+    std::uint32_t epoch = 0;
+    friend bool operator==(const Heartbeat&, const Heartbeat&) = default;
+};
+
+struct Ping
+{
+    std::uint32_t nonce = 0;
+    std::uint64_t time_us = 0;  ///< sender's clock
+    friend bool operator==(const Ping&, const Ping&) = default;
+};
+
+struct Pong
+{
+    std::uint32_t nonce = 0;
+    std::uint64_t time_us = 0;  ///< the Ping's clock, echoed
+    friend bool operator==(const Pong&, const Pong&) = default;
+};
+
+struct LeafAck
+{
+    WireLeafId leaf;
+    std::uint64_t tick = 0;
+    friend bool operator==(const LeafAck&, const LeafAck&) = default;
+};
+
+struct Ack
+{
+    std::vector<LeafAck> acks;  ///< 1..64
+    friend bool operator==(const Ack&, const Ack&) = default;
+};
+
+using Body = std::variant<Hello, Welcome, Reject, PeerJoined, PeerLeft, Blob, PointsOfInterest,
+                          Partition, Force, Leave, LeafState, Halo, Heartbeat, Ping, Pong, Ack>;
+static_assert(std::variant_size_v<Body> == k_message_type_count);
+
+/// Fields every datagram carries besides its type (docs/protocol.md §4).
+struct Header
+{
+    std::uint32_t session = 0;  ///< 0 only in Hello and Reject
+    PeerId sender = k_no_peer;  ///< k_no_peer only in Hello
+    std::uint16_t sequence = 0;
+    std::uint64_t tick = 0;
+    friend bool operator==(const Header&, const Header&) = default;
+};
+
+struct Message
+{
+    Header header;
+    Body body;
+
+    [[nodiscard]] MessageType type() const noexcept
+    {
+        return static_cast<MessageType>(body.index() + 1);
+    }
+    friend bool operator==(const Message&, const Message&) = default;
+};
+
+/// The channel a message type travels on by default (docs/protocol.md §2).
+[[nodiscard]] constexpr Channel default_channel(MessageType type) noexcept
+{
+    return static_cast<std::uint8_t>(type) >= static_cast<std::uint8_t>(MessageType::LeafState)
+               ? Channel::State
+               : Channel::Control;
+}
+
+/// Whether a message of this type may arrive on `channel`: control types only on channel 0, state
+/// types on either (the exact coupling mode sends halos reliably).
+[[nodiscard]] constexpr bool allowed_on(MessageType type, Channel channel) noexcept
+{
+    return channel == Channel::Control || default_channel(type) == Channel::State;
+}
+
+/// Short stable name, e.g. "leaf-state".
+[[nodiscard]] std::string_view to_string(MessageType type) noexcept;
+
+}  // namespace pliant::net

@@ -1,0 +1,1049 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+// The codec of docs/protocol.md. Each message type has three functions kept side by side so that
+// a layout change touches one place: body_size (bytes), write_body and read_body. The semantic
+// rules live in check_* and run on both sides (see codec.h).
+
+#include <pliant/net/codec.h>
+
+#include "net/byte_io_internal.h"
+
+#include <algorithm>
+#include <cfloat>
+#include <cmath>
+#include <type_traits>
+
+namespace pliant::net
+{
+namespace
+{
+
+using detail::ByteReader;
+using detail::ByteWriter;
+using detail::is_finite_bits;
+using Err = std::optional<DecodeError>;
+
+constexpr std::size_t k_peer_info_fixed = 24;
+constexpr std::size_t k_target_size = 40;
+constexpr std::size_t k_force_size = 64;
+constexpr std::size_t k_range_size = 8;
+constexpr std::size_t k_ack_size = 16;
+constexpr std::size_t k_halo_fixed = 16;
+
+std::size_t value_size(ValueEncoding e) noexcept
+{
+    return e == ValueEncoding::F32 ? 4 : 8;
+}
+
+bool valid_encoding(std::uint8_t e) noexcept
+{
+    return e == 1 || e == 2;
+}
+bool valid_role(std::uint8_t r) noexcept
+{
+    return r == 1 || r == 2;
+}
+bool valid_reason(std::uint8_t r) noexcept
+{
+    return r >= 1 && r <= k_max_disconnect_reason;
+}
+
+std::size_t max_leaf_nodes(ValueEncoding e) noexcept
+{
+    return e == ValueEncoding::F32 ? k_max_leaf_nodes_f32 : k_max_leaf_nodes_f64;
+}
+
+// ---- semantic checks (shared by encode and decode) -------------------------------------------
+
+Err check_value(double x, ValueEncoding e) noexcept
+{
+    if (!is_finite_bits(x))
+        return DecodeError::NonFinite;
+    // Only an encoder can meet this: a decoded f32 is always in range.
+    if (e == ValueEncoding::F32 && std::fabs(x) > static_cast<double>(FLT_MAX))
+        return DecodeError::NonFinite;
+    return {};
+}
+
+Err check_values(const std::vector<double>& values, ValueEncoding e) noexcept
+{
+    for (double x : values)
+        if (auto err = check_value(x, e))
+            return err;
+    return {};
+}
+
+Err check_time(double t) noexcept
+{
+    if (!is_finite_bits(t))
+        return DecodeError::NonFinite;
+    if (t < 0.0)
+        return DecodeError::BadRange;
+    return {};
+}
+
+Err check_name(const std::string& name) noexcept
+{
+    if (name.empty() || name.size() > k_max_name_length)
+        return DecodeError::BadName;
+    for (char c : name)
+        if (c < 0x20 || c > 0x7E)
+            return DecodeError::BadName;
+    return {};
+}
+
+Err check_peer_info(const PeerInfo& p) noexcept
+{
+    if (p.id == k_no_peer)
+        return DecodeError::BadRange;
+    if (!valid_role(static_cast<std::uint8_t>(p.role)))
+        return DecodeError::BadEnum;
+    if (p.port == 0)
+        return DecodeError::BadRange;
+    return check_name(p.name);
+}
+
+Err check_leaf(const WireLeafId& leaf) noexcept
+{
+    if (leaf.square > 1 || leaf.depth > k_max_grid_level)
+        return DecodeError::BadRange;
+    const std::uint32_t side = 1u << leaf.depth;
+    if (leaf.ix >= side || leaf.iy >= side)
+        return DecodeError::BadRange;
+    return {};
+}
+
+Err check_target(const Target& t) noexcept
+{
+    const auto kind = static_cast<std::uint8_t>(t.kind);
+    if (kind != 1 && kind != 2)
+        return DecodeError::BadEnum;
+    for (double x : t.position)
+        if (!is_finite_bits(x))
+            return DecodeError::NonFinite;
+    if (!is_finite_bits(t.radius))
+        return DecodeError::NonFinite;
+    if (t.kind == TargetKind::Face)
+    {
+        if (t.face >= k_max_face_index)
+            return DecodeError::BadRange;
+        for (double x : t.position)
+            if (x != 0.0)
+                return DecodeError::BadRange;
+    }
+    else if (t.face != 0)
+    {
+        return DecodeError::BadRange;
+    }
+    if (t.radius < 0.0)
+        return DecodeError::BadRange;
+    return {};
+}
+
+Err check(const Hello& m) noexcept
+{
+    if (!valid_role(static_cast<std::uint8_t>(m.role)))
+        return DecodeError::BadEnum;
+    return check_name(m.name);
+}
+
+Err check(const Welcome& m) noexcept
+{
+    if (m.peers.empty() || m.peers.size() > k_max_welcome_peers)
+        return DecodeError::BadCount;
+    if (m.grid_level < 1 || m.grid_level > k_max_grid_level)
+        return DecodeError::BadRange;
+    if (m.leaf_depth > std::min<int>(m.grid_level, k_max_partition_depth))
+        return DecodeError::BadRange;
+    if (auto err = check_time(m.time))
+        return err;
+    if (m.model_size < 1 || m.model_size > k_max_blob_size || m.state_size > k_max_blob_size)
+        return DecodeError::BadRange;
+    bool has_you = false;
+    bool has_master = false;
+    for (std::size_t i = 0; i < m.peers.size(); ++i)
+    {
+        if (auto err = check_peer_info(m.peers[i]))
+            return err;
+        for (std::size_t j = 0; j < i; ++j)
+            if (m.peers[j].id == m.peers[i].id)
+                return DecodeError::Duplicate;
+        has_you = has_you || m.peers[i].id == m.your_id;
+        has_master = has_master || m.peers[i].id == m.master_id;
+    }
+    if (m.your_id == k_no_peer || !has_you || !has_master)
+        return DecodeError::BadRange;
+    return {};
+}
+
+Err check(const Reject& m) noexcept
+{
+    return valid_reason(static_cast<std::uint8_t>(m.reason)) ? Err{} : DecodeError::BadEnum;
+}
+
+Err check(const PeerJoined& m) noexcept
+{
+    return check_peer_info(m.peer);
+}
+
+Err check(const PeerLeft& m) noexcept
+{
+    if (m.peer == k_no_peer)
+        return DecodeError::BadRange;
+    return valid_reason(static_cast<std::uint8_t>(m.reason)) ? Err{} : DecodeError::BadEnum;
+}
+
+Err check(const Blob& m) noexcept
+{
+    const auto kind = static_cast<std::uint8_t>(m.kind);
+    if (kind != 1 && kind != 2)
+        return DecodeError::BadEnum;
+    if (m.data.empty() || m.data.size() > k_max_blob_chunk)
+        return DecodeError::BadCount;
+    if (m.total_size > k_max_blob_size ||
+        std::uint64_t{m.offset} + m.data.size() > std::uint64_t{m.total_size})
+        return DecodeError::BadRange;
+    return {};
+}
+
+Err check(const PointsOfInterest& m) noexcept
+{
+    if (m.points.size() > k_max_points)
+        return DecodeError::BadCount;
+    for (const Target& t : m.points)
+        if (auto err = check_target(t))
+            return err;
+    return {};
+}
+
+Err check(const Partition& m) noexcept
+{
+    if (m.epoch == 0 || m.leaf_depth > k_max_partition_depth)
+        return DecodeError::BadRange;
+    if (m.owners.size() != (std::size_t{2} << (2 * m.leaf_depth)))
+        return DecodeError::BadCount;
+    for (PeerId p : m.owners)
+        if (p == k_no_peer)
+            return DecodeError::BadRange;
+    return {};
+}
+
+Err check(const Force& m) noexcept
+{
+    if (m.forces.size() > k_max_points)
+        return DecodeError::BadCount;
+    for (const UserForce& f : m.forces)
+    {
+        if (auto err = check_target(f.target))
+            return err;
+        for (double x : f.force)
+            if (!is_finite_bits(x))
+                return DecodeError::NonFinite;
+    }
+    return {};
+}
+
+Err check(const Leave& m) noexcept
+{
+    return valid_reason(static_cast<std::uint8_t>(m.reason)) ? Err{} : DecodeError::BadEnum;
+}
+
+Err check(const LeafState& m) noexcept
+{
+    if (auto err = check_leaf(m.leaf))
+        return err;
+    if (!valid_encoding(static_cast<std::uint8_t>(m.encoding)))
+        return DecodeError::BadEnum;
+    if (m.u.empty() || m.u.size() != m.v.size() || m.u.size() > max_leaf_nodes(m.encoding))
+        return DecodeError::BadCount;
+    if (std::size_t{m.node_offset} + m.u.size() > 0xFFFFu)
+        return DecodeError::BadRange;
+    if (auto err = check_time(m.time))
+        return err;
+    if (auto err = check_values(m.u, m.encoding))
+        return err;
+    return check_values(m.v, m.encoding);
+}
+
+std::size_t halo_nodes(const std::vector<NodeRange>& ranges) noexcept
+{
+    std::size_t n = 0;
+    for (const NodeRange& r : ranges)
+        n += r.count;
+    return n;
+}
+
+Err check(const Halo& m) noexcept
+{
+    if (m.stage > k_max_halo_stage)
+        return DecodeError::BadRange;
+    if (!valid_encoding(static_cast<std::uint8_t>(m.encoding)) || (!m.has_u && !m.has_v))
+        return DecodeError::BadEnum;
+    if (m.ranges.empty() || m.ranges.size() > k_max_halo_ranges)
+        return DecodeError::BadCount;
+    std::uint64_t next_free = 0;
+    for (const NodeRange& r : m.ranges)
+    {
+        if (r.count == 0 || r.first < next_free ||
+            std::uint64_t{r.first} + r.count > k_max_grid_nodes)
+            return DecodeError::BadRange;
+        next_free = std::uint64_t{r.first} + r.count;
+    }
+    const std::size_t n = halo_nodes(m.ranges);
+    const std::size_t fields = (m.has_u ? 1u : 0u) + (m.has_v ? 1u : 0u);
+    if (k_halo_fixed + k_range_size * m.ranges.size() + fields * n * value_size(m.encoding) >
+        k_max_state_payload)
+        return DecodeError::BadCount;
+    if (m.u.size() != (m.has_u ? n : 0) || m.v.size() != (m.has_v ? n : 0))
+        return DecodeError::BadCount;
+    if (auto err = check_time(m.time))
+        return err;
+    if (auto err = check_values(m.u, m.encoding))
+        return err;
+    return check_values(m.v, m.encoding);
+}
+
+Err check(const Heartbeat&) noexcept
+{
+    return {};
+}
+Err check(const Ping&) noexcept
+{
+    return {};
+}
+Err check(const Pong&) noexcept
+{
+    return {};
+}
+
+Err check(const Ack& m) noexcept
+{
+    if (m.acks.empty() || m.acks.size() > k_max_acks)
+        return DecodeError::BadCount;
+    for (const LeafAck& a : m.acks)
+        if (auto err = check_leaf(a.leaf))
+            return err;
+    return {};
+}
+
+Err check_header(const Header& h, MessageType type) noexcept
+{
+    if (h.session == 0 && type != MessageType::Hello && type != MessageType::Reject)
+        return DecodeError::BadSession;
+    if (h.sender == k_no_peer && type != MessageType::Hello)
+        return DecodeError::BadSender;
+    return {};
+}
+
+// ---- sizes -----------------------------------------------------------------------------------
+
+std::size_t peer_info_size(const PeerInfo& p) noexcept
+{
+    return k_peer_info_fixed + p.name.size();
+}
+
+std::size_t body_size(const Hello& m) noexcept
+{
+    return 4 + m.name.size();
+}
+std::size_t body_size(const Welcome& m) noexcept
+{
+    std::size_t n = 44;
+    for (const PeerInfo& p : m.peers)
+        n += peer_info_size(p);
+    return n;
+}
+std::size_t body_size(const Reject&) noexcept
+{
+    return 4;
+}
+std::size_t body_size(const PeerJoined& m) noexcept
+{
+    return peer_info_size(m.peer);
+}
+std::size_t body_size(const PeerLeft&) noexcept
+{
+    return 4;
+}
+std::size_t body_size(const Blob& m) noexcept
+{
+    return 12 + m.data.size();
+}
+std::size_t body_size(const PointsOfInterest& m) noexcept
+{
+    return 4 + k_target_size * m.points.size();
+}
+std::size_t body_size(const Partition& m) noexcept
+{
+    return 8 + 2 * m.owners.size();
+}
+std::size_t body_size(const Force& m) noexcept
+{
+    return 4 + k_force_size * m.forces.size();
+}
+std::size_t body_size(const Leave&) noexcept
+{
+    return 4;
+}
+std::size_t body_size(const LeafState& m) noexcept
+{
+    return k_leaf_state_fixed + (m.u.size() + m.v.size()) * value_size(m.encoding);
+}
+std::size_t body_size(const Halo& m) noexcept
+{
+    return k_halo_fixed + k_range_size * m.ranges.size() +
+           (m.u.size() + m.v.size()) * value_size(m.encoding);
+}
+std::size_t body_size(const Heartbeat&) noexcept
+{
+    return 4;
+}
+std::size_t body_size(const Ping&) noexcept
+{
+    return 16;
+}
+std::size_t body_size(const Pong&) noexcept
+{
+    return 16;
+}
+std::size_t body_size(const Ack& m) noexcept
+{
+    return 4 + k_ack_size * m.acks.size();
+}
+
+// ---- writers ---------------------------------------------------------------------------------
+
+void write_name(ByteWriter& w, const std::string& name) noexcept
+{
+    w.bytes(reinterpret_cast<const std::byte*>(name.data()), name.size());
+}
+
+void write_peer_info(ByteWriter& w, const PeerInfo& p) noexcept
+{
+    w.u16(p.id.value);
+    w.u8(static_cast<std::uint8_t>(p.role));
+    w.u8(4);
+    for (std::uint8_t b : p.ipv4)
+        w.u8(b);
+    w.zeros(12);
+    w.u16(p.port);
+    w.u8(static_cast<std::uint8_t>(p.name.size()));
+    w.u8(0);
+    write_name(w, p.name);
+}
+
+void write_leaf(ByteWriter& w, const WireLeafId& l) noexcept
+{
+    w.u8(l.square);
+    w.u8(l.depth);
+    w.u16(l.ix);
+    w.u16(l.iy);
+}
+
+void write_target(ByteWriter& w, const Target& t, std::uint16_t grab_id, bool is_force) noexcept
+{
+    w.u8(static_cast<std::uint8_t>(t.kind));
+    if (is_force)
+    {
+        w.u8(0);
+        w.u16(grab_id);
+    }
+    else
+    {
+        w.zeros(3);
+    }
+    w.u32(t.face);
+    for (double x : t.position)
+        w.f64(x);
+    w.f64(t.radius);
+}
+
+void write_values(ByteWriter& w, const std::vector<double>& values, ValueEncoding e) noexcept
+{
+    if (e == ValueEncoding::F32)
+        for (double x : values)
+            w.f32(x);
+    else
+        for (double x : values)
+            w.f64(x);
+}
+
+void write_body(ByteWriter& w, const Hello& m) noexcept
+{
+    w.u8(static_cast<std::uint8_t>(m.role));
+    w.u8(static_cast<std::uint8_t>(m.name.size()));
+    w.u16(m.listen_port);
+    write_name(w, m.name);
+}
+void write_body(ByteWriter& w, const Welcome& m) noexcept
+{
+    w.u16(m.your_id.value);
+    w.u16(m.master_id.value);
+    w.u8(m.grid_level);
+    w.u8(m.leaf_depth);
+    w.u8(static_cast<std::uint8_t>(m.peers.size()));
+    w.u8(0);
+    w.u32(m.epoch);
+    w.f64(m.time);
+    w.u32(m.model_size);
+    w.u64(m.model_hash);
+    w.u32(m.state_size);
+    w.u64(m.state_hash);
+    for (const PeerInfo& p : m.peers)
+        write_peer_info(w, p);
+}
+void write_body(ByteWriter& w, const Reject& m) noexcept
+{
+    w.u8(static_cast<std::uint8_t>(m.reason));
+    w.zeros(3);
+}
+void write_body(ByteWriter& w, const PeerJoined& m) noexcept
+{
+    write_peer_info(w, m.peer);
+}
+void write_body(ByteWriter& w, const PeerLeft& m) noexcept
+{
+    w.u16(m.peer.value);
+    w.u8(static_cast<std::uint8_t>(m.reason));
+    w.u8(0);
+}
+void write_body(ByteWriter& w, const Blob& m) noexcept
+{
+    w.u8(static_cast<std::uint8_t>(m.kind));
+    w.u8(0);
+    w.u16(static_cast<std::uint16_t>(m.data.size()));
+    w.u32(m.total_size);
+    w.u32(m.offset);
+    w.bytes(m.data.data(), m.data.size());
+}
+void write_body(ByteWriter& w, const PointsOfInterest& m) noexcept
+{
+    w.u8(static_cast<std::uint8_t>(m.points.size()));
+    w.zeros(3);
+    for (const Target& t : m.points)
+        write_target(w, t, 0, false);
+}
+void write_body(ByteWriter& w, const Partition& m) noexcept
+{
+    w.u32(m.epoch);
+    w.u8(m.leaf_depth);
+    w.zeros(3);
+    for (PeerId p : m.owners)
+        w.u16(p.value);
+}
+void write_body(ByteWriter& w, const Force& m) noexcept
+{
+    w.u8(static_cast<std::uint8_t>(m.forces.size()));
+    w.zeros(3);
+    for (const UserForce& f : m.forces)
+    {
+        write_target(w, f.target, f.grab_id, true);
+        for (double x : f.force)
+            w.f64(x);
+    }
+}
+void write_body(ByteWriter& w, const Leave& m) noexcept
+{
+    w.u8(static_cast<std::uint8_t>(m.reason));
+    w.zeros(3);
+}
+void write_body(ByteWriter& w, const LeafState& m) noexcept
+{
+    w.u32(m.epoch);
+    write_leaf(w, m.leaf);
+    w.u8(static_cast<std::uint8_t>(m.encoding));
+    w.u8(0);
+    w.u16(m.node_offset);
+    w.u16(static_cast<std::uint16_t>(m.u.size()));
+    w.f64(m.time);
+    write_values(w, m.u, m.encoding);
+    write_values(w, m.v, m.encoding);
+}
+void write_body(ByteWriter& w, const Halo& m) noexcept
+{
+    w.u32(m.epoch);
+    w.u8(m.stage);
+    w.u8(static_cast<std::uint8_t>(m.encoding));
+    w.u8(static_cast<std::uint8_t>((m.has_u ? 1u : 0u) | (m.has_v ? 2u : 0u)));
+    w.u8(static_cast<std::uint8_t>(m.ranges.size()));
+    w.f64(m.time);
+    for (const NodeRange& r : m.ranges)
+    {
+        w.u32(r.first);
+        w.u16(r.count);
+        w.u16(0);
+    }
+    write_values(w, m.u, m.encoding);
+    write_values(w, m.v, m.encoding);
+}
+void write_body(ByteWriter& w, const Heartbeat& m) noexcept
+{
+    w.u32(m.epoch);
+}
+void write_body(ByteWriter& w, const Ping& m) noexcept
+{
+    w.u32(m.nonce);
+    w.u32(0);
+    w.u64(m.time_us);
+}
+void write_body(ByteWriter& w, const Pong& m) noexcept
+{
+    w.u32(m.nonce);
+    w.u32(0);
+    w.u64(m.time_us);
+}
+void write_body(ByteWriter& w, const Ack& m) noexcept
+{
+    w.u8(static_cast<std::uint8_t>(m.acks.size()));
+    w.zeros(3);
+    for (const LeafAck& a : m.acks)
+    {
+        write_leaf(w, a.leaf);
+        w.u16(0);
+        w.u64(a.tick);
+    }
+}
+
+// ---- readers ---------------------------------------------------------------------------------
+// Each returns an error found while reading the structure (reserved bytes, wire-only enums,
+// counts that bound what follows); `r.short_read()` is tested by the caller afterwards.
+
+Err read_name(ByteReader& r, std::string& name, std::size_t n) noexcept
+{
+    if (n > r.remaining())
+    {
+        r.skip(n);
+        return {};
+    }
+    name.resize(n);
+    r.bytes(reinterpret_cast<std::byte*>(name.data()), n);
+    return {};
+}
+
+Err read_peer_info(ByteReader& r, PeerInfo& p) noexcept
+{
+    p.id = PeerId{r.u16()};
+    p.role = static_cast<Role>(r.u8());
+    const std::uint8_t family = r.u8();
+    for (std::uint8_t& b : p.ipv4)
+        b = r.u8();
+    bool reserved_ok = true;
+    for (int i = 0; i < 12; ++i)
+        reserved_ok = (r.u8() == 0) && reserved_ok;
+    p.port = r.u16();
+    const std::uint8_t name_length = r.u8();
+    const std::uint8_t reserved = r.u8();
+    if (r.short_read())
+        return {};
+    if (family != 4)
+        return DecodeError::BadEnum;
+    if (!reserved_ok || reserved != 0)
+        return DecodeError::BadReserved;
+    if (name_length == 0 || name_length > k_max_name_length)
+        return DecodeError::BadName;
+    return read_name(r, p.name, name_length);
+}
+
+void read_leaf(ByteReader& r, WireLeafId& l) noexcept
+{
+    l.square = r.u8();
+    l.depth = r.u8();
+    l.ix = r.u16();
+    l.iy = r.u16();
+}
+
+Err read_reserved(ByteReader& r, std::size_t n) noexcept
+{
+    bool ok = true;
+    for (std::size_t i = 0; i < n; ++i)
+        ok = (r.u8() == 0) && ok;
+    return (ok || r.short_read()) ? Err{} : DecodeError::BadReserved;
+}
+
+/// Reads a target; for a force entry the 3 bytes after kind hold (reserved u8, grab id u16).
+Err read_target(ByteReader& r, Target& t, std::uint16_t* grab_id) noexcept
+{
+    t.kind = static_cast<TargetKind>(r.u8());
+    if (grab_id != nullptr)
+    {
+        if (auto err = read_reserved(r, 1))
+            return err;
+        *grab_id = r.u16();
+    }
+    else if (auto err = read_reserved(r, 3))
+    {
+        return err;
+    }
+    t.face = r.u32();
+    for (double& x : t.position)
+        x = r.f64();
+    t.radius = r.f64();
+    return {};
+}
+
+/// Reads `n` values; the caller has checked that n * size bytes remain.
+void read_values(ByteReader& r, std::vector<double>& out, std::size_t n, ValueEncoding e) noexcept
+{
+    out.resize(n);
+    if (e == ValueEncoding::F32)
+        for (double& x : out)
+            x = r.f32();
+    else
+        for (double& x : out)
+            x = r.f64();
+}
+
+Err read_body(ByteReader& r, Hello& m) noexcept
+{
+    m.role = static_cast<Role>(r.u8());
+    const std::uint8_t n = r.u8();
+    m.listen_port = r.u16();
+    if (r.short_read())
+        return {};
+    if (n == 0 || n > k_max_name_length)
+        return DecodeError::BadName;
+    return read_name(r, m.name, n);
+}
+
+Err read_body(ByteReader& r, Welcome& m) noexcept
+{
+    m.your_id = PeerId{r.u16()};
+    m.master_id = PeerId{r.u16()};
+    m.grid_level = r.u8();
+    m.leaf_depth = r.u8();
+    const std::uint8_t count = r.u8();
+    if (auto err = read_reserved(r, 1))
+        return err;
+    m.epoch = r.u32();
+    m.time = r.f64();
+    m.model_size = r.u32();
+    m.model_hash = r.u64();
+    m.state_size = r.u32();
+    m.state_hash = r.u64();
+    if (r.short_read())
+        return {};
+    if (count == 0 || count > k_max_welcome_peers)
+        return DecodeError::BadCount;
+    m.peers.resize(count);
+    for (PeerInfo& p : m.peers)
+    {
+        if (auto err = read_peer_info(r, p))
+            return err;
+        if (r.short_read())
+            return {};
+    }
+    return {};
+}
+
+Err read_body(ByteReader& r, Reject& m) noexcept
+{
+    m.reason = static_cast<DisconnectReason>(r.u8());
+    return read_reserved(r, 3);
+}
+
+Err read_body(ByteReader& r, PeerJoined& m) noexcept
+{
+    return read_peer_info(r, m.peer);
+}
+
+Err read_body(ByteReader& r, PeerLeft& m) noexcept
+{
+    m.peer = PeerId{r.u16()};
+    m.reason = static_cast<DisconnectReason>(r.u8());
+    return read_reserved(r, 1);
+}
+
+Err read_body(ByteReader& r, Blob& m) noexcept
+{
+    m.kind = static_cast<BlobKind>(r.u8());
+    if (auto err = read_reserved(r, 1))
+        return err;
+    const std::uint16_t n = r.u16();
+    m.total_size = r.u32();
+    m.offset = r.u32();
+    if (r.short_read())
+        return {};
+    if (n == 0 || n > k_max_blob_chunk)
+        return DecodeError::BadCount;
+    if (n > r.remaining())
+    {
+        r.skip(n);
+        return {};
+    }
+    m.data.resize(n);
+    r.bytes(m.data.data(), n);
+    return {};
+}
+
+Err read_body(ByteReader& r, PointsOfInterest& m) noexcept
+{
+    const std::uint8_t count = r.u8();
+    if (auto err = read_reserved(r, 3))
+        return err;
+    if (r.short_read())
+        return {};
+    if (count > k_max_points)
+        return DecodeError::BadCount;
+    m.points.resize(count);
+    for (Target& t : m.points)
+        if (auto err = read_target(r, t, nullptr))
+            return err;
+    return {};
+}
+
+Err read_body(ByteReader& r, Partition& m) noexcept
+{
+    m.epoch = r.u32();
+    m.leaf_depth = r.u8();
+    if (auto err = read_reserved(r, 3))
+        return err;
+    if (r.short_read())
+        return {};
+    if (m.leaf_depth > k_max_partition_depth)
+        return DecodeError::BadRange;
+    const std::size_t n = std::size_t{2} << (2 * m.leaf_depth);
+    if (2 * n > r.remaining())
+    {
+        r.skip(2 * n);
+        return {};
+    }
+    m.owners.resize(n);
+    for (PeerId& p : m.owners)
+        p = PeerId{r.u16()};
+    return {};
+}
+
+Err read_body(ByteReader& r, Force& m) noexcept
+{
+    const std::uint8_t count = r.u8();
+    if (auto err = read_reserved(r, 3))
+        return err;
+    if (r.short_read())
+        return {};
+    if (count > k_max_points)
+        return DecodeError::BadCount;
+    m.forces.resize(count);
+    for (UserForce& f : m.forces)
+    {
+        if (auto err = read_target(r, f.target, &f.grab_id))
+            return err;
+        for (double& x : f.force)
+            x = r.f64();
+    }
+    return {};
+}
+
+Err read_body(ByteReader& r, Leave& m) noexcept
+{
+    m.reason = static_cast<DisconnectReason>(r.u8());
+    return read_reserved(r, 3);
+}
+
+Err read_body(ByteReader& r, LeafState& m) noexcept
+{
+    m.epoch = r.u32();
+    read_leaf(r, m.leaf);
+    const std::uint8_t encoding = r.u8();
+    if (auto err = read_reserved(r, 1))
+        return err;
+    m.node_offset = r.u16();
+    const std::uint16_t n = r.u16();
+    m.time = r.f64();
+    if (r.short_read())
+        return {};
+    if (!valid_encoding(encoding))
+        return DecodeError::BadEnum;
+    m.encoding = static_cast<ValueEncoding>(encoding);
+    if (n == 0 || n > max_leaf_nodes(m.encoding))
+        return DecodeError::BadCount;
+    if (2 * std::size_t{n} * value_size(m.encoding) > r.remaining())
+    {
+        r.skip(r.remaining() + 1);
+        return {};
+    }
+    read_values(r, m.u, n, m.encoding);
+    read_values(r, m.v, n, m.encoding);
+    return {};
+}
+
+Err read_body(ByteReader& r, Halo& m) noexcept
+{
+    m.epoch = r.u32();
+    m.stage = r.u8();
+    const std::uint8_t encoding = r.u8();
+    const std::uint8_t fields = r.u8();
+    const std::uint8_t count = r.u8();
+    m.time = r.f64();
+    if (r.short_read())
+        return {};
+    if (!valid_encoding(encoding) || fields == 0 || fields > 3)
+        return DecodeError::BadEnum;
+    m.encoding = static_cast<ValueEncoding>(encoding);
+    m.has_u = (fields & 1u) != 0;
+    m.has_v = (fields & 2u) != 0;
+    if (count == 0 || count > k_max_halo_ranges)
+        return DecodeError::BadCount;
+    m.ranges.resize(count);
+    for (NodeRange& range : m.ranges)
+    {
+        range.first = r.u32();
+        range.count = r.u16();
+        if (auto err = read_reserved(r, 2))
+            return err;
+    }
+    if (r.short_read())
+        return {};
+    // Bound the value count before allocating: hostile ranges could claim millions of nodes.
+    const std::size_t n = halo_nodes(m.ranges);
+    const std::size_t nf = (m.has_u ? 1u : 0u) + (m.has_v ? 1u : 0u);
+    const std::size_t values_bytes = nf * n * value_size(m.encoding);
+    if (k_halo_fixed + k_range_size * count + values_bytes > k_max_state_payload)
+        return DecodeError::BadCount;
+    if (values_bytes > r.remaining())
+    {
+        r.skip(r.remaining() + 1);
+        return {};
+    }
+    if (m.has_u)
+        read_values(r, m.u, n, m.encoding);
+    else
+        m.u.clear();
+    if (m.has_v)
+        read_values(r, m.v, n, m.encoding);
+    else
+        m.v.clear();
+    return {};
+}
+
+Err read_body(ByteReader& r, Heartbeat& m) noexcept
+{
+    m.epoch = r.u32();
+    return {};
+}
+
+Err read_body(ByteReader& r, Ping& m) noexcept
+{
+    m.nonce = r.u32();
+    if (auto err = read_reserved(r, 4))
+        return err;
+    m.time_us = r.u64();
+    return {};
+}
+
+Err read_body(ByteReader& r, Pong& m) noexcept
+{
+    m.nonce = r.u32();
+    if (auto err = read_reserved(r, 4))
+        return err;
+    m.time_us = r.u64();
+    return {};
+}
+
+Err read_body(ByteReader& r, Ack& m) noexcept
+{
+    const std::uint8_t count = r.u8();
+    if (auto err = read_reserved(r, 3))
+        return err;
+    if (r.short_read())
+        return {};
+    if (count == 0 || count > k_max_acks)
+        return DecodeError::BadCount;
+    m.acks.resize(count);
+    for (LeafAck& a : m.acks)
+    {
+        read_leaf(r, a.leaf);
+        if (auto err = read_reserved(r, 2))
+            return err;
+        a.tick = r.u64();
+    }
+    return {};
+}
+
+/// Default-constructs the body alternative for wire type `type` (1..16).
+template <std::size_t I = 0>
+Body make_body(std::size_t index) noexcept
+{
+    if constexpr (I + 1 < std::variant_size_v<Body>)
+    {
+        if (index != I)
+            return make_body<I + 1>(index);
+    }
+    return Body{std::in_place_index<I>};
+}
+
+}  // namespace
+
+std::optional<DecodeError> validate(const Message& message) noexcept
+{
+    if (auto err = check_header(message.header, message.type()))
+        return err;
+    return std::visit([](const auto& body) { return check(body); }, message.body);
+}
+
+std::size_t encoded_size(const Message& message) noexcept
+{
+    return k_header_size +
+           std::visit([](const auto& body) { return body_size(body); }, message.body);
+}
+
+Expected<std::size_t, EncodeError> encode(const Message& message, std::span<std::byte> out) noexcept
+{
+    if (validate(message))
+        return Unexpected{EncodeError::InvalidMessage};
+    const std::size_t size = encoded_size(message);
+    PLIANT_ASSERT(size <= k_max_datagram_size,
+                  "encode: a valid message exceeds the datagram limit");
+    if (out.size() < size)
+        return Unexpected{EncodeError::BufferTooSmall};
+    ByteWriter w(out);
+    w.u32(k_protocol_magic);
+    w.u8(k_protocol_version);
+    w.u8(static_cast<std::uint8_t>(message.type()));
+    w.u8(0);  // flags: reserved for issue 7
+    w.u8(0);
+    w.u32(message.header.session);
+    w.u16(message.header.sender.value);
+    w.u16(message.header.sequence);
+    w.u64(message.header.tick);
+    std::visit([&w](const auto& body) { write_body(w, body); }, message.body);
+    PLIANT_ASSERT(w.size() == size, "encode: body_size and write_body disagree");
+    return w.size();
+}
+
+Expected<Message, DecodeError> decode(std::span<const std::byte> datagram) noexcept
+{
+    if (datagram.size() < k_header_size)
+        return Unexpected{DecodeError::TooShort};
+    if (datagram.size() > k_max_datagram_size)
+        return Unexpected{DecodeError::TooLarge};
+    ByteReader r(datagram);
+    if (r.u32() != k_protocol_magic)
+        return Unexpected{DecodeError::BadMagic};
+    if (r.u8() != k_protocol_version)
+        return Unexpected{DecodeError::BadVersion};
+    const std::uint8_t type = r.u8();
+    if (type == 0 || type > k_message_type_count)
+        return Unexpected{DecodeError::UnknownType};
+    if (r.u8() != 0)
+        return Unexpected{DecodeError::BadFlags};
+    if (r.u8() != 0)
+        return Unexpected{DecodeError::BadReserved};
+    Message message{.header = {}, .body = make_body(type - 1u)};
+    message.header.session = r.u32();
+    message.header.sender = PeerId{r.u16()};
+    message.header.sequence = r.u16();
+    message.header.tick = r.u64();
+    if (auto err = check_header(message.header, message.type()))
+        return Unexpected{*err};
+    const Err structural =
+        std::visit([&r](auto& body) { return read_body(r, body); }, message.body);
+    if (structural)
+        return Unexpected{*structural};
+    if (r.short_read() || r.remaining() != 0)
+        return Unexpected{DecodeError::BadLength};
+    if (auto err = std::visit([](const auto& body) { return check(body); }, message.body))
+        return Unexpected{*err};
+    return message;
+}
+
+}  // namespace pliant::net

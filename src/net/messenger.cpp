@@ -1,0 +1,162 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+// Incoming-datagram policy and typed sending over a Transport (see messenger.h). A bad datagram
+// costs a decode attempt and a counter increment; it is logged at debug level, and a peer that
+// keeps sending them is cut off, so a hostile peer cannot make the log or the loop expensive.
+
+#include <pliant/net/messenger.h>
+
+#include <spdlog/spdlog.h>
+
+namespace pliant::net
+{
+
+Unexpected<Drop> Peer::drop(DropReason reason, DecodeError error) noexcept
+{
+    ++bad_;
+    if (reason == DropReason::Undecodable)
+        ++errors_[static_cast<std::size_t>(error)];
+    return Unexpected{Drop{reason, error}};
+}
+
+Expected<Message, Drop> Peer::accept(Channel channel, std::span<const std::byte> datagram) noexcept
+{
+    auto decoded = decode(datagram);
+    if (!decoded)
+        return drop(DropReason::Undecodable, decoded.error());
+    const Message& m = *decoded;
+    if (!allowed_on(m.type(), channel))
+        return drop(DropReason::WrongChannel);
+    const bool hello = m.type() == MessageType::Hello;
+    if (session_ != 0 && m.header.session != session_ && !(hello && m.header.session == 0))
+        return drop(DropReason::WrongSession);
+    if (id_ != k_no_peer && m.header.sender != id_)
+        return drop(DropReason::WrongSender);
+    ++good_;
+    return std::move(decoded).value();
+}
+
+Messenger::Messenger(Transport& transport, const MessengerSettings& settings)
+    : transport_(transport), settings_(settings), buffer_(k_max_datagram_size)
+{
+}
+
+core::Result<void> Messenger::send_encoded(PeerHandle peer, MessageType type, std::size_t size,
+                                           SendMode mode) noexcept
+{
+    const bool reliable = mode == SendMode::Reliable || default_channel(type) == Channel::Control;
+    const Channel channel = reliable ? Channel::Control : Channel::State;
+    return transport_.send(peer, channel, std::span<const std::byte>(buffer_.data(), size),
+                           reliable ? Delivery::Reliable : Delivery::Unreliable);
+}
+
+core::Result<void> Messenger::send(PeerHandle peer, const Message& message, SendMode mode) noexcept
+{
+    auto size = encode(message, buffer_);
+    if (!size)
+        return core::fail(
+            core::ErrorCode::InvalidArgument,
+            std::string("Messenger::send: cannot encode ") +
+                std::string(to_string(message.type())) + ": " +
+                std::string(to_string(size.error())) + " (" +
+                std::string(to_string(validate(message).value_or(DecodeError::TooShort))) + ")");
+    return send_encoded(peer, message.type(), *size, mode);
+}
+
+core::Result<void> Messenger::broadcast(const Message& message, SendMode mode) noexcept
+{
+    auto size = encode(message, buffer_);
+    if (!size)
+        return core::fail(core::ErrorCode::InvalidArgument,
+                          std::string("Messenger::broadcast: cannot encode ") +
+                              std::string(to_string(message.type())));
+    core::Result<void> first;
+    for (const auto& [handle, p] : peers_)
+    {
+        auto r = send_encoded(handle, message.type(), *size, mode);
+        if (!r && first)
+            first = r;
+    }
+    return first;
+}
+
+std::optional<MessengerEvent> Messenger::poll(int timeout_ms) noexcept
+{
+    // A flood of bad datagrams must not keep this call from returning: stop after this many
+    // dropped ones; the caller polls again on its next iteration.
+    constexpr int k_max_drops_per_poll = 256;
+    int wait = timeout_ms;
+    int drops = 0;
+    while (drops < k_max_drops_per_poll)
+    {
+        auto ev = transport_.poll(wait);
+        if (!ev)
+            break;
+        wait = 0;
+        switch (ev->kind)
+        {
+        case TransportEvent::Kind::Connected:
+            peers_.insert_or_assign(ev->peer, Peer(ev->peer, session_));
+            return MessengerEvent{.kind = MessengerEvent::Kind::Connected,
+                                  .peer = ev->peer,
+                                  .channel = Channel::Control,
+                                  .reason = DisconnectReason::None,
+                                  .message = {}};
+        case TransportEvent::Kind::Disconnected:
+            peers_.erase(ev->peer);
+            return MessengerEvent{.kind = MessengerEvent::Kind::Disconnected,
+                                  .peer = ev->peer,
+                                  .channel = Channel::Control,
+                                  .reason = ev->reason,
+                                  .message = {}};
+        case TransportEvent::Kind::Received: break;
+        }
+        auto it = peers_.find(ev->peer);
+        if (it == peers_.end())
+            continue;  // a straggler from a connection already cut off
+        Peer& p = it->second;
+        if (p.bad_datagrams() > settings_.bad_datagram_limit)
+            continue;  // being disconnected: ignore the rest
+        auto m = p.accept(ev->channel, ev->data);
+        if (!m)
+        {
+            ++drops;
+            ++dropped_;
+            transport_.report_bad_datagram(ev->peer);
+            spdlog::debug("net: dropped a datagram from peer {} ({} bytes): reason {}, {}",
+                          ev->peer.value, ev->data.size(), static_cast<int>(m.error().reason),
+                          to_string(m.error().error));
+            if (p.bad_datagrams() > settings_.bad_datagram_limit)
+                transport_.disconnect(ev->peer, DisconnectReason::TooManyBadDatagrams);
+            continue;
+        }
+        return MessengerEvent{.kind = MessengerEvent::Kind::Received,
+                              .peer = ev->peer,
+                              .channel = ev->channel,
+                              .reason = DisconnectReason::None,
+                              .message = std::move(m).value()};
+    }
+    return std::nullopt;
+}
+
+void Messenger::set_session(std::uint32_t session) noexcept
+{
+    session_ = session;
+    for (auto& [h, p] : peers_)
+        p.set_session(session);
+}
+
+void Messenger::bind(PeerHandle peer, PeerId id) noexcept
+{
+    auto it = peers_.find(peer);
+    if (it != peers_.end())
+        it->second.bind(id);
+}
+
+const Peer* Messenger::peer(PeerHandle handle) const noexcept
+{
+    auto it = peers_.find(handle);
+    return it == peers_.end() ? nullptr : &it->second;
+}
+
+}  // namespace pliant::net

@@ -1,0 +1,244 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+// Peer and Messenger: bad datagrams (undecodable, wrong channel, wrong session, spoofed sender)
+// are dropped and counted, never delivered; past the threshold the sender is disconnected with
+// TooManyBadDatagrams and learns why; good messages arrive typed on the right channel.
+
+#include <pliant/net/messenger.h>
+#include <pliant/net/simulated_transport.h>
+
+#include <gtest/gtest.h>
+
+#include "net/sample_messages.h"
+
+namespace pliant::net
+{
+namespace
+{
+
+std::vector<std::byte> encode_vec(const Message& m)
+{
+    std::vector<std::byte> out(encoded_size(m));
+    EXPECT_TRUE(encode(m, out).has_value());
+    return out;
+}
+
+Message ping(std::uint32_t session = 0xC0FFEE01u, PeerId sender = PeerId{3})
+{
+    Message m{samples::header(), Ping{.nonce = 1, .time_us = 2}};
+    m.header.session = session;
+    m.header.sender = sender;
+    return m;
+}
+
+TEST(Peer, DropsAndCountsEveryKindOfBadDatagram)
+{
+    Peer peer(PeerHandle{1});
+    const auto good = encode_vec(ping());
+    EXPECT_TRUE(peer.accept(Channel::State, good).has_value());
+    EXPECT_TRUE(peer.accept(Channel::Control, good).has_value()) << "state types may go reliably";
+
+    auto junk = good;
+    junk[0] = std::byte{0};
+    auto r = peer.accept(Channel::State, junk);
+    ASSERT_FALSE(r.has_value());
+    EXPECT_EQ(r.error().reason, DropReason::Undecodable);
+    EXPECT_EQ(r.error().error, DecodeError::BadMagic);
+
+    Message leave{samples::header(), Leave{.reason = DisconnectReason::Quit}};
+    r = peer.accept(Channel::State, encode_vec(leave));
+    ASSERT_FALSE(r.has_value());
+    EXPECT_EQ(r.error().reason, DropReason::WrongChannel);
+
+    peer.set_session(0xC0FFEE01u);
+    r = peer.accept(Channel::State, encode_vec(ping(0x1234)));
+    ASSERT_FALSE(r.has_value());
+    EXPECT_EQ(r.error().reason, DropReason::WrongSession);
+    Message hello{samples::header(), Hello{.role = Role::Viewer, .listen_port = 0, .name = "x"}};
+    hello.header.session = 0;
+    EXPECT_TRUE(peer.accept(Channel::Control, encode_vec(hello)).has_value())
+        << "a Hello may carry no session";
+
+    peer.bind(PeerId{3});
+    EXPECT_TRUE(peer.accept(Channel::State, good).has_value());
+    r = peer.accept(Channel::State, encode_vec(ping(0xC0FFEE01u, PeerId{4})));
+    ASSERT_FALSE(r.has_value());
+    EXPECT_EQ(r.error().reason, DropReason::WrongSender);
+
+    EXPECT_EQ(peer.bad_datagrams(), 4u);
+    EXPECT_EQ(peer.good_datagrams(), 4u);
+    EXPECT_EQ(peer.errors()[static_cast<std::size_t>(DecodeError::BadMagic)], 1u);
+}
+
+struct Net
+{
+    SimulatedNetwork net;
+    std::unique_ptr<Transport> ta = net.create_endpoint();
+    std::unique_ptr<Transport> tb = net.create_endpoint();
+    Messenger a{*ta, MessengerSettings{.bad_datagram_limit = 5}};
+    Messenger b{*tb, MessengerSettings{.bad_datagram_limit = 5}};
+    PeerHandle a_to_b;
+    PeerHandle b_to_a;
+
+    Net()
+    {
+        EXPECT_TRUE(ta->open({}));
+        const Address addr_b = tb->open({}).value();
+        a_to_b = ta->connect(addr_b).value();
+        bool a_up = false;
+        bool b_up = false;
+        for (int i = 0; i < 1000 && !(a_up && b_up); ++i)
+        {
+            net.advance(0.001);
+            while (auto ev = a.poll())
+                a_up = a_up || ev->kind == MessengerEvent::Kind::Connected;
+            while (auto ev = b.poll())
+                if (ev->kind == MessengerEvent::Kind::Connected)
+                {
+                    b_up = true;
+                    b_to_a = ev->peer;
+                }
+        }
+        EXPECT_TRUE(a_up && b_up);
+    }
+
+    std::vector<MessengerEvent> drain_b(int ms = 50)
+    {
+        std::vector<MessengerEvent> out;
+        for (int i = 0; i < ms; ++i)
+        {
+            net.advance(0.001);
+            while (auto ev = b.poll())
+                out.push_back(std::move(*ev));
+        }
+        return out;
+    }
+};
+
+TEST(Messenger, DeliversTypedMessagesOnTheirChannels)
+{
+    Net n;
+    for (const Message& m : samples::all())
+        ASSERT_TRUE(n.a.send(n.a_to_b, m)) << to_string(m.type());
+    const auto events = n.drain_b();
+    std::vector<Message> control;
+    std::vector<Message> state;
+    for (const auto& ev : events)
+    {
+        ASSERT_EQ(ev.kind, MessengerEvent::Kind::Received);
+        (ev.channel == Channel::Control ? control : state).push_back(ev.message);
+        EXPECT_EQ(ev.channel, default_channel(ev.message.type()));
+    }
+    std::vector<Message> expected_control;
+    std::vector<Message> expected_state;
+    for (const Message& m : samples::all())
+        (default_channel(m.type()) == Channel::Control ? expected_control : expected_state)
+            .push_back(m);
+    EXPECT_EQ(control, expected_control);
+    EXPECT_EQ(state, expected_state);
+    EXPECT_EQ(n.b.dropped(), 0u);
+
+    // SendMode::Reliable moves a state message to the reliable control channel.
+    ASSERT_TRUE(n.a.send(n.a_to_b, samples::all().back(), SendMode::Reliable));
+    const auto again = n.drain_b();
+    ASSERT_EQ(again.size(), 1u);
+    EXPECT_EQ(again[0].channel, Channel::Control);
+
+    // An invalid message is refused at the sender, not sent.
+    Message bad = ping();
+    bad.header.session = 0;
+    EXPECT_FALSE(n.a.send(n.a_to_b, bad));
+}
+
+TEST(Messenger, BadDatagramsAreDroppedCountedAndTheSenderCutOff)
+{
+    Net n;
+    const std::vector<std::byte> junk = {std::byte{1}, std::byte{2}, std::byte{3}};
+    // Below the limit: counted, never delivered, the connection stays.
+    for (int i = 0; i < 5; ++i)
+        ASSERT_TRUE(n.ta->send(n.a_to_b, Channel::State, junk, Delivery::Reliable));
+    ASSERT_TRUE(n.a.send(n.a_to_b, ping()));
+    auto events = n.drain_b();
+    ASSERT_EQ(events.size(), 1u);
+    EXPECT_EQ(events[0].message.type(), MessageType::Ping);
+    EXPECT_EQ(n.tb->stats(n.b_to_a)->bad_datagrams, 5u);
+    EXPECT_EQ(n.b.peer(n.b_to_a)->bad_datagrams(), 5u);
+    EXPECT_EQ(n.b.peer(n.b_to_a)->errors()[static_cast<std::size_t>(DecodeError::TooShort)], 5u);
+
+    // One more crosses the limit: b disconnects a with the reason, and a learns it.
+    ASSERT_TRUE(n.ta->send(n.a_to_b, Channel::State, junk, Delivery::Reliable));
+    ASSERT_TRUE(n.a.send(n.a_to_b, ping()));  // in flight behind the junk: never delivered
+    events = n.drain_b();
+    ASSERT_EQ(events.size(), 1u);
+    EXPECT_EQ(events[0].kind, MessengerEvent::Kind::Disconnected);
+    EXPECT_EQ(events[0].reason, DisconnectReason::TooManyBadDatagrams);
+    std::optional<DisconnectReason> told;
+    for (int i = 0; i < 50 && !told; ++i)
+    {
+        n.net.advance(0.001);
+        while (auto ev = n.a.poll())
+            if (ev->kind == MessengerEvent::Kind::Disconnected)
+                told = ev->reason;
+    }
+    EXPECT_EQ(told, DisconnectReason::TooManyBadDatagrams);
+    EXPECT_EQ(n.b.dropped(), 6u);
+}
+
+TEST(Messenger, SpoofedSenderAndForeignSessionAreDropped)
+{
+    Net n;
+    n.b.set_session(0xC0FFEE01u);
+    n.b.bind(n.b_to_a, PeerId{3});
+    ASSERT_TRUE(n.a.send(n.a_to_b, ping(0xC0FFEE01u, PeerId{4})));  // claims to be peer 4
+    ASSERT_TRUE(n.a.send(n.a_to_b, ping(0xBADBAD, PeerId{3})));     // another session
+    ASSERT_TRUE(n.a.send(n.a_to_b, ping()));
+    const auto events = n.drain_b();
+    ASSERT_EQ(events.size(), 1u);
+    EXPECT_EQ(events[0].message.header.sender, PeerId{3});
+    EXPECT_EQ(n.b.dropped(), 2u);
+}
+
+TEST(Messenger, BroadcastReachesEveryPeer)
+{
+    SimulatedNetwork net;
+    auto hub_t = net.create_endpoint();
+    const Address hub_addr = hub_t->open({}).value();
+    Messenger hub(*hub_t);
+    std::vector<std::unique_ptr<Transport>> leaves_t;
+    std::vector<std::unique_ptr<Messenger>> leaves;
+    for (int i = 0; i < 3; ++i)
+    {
+        leaves_t.push_back(net.create_endpoint());
+        ASSERT_TRUE(leaves_t.back()->open({}));
+        ASSERT_TRUE(leaves_t.back()->connect(hub_addr));
+        leaves.push_back(std::make_unique<Messenger>(*leaves_t.back()));
+    }
+    int connected = 0;
+    for (int i = 0; i < 100; ++i)
+    {
+        net.advance(0.001);
+        while (auto ev = hub.poll())
+            connected += ev->kind == MessengerEvent::Kind::Connected ? 1 : 0;
+        for (auto& l : leaves)
+            while (l->poll())
+            {
+            }
+    }
+    ASSERT_EQ(connected, 3);
+    ASSERT_TRUE(hub.broadcast(Message{samples::header(), Heartbeat{.epoch = 5}}));
+    int got = 0;
+    for (int i = 0; i < 100; ++i)
+    {
+        net.advance(0.001);
+        for (auto& l : leaves)
+            while (auto ev = l->poll())
+                got += ev->kind == MessengerEvent::Kind::Received &&
+                               std::get<Heartbeat>(ev->message.body).epoch == 5
+                           ? 1
+                           : 0;
+    }
+    EXPECT_EQ(got, 3);
+}
+
+}  // namespace
+}  // namespace pliant::net
