@@ -28,6 +28,7 @@ std::string_view to_string(ErrorCode code) noexcept
     case ErrorCode::BadGrid: return "bad-grid";
     case ErrorCode::BadScenario: return "bad-scenario";
     case ErrorCode::NetworkError: return "network-error";
+    case ErrorCode::GraphicsError: return "graphics-error";
     }
     return "unknown";
 }

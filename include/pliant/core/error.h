@@ -43,6 +43,8 @@ enum class ErrorCode : std::uint16_t
     BadScenario = 80,              ///< a scenario file with a missing or out-of-range key
                                    // network (session level; the codec uses its own DecodeError)
     NetworkError = 100,
+                                   // render
+    GraphicsError = 120,  ///< no OpenGL 3.3 context could be made, or GL refused a resource
 };
 
 /// Short stable name of a code, e.g. "open-boundary"; used in JSON output and logs.

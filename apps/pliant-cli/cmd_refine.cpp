@@ -1,0 +1,187 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+// `pliant refine GRID --levels K -o OUT`: modified butterfly refinement of a native grid file
+// (docs/subdivision.md). Every channel of the file (positions px/py/pz and any other per-node
+// field, e.g. a displacement u) is refined by the same operator; OUT is a .pgrid with the same
+// channels, or an .obj/.ply surface of the refined positions.
+#include <pliant/core/grid_io.h>
+#include <pliant/core/tetra_grid.h>
+#include <pliant/mesh/io.h>
+#include <pliant/subdiv/refine.h>
+
+#include <spdlog/spdlog.h>
+
+#include "cli_common.h"
+#include "commands.h"
+
+#include <algorithm>
+#include <cctype>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace pliant::cli
+{
+namespace
+{
+
+struct RefineOptions
+{
+    std::filesystem::path grid;
+    std::filesystem::path out;
+    int levels = 1;
+    int threads = 1;
+};
+
+std::string lower_extension(const std::filesystem::path& p)
+{
+    std::string ext = p.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return ext;
+}
+
+int run_refine(const RefineOptions& opt)
+{
+    using core::ErrorCode;
+    const std::string ext = lower_extension(opt.out);
+    if (ext != ".pgrid" && ext != ".obj" && ext != ".ply")
+        return report(
+            {ErrorCode::UnsupportedFormat, "refine: output " + opt.out.string() +
+                                               " must end in .pgrid (native grid), .obj or .ply"});
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(opt.grid, ec))
+        return report({ErrorCode::IoError, "refine: " + opt.grid.string() +
+                                               ": no such file (expected a .pgrid grid file; "
+                                               "make one with `pliant remesh`)"});
+
+    auto file = core::load_grid(opt.grid);
+    if (!file)
+        return report(file.error());
+    const int level = file->level;
+    if (level + opt.levels > core::k_max_level)
+        return report({ErrorCode::InvalidArgument,
+                       "refine: " + opt.grid.string() + " is level " + std::to_string(level) +
+                           "; level " + std::to_string(level) + " + " + std::to_string(opt.levels) +
+                           " = " + std::to_string(level + opt.levels) +
+                           " exceeds the finest level " + std::to_string(core::k_max_level) +
+                           " (use --levels " + std::to_string(core::k_max_level - level) +
+                           " or fewer)"});
+    if (level >= core::k_max_level)
+        return report({ErrorCode::InvalidArgument, "refine: " + opt.grid.string() +
+                                                       " is already at the finest level " +
+                                                       std::to_string(core::k_max_level)});
+
+    auto grid = core::TetraGrid::create(level);
+    if (!grid)
+        return report(grid.error());
+    // Checks that the file has positions, even when only they are written.
+    if (auto geometry = core::geometry_of(*grid, *file); !geometry)
+        return report(geometry.error());
+
+    auto plans = subdiv::make_plans(level, opt.levels);
+    if (!plans)
+        return report(plans.error());
+
+    // Each channel at the working ghost width the mask needs.
+    std::vector<core::Field<double>> channels;
+    channels.reserve(file->fields.size());
+    for (const core::NamedField& nf : file->fields)
+    {
+        core::Field<double>& f = channels.emplace_back(*grid, subdiv::k_refine_ghost);
+        for (int y = 0; y < f.ny(); ++y)
+            for (int x = 0; x < f.nx(); ++x)
+                f.at(x, y) = nf.values.at(x, y);
+        core::fill_ghosts(*grid, f);
+    }
+
+    const auto start = std::chrono::steady_clock::now();
+    for (const subdiv::ConvolutionPlan& plan : *plans)
+    {
+        const auto t0 = std::chrono::steady_clock::now();
+        for (core::Field<double>& f : channels)
+        {
+            core::Field<double> next(plan.fine_grid(), subdiv::k_refine_ghost);
+            subdiv::refine(plan, f, next, opt.threads);
+            f = std::move(next);
+        }
+        const double ms =
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
+                .count();
+        spdlog::debug(
+            "refine: level {} -> {}: {:.3f} ms for {} channel(s), {} grid nodes ({} "
+            "surface vertices), {} thread(s)",
+            plan.coarse_level(), plan.fine_level(), ms, channels.size(),
+            plan.fine_grid().node_count(), plan.fine_grid().unique_count(), opt.threads);
+    }
+    const double total_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    const core::TetraGrid& fine = plans->back().fine_grid();
+
+    core::GridFile out;
+    out.level = fine.level();
+    for (std::size_t i = 0; i < channels.size(); ++i)
+    {
+        core::Field<double> plain(fine, 0);
+        for (int y = 0; y < plain.ny(); ++y)
+            for (int x = 0; x < plain.nx(); ++x)
+                plain.at(x, y) = channels[i].at(x, y);
+        out.fields.push_back({file->fields[i].name, std::move(plain)});
+    }
+
+    if (ext == ".pgrid")
+    {
+        if (auto saved = core::save_grid(opt.out, out); !saved)
+            return report(saved.error());
+    }
+    else
+    {
+        auto positions = core::geometry_of(fine, out);
+        if (!positions)
+            return report(positions.error());
+        const mesh::TriMesh surface = mesh::from_grid(fine, *positions);
+        if (auto saved = mesh::export_mesh(opt.out, surface); !saved)
+            return report(saved.error());
+    }
+    spdlog::debug("refine: {} levels in {:.3f} ms", opt.levels, total_ms);
+    std::printf("%s: level %d -> %d, %zu vertices, %zu faces, %zu channel(s) -> %s\n",
+                opt.grid.string().c_str(), level, fine.level(), fine.unique_count(),
+                fine.face_count(), channels.size(), opt.out.string().c_str());
+    return 0;
+}
+
+void add_refine_command(CLI::App& app, const GlobalOptions& global)
+{
+    auto opt = std::make_shared<RefineOptions>();
+    CLI::App* cmd = app.add_subcommand(
+        "refine",
+        "Refine a grid by modified butterfly subdivision (interpolating: the input nodes keep "
+        "their positions; each level quadruples the faces).");
+    cmd->footer(
+        "Every channel of GRID (positions px/py/pz and any other per-node field such as a\n"
+        "displacement u) is refined by the same operator. A .pgrid OUT keeps all channels; an\n"
+        ".obj or .ply OUT gets the refined surface (2W^2+2 vertices, 4W^2 faces, W = 2^level).\n"
+        "The level of GRID plus --levels may be at most 10.\n\n"
+        "Examples:\n"
+        "  pliant refine spot.pgrid --levels 2 -o spot_fine.pgrid\n"
+        "  pliant refine spot.pgrid --levels 3 -o spot_fine.obj --verbose   # timing per level");
+    cmd->add_option("GRID", opt->grid, "Input grid file (.pgrid, from `pliant remesh`)")
+        ->required();
+    cmd->add_option("-l,--levels", opt->levels, "Number of levels to refine (level + K <= 10)")
+        ->check(CLI::Range(1, 9))
+        ->capture_default_str();
+    cmd->add_option("-o,--output", opt->out, "Output file: .pgrid, .obj or .ply")->required();
+    cmd->add_option("-j,--threads", opt->threads,
+                    "Threads for the convolution (results are identical for any count)")
+        ->check(CLI::Range(1, 256))
+        ->capture_default_str();
+    cmd->callback(command_callback(global, [opt]() -> int { return run_refine(*opt); }));
+}
+
+const CommandRegistrar k_register{{"refine", 30, &add_refine_command}};
+
+}  // namespace
+}  // namespace pliant::cli

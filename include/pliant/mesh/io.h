@@ -1,0 +1,73 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+#pragma once
+
+/// \file
+/// Reading meshes from files (through Assimp), writing them back (our own OBJ / PLY writers), and
+/// turning a geometry image back into a `TriMesh`. docs/mesh.md describes the formats, the
+/// welding and the error messages.
+
+#include <pliant/core/field.h>
+#include <pliant/core/result.h>
+#include <pliant/core/tetra_grid.h>
+#include <pliant/mesh/tri_mesh.h>
+
+#include <cstddef>
+#include <filesystem>
+#include <string>
+
+namespace pliant::mesh
+{
+
+/// What `import_mesh` did to the file's data on its way to a `TriMesh`.
+struct ImportReport
+{
+    std::string format;                     ///< e.g. "obj", "ply-binary", "stl-ascii", "gltf"
+    std::size_t meshes = 0;                 ///< mesh instances in the file's scene (all merged)
+    std::size_t file_vertices = 0;          ///< vertex records in the file (OBJ `v` lines, OFF and
+                                            ///< PLY header counts, 3 per STL facet; glTF: as read)
+    std::size_t raw_vertices = 0;           ///< vertices as Assimp delivered them (OBJ and STL:
+                                            ///< one per face corner)
+    std::size_t raw_faces = 0;              ///< polygons in the file (before triangulation)
+    std::size_t polygons_triangulated = 0;  ///< faces with more than 3 corners, fan-split
+    std::size_t welded = 0;                 ///< used vertices merged into an equal position
+    std::size_t unreferenced_dropped = 0;   ///< vertex records no face uses (removed)
+    std::size_t vertices = 0;               ///< vertices of the result
+    std::size_t faces = 0;                  ///< triangles of the result
+    std::size_t non_triangles_dropped = 0;  ///< points and lines (faces with < 3 corners), ignored
+};
+
+/// Reads a surface mesh: OBJ, OFF, PLY (ascii and binary), STL (ascii and binary), glTF 2 (.gltf,
+/// .glb), chosen by extension (case-insensitive). All meshes of the file are merged (node
+/// transforms applied), polygons are triangulated, vertices with bit-identical positions are
+/// welded (seams split only by normals or texture coordinates disappear), and positions no face
+/// uses are dropped. The result is not validated: call `validate` for the DESIGN §2.1 rules.
+///
+/// \return the mesh, or an error whose message names the file:
+///   - IoError: the file is missing or unreadable;
+///   - EmptyInput: an empty file, or a file with no faces;
+///   - UnsupportedFormat: an extension not listed above;
+///   - ParseError: malformed or truncated content (e.g. a binary STL whose size is not
+///     84 + 50·n bytes, a binary PLY shorter than its header's counts);
+///   - NonFiniteCoordinate: a vertex position with NaN or infinity (the message says which).
+/// Thread-safe (each call owns its Assimp importer); Assimp's own logging never reaches stdout.
+[[nodiscard]] core::Result<TriMesh> import_mesh(const std::filesystem::path& path,
+                                                ImportReport* report = nullptr);
+
+/// Writes `mesh` by extension: `.obj` (ascii, every coordinate with 17 significant digits) or
+/// `.ply` (binary little-endian, double-precision coordinates, uint32 indices); vertex and face
+/// order are kept. Both files hold the doubles exactly. `import_mesh` of what `import_mesh`
+/// produced gives the identical mesh back (tested on the data meshes); since Assimp reads floats,
+/// a double mesh comes back rounded to float: exactly so through PLY, within one float ulp
+/// through OBJ (Assimp's fast_atof on exponent notation). docs/mesh.md has the details.
+/// \return IoError when the file cannot be written, UnsupportedFormat for another extension.
+[[nodiscard]] core::Result<void> export_mesh(const std::filesystem::path& path,
+                                             const TriMesh& mesh);
+
+/// The surface of a geometry image: vertex i is the position of node `grid.node_of_unique()[i]`
+/// (2W²+2 vertices), faces are `grid.triangles()` (4W² faces).
+/// \pre positions made for `grid` (same level).
+[[nodiscard]] TriMesh from_grid(const core::TetraGrid& grid,
+                                const core::Vec3Field<double>& positions);
+
+}  // namespace pliant::mesh

@@ -1,0 +1,579 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+#include "mesh/format_scan_internal.h"
+
+#include <algorithm>
+#include <array>
+#include <charconv>
+#include <cstdint>
+#include <limits>
+#include <optional>
+#include <vector>
+
+namespace pliant::mesh::detail
+{
+
+namespace
+{
+
+using core::ErrorCode;
+using core::fail;
+
+std::string plural(std::size_t n, const char* word)
+{
+    if (std::string_view(word) == "vertex")
+        return std::to_string(n) + (n == 1 ? " vertex" : " vertices");
+    return std::to_string(n) + " " + word + (n == 1 ? "" : "s");
+}
+
+/// Splits `text` into lines (without the terminator) and calls `f(line)` for each; stops early
+/// when `f` returns false.
+template <typename F>
+void for_each_line(std::string_view text, F&& f)
+{
+    std::size_t start = 0;
+    while (start < text.size())
+    {
+        std::size_t end = text.find('\n', start);
+        if (end == std::string_view::npos)
+            end = text.size();
+        std::string_view line = text.substr(start, end - start);
+        if (!line.empty() && line.back() == '\r')
+            line.remove_suffix(1);
+        if (!f(line))
+            return;
+        start = end + 1;
+    }
+}
+
+std::string_view trim(std::string_view s)
+{
+    const auto is_space = [](char c)
+    { return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v'; };
+    while (!s.empty() && is_space(s.front()))
+        s.remove_prefix(1);
+    while (!s.empty() && is_space(s.back()))
+        s.remove_suffix(1);
+    return s;
+}
+
+/// Whitespace-separated tokens of one line.
+std::vector<std::string_view> tokens(std::string_view line)
+{
+    std::vector<std::string_view> out;
+    std::size_t i = 0;
+    while (i < line.size())
+    {
+        while (i < line.size() && (line[i] == ' ' || line[i] == '\t'))
+            ++i;
+        const std::size_t start = i;
+        while (i < line.size() && line[i] != ' ' && line[i] != '\t')
+            ++i;
+        if (i > start)
+            out.push_back(line.substr(start, i - start));
+    }
+    return out;
+}
+
+std::optional<std::size_t> parse_count(std::string_view s)
+{
+    std::size_t v = 0;
+    const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+    if (ec != std::errc{} || ptr != s.data() + s.size())
+        return std::nullopt;
+    return v;
+}
+
+/// A text format must not contain control bytes other than white space: the usual sign of a
+/// binary or random file handed to a text reader.
+core::Result<void> check_text(std::string_view bytes, const std::string& name, const char* what)
+{
+    for (std::size_t i = 0; i < bytes.size(); ++i)
+    {
+        const auto c = static_cast<unsigned char>(bytes[i]);
+        const bool space = c == '\t' || c == '\n' || c == '\r' || c == '\f' || c == '\v';
+        if ((c < 0x20 && !space) || c == 0x7f)
+        {
+            std::array<char, 8> hex{};
+            const auto r = std::to_chars(hex.data(), hex.data() + hex.size(), c, 16);
+            return fail(ErrorCode::ParseError,
+                        name + ": not a text " + what + " file: control byte 0x" +
+                            std::string(hex.data(), r.ptr) + " at offset " + std::to_string(i));
+        }
+    }
+    return {};
+}
+
+bool only_space(std::string_view bytes)
+{
+    return std::all_of(bytes.begin(), bytes.end(),
+                       [](char c)
+                       { return c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\f'; });
+}
+
+core::Result<ScanResult> scan_obj(std::string_view bytes, const std::string& name)
+{
+    if (auto text = check_text(bytes, name, "OBJ"); !text)
+        return text.error();
+    ScanResult r{.format = Format::Obj};
+    std::size_t lines = 0;
+    // Which `v` records faces use (1-based, negative = relative), for the report only; indices
+    // that do not parse or are out of range are Assimp's to reject.
+    std::vector<bool> used;
+    for_each_line(bytes,
+                  [&](std::string_view line)
+                  {
+                      ++lines;
+                      line = trim(line);
+                      if (line.size() < 2 || (line[1] != ' ' && line[1] != '\t'))
+                          return true;
+                      if (line[0] == 'v')
+                      {
+                          ++r.vertices;
+                          used.push_back(false);
+                      }
+                      else if (line[0] == 'f')
+                      {
+                          ++r.faces;
+                          const std::vector<std::string_view> t = tokens(line.substr(1));
+                          for (std::string_view corner : t)
+                          {
+                              long index = 0;
+                              std::from_chars(corner.data(), corner.data() + corner.size(), index);
+                              const long n = static_cast<long>(used.size());
+                              const long k = index < 0 ? n + index : index - 1;
+                              if (k >= 0 && k < n)
+                                  used[static_cast<std::size_t>(k)] = true;
+                          }
+                      }
+                      return true;
+                  });
+    r.unreferenced = static_cast<std::size_t>(std::count(used.begin(), used.end(), false));
+    r.faces_known = true;
+    if (r.faces == 0)
+        return fail(ErrorCode::EmptyInput, name + ": no faces: no 'f' line in " +
+                                               plural(lines, "line") + " (" +
+                                               plural(r.vertices, "vertex line") + ")");
+    return r;
+}
+
+core::Result<ScanResult> scan_off(std::string_view bytes, const std::string& name)
+{
+    if (auto text = check_text(bytes, name, "OFF"); !text)
+        return text.error();
+    // Content lines: comments (# to end of line) and blank lines removed.
+    std::vector<std::string_view> content;
+    for_each_line(bytes,
+                  [&](std::string_view line)
+                  {
+                      const std::size_t hash = line.find('#');
+                      if (hash != std::string_view::npos)
+                          line = line.substr(0, hash);
+                      line = trim(line);
+                      if (!line.empty())
+                          content.push_back(line);
+                      return true;
+                  });
+    if (content.empty())
+        return fail(ErrorCode::EmptyInput, name + ": empty OFF file (no content lines)");
+    std::vector<std::string_view> head = tokens(content[0]);
+    const std::string_view key = head.empty() ? std::string_view{} : head[0];
+    if (key.size() < 3 || key.substr(key.size() - 3) != "OFF")
+        return fail(ErrorCode::ParseError, name + ": not an OFF file: first line is '" +
+                                               std::string(content[0].substr(0, 40)) +
+                                               "', expected 'OFF'");
+    std::size_t next = 1;
+    head.erase(head.begin());
+    if (head.empty() && content.size() > 1)
+        head = tokens(content[next++]);
+    if (head.size() < 2)
+        return fail(ErrorCode::ParseError,
+                    name + ": bad OFF header: expected 'vertices faces edges' counts");
+    const auto v = parse_count(head[0]);
+    const auto f = parse_count(head[1]);
+    if (!v || !f)
+        return fail(ErrorCode::ParseError, name + ": bad OFF header: counts '" +
+                                               std::string(head[0]) + " " + std::string(head[1]) +
+                                               "' are not non-negative integers");
+    ScanResult r{.format = Format::Off, .vertices = *v, .faces = *f, .faces_known = true};
+    if (*f == 0)
+        return fail(ErrorCode::EmptyInput, name + ": no faces: the OFF header declares " +
+                                               plural(*v, "vertex") + " and 0 faces");
+    const std::size_t data_lines = content.size() - next;
+    // Overflow-safe: each count alone is compared first.
+    if (*v > data_lines || *f > data_lines || *v + *f > data_lines)
+        return fail(ErrorCode::ParseError, name + ": truncated OFF file: the header declares " +
+                                               plural(*v, "vertex") + " and " + plural(*f, "face") +
+                                               " but only " + plural(data_lines, "data line") +
+                                               " follow");
+    return r;
+}
+
+// ---- PLY ----------------------------------------------------------------------------------
+
+struct PlyProperty
+{
+    int size = 0;        ///< bytes of a scalar, or of one list item
+    int count_size = 0;  ///< bytes of the list length (0: scalar)
+    bool count_signed = false;
+};
+
+struct PlyElement
+{
+    std::string name;
+    std::size_t count = 0;
+    std::vector<PlyProperty> properties;
+};
+
+/// Bytes of a PLY scalar type, 0 if unknown; `is_signed` set for integer types.
+int ply_type_size(std::string_view t, bool* is_signed)
+{
+    *is_signed =
+        t == "char" || t == "int8" || t == "short" || t == "int16" || t == "int" || t == "int32";
+    if (t == "char" || t == "uchar" || t == "int8" || t == "uint8")
+        return 1;
+    if (t == "short" || t == "ushort" || t == "int16" || t == "uint16")
+        return 2;
+    if (t == "int" || t == "uint" || t == "int32" || t == "uint32" || t == "float" ||
+        t == "float32")
+        return 4;
+    if (t == "double" || t == "float64")
+        return 8;
+    return 0;
+}
+
+/// Reads a list length of `size` bytes (1, 2 or 4), little- or big-endian. Negative -> nullopt.
+std::optional<std::uint64_t> read_count(const unsigned char* p, int size, bool is_signed,
+                                        bool big_endian)
+{
+    std::uint64_t v = 0;
+    for (int i = 0; i < size; ++i)
+    {
+        const int shift = big_endian ? 8 * (size - 1 - i) : 8 * i;
+        v |= static_cast<std::uint64_t>(p[i]) << shift;
+    }
+    if (is_signed && (v >> (8 * size - 1)) != 0)
+        return std::nullopt;
+    return v;
+}
+
+core::Result<ScanResult> scan_ply(std::string_view bytes, const std::string& name)
+{
+    if (bytes.substr(0, 4) != "ply\n" && bytes.substr(0, 5) != "ply\r\n")
+        return fail(ErrorCode::ParseError, name + ": not a PLY file: it does not start with 'ply'");
+    const std::size_t end_pos = bytes.find("end_header");
+    if (end_pos == std::string_view::npos)
+        return fail(ErrorCode::ParseError, name + ": bad PLY header: no 'end_header' line");
+    std::size_t data = end_pos + 10;
+    if (data < bytes.size() && bytes[data] == '\r')
+        ++data;
+    if (data >= bytes.size() || bytes[data] != '\n')
+    {
+        if (data >= bytes.size())
+            return fail(ErrorCode::ParseError, name +
+                                                   ": truncated PLY file: no data after "
+                                                   "'end_header'");
+        return fail(ErrorCode::ParseError, name + ": bad PLY header: 'end_header' is not a line");
+    }
+    ++data;
+    const std::string_view header = bytes.substr(0, end_pos);
+    if (auto text = check_text(header, name, "PLY header"); !text)
+        return text.error();
+
+    std::string encoding;
+    std::vector<PlyElement> elements;
+    std::optional<core::Error> error;
+    for_each_line(header,
+                  [&](std::string_view line)
+                  {
+                      const std::vector<std::string_view> t = tokens(line);
+                      if (t.empty() || t[0] == "ply" || t[0] == "comment" || t[0] == "obj_info")
+                          return true;
+                      const auto bad = [&](const std::string& why)
+                      {
+                          error = core::Error{ErrorCode::ParseError,
+                                              name + ": bad PLY header line '" +
+                                                  std::string(line.substr(0, 60)) + "': " + why};
+                          return false;
+                      };
+                      if (t[0] == "format")
+                      {
+                          if (t.size() < 2)
+                              return bad("no encoding");
+                          encoding = std::string(t[1]);
+                          return true;
+                      }
+                      if (t[0] == "element")
+                      {
+                          const auto n = t.size() == 3 ? parse_count(t[2]) : std::nullopt;
+                          if (!n)
+                              return bad("expected 'element NAME COUNT'");
+                          elements.push_back({std::string(t[1]), *n, {}});
+                          return true;
+                      }
+                      if (t[0] == "property")
+                      {
+                          if (elements.empty())
+                              return bad("property before any element");
+                          PlyProperty p;
+                          bool is_signed = false;
+                          if (t.size() == 5 && t[1] == "list")
+                          {
+                              p.count_size = ply_type_size(t[2], &p.count_signed);
+                              p.size = ply_type_size(t[3], &is_signed);
+                              if (p.count_size == 0 || p.count_size == 8 || p.size == 0)
+                                  return bad("unknown list type");
+                          }
+                          else if (t.size() == 3)
+                          {
+                              p.size = ply_type_size(t[1], &is_signed);
+                              if (p.size == 0)
+                                  return bad("unknown type '" + std::string(t[1]) + "'");
+                          }
+                          else
+                              return bad("expected 'property TYPE NAME'");
+                          elements.back().properties.push_back(p);
+                          return true;
+                      }
+                      return bad("unknown keyword");
+                  });
+    if (error)
+        return *error;
+
+    ScanResult r{};
+    bool has_faces = false;
+    for (const PlyElement& e : elements)
+    {
+        if (e.name == "vertex")
+            r.vertices = e.count;
+        if (e.name == "face")
+        {
+            r.faces = e.count;
+            r.faces_known = true;
+        }
+        if ((e.name == "face" || e.name == "tristrips") && e.count > 0)
+            has_faces = true;
+    }
+    if (!has_faces)
+        return fail(ErrorCode::EmptyInput, name + ": no faces: the PLY header declares " +
+                                               plural(r.vertices, "vertex") +
+                                               " and no 'face' element with a non-zero count");
+
+    const std::string_view body = bytes.substr(data);
+    if (encoding == "ascii")
+    {
+        r.format = Format::PlyAscii;
+        if (auto text = check_text(body, name, "ASCII PLY"); !text)
+            return text.error();
+        std::size_t needed = 0;
+        for (const PlyElement& e : elements)
+        {
+            if (e.count > bytes.size())  // each record is at least one line of >= 2 bytes
+                needed = std::numeric_limits<std::size_t>::max();
+            else
+                needed += e.count;
+        }
+        std::size_t lines = 0;
+        for_each_line(body,
+                      [&](std::string_view line)
+                      {
+                          if (!trim(line).empty())
+                              ++lines;
+                          return true;
+                      });
+        if (lines < needed)
+            return fail(ErrorCode::ParseError,
+                        name + ": truncated ASCII PLY file: the header declares " +
+                            plural(r.vertices, "vertex") + " and " + plural(r.faces, "face") +
+                            " but only " + plural(lines, "data line") + " follow");
+        return r;
+    }
+    if (encoding != "binary_little_endian" && encoding != "binary_big_endian")
+        return fail(ErrorCode::UnsupportedFormat,
+                    name + ": PLY encoding '" + encoding +
+                        "' is not one of ascii, binary_little_endian, binary_big_endian");
+    r.format = Format::PlyBinary;
+    const bool big = encoding == "binary_big_endian";
+    const auto* p = reinterpret_cast<const unsigned char*>(body.data());
+    const std::size_t size = body.size();
+    std::size_t at = 0;
+    for (const PlyElement& e : elements)
+    {
+        const bool fixed = std::all_of(e.properties.begin(), e.properties.end(),
+                                       [](const PlyProperty& q) { return q.count_size == 0; });
+        const auto truncated = [&](std::size_t record)
+        {
+            return fail(ErrorCode::ParseError, name + ": truncated binary PLY file: element '" +
+                                                   e.name + "' record " + std::to_string(record) +
+                                                   " of " + std::to_string(e.count) +
+                                                   " ends beyond the data (" +
+                                                   plural(size, "byte") + " after the header)");
+        };
+        if (fixed)
+        {
+            std::size_t record = 0;
+            for (const PlyProperty& q : e.properties)
+                record += static_cast<std::size_t>(q.size);
+            if (record == 0)
+                continue;
+            const std::size_t room = (size - at) / record;
+            if (e.count > room)
+                return truncated(room);
+            at += e.count * record;
+            continue;
+        }
+        // Lists: walk record by record; every list record consumes at least its length bytes,
+        // so the loop is bounded by the file size.
+        for (std::size_t i = 0; i < e.count; ++i)
+        {
+            for (const PlyProperty& q : e.properties)
+            {
+                if (q.count_size == 0)
+                {
+                    if (size - at < static_cast<std::size_t>(q.size))
+                        return truncated(i);
+                    at += static_cast<std::size_t>(q.size);
+                    continue;
+                }
+                if (size - at < static_cast<std::size_t>(q.count_size))
+                    return truncated(i);
+                const auto n = read_count(p + at, q.count_size, q.count_signed, big);
+                if (!n)
+                    return fail(ErrorCode::ParseError,
+                                name + ": bad binary PLY data: element '" + e.name + "' record " +
+                                    std::to_string(i) + " has a negative list length");
+                at += static_cast<std::size_t>(q.count_size);
+                const std::size_t room = (size - at) / static_cast<std::size_t>(q.size);
+                if (*n > room)
+                    return truncated(i);
+                at += static_cast<std::size_t>(*n) * static_cast<std::size_t>(q.size);
+            }
+        }
+    }
+    return r;
+}
+
+// ---- STL ----------------------------------------------------------------------------------
+
+core::Result<ScanResult> scan_stl(std::string_view bytes, const std::string& name)
+{
+    const std::size_t size = bytes.size();
+    std::uint64_t n = 0;
+    if (size >= 84)
+    {
+        const auto* p = reinterpret_cast<const unsigned char*>(bytes.data()) + 80;
+        n = static_cast<std::uint64_t>(p[0]) | static_cast<std::uint64_t>(p[1]) << 8 |
+            static_cast<std::uint64_t>(p[2]) << 16 | static_cast<std::uint64_t>(p[3]) << 24;
+        if (84 + 50 * n == size)
+        {
+            if (n == 0)
+                return fail(ErrorCode::EmptyInput,
+                            name + ": no faces: the binary STL header declares 0 triangles");
+            return ScanResult{
+                .format = Format::StlBinary, .vertices = 3 * n, .faces = n, .faces_known = true};
+        }
+    }
+    const std::string_view start = trim(bytes.substr(0, std::min<std::size_t>(size, 512)));
+    if (start.substr(0, 5) == "solid" && check_text(bytes, name, "STL"))
+    {
+        ScanResult r{.format = Format::StlAscii};
+        std::size_t closed = 0;
+        for_each_line(bytes,
+                      [&](std::string_view line)
+                      {
+                          const std::vector<std::string_view> t = tokens(trim(line));
+                          if (!t.empty() && t[0] == "facet")
+                              ++r.faces;
+                          if (!t.empty() && t[0] == "endfacet")
+                              ++closed;
+                          return true;
+                      });
+        r.vertices = 3 * r.faces;
+        r.faces_known = true;
+        if (r.faces == 0)
+            return fail(ErrorCode::EmptyInput, name + ": no faces: no 'facet' in the ASCII STL");
+        if (closed != r.faces)
+            return fail(ErrorCode::ParseError,
+                        name + ": truncated ASCII STL file: " + plural(r.faces, "facet") +
+                            " opened, " + std::to_string(closed) + " closed");
+        return r;
+    }
+    if (size < 84)
+        return fail(ErrorCode::ParseError,
+                    name + ": not an STL file: neither ASCII ('solid ...') nor binary (" +
+                        plural(size, "byte") + ", shorter than the 84-byte binary header)");
+    return fail(ErrorCode::ParseError,
+                name + ": truncated or malformed binary STL file: the header declares " +
+                    plural(static_cast<std::size_t>(n), "triangle") + ", which needs 84 + 50 * " +
+                    std::to_string(n) + " = " + std::to_string(84 + 50 * n) +
+                    " bytes, but the file has " + std::to_string(size));
+}
+
+// ---- glTF ---------------------------------------------------------------------------------
+
+core::Result<ScanResult> scan_glb(std::string_view bytes, const std::string& name)
+{
+    if (bytes.size() < 12 || bytes.substr(0, 4) != "glTF")
+        return fail(ErrorCode::ParseError, name +
+                                               ": not a GLB file: no 'glTF' magic in the "
+                                               "12-byte header");
+    const auto* p = reinterpret_cast<const unsigned char*>(bytes.data()) + 8;
+    const std::uint64_t length =
+        static_cast<std::uint64_t>(p[0]) | static_cast<std::uint64_t>(p[1]) << 8 |
+        static_cast<std::uint64_t>(p[2]) << 16 | static_cast<std::uint64_t>(p[3]) << 24;
+    if (length > bytes.size())
+        return fail(ErrorCode::ParseError, name + ": truncated GLB file: the header declares " +
+                                               plural(static_cast<std::size_t>(length), "byte") +
+                                               ", the file has " + std::to_string(bytes.size()));
+    return ScanResult{.format = Format::Glb};
+}
+
+}  // namespace
+
+std::string_view format_name(Format format) noexcept
+{
+    switch (format)
+    {
+    case Format::Obj: return "obj";
+    case Format::Off: return "off";
+    case Format::PlyAscii: return "ply-ascii";
+    case Format::PlyBinary: return "ply-binary";
+    case Format::StlAscii: return "stl-ascii";
+    case Format::StlBinary: return "stl-binary";
+    case Format::Gltf: return "gltf";
+    case Format::Glb: return "glb";
+    }
+    return "unknown";
+}
+
+core::Result<ScanResult> scan_format(std::string_view bytes, std::string_view ext,
+                                     const std::string& name)
+{
+    if (bytes.empty())
+        return fail(ErrorCode::EmptyInput, name + ": empty file (0 bytes)");
+    const bool text_format = ext == ".obj" || ext == ".off" || ext == ".gltf";
+    if (text_format && only_space(bytes))
+        return fail(ErrorCode::EmptyInput,
+                    name + ": empty file (" + plural(bytes.size(), "byte") + " of white space)");
+    if (ext == ".obj")
+        return scan_obj(bytes, name);
+    if (ext == ".off")
+        return scan_off(bytes, name);
+    if (ext == ".ply")
+        return scan_ply(bytes, name);
+    if (ext == ".stl")
+        return scan_stl(bytes, name);
+    if (ext == ".glb")
+        return scan_glb(bytes, name);
+    if (ext == ".gltf")
+    {
+        if (auto text = check_text(bytes, name, "glTF"); !text)
+            return text.error();
+        return ScanResult{.format = Format::Gltf};
+    }
+    return fail(ErrorCode::UnsupportedFormat,
+                name + ": unsupported format '" + std::string(ext) +
+                    "' (pliant reads .obj .off .ply .stl .gltf .glb)");
+}
+
+}  // namespace pliant::mesh::detail

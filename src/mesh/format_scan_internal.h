@@ -1,0 +1,58 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+#pragma once
+
+// Structural checks of a mesh file's bytes before Assimp sees them.
+//
+// Assimp 5.2 is lenient where pliant must be strict: on a truncated binary STL or PLY, or an OFF
+// file shorter than its header's counts, some of its readers return the part they could read (or
+// reserve memory for the declared counts first). These scanners read only headers and record
+// boundaries, never the numbers, so they stay small and obviously bounded by the file size: every
+// loop advances through the buffer or stops. They also count the file's vertex and face records
+// for the ImportReport (Assimp's OBJ and STL readers expand vertices per face corner, so its
+// counts do not show the file's).
+
+#include <pliant/core/result.h>
+
+#include <cstddef>
+#include <string>
+#include <string_view>
+
+namespace pliant::mesh::detail
+{
+
+enum class Format
+{
+    Obj,
+    Off,
+    PlyAscii,
+    PlyBinary,
+    StlAscii,
+    StlBinary,
+    Gltf,
+    Glb,
+};
+
+/// Short name for reports and JSON: "obj", "ply-binary", ...
+[[nodiscard]] std::string_view format_name(Format format) noexcept;
+
+/// What the scan learned. Counts are the file's records, or 0 when the format does not say.
+struct ScanResult
+{
+    Format format = Format::Obj;
+    std::size_t vertices = 0;
+    std::size_t faces = 0;
+    bool faces_known = false;  ///< `faces` is the file's exact face record count
+    /// OBJ only: `v` records no `f` line refers to (Assimp's OBJ reader drops them silently).
+    std::size_t unreferenced = 0;
+};
+
+/// Checks `bytes` (the whole file) against the structure of the format its lower-case extension
+/// `ext` (".obj", ".stl", ...) names. `name` prefixes every message.
+/// \return EmptyInput (no bytes, or a header that declares no faces), ParseError (binary bytes in
+/// a text format, a bad header, fewer records or bytes than the header declares),
+/// UnsupportedFormat (unknown extension, a PLY encoding pliant does not read).
+[[nodiscard]] core::Result<ScanResult> scan_format(std::string_view bytes, std::string_view ext,
+                                                   const std::string& name);
+
+}  // namespace pliant::mesh::detail

@@ -1,0 +1,343 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+// Import: the real meshes against the counts of tests/data/meshes/README.md (measured there by an
+// independent Python tool), every supported format against the same mesh, welding, and every
+// import error code on hostile files.
+
+#include <pliant/mesh/io.h>
+#include <pliant/mesh/validate.h>
+
+#include <gtest/gtest.h>
+
+#include "mesh/mesh_files.h"
+#include "shapes.h"
+#include "support/test_paths.h"
+
+#include <cstdint>
+#include <random>
+#include <string>
+
+namespace pliant::mesh
+{
+namespace
+{
+
+using core::ErrorCode;
+
+std::filesystem::path data(const char* name)
+{
+    return test::source_dir() / "tests" / "data" / "meshes" / name;
+}
+
+struct Expected
+{
+    const char* file;
+    std::size_t vertices;
+    std::size_t faces;
+    long genus;  ///< -1: undefined
+    ErrorCode code;
+    bool ok;
+};
+
+// tests/data/meshes/README.md, "Positive set" and "Negative set".
+const Expected k_table[] = {
+    {"fox.ply", 313, 622, 0, ErrorCode::InvalidArgument, true},
+    {"blub_triangulated.obj", 7106, 14208, 0, ErrorCode::InvalidArgument, true},
+    {"spot_triangulated.obj", 2930, 5856, 0, ErrorCode::InvalidArgument, true},
+    {"cube_minus_sphere.obj", 2066, 4128, 0, ErrorCode::InvalidArgument, true},
+    {"cactus.off", 5261, 10518, 0, ErrorCode::InvalidArgument, true},
+    {"negative/stanford-bunny_open.obj", 34834, 69451, -1, ErrorCode::OpenBoundary, false},
+    {"negative/bob_small_genus1.ply", 250, 500, 1, ErrorCode::WrongGenus, false},
+    {"negative/hourglass_ico_nonmanifold_vertex.obj", 23, 40, -1, ErrorCode::NonManifoldVertex,
+     false},
+    {"negative/two_cubes_shared_edge_nonmanifold_edge.obj", 14, 24, -1, ErrorCode::NonManifoldEdge,
+     false},
+};
+
+class RealMesh : public ::testing::TestWithParam<Expected>
+{
+};
+
+TEST_P(RealMesh, CountsGenusAndVerdictMatchTheDataTable)
+{
+    const Expected& e = GetParam();
+    ImportReport report;
+    auto mesh = import_mesh(data(e.file), &report);
+    ASSERT_TRUE(mesh) << mesh.error().message;
+    EXPECT_EQ(mesh->vertex_count(), e.vertices);
+    EXPECT_EQ(mesh->face_count(), e.faces);
+    EXPECT_EQ(report.vertices, e.vertices);
+    const MeshStats s = analyze(*mesh);
+    EXPECT_EQ(s.unreferenced_vertices, 0U);
+    if (e.genus >= 0)
+    {
+        ASSERT_TRUE(s.genus.has_value());
+        EXPECT_EQ(*s.genus, e.genus);
+    }
+    else
+    {
+        EXPECT_FALSE(s.genus.has_value());
+    }
+    const auto verdict = validate(*mesh, e.file);
+    EXPECT_EQ(verdict.has_value(), e.ok);
+    if (!e.ok)
+    {
+        EXPECT_EQ(verdict.error().code, e.code) << verdict.error().message;
+        EXPECT_NE(verdict.error().message.find(e.file), std::string::npos);
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(Table, RealMesh, ::testing::ValuesIn(k_table),
+                         [](const ::testing::TestParamInfo<Expected>& param_info)
+                         {
+                             std::string n = param_info.param.file;
+                             for (char& c : n)
+                                 if (!std::isalnum(static_cast<unsigned char>(c)))
+                                     c = '_';
+                             return n;
+                         });
+
+TEST(Import, OpenBunnyDropsUnreferencedAndReportsItsHoles)
+{
+    ImportReport report;
+    auto mesh = import_mesh(data("negative/stanford-bunny_open.obj"), &report);
+    ASSERT_TRUE(mesh);
+    EXPECT_EQ(report.file_vertices, 35947U);
+    EXPECT_EQ(report.unreferenced_dropped, 1113U);
+    const MeshStats s = analyze(*mesh);
+    EXPECT_EQ(s.boundary_edges, 223U);
+    EXPECT_EQ(s.boundary_loops, 5U);
+    EXPECT_EQ(s.euler_characteristic, -3);
+    const auto verdict = validate(*mesh, "bunny.obj");
+    ASSERT_FALSE(verdict);
+    EXPECT_NE(verdict.error().message.find("223 boundary edges in 5 loops"), std::string::npos)
+        << verdict.error().message;
+}
+
+TEST(Import, GenusOneMessageSaysGenusOne)
+{
+    auto mesh = import_mesh(data("negative/bob_small_genus1.ply"));
+    ASSERT_TRUE(mesh);
+    const auto verdict = validate(*mesh, "bob.ply");
+    ASSERT_FALSE(verdict);
+    EXPECT_NE(verdict.error().message.find("genus 1"), std::string::npos)
+        << verdict.error().message;
+}
+
+TEST(Import, NonManifoldEdgeMeshHasTheREADMEsPinchCount)
+{
+    auto mesh = import_mesh(data("negative/two_cubes_shared_edge_nonmanifold_edge.obj"));
+    ASSERT_TRUE(mesh);
+    const MeshStats s = analyze(*mesh);
+    EXPECT_EQ(s.non_manifold_edges, 1U);
+    EXPECT_EQ(s.non_manifold_vertices, 2U);  // README: "2 non-manifold vertices"
+    EXPECT_EQ(s.euler_characteristic, 3);
+}
+
+// ---- every format gives the same mesh ------------------------------------------------------
+
+class Formats : public ::testing::Test
+{
+protected:
+    std::filesystem::path dir_ = test::scratch_dir("mesh_formats");
+    TriMesh reference_ = scenes::octahedron();
+
+    TriMesh load(const char* name, const std::string& bytes, ImportReport* report = nullptr)
+    {
+        test::write_bytes(dir_ / name, bytes);
+        auto mesh = import_mesh(dir_ / name, report);
+        EXPECT_TRUE(mesh) << mesh.error().message;
+        return mesh ? *mesh : TriMesh{};
+    }
+};
+
+void expect_same(const TriMesh& a, const TriMesh& b)
+{
+    ASSERT_EQ(a.positions.size(), b.positions.size());
+    ASSERT_EQ(a.faces.size(), b.faces.size());
+    for (std::size_t i = 0; i < a.positions.size(); ++i)
+        EXPECT_EQ(a.positions[i], b.positions[i]) << "vertex " << i;
+    for (std::size_t i = 0; i < a.faces.size(); ++i)
+        EXPECT_EQ(a.faces[i], b.faces[i]) << "face " << i;
+}
+
+TEST_F(Formats, EveryFormatImportsToTheSameMesh)
+{
+    // The octahedron's vertices are numbered in order of first use by its faces, which is what
+    // import produces; its coordinates are exact in float.
+    ASSERT_TRUE(export_mesh(dir_ / "ref.obj", reference_));
+    auto obj = import_mesh(dir_ / "ref.obj");
+    ASSERT_TRUE(obj);
+    ImportReport r;
+    expect_same(load("a.off", test::to_off(reference_), &r), *obj);
+    EXPECT_EQ(r.format, "off");
+    expect_same(load("a.ply", test::to_ply_ascii(reference_), &r), *obj);
+    EXPECT_EQ(r.format, "ply-ascii");
+    expect_same(load("a.stl", test::to_stl_ascii(reference_), &r), *obj);
+    EXPECT_EQ(r.format, "stl-ascii");
+    expect_same(load("b.stl", test::to_stl_binary(reference_), &r), *obj);
+    EXPECT_EQ(r.format, "stl-binary");
+    expect_same(load("a.gltf", test::to_gltf(reference_), &r), *obj);
+    EXPECT_EQ(r.format, "gltf");
+    ASSERT_TRUE(export_mesh(dir_ / "ref.ply", reference_));
+    expect_same(load("c.ply", test::read_all(dir_ / "ref.ply"), &r), *obj);
+    EXPECT_EQ(r.format, "ply-binary");
+    // Every one of them is a valid genus-0 surface.
+    EXPECT_TRUE(validate(*obj, "octahedron"));
+}
+
+TEST_F(Formats, StlCornersAreWeldedBackToSixVertices)
+{
+    ImportReport r;
+    const TriMesh m = load("w.stl", test::to_stl_binary(reference_), &r);
+    EXPECT_EQ(m.vertex_count(), 6U);
+    EXPECT_EQ(m.face_count(), 8U);
+    EXPECT_EQ(r.raw_vertices, 24U);
+    EXPECT_EQ(r.welded, 18U);
+    EXPECT_TRUE(validate(m, "w.stl"));
+}
+
+TEST_F(Formats, SeamsWithDifferentNormalsAndUVsAreWelded)
+{
+    // A tetrahedron whose every corner has its own texture coordinate and normal: Assimp keeps
+    // them apart, pliant welds by position only.
+    const std::string obj =
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
+        "vt 0 0\nvt 1 0\nvt 0 1\nvt 1 1\nvn 0 0 1\nvn 0 1 0\nvn 1 0 0\n"
+        "f 1/1/1 3/2/2 2/3/3\nf 1/4/1 2/1/2 4/2/3\n"
+        "f 1/3/1 4/4/2 3/1/3\nf 2/2/1 3/3/2 4/4/3\n";
+    const TriMesh m = load("seam.obj", obj);
+    EXPECT_EQ(m.vertex_count(), 4U);
+    EXPECT_TRUE(validate(m, "seam.obj")) << validate(m, "seam.obj").error().message;
+}
+
+TEST_F(Formats, PolygonsAreFanTriangulatedAndObjectsMerged)
+{
+    // A cube of six quads, split over two OBJ objects.
+    const std::string obj =
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
+        "o first\nf 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\n"
+        "o second\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
+    ImportReport r;
+    const TriMesh m = load("cube.obj", obj, &r);
+    EXPECT_EQ(m.vertex_count(), 8U);
+    EXPECT_EQ(m.face_count(), 12U);
+    EXPECT_EQ(r.polygons_triangulated, 6U);
+    EXPECT_EQ(r.meshes, 2U);
+    EXPECT_TRUE(validate(m, "cube.obj")) << validate(m, "cube.obj").error().message;
+    EXPECT_GT(scenes::detail::signed_volume(m), 0.0);  // winding kept
+}
+
+TEST_F(Formats, GltfNodeTransformIsApplied)
+{
+    std::string g = test::to_gltf(reference_);
+    const std::string node = R"("nodes":[{"mesh":0}])";
+    g.replace(g.find(node), node.size(), R"("nodes":[{"mesh":0,"translation":[10,0,0]}])");
+    const TriMesh m = load("moved.gltf", g);
+    ASSERT_EQ(m.vertex_count(), 6U);
+    const MeshStats s = analyze(m);
+    EXPECT_EQ(s.bbox_min.x, 9.0);
+    EXPECT_EQ(s.bbox_max.x, 11.0);
+}
+
+// ---- hostile files: one error code each, no crash ------------------------------------------
+
+class BadFiles : public ::testing::Test
+{
+protected:
+    std::filesystem::path dir_ = test::scratch_dir("mesh_bad_files");
+
+    core::Error error_of(const char* name, const std::string& bytes)
+    {
+        test::write_bytes(dir_ / name, bytes);
+        auto mesh = import_mesh(dir_ / name);
+        EXPECT_FALSE(mesh) << name << " imported";
+        if (mesh)
+            return {};
+        EXPECT_NE(mesh.error().message.find(name), std::string::npos) << mesh.error().message;
+        return mesh.error();
+    }
+};
+
+TEST_F(BadFiles, MissingFileIsIoError)
+{
+    auto mesh = import_mesh(dir_ / "nope.obj");
+    ASSERT_FALSE(mesh);
+    EXPECT_EQ(mesh.error().code, ErrorCode::IoError);
+    auto folder = import_mesh(dir_);
+    ASSERT_FALSE(folder);
+    EXPECT_EQ(folder.error().code, ErrorCode::IoError);
+}
+
+TEST_F(BadFiles, EmptyFilesAreEmptyInput)
+{
+    for (const char* name : {"e.obj", "e.off", "e.ply", "e.stl", "e.gltf", "e.glb"})
+        EXPECT_EQ(error_of(name, "").code, ErrorCode::EmptyInput) << name;
+    EXPECT_EQ(error_of("ws.obj", "  \n\n").code, ErrorCode::EmptyInput);
+    EXPECT_EQ(error_of("points.obj", "v 0 0 0\nv 1 0 0\n").code, ErrorCode::EmptyInput);
+    EXPECT_EQ(error_of("nofaces.off", "OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n").code,
+              ErrorCode::EmptyInput);
+    std::string stl(84, '\0');  // binary STL header declaring 0 triangles
+    EXPECT_EQ(error_of("zero.stl", stl).code, ErrorCode::EmptyInput);
+}
+
+TEST_F(BadFiles, UnknownExtensionIsUnsupportedFormat)
+{
+    EXPECT_EQ(error_of("m.xyz", "v 0 0 0\n").code, ErrorCode::UnsupportedFormat);
+    EXPECT_EQ(error_of("noext", "v 0 0 0\n").code, ErrorCode::UnsupportedFormat);
+}
+
+TEST_F(BadFiles, GarbageBytesAreParseErrors)
+{
+    std::mt19937 rng(12345);
+    std::string garbage(4000, '\0');
+    for (char& c : garbage)
+        c = static_cast<char>(rng() & 0xFF);
+    for (const char* name : {"g.obj", "g.off", "g.ply", "g.stl", "g.gltf", "g.glb"})
+        EXPECT_EQ(error_of(name, garbage).code, ErrorCode::ParseError) << name;
+    EXPECT_EQ(error_of("t.gltf", "{\"asset\": {\"version\": \"2.0\"}, \"meshes\": [").code,
+              ErrorCode::ParseError);
+    EXPECT_EQ(error_of("h.ply", "ply\nformat ascii 1.0\nelement vertex x\nend_header\n").code,
+              ErrorCode::ParseError);
+    EXPECT_EQ(error_of("idx.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n").code,
+              ErrorCode::ParseError);
+}
+
+TEST_F(BadFiles, TruncatedBinaryStlIsParseError)
+{
+    const std::string full = test::to_stl_binary(scenes::octahedron());
+    ASSERT_EQ(full.size(), 84U + 50U * 8U);
+    const core::Error e = error_of("cut.stl", full.substr(0, full.size() - 30));
+    EXPECT_EQ(e.code, ErrorCode::ParseError);
+    EXPECT_NE(e.message.find("484"), std::string::npos) << e.message;  // 84 + 50 * 8
+    EXPECT_EQ(error_of("short.stl", full.substr(0, 40)).code, ErrorCode::ParseError);
+}
+
+TEST_F(BadFiles, TruncatedPlyIsParseError)
+{
+    ASSERT_TRUE(export_mesh(dir_ / "full.ply", scenes::icosphere(1)));
+    const std::string full = test::read_all(dir_ / "full.ply");
+    // Cut inside the faces, inside the vertices, and right after the header.
+    for (const std::size_t keep : {full.size() - 7, full.size() / 2, full.find("end_header") + 11})
+        EXPECT_EQ(error_of("cut.ply", full.substr(0, keep)).code, ErrorCode::ParseError) << keep;
+    const std::string ascii = test::to_ply_ascii(scenes::icosphere(1));
+    EXPECT_EQ(error_of("cut_ascii.ply", ascii.substr(0, ascii.size() - 30)).code,
+              ErrorCode::ParseError);
+    const std::string off = test::to_off(scenes::icosphere(1));
+    EXPECT_EQ(error_of("cut.off", off.substr(0, off.size() - 30)).code, ErrorCode::ParseError);
+}
+
+TEST_F(BadFiles, NonFiniteCoordinatesAreReportedWithTheirFace)
+{
+    const core::Error nan = error_of("nan.obj",
+                                     "v 0 0 0\nv 1 0 0\nv 0 nan 0\nv 0 0 1\n"
+                                     "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+    EXPECT_EQ(nan.code, ErrorCode::NonFiniteCoordinate) << nan.message;
+    EXPECT_NE(nan.message.find("face 0"), std::string::npos) << nan.message;
+    TriMesh m = scenes::tetrahedron();
+    m.positions[2].z = std::numeric_limits<double>::infinity();
+    EXPECT_EQ(error_of("inf.stl", test::to_stl_binary(m)).code, ErrorCode::NonFiniteCoordinate);
+}
+
+}  // namespace
+}  // namespace pliant::mesh
