@@ -1,0 +1,85 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+#pragma once
+
+/// \file
+/// The remesher's entry point: a closed genus-0 mesh onto the TetraGrid (DESIGN.md §2,
+/// docs/remesh.md). Phases: sphere map (mesh -> sphere, fold-free), domain map (grid ->
+/// sphere), sampling (grid node -> input surface), and optionally the quality measurement.
+
+#include <pliant/core/field.h>
+#include <pliant/core/progress.h>
+#include <pliant/core/result.h>
+#include <pliant/core/tetra_grid.h>
+#include <pliant/mesh/tri_mesh.h>
+#include <pliant/remesh/quality.h>
+#include <pliant/remesh/sphere_map.h>
+
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace pliant::remesh
+{
+
+struct RemeshSettings
+{
+    int level = 7;  ///< grid level 1..10 (W = 2^level)
+    SphereMapSettings sphere;
+    bool measure = true;  ///< compute the distance part of the report (takes about as long as
+                          ///< the remeshing itself)
+    DistanceSettings distance;
+};
+
+struct PhaseTime
+{
+    std::string name;
+    double seconds = 0.0;
+};
+
+/// Everything REMESH-NOTES.md §1 asks for, plus counts.
+struct QualityReport
+{
+    int level = 0;
+    std::size_t input_vertices = 0;
+    std::size_t input_faces = 0;
+    std::size_t output_vertices = 0;  ///< 2W^2 + 2
+    std::size_t output_faces = 0;     ///< 4W^2
+    bool input_flipped = false;       ///< the input faced inward and was reoriented
+    std::string sphere_method;        ///< "spring-embedder" or "coarse-to-fine"
+    std::size_t gnomonic_folds = 0;
+    std::size_t spring_folds = 0;
+    std::size_t inverted_mesh = 0;    ///< spherical triangles of the input map (always 0)
+    std::size_t inverted_domain = 0;  ///< spherical triangles of the domain map (always 0)
+    double rms_stretch = 0.0;
+    double stretch_efficiency = 0.0;
+    bool measured = false;  ///< whether `distance` was computed
+    SurfaceDistance distance;
+    AreaSpread areas;
+    std::size_t brute_force_locations = 0;
+    std::vector<PhaseTime> phases;
+    double total_seconds = 0.0;
+};
+
+struct RemeshResult
+{
+    core::TetraGrid grid;
+    core::Vec3Field<double> positions;  ///< the sampled surface, twins equal, ghost width 0
+    QualityReport report;
+};
+
+/// Remeshes `mesh` onto a grid of `settings.level`.
+/// \pre `mesh` passed mesh::validate (the CLI validates first). Inward-facing meshes are
+/// accepted and reoriented.
+/// \return InvalidArgument for a level outside 1..10; InvertedTriangles (with the count) when a
+/// fold-free sphere map cannot be built (never a folded result); NotConverged when the
+/// simplification does not reach a tetrahedron.
+core::Result<RemeshResult> remesh(const mesh::TriMesh& mesh, const RemeshSettings& settings = {},
+                                  core::ProgressSink* progress = nullptr);
+
+/// The report as a JSON object (keys documented in docs/remesh.md).
+[[nodiscard]] std::string to_json(const QualityReport& report);
+/// The report as readable lines.
+[[nodiscard]] std::string to_text(const QualityReport& report);
+
+}  // namespace pliant::remesh
