@@ -1,0 +1,170 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+// Membrane benchmark (issue 5, docs/physics.md "Performance"). Prints a table and CSV lines:
+//   triad,<threads>,<GB/s>
+//   step,<level>,<threads>,<grid nodes>,<ns per node-step>,<node-steps/s>,<GB/s effective>
+//   realtime,<level>,<threads>,<simulated s>,<wall s>,<ratio>,<steps>
+// Usage: pliant_bench_sim [max_level=10] [realtime_seconds=1.5] [min_level=6] [kernel]
+//   "kernel" runs only the step timing, 1 thread, 10 steps per level (for callgrind, whose
+//   instruction counts are exactly repeatable on a shared machine).
+// Timings are medians of repeated runs; the machine is shared, so compare ratios within a run.
+
+#include <pliant/sim/membrane.h>
+#include <pliant/sim/rkf45.h>
+
+#include <omp.h>
+
+#include "grid_shapes.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+namespace
+{
+
+using namespace pliant;
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t0)
+{
+    return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+double median(std::vector<double> v)
+{
+    std::sort(v.begin(), v.end());
+    return v[v.size() / 2];
+}
+
+// STREAM triad a = b + s c over arrays well outside the last-level cache (3 x 64 MiB).
+double triad_gbs(int threads)
+{
+    const std::size_t n = std::size_t{1} << 23;
+    std::vector<double> a(n, 0.0), b(n, 1.0), c(n, 2.0);
+    const auto len = static_cast<std::ptrdiff_t>(n);
+    std::vector<double> times;
+    for (int rep = 0; rep < 7; ++rep)
+    {
+        const auto t0 = Clock::now();
+        double* __restrict pa = a.data();
+        const double* __restrict pb = b.data();
+        const double* __restrict pc = c.data();
+#pragma omp parallel for schedule(static) num_threads(threads)
+        for (std::ptrdiff_t i = 0; i < len; ++i)
+            pa[i] = pb[i] + 3.0 * pc[i];
+        times.push_back(seconds_since(t0));
+    }
+    std::printf("%s", a[n / 2] == 7.0 ? "" : "?");  // keep the loop
+    return 3.0 * 8.0 * static_cast<double>(n) / median(times) / 1e9;
+}
+
+sim::MembraneSettings bench_material()
+{
+    sim::MembraneSettings s;
+    s.T = 1.0;
+    s.rho = 1.0;
+    s.beta = 0.5;
+    s.k_f = 1.0;
+    s.rtol = 1e-4;
+    s.atol = 1e-8;
+    return s;
+}
+
+// Doubles moved per node per step by the integrator (see docs/physics.md): stages 1-5 read u,
+// v, kv_1..kv_{s-1}, three weights, 1/m and the force plane and write kv_s; stage 6 reads u, v,
+// kv_1..kv_5 and the five model planes and writes u, v: 5 * 7 + 15 + 14 = 64 doubles.
+constexpr double k_doubles_per_node_step = 64.0;
+
+}  // namespace
+
+int main(int argc, char** argv)
+{
+    const int max_level = argc > 1 ? std::atoi(argv[1]) : 10;
+    const double rt_seconds = argc > 2 ? std::atof(argv[2]) : 1.5;
+    const int min_level = argc > 3 ? std::atoi(argv[3]) : 6;
+    const bool kernel_only = argc > 4 && std::string(argv[4]) == "kernel";
+#if defined(PLIANT_NATIVE_ISA)
+    std::printf("build: -march=native, -ffp-contract=off, double state\n");
+#else
+    std::printf("build: portable ISA, -ffp-contract=off, double state\n");
+#endif
+    if (!kernel_only)
+        for (const int threads : {1, 2})
+            std::printf("triad,%d,%.2f\n", threads, triad_gbs(threads));
+
+    for (int level = min_level; level <= max_level; ++level)
+    {
+        const core::TetraGrid grid = core::TetraGrid::create(level).value();
+        for (const int threads : {1, 2})
+        {
+            if (kernel_only && threads > 1)
+                continue;
+            sim::MembraneSettings set = bench_material();
+            set.fixed_step = true;
+            set.fixed_dt = 1e-4;
+            set.threads = threads;
+            sim::MembraneModel model =
+                sim::MembraneModel::create(grid, scenes::sphere_grid(grid, 1.0), set).value();
+            sim::MembraneState state = sim::MembraneState::at_rest(grid);
+            sim::Rkf45Workspace ws(model, threads);
+            const sim::Force force{-1, {1.0, 0.0, 0.0}, 0.2, {-1.0, 0.0, 0.0}};
+            sim::set_forces(model, ws, std::span<const sim::Force>(&force, 1));
+            const double nodes = static_cast<double>(grid.node_count());
+            const int steps = kernel_only ? 10 : std::max(3, static_cast<int>(3e7 / nodes));
+            for (int k = 0; k < 2; ++k)
+                (void)sim::step_prepared(model, state, ws);
+            std::vector<double> per;
+            for (int rep = 0; rep < (kernel_only ? 1 : 5); ++rep)
+            {
+                const auto t0 = Clock::now();
+                for (int k = 0; k < steps; ++k)
+                    (void)sim::step_prepared(model, state, ws);
+                per.push_back(seconds_since(t0) / steps);
+            }
+            const double t = median(per);
+            const double ns = t / nodes * 1e9;
+            std::printf("step,%d,%d,%.0f,%.2f,%.3e,%.2f\n", level, threads, nodes, ns, nodes / t,
+                        k_doubles_per_node_step * 8.0 * nodes / t / 1e9);
+            std::fflush(stdout);
+        }
+    }
+
+    if (kernel_only)
+        return 0;
+    // Real time: the benchmark scenario (adaptive, one moving force), frames of 1/60 s.
+    for (const int threads : {1, 2})
+        for (int level = min_level; level <= max_level; ++level)
+        {
+            const core::TetraGrid grid = core::TetraGrid::create(level).value();
+            sim::MembraneSettings set = bench_material();
+            set.threads = threads;
+            sim::MembraneModel model =
+                sim::MembraneModel::create(grid, scenes::sphere_grid(grid, 1.0), set).value();
+            sim::MembraneState state = sim::MembraneState::at_rest(grid);
+            sim::Rkf45Workspace ws(model, threads);
+            const auto t0 = Clock::now();
+            std::uint64_t steps = 0;
+            int frame = 0;
+            while (seconds_since(t0) < rt_seconds && frame < 600)
+            {
+                ++frame;
+                const double t = frame / 60.0;
+                const double s = std::min(1.0, t / 2.0);  // the finger slides over 2 s
+                const sim::Force force{-1, {1.0 - s, 0.0, s}, 0.2, {-1.0, 0.0, -1.0}};
+                steps +=
+                    sim::advance_to(model, state, ws, t, std::span<const sim::Force>(&force, 1))
+                        .steps;
+            }
+            const double wall = seconds_since(t0);
+            std::printf("realtime,%d,%d,%.3f,%.3f,%.3f,%llu\n", level, threads, state.time, wall,
+                        state.time / wall, static_cast<unsigned long long>(steps));
+            std::fflush(stdout);
+            if (state.time < wall * 0.5)
+                break;  // far from real time: finer levels only get slower
+        }
+    return 0;
+}

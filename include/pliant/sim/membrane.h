@@ -1,0 +1,173 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+#pragma once
+
+/// \file
+/// The membrane model of DESIGN.md §4: settings, the assembled model (rest geometry, cotangent
+/// stiffness as a three-weight stencil, lumped mass) and the integrated state (u, v).
+///
+/// Design
+/// - `MembraneModel` holds everything that changes only at a re-assembly: rest positions P, rest
+///   normals N, the stiffness K as three edge weights per node (to the +x, +y and +(1,1)
+///   neighbours; the other three edges of a node are its neighbours' weights) and the lumped
+///   mass. All planes share one stride (ghost ring 1), so a kernel reads the seven stencil
+///   points at fixed offsets with no branch.
+/// - The weights and masses of ghost nodes are computed from ghost-padded positions, not copied:
+///   every formula is symmetric under the gluing isometries (pairs of opposite terms are added
+///   first, and IEEE addition commutes), so a ghost or twin node computes bit for bit what its
+///   canonical node computes.
+/// - Corners (DESIGN §1): a corner's six grid triangles are its three real triangles, each seen
+///   twice through the ghost map. The stencil therefore gives at a corner twice the real stiffness
+///   row and twice the real lumped mass; `M⁻¹K` is exact. `multiplicity()` is 2 there, 1
+///   elsewhere; `unique_mass()` and `energy()` divide it out.
+/// - `MembraneState` holds u [m] and v [m/s] (ghost ring 1), the time [s] and the tick; it is the
+///   only thing integrated, hashed and sent.
+///
+/// Alternatives rejected: an assembled sparse matrix (Eigen SpMV is ~7x slower than the stencil
+/// at level 10 and needs an index per entry); six weights per node (twice the bytes per stage).
+
+#include <pliant/core/field.h>
+#include <pliant/core/result.h>
+#include <pliant/core/tetra_grid.h>
+#include <pliant/core/vec3.h>
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace pliant::sim
+{
+
+/// Material, integrator and threading settings (SI units). Validated by `MembraneModel::create`.
+struct MembraneSettings
+{
+    double T = 1.0;            ///< tension [N/m], > 0
+    double rho = 1.0;          ///< areal density [kg/m^2], > 0
+    double beta = 0.0;         ///< nodal velocity damping, B = beta M [1/s], >= 0
+    double k_f = 0.0;          ///< elastic foundation, k_f M u [1/s^2], >= 0
+    int reassemble_every = 0;  ///< R: re-assemble K and M from the deformed surface every R
+                               ///< accepted steps; 0 = never
+    double rtol = 1e-4;        ///< RKF45 relative tolerance (per node, max norm), >= 0
+    double atol = 1e-8;        ///< RKF45 absolute tolerance [m for u, m/s for v], > 0
+    double dt_min = 1e-7;      ///< smallest adaptive step [s], > 0
+    double dt_max = 0.05;      ///< largest adaptive step [s], >= dt_min
+    double dt_initial = 1e-3;  ///< first adaptive step [s], in [dt_min, dt_max]
+    double safety = 0.9;       ///< step-size controller safety factor, in (0, 1]
+    double max_growth = 5.0;   ///< largest step growth per accepted step, > 1
+    double min_shrink = 0.2;   ///< smallest step factor after a rejection, in (0, 1)
+    bool fixed_step = false;   ///< lockstep mode: every step is exactly `fixed_dt`, never rejected
+    double fixed_dt = 1e-3;    ///< step of the fixed-step mode [s], > 0
+    int threads = 0;           ///< OpenMP threads for a step; 0 = OpenMP's default
+    int leaf_depth = -1;  ///< quad-tree depth of the parallel work split; -1 = level - 6 (64 x 64
+                          ///< node leaves), clamped to 0..level
+};
+
+/// Kinetic, strain and foundation energy [J] over the unique vertices.
+struct Energy
+{
+    double kinetic = 0.0;     ///< 1/2 v^T M v
+    double strain = 0.0;      ///< 1/2 u^T K u
+    double foundation = 0.0;  ///< 1/2 k_f u^T M u
+    [[nodiscard]] double total() const noexcept { return kinetic + strain + foundation; }
+};
+
+/// The integrated state: normal displacement u [m] and velocity v [m/s] per node (ghost ring 1),
+/// the simulated time [s] and the number of accepted steps.
+struct MembraneState
+{
+    core::Field<double> u;
+    core::Field<double> v;
+    double time = 0.0;
+    std::uint64_t tick = 0;
+
+    /// The rest state (u = v = 0, time 0) for `grid`.
+    [[nodiscard]] static MembraneState at_rest(const core::TetraGrid& grid);
+    /// Hash of the in-range u and v values, the time and the tick (golden-hash tests, sync).
+    [[nodiscard]] std::uint64_t hash() const noexcept;
+};
+
+class MembraneModel
+{
+public:
+    /// Builds the model from rest positions (any ghost width; twins are taken from their
+    /// canonical node). \return InvalidArgument for a setting out of range or positions of
+    /// another level; NonFiniteCoordinate for a NaN/inf position; DegenerateFace for a
+    /// zero-area triangle (the cotangent weights would be infinite).
+    static core::Result<MembraneModel> create(const core::TetraGrid& grid,
+                                              const core::Vec3Field<double>& rest_positions,
+                                              const MembraneSettings& settings);
+
+    [[nodiscard]] const core::TetraGrid& grid() const noexcept { return grid_; }
+    [[nodiscard]] const MembraneSettings& settings() const noexcept { return settings_; }
+    /// Changes the integrator / threading settings (not the material). \return InvalidArgument.
+    core::Result<void> set_settings(const MembraneSettings& settings);
+
+    /// Rest positions P [m] (ghost ring 2) and unit outward rest normals N (ghost ring 1).
+    [[nodiscard]] const core::Vec3Field<double>& rest_positions() const noexcept { return P_; }
+    [[nodiscard]] const core::Vec3Field<double>& normals() const noexcept { return N_; }
+    /// Edge weights T/2 (cot a + cot b) [N/m] of the edges to (x+1, y), (x, y+1), (x+1, y+1).
+    [[nodiscard]] const core::Field<double>& weight_x() const noexcept { return wx_; }
+    [[nodiscard]] const core::Field<double>& weight_y() const noexcept { return wy_; }
+    [[nodiscard]] const core::Field<double>& weight_d() const noexcept { return wd_; }
+    /// Stencil lumped mass rho/3 * (sum of the six grid triangles' areas) [kg] (twice the real
+    /// mass at the four corners) and its inverse.
+    [[nodiscard]] const core::Field<double>& mass() const noexcept { return mass_; }
+    [[nodiscard]] const core::Field<double>& inverse_mass() const noexcept { return inv_mass_; }
+    /// 2 at the four tetrahedron corners, 1 elsewhere (see the file comment).
+    [[nodiscard]] int multiplicity(core::NodeIndex n) const noexcept;
+    /// The real lumped mass of a node [kg] (stencil mass / multiplicity).
+    [[nodiscard]] double unique_mass(core::NodeIndex n) const noexcept;
+
+    /// The leaves of the parallel work split, in their fixed order, and their node rectangles.
+    [[nodiscard]] std::span<const core::LeafId> leaves() const noexcept { return leaves_; }
+    [[nodiscard]] std::span<const core::Region> leaf_regions() const noexcept { return regions_; }
+    /// Axis-aligned bounds of each leaf's rest positions (min then max), for force look-up.
+    [[nodiscard]] std::span<const core::Vec3> leaf_bounds() const noexcept { return bounds_; }
+
+    /// Twin and ghost copies (padded offsets of ghost-ring-1 planes) that make a plane
+    /// consistent after its canonical nodes were written: twins first, then the ghost ring.
+    [[nodiscard]] std::span<const core::GhostCopy> sync_table() const noexcept { return sync_; }
+    /// Applies `sync_table()` to a ghost-ring-1 plane of this grid.
+    void sync(core::Field<double>& f) const noexcept;
+
+    /// Re-assembles K and M from the deformed surface P + u N (u with ghosts synced); P and N
+    /// stay the rest geometry. \return DegenerateFace (the model is left unchanged) when a
+    /// deformed triangle has zero area or a non-finite position.
+    core::Result<void> reassemble(const core::Field<double>& u);
+    /// The tick of the last re-assembly (0 after `create`).
+    [[nodiscard]] std::uint64_t assembled_tick() const noexcept { return assembled_tick_; }
+    void set_assembled_tick(std::uint64_t tick) noexcept { assembled_tick_ = tick; }
+
+    /// Deformed positions p = P + u N for every in-range node (`out` is resized to ghost 0).
+    void positions(const core::Field<double>& u, core::Vec3Field<double>& out) const;
+
+private:
+    MembraneModel() = default;
+    core::Result<void> assemble(const core::Vec3Field<double>& X);
+
+    core::TetraGrid grid_ = core::TetraGrid::create(1).value();
+    MembraneSettings settings_;
+    core::Vec3Field<double> P_;
+    core::Vec3Field<double> N_;
+    core::Field<double> wx_, wy_, wd_, mass_, inv_mass_;
+    std::vector<core::LeafId> leaves_;
+    std::vector<core::Region> regions_;
+    std::vector<core::Vec3> bounds_;
+    std::vector<core::GhostCopy> sync_;
+    std::uint64_t assembled_tick_ = 0;
+};
+
+/// Checks a settings aggregate. \return InvalidArgument naming the field and its range.
+core::Result<void> validate(const MembraneSettings& settings);
+
+/// out = K u with the stencil (corner rows doubled, see the file comment) for every in-range
+/// node; `u` must have ghost ring >= 1 and be synced (`MembraneModel::sync`). `out` is resized
+/// to a ghost-ring-1 plane and synced.
+void apply_stiffness(const MembraneModel& model, const core::Field<double>& u,
+                     core::Field<double>& out);
+
+/// Kinetic, strain and foundation energy of a state (u, v synced), summed per leaf in the
+/// model's fixed leaf order (independent of the thread count).
+[[nodiscard]] Energy energy(const MembraneModel& model, const MembraneState& state);
+
+}  // namespace pliant::sim

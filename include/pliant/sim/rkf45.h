@@ -1,0 +1,159 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+#pragma once
+
+/// \file
+/// Runge-Kutta-Fehlberg 4(5) for the membrane (DESIGN.md §4), forces, and the step API.
+///
+/// Design
+/// - The ODE is u' = v, v' = a(u, v) = -beta v - k_f u - M^-1 K u + M^-1 f. Only the six velocity
+///   slopes kv_s are stored: the displacement slopes are the stage velocities
+///   V_s = v + h sum_j a_sj kv_j, so the stage displacements are
+///   U_s = u + h c_s v + h^2 sum_m (A^2)_sm kv_m. A stage pass computes U_s for three rows at a
+///   time into a small per-thread buffer and applies the stencil to it, so K is never applied to
+///   a stored stage plane ("fused" stages). The sixth stage is fused with the final update and
+///   the error estimate, so kv_6 is never stored.
+/// - The propagated solution is the 5th-order one (local extrapolation); the embedded 4th-order
+///   solution only gives the error estimate, in the max norm over canonical nodes,
+///   |e_i| / (atol + rtol max(|y_i|, |y_new_i|)) for u and v. Max is order-independent, so the
+///   error (and hence every accept/reject decision) is identical for any thread count.
+/// - Work is split over the model's quad-tree leaves (OpenMP, static schedule); every node's
+///   arithmetic is the same whichever thread runs it, so results are bit-identical for any
+///   thread count. After each stage the twins and the ghost ring are copied from canonical nodes.
+/// - Restricted steps: only the canonical nodes inside `owned` regions are integrated; all
+///   others are Dirichlet values held fixed at their step-start u during the step (their v and
+///   slopes are taken as zero) and are left untouched. Restricting to all leaves gives the full
+///   step bit for bit.
+/// - Forces are constant over a step (evaluated at its start) and enter as a dense acceleration
+///   plane built from the force list; see `Force` for how they are spread over nodes.
+
+#include <pliant/core/field.h>
+#include <pliant/core/tetra_grid.h>
+#include <pliant/core/vec3.h>
+#include <pliant/sim/membrane.h>
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace pliant::sim
+{
+
+/// A user force: on a picked face (`face` >= 0, an index into `TetraGrid::triangles()`), or on
+/// the nodes within `radius` of `point` (`face` < 0). Only its component along each node's rest
+/// normal acts (a membrane under tension carries no in-plane load in this model).
+/// Distribution: a face gives each of its three vertices 1/3 of F.N_i; a point force gives node i
+/// (rest position within the radius) the share w_i / sum w of F.N_i, w_i = (1 - (d_i/radius)^2)^2;
+/// with no node inside the radius, the nearest node takes it all. Nodal force -> acceleration
+/// f_i / m_i with the real lumped mass m_i.
+struct Force
+{
+    std::int64_t face = -1;  ///< face index (0 .. 4W^2-1), or -1 for point + radius
+    core::Vec3 point{};      ///< centre on the rest surface [m] (point forces)
+    double radius = 0.0;     ///< support radius [m] (point forces), >= 0
+    core::Vec3 vector{};     ///< the force [N]
+};
+
+/// Checks forces against a model. \return InvalidArgument naming the force and the rule.
+core::Result<void> validate_forces(const MembraneModel& model, std::span<const Force> forces);
+
+/// Bit flags of a step's outcome.
+enum class StepStatus : std::uint32_t
+{
+    Ok = 0,
+    Rejected = 1U << 0,        ///< at least one trial step was rejected (count in the report)
+    MinStepReached = 1U << 1,  ///< accepted at dt_min with the error still above tolerance
+    NonFinite = 1U << 2,       ///< a trial produced NaN/inf at dt_min: the state was kept as is
+};
+[[nodiscard]] constexpr StepStatus operator|(StepStatus a, StepStatus b) noexcept
+{
+    return static_cast<StepStatus>(static_cast<std::uint32_t>(a) | static_cast<std::uint32_t>(b));
+}
+[[nodiscard]] constexpr bool has_flag(StepStatus s, StepStatus flag) noexcept
+{
+    return (static_cast<std::uint32_t>(s) & static_cast<std::uint32_t>(flag)) != 0;
+}
+
+/// What one `step` did.
+struct StepReport
+{
+    StepStatus status = StepStatus::Ok;
+    std::uint32_t rejections = 0;  ///< rejected trials before the accepted one
+    double dt = 0.0;               ///< the accepted step [s] (0 when nothing was accepted)
+    double error = 0.0;            ///< scaled error norm of the accepted step (<= 1 unless
+                                   ///< MinStepReached; 0 in fixed-step mode is not computed)
+    bool reassembled = false;      ///< K and M were re-assembled before this step
+};
+
+/// What one `advance_to` did.
+struct AdvanceReport
+{
+    StepStatus status = StepStatus::Ok;  ///< union of the steps' flags
+    std::uint64_t steps = 0;
+    std::uint64_t rejections = 0;
+    bool reached = false;  ///< time == target (adaptive) or no full fixed step fits any more
+};
+
+/// Per-step options.
+struct StepOptions
+{
+    /// Restrict the step to the canonical nodes inside these regions (see the file comment);
+    /// empty = all nodes. Regions must lie inside the grid.
+    std::span<const core::Region> owned{};
+    /// Largest step for this call [s] (e.g. to land on a frame time); 0 = no limit.
+    double dt_limit = 0.0;
+};
+
+/// All planes and buffers of the integrator, so a step allocates nothing. Also carries the
+/// adaptive step proposal between calls. One workspace per state being integrated.
+class Rkf45Workspace
+{
+public:
+    /// \param threads the most OpenMP threads a step may use (0 = OpenMP's maximum).
+    explicit Rkf45Workspace(const MembraneModel& model, int threads = 0);
+
+    /// The step size the next adaptive step will try [s].
+    [[nodiscard]] double next_dt() const noexcept { return next_dt_; }
+    void set_next_dt(double dt) noexcept { next_dt_ = dt; }
+
+    // Planes (ghost ring 1, the model's stride). Public for the kernels and tests; treat as
+    // scratch.
+    std::vector<core::Field<double>> kv;  ///< kv_1 .. kv_5
+    core::Field<double> u_out, v_out;     ///< trial state
+    core::Field<double> v_src;            ///< v, masked to the owned nodes in restricted steps
+    core::Field<double> accel;            ///< force accelerations [m/s^2]
+    std::vector<double> row_buffers;      ///< per thread: 3 rows of stage displacements
+    std::size_t row_buffer_len = 0;       ///< doubles per thread
+    std::vector<double> leaf_error;       ///< per leaf error norm
+    std::vector<double> leaf_probe;       ///< per leaf NaN probe
+    std::vector<std::int64_t> touched;    ///< accel offsets written by the last force set
+    int max_threads = 1;
+
+private:
+    double next_dt_ = 0.0;
+};
+
+/// Writes the accelerations of `forces` into `ws.accel` (clearing the previous ones).
+/// \pre `validate_forces(model, forces)` succeeded.
+void set_forces(const MembraneModel& model, Rkf45Workspace& ws, std::span<const Force> forces);
+
+/// One step (adaptive or fixed per the model's settings) with the forces last given to
+/// `set_forces`. Re-assembles K and M first when the tick is a multiple of R. A rejected trial
+/// is retried with a smaller step; the state is only changed by an accepted step, and a
+/// non-finite trial at dt_min leaves it untouched (NonFinite).
+StepReport step_prepared(MembraneModel& model, MembraneState& state, Rkf45Workspace& ws,
+                         const StepOptions& options = {});
+
+/// `set_forces` then `step_prepared`.
+StepReport step(MembraneModel& model, MembraneState& state, Rkf45Workspace& ws,
+                std::span<const Force> forces, const StepOptions& options = {});
+
+/// Steps until `state.time` reaches `target_time` [s] (adaptive: the last step is shortened to
+/// land on it; fixed-step: as many whole steps as fit, the remainder waits for the next call),
+/// with `forces` held for the whole call. Real-time use: one call per frame. Stops early after
+/// `max_steps` steps or on NonFinite.
+AdvanceReport advance_to(MembraneModel& model, MembraneState& state, Rkf45Workspace& ws,
+                         double target_time, std::span<const Force> forces,
+                         const StepOptions& options = {}, std::uint64_t max_steps = 10'000'000);
+
+}  // namespace pliant::sim

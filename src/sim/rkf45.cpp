@@ -1,0 +1,662 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+#include <pliant/sim/rkf45.h>
+
+#include <omp.h>
+
+#if defined(__SSE__)
+#include <xmmintrin.h>
+#endif
+
+#include "sim/stencil_internal.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+namespace pliant::sim
+{
+namespace
+{
+
+using core::Field;
+
+// Fehlberg's 4(5) tableau (Hairer, Norsett & Wanner, Solving ODEs I, Table II.5.1).
+struct Tableau
+{
+    double c[6];
+    double a[6][6];
+    double b5[6];
+    double b4[6];
+};
+
+constexpr Tableau k_fehlberg = {
+    {0.0, 1.0 / 4.0, 3.0 / 8.0, 12.0 / 13.0, 1.0, 1.0 / 2.0},
+    {{0, 0, 0, 0, 0, 0},
+     {1.0 / 4.0, 0, 0, 0, 0, 0},
+     {3.0 / 32.0, 9.0 / 32.0, 0, 0, 0, 0},
+     {1932.0 / 2197.0, -7200.0 / 2197.0, 7296.0 / 2197.0, 0, 0, 0},
+     {439.0 / 216.0, -8.0, 3680.0 / 513.0, -845.0 / 4104.0, 0, 0},
+     {-8.0 / 27.0, 2.0, -3544.0 / 2565.0, 1859.0 / 4104.0, -11.0 / 40.0, 0}},
+    {16.0 / 135.0, 0.0, 6656.0 / 12825.0, 28561.0 / 56430.0, -9.0 / 50.0, 2.0 / 55.0},
+    {25.0 / 216.0, 0.0, 1408.0 / 2565.0, 2197.0 / 4104.0, -1.0 / 5.0, 0.0},
+};
+
+// Products of the tableau that turn the second-order system into velocity slopes only:
+// U_s = u + h c_s v + h^2 sum_m (A^2)_sm kv_m, u_new = u + h v + h^2 sum_m (b A)_m kv_m.
+struct Derived
+{
+    double aa[6][6];  // A^2
+    double ba[6];     // b5 A
+    double ea[6];     // (b5 - b4) A
+    double e[6];      // b5 - b4
+};
+
+constexpr Derived derive(const Tableau& t)
+{
+    Derived d{};
+    for (int s = 0; s < 6; ++s)
+        for (int m = 0; m < 6; ++m)
+        {
+            double sum = 0.0;
+            for (int j = 0; j < 6; ++j)
+                sum += t.a[s][j] * t.a[j][m];
+            d.aa[s][m] = sum;
+        }
+    for (int m = 0; m < 6; ++m)
+    {
+        double sb = 0.0;
+        double se = 0.0;
+        for (int s = 0; s < 6; ++s)
+        {
+            sb += t.b5[s] * t.a[s][m];
+            se += (t.b5[s] - t.b4[s]) * t.a[s][m];
+        }
+        d.ba[m] = sb;
+        d.ea[m] = se;
+        d.e[m] = t.b5[m] - t.b4[m];
+    }
+    return d;
+}
+
+constexpr Derived k_derived = derive(k_fehlberg);
+
+// Step-size dependent coefficients, computed once per trial (the same on every thread).
+struct Coeffs
+{
+    double cu[6];     // h c_s
+    double ck[6][6];  // h^2 (A^2)_sm
+    double cv[6][6];  // h a_sj
+    double ub[6];     // h^2 (b5 A)_m
+    double vb[6];     // h b5_m
+    double ue[6];     // h^2 ((b5 - b4) A)_m
+    double ve[6];     // h (b5 - b4)_m
+    double h = 0.0;
+};
+
+Coeffs make_coeffs(double h)
+{
+    Coeffs c{};
+    const double h2 = h * h;
+    c.h = h;
+    for (int s = 0; s < 6; ++s)
+    {
+        c.cu[s] = h * k_fehlberg.c[s];
+        for (int m = 0; m < 6; ++m)
+        {
+            c.ck[s][m] = h2 * k_derived.aa[s][m];
+            c.cv[s][m] = h * k_fehlberg.a[s][m];
+        }
+        c.ub[s] = h2 * k_derived.ba[s];
+        c.vb[s] = h * k_fehlberg.b5[s];
+        c.ue[s] = h2 * k_derived.ea[s];
+        c.ve[s] = h * k_derived.e[s];
+    }
+    return c;
+}
+
+// Everything a stage pass reads and writes (origins of ghost-ring-1 planes, one stride).
+struct Planes
+{
+    const double* u;
+    const double* v;  // v_src
+    const double* kv[5];
+    double* kv_out[5];
+    const double* wx;
+    const double* wy;
+    const double* wd;
+    const double* inv_m;
+    const double* acc;
+    double* u_out;
+    double* v_out;
+    std::ptrdiff_t s;
+    double beta;
+    double k_f;
+    double rtol;
+    double atol;
+    int w;  // W, for the canonical-node rule of the error norm
+};
+
+// Stage displacements U_S of row yy for x in [x0 - 1, x1] into dst[0 .. x1 - x0 + 1].
+template <int S>
+void fill_row(const Planes& p, const Coeffs& c, double* __restrict dst, int yy, int x0, int x1)
+{
+    const double* __restrict u = p.u;
+    const double* __restrict v = p.v;
+    const std::ptrdiff_t base = static_cast<std::ptrdiff_t>(yy) * p.s;
+    const double cu = c.cu[S];
+    // The planes never overlap: no loop-carried dependence (lets GCC vectorise without a
+    // runtime alias check per plane pair, which it would give up on).
+#pragma GCC ivdep
+    for (int x = x0 - 1; x <= x1; ++x)
+    {
+        const std::ptrdiff_t o = base + x;
+        double value = u[o] + cu * v[o];
+        for (int m = 0; m + 1 < S; ++m)  // (A^2)_{S, S-1} = 0
+            value = value + c.ck[S][m] * p.kv[m][o];
+        dst[x - x0 + 1] = value;
+    }
+}
+
+// One stage over one region. S < 5 writes kv_S; S == 5 also finishes the step (u_out, v_out)
+// and returns the error norm over the region's canonical nodes and a NaN probe.
+template <int S>
+void stage_region(const Planes& p, const Coeffs& c, const core::Region& r, double* buffer,
+                  double& err_out, double& probe_out)
+{
+    const int len = r.x1 - r.x0 + 2;
+    double* rows[3] = {buffer, buffer + len, buffer + 2 * len};
+    fill_row<S>(p, c, rows[0], r.y0 - 1, r.x0, r.x1);
+    fill_row<S>(p, c, rows[1], r.y0, r.x0, r.x1);
+    double err = 0.0;
+    double probe = 0.0;
+    const std::ptrdiff_t s = p.s;
+    for (int y = r.y0; y < r.y1; ++y)
+    {
+        fill_row<S>(p, c, rows[2], y + 1, r.x0, r.x1);
+        const double* __restrict bp = rows[0];
+        const double* __restrict bc = rows[1];
+        const double* __restrict bn = rows[2];
+        const double* __restrict v = p.v;
+        const double* __restrict wx = p.wx;
+        const double* __restrict wy = p.wy;
+        const double* __restrict wd = p.wd;
+        const double* __restrict inv_m = p.inv_m;
+        const double* __restrict acc = p.acc;
+        const std::ptrdiff_t base = static_cast<std::ptrdiff_t>(y) * s;
+        // Canonical nodes of this row: x < 2W, and x <= W on the folded rows y = 0 and y = W.
+        const int x_canon = (y == 0 || y == p.w) ? p.w + 1 : 2 * p.w;
+#pragma GCC ivdep
+        for (int x = r.x0; x < r.x1; ++x)
+        {
+            const std::ptrdiff_t i = base + x;
+            const int j = x - r.x0 + 1;
+            double vel = v[i];
+            for (int m = 0; m < S; ++m)
+                vel = vel + c.cv[S][m] * p.kv[m][i];
+            const double uc = bc[j];
+            const double ku =
+                detail::stencil(uc, bc[j + 1], bc[j - 1], bn[j], bp[j], bn[j + 1], bp[j - 1], wx[i],
+                                wx[i - 1], wy[i], wy[i - s], wd[i], wd[i - s - 1]);
+            const double a = ((-p.beta * vel - p.k_f * uc) - inv_m[i] * ku) + acc[i];
+            if constexpr (S < 5)
+            {
+                p.kv_out[S][i] = a;
+            }
+            else
+            {
+                const double u0 = p.u[i];
+                const double v0 = v[i];
+                double un = u0 + c.h * v0;
+                double vn = v0;
+                double eu = 0.0;
+                double ev = 0.0;
+                for (int m = 0; m < 5; ++m)
+                {
+                    const double k = p.kv[m][i];
+                    un = un + c.ub[m] * k;
+                    vn = vn + c.vb[m] * k;
+                    eu = eu + c.ue[m] * k;
+                    ev = ev + c.ve[m] * k;
+                }
+                vn = vn + c.vb[5] * a;
+                ev = ev + c.ve[5] * a;
+                p.u_out[i] = un;
+                p.v_out[i] = vn;
+                const double su =
+                    std::fabs(eu) / (p.atol + p.rtol * std::max(std::fabs(u0), std::fabs(un)));
+                const double sv =
+                    std::fabs(ev) / (p.atol + p.rtol * std::max(std::fabs(v0), std::fabs(vn)));
+                const double e = x < x_canon ? std::max(su, sv) : 0.0;
+                err = std::max(err, e);
+                probe += (un - un) + (vn - vn);  // NaN iff something is not finite
+            }
+        }
+        double* t = rows[0];
+        rows[0] = rows[1];
+        rows[1] = rows[2];
+        rows[2] = t;
+    }
+    err_out = err;
+    probe_out = probe;
+}
+
+// Sets FTZ and DAZ for the current thread for its lifetime (x86 SSE; elsewhere a no-op).
+class FlushDenormals
+{
+public:
+#if defined(__SSE__)
+    FlushDenormals() : saved_(_mm_getcsr())
+    {
+        _mm_setcsr(saved_ | 0x8040U);
+    }
+    ~FlushDenormals()
+    {
+        _mm_setcsr(saved_);
+    }
+
+private:
+    unsigned saved_;
+#else
+    FlushDenormals() = default;
+#endif
+public:
+    FlushDenormals(const FlushDenormals&) = delete;
+    FlushDenormals& operator=(const FlushDenormals&) = delete;
+};
+
+struct TrialResult
+{
+    double error = 0.0;
+    bool finite = true;
+};
+
+template <int S>
+void run_stage(const Planes& p, const Coeffs& c, std::span<const core::Region> regions,
+               Rkf45Workspace& ws)
+{
+    const auto n = static_cast<std::ptrdiff_t>(regions.size());
+#pragma omp for schedule(static)
+    for (std::ptrdiff_t k = 0; k < n; ++k)
+    {
+        double* buffer = ws.row_buffers.data() +
+                         static_cast<std::size_t>(omp_get_thread_num()) * ws.row_buffer_len;
+        const auto kk = static_cast<std::size_t>(k);
+        stage_region<S>(p, c, regions[kk], buffer, ws.leaf_error[kk], ws.leaf_probe[kk]);
+    }
+}
+
+// One trial step of size h from (state.u, state.v or its masked copy) into ws.u_out / v_out.
+TrialResult trial(const MembraneModel& model, const MembraneState& state, Rkf45Workspace& ws,
+                  std::span<const core::Region> regions, double h, int threads, bool restricted)
+{
+    const MembraneSettings& set = model.settings();
+    const Coeffs c = make_coeffs(h);
+    Planes p{};
+    p.u = state.u.origin();
+    p.v = restricted ? ws.v_src.origin() : state.v.origin();
+    for (std::size_t m = 0; m < 5; ++m)
+    {
+        p.kv[m] = ws.kv[m].origin();
+        p.kv_out[m] = ws.kv[m].origin();
+    }
+    p.wx = model.weight_x().origin();
+    p.wy = model.weight_y().origin();
+    p.wd = model.weight_d().origin();
+    p.inv_m = model.inverse_mass().origin();
+    p.acc = ws.accel.origin();
+    p.u_out = ws.u_out.origin();
+    p.v_out = ws.v_out.origin();
+    p.s = state.u.stride();
+    p.beta = set.beta;
+    p.k_f = set.k_f;
+    p.rtol = set.rtol;
+    p.atol = set.atol;
+    p.w = model.grid().w();
+
+#pragma omp parallel num_threads(threads)
+    {
+        // Flush denormals to zero on every thread of the pass: the far tails of a wave decay
+        // into denormal numbers, which cost ~100x per operation on x86 (measured: 400+ ns per
+        // node-step instead of tens). Every thread runs in the same mode, so results stay
+        // bit-identical for any thread count.
+        const FlushDenormals flush;
+        run_stage<0>(p, c, regions, ws);
+#pragma omp single
+        model.sync(ws.kv[0]);
+        run_stage<1>(p, c, regions, ws);
+#pragma omp single
+        model.sync(ws.kv[1]);
+        run_stage<2>(p, c, regions, ws);
+#pragma omp single
+        model.sync(ws.kv[2]);
+        run_stage<3>(p, c, regions, ws);
+#pragma omp single
+        model.sync(ws.kv[3]);
+        run_stage<4>(p, c, regions, ws);
+#pragma omp single
+        model.sync(ws.kv[4]);
+        run_stage<5>(p, c, regions, ws);
+    }
+    TrialResult t;
+    for (std::size_t k = 0; k < regions.size(); ++k)
+    {
+        t.error = std::max(t.error, ws.leaf_error[k]);
+        if (std::isnan(ws.leaf_probe[k]))
+            t.finite = false;
+    }
+    return t;
+}
+
+void copy_regions(const Field<double>& from, Field<double>& to,
+                  std::span<const core::Region> regions)
+{
+    for (const core::Region& r : regions)
+        for (int y = r.y0; y < r.y1; ++y)
+            std::copy(from.origin() + from.offset(r.x0, y), from.origin() + from.offset(r.x1, y),
+                      to.origin() + to.offset(r.x0, y));
+}
+
+void add_node_accel(const MembraneModel& model, Rkf45Workspace& ws, core::NodeIndex n,
+                    double force_n)
+{
+    const core::NodeIndex c = model.grid().canonical(n);
+    const core::GridCoord g = model.grid().coord(c);
+    const std::ptrdiff_t off = ws.accel.padded_offset(g.x, g.y);
+    ws.accel.padded()[static_cast<std::size_t>(off)] += force_n / model.unique_mass(c);
+    ws.touched.push_back(off);
+}
+
+core::Vec3 normal_at(const MembraneModel& model, int x, int y)
+{
+    return {model.normals()[0].at(x, y), model.normals()[1].at(x, y), model.normals()[2].at(x, y)};
+}
+
+core::Vec3 rest_at(const MembraneModel& model, int x, int y)
+{
+    return {model.rest_positions()[0].at(x, y), model.rest_positions()[1].at(x, y),
+            model.rest_positions()[2].at(x, y)};
+}
+
+void add_point_force(const MembraneModel& model, Rkf45Workspace& ws, const Force& f)
+{
+    const core::TetraGrid& g = model.grid();
+    const auto regions = model.leaf_regions();
+    const auto bounds = model.leaf_bounds();
+    const double r2 = f.radius * f.radius;
+    // Pass 0 sums the weights, pass 1 applies them; both visit nodes in leaf order.
+    double wsum = 0.0;
+    for (int pass = 0; pass < 2; ++pass)
+    {
+        for (std::size_t k = 0; k < regions.size(); ++k)
+        {
+            const core::Vec3 lo = bounds[2 * k];
+            const core::Vec3 hi = bounds[2 * k + 1];
+            const core::Vec3 q{std::clamp(f.point.x, lo.x, hi.x), std::clamp(f.point.y, lo.y, hi.y),
+                               std::clamp(f.point.z, lo.z, hi.z)};
+            const core::Vec3 dq = q - f.point;
+            if (core::dot(dq, dq) >= r2)
+                continue;
+            const core::Region r = regions[k];
+            for (int y = r.y0; y < r.y1; ++y)
+                for (int x = r.x0; x < r.x1; ++x)
+                {
+                    if (!g.is_canonical(g.index(x, y)))
+                        continue;
+                    const core::Vec3 d = rest_at(model, x, y) - f.point;
+                    const double d2 = core::dot(d, d);
+                    if (d2 >= r2)
+                        continue;
+                    const double t = 1.0 - d2 / r2;
+                    const double w = t * t;
+                    if (pass == 0)
+                        wsum += w;
+                    else
+                        add_node_accel(model, ws, g.index(x, y),
+                                       w / wsum * core::dot(f.vector, normal_at(model, x, y)));
+                }
+        }
+        if (pass == 0 && !(wsum > 0.0))
+            break;
+    }
+    if (wsum > 0.0)
+        return;
+    // No node inside the radius: the nearest canonical node takes the whole force.
+    double best = 0.0;
+    core::NodeIndex best_node{};
+    bool found = false;
+    for (const core::NodeIndex n : g.node_of_unique())
+    {
+        const core::GridCoord c = g.coord(n);
+        const core::Vec3 d = rest_at(model, c.x, c.y) - f.point;
+        const double d2 = core::dot(d, d);
+        if (!found || d2 < best)
+        {
+            best = d2;
+            best_node = n;
+            found = true;
+        }
+    }
+    const core::GridCoord c = g.coord(best_node);
+    add_node_accel(model, ws, best_node, core::dot(f.vector, normal_at(model, c.x, c.y)));
+}
+
+}  // namespace
+
+Rkf45Workspace::Rkf45Workspace(const MembraneModel& model, int threads)
+{
+    const core::TetraGrid& g = model.grid();
+    max_threads = threads > 0 ? threads : std::max(1, omp_get_max_threads());
+    for (int k = 0; k < 5; ++k)
+        kv.emplace_back(g, 1);
+    u_out = Field<double>(g, 1);
+    v_out = Field<double>(g, 1);
+    v_src = Field<double>(g, 1);
+    accel = Field<double>(g, 1);
+    row_buffer_len = 3 * static_cast<std::size_t>(g.nx() + 3);
+    row_buffers.assign(row_buffer_len * static_cast<std::size_t>(max_threads), 0.0);
+    leaf_error.assign(model.leaf_regions().size(), 0.0);
+    leaf_probe.assign(model.leaf_regions().size(), 0.0);
+    touched.reserve(4096);
+    next_dt_ = model.settings().dt_initial;
+}
+
+core::Result<void> validate_forces(const MembraneModel& model, std::span<const Force> forces)
+{
+    const auto faces = static_cast<std::int64_t>(model.grid().face_count());
+    for (std::size_t k = 0; k < forces.size(); ++k)
+    {
+        const Force& f = forces[k];
+        const std::string name = "force " + std::to_string(k) + ": ";
+        if (!core::is_finite(f.vector))
+            return core::fail(core::ErrorCode::InvalidArgument, name + "vector is not finite");
+        if (f.face >= faces)
+            return core::fail(
+                core::ErrorCode::InvalidArgument,
+                name + "face " + std::to_string(f.face) + " is not below " + std::to_string(faces));
+        if (f.face < 0 &&
+            (!core::is_finite(f.point) || !(f.radius >= 0.0) || !std::isfinite(f.radius)))
+            return core::fail(core::ErrorCode::InvalidArgument,
+                              name + "point force needs a finite point and radius >= 0");
+    }
+    return {};
+}
+
+void set_forces(const MembraneModel& model, Rkf45Workspace& ws, std::span<const Force> forces)
+{
+    auto data = ws.accel.padded();
+    for (const std::int64_t off : ws.touched)
+        data[static_cast<std::size_t>(off)] = 0.0;
+    ws.touched.clear();
+    const core::TetraGrid& g = model.grid();
+    const int w2 = 2 * g.w();
+    for (const Force& f : forces)
+    {
+        if (f.face >= 0)
+        {
+            PLIANT_ASSERT(static_cast<std::size_t>(f.face) < g.face_count(),
+                          "set_forces: face out of range");
+            const auto cell = f.face / 2;
+            const int x = static_cast<int>(cell % w2);
+            const int y = static_cast<int>(cell / w2);
+            const core::NodeIndex n[3] = {
+                g.index(x, y), (f.face % 2 == 0) ? g.index(x + 1, y) : g.index(x + 1, y + 1),
+                (f.face % 2 == 0) ? g.index(x + 1, y + 1) : g.index(x, y + 1)};
+            for (const core::NodeIndex node : n)
+            {
+                const core::GridCoord c = g.coord(node);
+                add_node_accel(model, ws, node,
+                               core::dot(f.vector, normal_at(model, c.x, c.y)) / 3.0);
+            }
+        }
+        else
+            add_point_force(model, ws, f);
+    }
+    model.sync(ws.accel);
+}
+
+StepReport step_prepared(MembraneModel& model, MembraneState& state, Rkf45Workspace& ws,
+                         const StepOptions& options)
+{
+    const MembraneSettings& set = model.settings();
+    StepReport report;
+    const int threads =
+        std::min(ws.max_threads, set.threads > 0 ? set.threads : omp_get_max_threads());
+
+    model.sync(state.u);
+    model.sync(state.v);
+    if (set.reassemble_every > 0 && state.tick > 0 &&
+        state.tick % static_cast<std::uint64_t>(set.reassemble_every) == 0 &&
+        model.assembled_tick() != state.tick)
+    {
+        report.reassembled = model.reassemble(state.u).has_value();
+        model.set_assembled_tick(state.tick);
+    }
+
+    const bool restricted = !options.owned.empty();
+    const std::span<const core::Region> regions = restricted ? options.owned : model.leaf_regions();
+    if (ws.leaf_error.size() < regions.size())
+    {
+        ws.leaf_error.resize(regions.size());
+        ws.leaf_probe.resize(regions.size());
+    }
+    if (restricted)
+    {
+        // Dirichlet nodes: v and every slope zero, so their stage displacements are u.
+        for (const core::Region& r : regions)
+            PLIANT_ASSERT(r.x0 >= 0 && r.y0 >= 0 && r.x1 <= model.grid().nx() &&
+                              r.y1 <= model.grid().ny() && r.x0 <= r.x1 && r.y0 <= r.y1,
+                          "step: owned region outside the grid");
+        ws.v_src.fill(0.0);
+        copy_regions(state.v, ws.v_src, regions);
+        model.sync(ws.v_src);
+        for (auto& k : ws.kv)
+            k.fill(0.0);
+    }
+
+    double h = set.fixed_step ? set.fixed_dt : std::clamp(ws.next_dt(), set.dt_min, set.dt_max);
+    bool limited = false;
+    if (!set.fixed_step && options.dt_limit > 0.0 && h > options.dt_limit)
+    {
+        h = options.dt_limit;
+        limited = true;
+    }
+    for (int attempt = 0; attempt < 200; ++attempt)
+    {
+        const TrialResult t = trial(model, state, ws, regions, h, threads, restricted);
+        const bool at_min = set.fixed_step || h <= set.dt_min;
+        if (!t.finite)
+        {
+            if (at_min)
+            {
+                report.status = report.status | StepStatus::NonFinite;
+                return report;
+            }
+            ++report.rejections;
+            report.status = report.status | StepStatus::Rejected;
+            h = std::max(set.dt_min, h * set.min_shrink);
+            continue;
+        }
+        if (t.error > 1.0 && !at_min)
+        {
+            ++report.rejections;
+            report.status = report.status | StepStatus::Rejected;
+            const double f = std::max(set.min_shrink, set.safety * std::pow(t.error, -0.2));
+            h = std::max(set.dt_min, h * std::min(f, 0.9));
+            continue;
+        }
+        if (t.error > 1.0 && !set.fixed_step)
+            report.status = report.status | StepStatus::MinStepReached;
+        // Accept.
+        if (restricted)
+        {
+            copy_regions(ws.u_out, state.u, regions);
+            copy_regions(ws.v_out, state.v, regions);
+        }
+        else
+        {
+            std::swap(state.u, ws.u_out);
+            std::swap(state.v, ws.v_out);
+        }
+        model.sync(state.u);
+        model.sync(state.v);
+        state.time += h;
+        ++state.tick;
+        report.dt = h;
+        report.error = t.error;
+        if (!set.fixed_step)
+        {
+            const double f = t.error > 0.0 ? std::clamp(set.safety * std::pow(t.error, -0.2),
+                                                        set.min_shrink, set.max_growth)
+                                           : set.max_growth;
+            double next = std::clamp(h * f, set.dt_min, set.dt_max);
+            if (limited)
+                next = std::max(next, std::clamp(ws.next_dt(), set.dt_min, set.dt_max));
+            ws.set_next_dt(next);
+        }
+        return report;
+    }
+    // 200 rejections in a row cannot happen with min_shrink < 1 and dt_min > 0 (h reaches
+    // dt_min after a bounded number of shrinks); treat it as a failed step all the same.
+    report.status = report.status | StepStatus::NonFinite;
+    return report;
+}
+
+StepReport step(MembraneModel& model, MembraneState& state, Rkf45Workspace& ws,
+                std::span<const Force> forces, const StepOptions& options)
+{
+    set_forces(model, ws, forces);
+    return step_prepared(model, state, ws, options);
+}
+
+AdvanceReport advance_to(MembraneModel& model, MembraneState& state, Rkf45Workspace& ws,
+                         double target_time, std::span<const Force> forces,
+                         const StepOptions& options, std::uint64_t max_steps)
+{
+    set_forces(model, ws, forces);
+    AdvanceReport report;
+    const MembraneSettings& set = model.settings();
+    const double slack = 1e-12 * std::max(1.0, std::fabs(target_time));
+    StepOptions opt = options;
+    while (report.steps < max_steps)
+    {
+        const double remaining = target_time - state.time;
+        if (set.fixed_step ? remaining + slack < set.fixed_dt : remaining <= slack)
+        {
+            report.reached = true;
+            break;
+        }
+        opt.dt_limit = options.dt_limit > 0.0 ? std::min(options.dt_limit, remaining) : remaining;
+        const StepReport r = step_prepared(model, state, ws, opt);
+        report.status = report.status | r.status;
+        report.rejections += r.rejections;
+        if (has_flag(r.status, StepStatus::NonFinite))
+            break;
+        ++report.steps;
+        if (!set.fixed_step && r.dt >= remaining)
+            state.time = target_time;  // land exactly, whatever the rounding of time += h
+    }
+    return report;
+}
+
+}  // namespace pliant::sim
