@@ -1,0 +1,419 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+// `pliant render GRID|MESH -o shot.png`: a Phong-shaded picture with no display, through an
+// offscreen OpenGL context (EGL surfaceless, else OSMesa; docs/rendering.md). A GRID (.pgrid) is
+// drawn by the texture path (positions in a float texture, normals in the vertex shader), after
+// optional butterfly refinement for display (--level-up); any other file is imported as a mesh
+// and drawn from a vertex buffer with CPU normals. --frames DIR renders every .pgrid of a folder
+// (simulation output) into a numbered PNG sequence with one still camera.
+#include <pliant/core/grid_io.h>
+#include <pliant/core/tetra_grid.h>
+#include <pliant/mesh/io.h>
+#include <pliant/render/framebuffer.h>
+#include <pliant/render/grid_renderer.h>
+#include <pliant/render/mesh_renderer.h>
+#include <pliant/render/normals.h>
+#include <pliant/render/offscreen_context.h>
+#include <pliant/subdiv/convolution_plan.h>
+#include <pliant/subdiv/refine.h>
+
+#include <spdlog/spdlog.h>
+
+#include "cli_common.h"
+#include "commands.h"
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace pliant::cli
+{
+namespace
+{
+
+namespace fs = std::filesystem;
+using core::ErrorCode;
+
+struct RenderOptions
+{
+    fs::path input;
+    fs::path out;
+    fs::path frames;
+    std::string size = "1280x720";
+    std::string camera;
+    std::string color = "none";
+    std::string backend = "auto";
+    int level_up = 0;
+    int samples = 4;
+    int owner_depth = 1;
+    bool wireframe = false;
+};
+
+/// A grid ready to draw: positions (displaced from the rest grid when the file has only "u"),
+/// the displacement for colouring, owners per node.
+struct GridScene
+{
+    core::TetraGrid grid;
+    core::Vec3Field<double> positions;
+    std::optional<core::Field<double>> u;
+    std::vector<std::uint16_t> owners;
+};
+
+core::Result<std::array<int, 2>> parse_size(const std::string& text)
+{
+    int w = 0;
+    int h = 0;
+    char x = 0;
+    if (std::sscanf(text.c_str(), "%d%c%d", &w, &x, &h) != 3 || (x != 'x' && x != 'X') || w < 16 ||
+        h < 16 || w > 8192 || h > 8192)
+        return core::fail(ErrorCode::InvalidArgument,
+                          "render: --size " + text + " is not WxH with 16 <= W, H <= 8192");
+    return std::array<int, 2>{w, h};
+}
+
+core::Result<render::CameraSettings> parse_camera(const std::string& text)
+{
+    render::CameraSettings camera;
+    if (text.empty())
+        return camera;
+    double az = 0.0;
+    double el = 0.0;
+    double dist = 0.0;
+    const int n = std::sscanf(text.c_str(), "%lf,%lf,%lf", &az, &el, &dist);
+    if (n < 2 || !std::isfinite(az) || !std::isfinite(el) || !std::isfinite(dist) || dist < 0.0)
+        return core::fail(ErrorCode::InvalidArgument,
+                          "render: --camera " + text +
+                              " is not AZIMUTH,ELEVATION[,DISTANCE] (degrees, degrees, model "
+                              "units >= 0; 0 fits the object)");
+    camera.azimuth_deg = az;
+    camera.elevation_deg = el;
+    camera.distance = n == 3 ? dist : 0.0;
+    return camera;
+}
+
+/// Owners from a channel "owner" (rounded), or the quad-tree leaves at `depth` (DESIGN §5) as
+/// a stand-in partition: each canonical node belongs to exactly one leaf, twins follow it.
+std::vector<std::uint16_t> owners_of(const core::TetraGrid& grid, const core::GridFile& file,
+                                     int depth)
+{
+    std::vector<std::uint16_t> owners(grid.node_count(), render::k_no_owner);
+    if (const core::Field<double>* channel = file.find("owner"); channel != nullptr)
+    {
+        for (std::uint32_t i = 0; i < grid.node_count(); ++i)
+        {
+            const double v = (*channel)[core::NodeIndex{i}];
+            owners[i] = v >= 0.0 && v < 65535.0 ? static_cast<std::uint16_t>(std::lround(v))
+                                                : render::k_no_owner;
+        }
+        return owners;
+    }
+    const int d = std::clamp(depth, 0, grid.level());
+    const std::vector<core::LeafId> leaves = grid.leaves(d);
+    for (std::size_t k = 0; k < leaves.size(); ++k)
+    {
+        const core::Region r = grid.leaf_region(leaves[k]);
+        for (int y = r.y0; y < r.y1; ++y)
+            for (int x = r.x0; x < r.x1; ++x)
+                if (grid.is_canonical(grid.index(x, y)))
+                    owners[grid.index(x, y).value] = static_cast<std::uint16_t>(k);
+    }
+    for (const core::TwinPair& t : grid.twins())
+        owners[t.twin.value] = owners[t.canonical.value];
+    return owners;
+}
+
+/// Loads a grid file; `rest` supplies positions for a frame that carries only "u".
+core::Result<GridScene> load_grid_scene(const fs::path& path, const RenderOptions& opt,
+                                        const core::GridFile* rest)
+{
+    auto file = core::load_grid(path);
+    if (!file)
+        return file.error();
+    auto grid = core::TetraGrid::create(file->level);
+    if (!grid)
+        return grid.error();
+    // `pliant simulate` frames carry deformed positions px/py/pz plus "u" (docs/physics.md):
+    // u only colours them. A frame with "u" alone is displaced from the rest grid.
+    const core::GridFile* geometry_file = &*file;
+    const bool displace = file->find("px") == nullptr && rest != nullptr;
+    if (displace)
+    {
+        if (rest->level != file->level)
+            return core::fail(ErrorCode::BadGrid, "render: " + path.string() + " is level " +
+                                                      std::to_string(file->level) +
+                                                      " but the rest grid is level " +
+                                                      std::to_string(rest->level));
+        geometry_file = rest;
+    }
+    auto rest_positions = core::geometry_of(*grid, *geometry_file);
+    if (!rest_positions)
+        return core::fail(ErrorCode::BadGrid,
+                          "render: " + path.string() +
+                              " has no positions px/py/pz (for frames that carry only \"u\", "
+                              "give the rest geometry .pgrid as GRID)");
+    std::optional<core::Field<double>> u;
+    if (const core::Field<double>* channel = file->find("u"); channel != nullptr)
+        u = *channel;
+    std::vector<std::uint16_t> owners = owners_of(*grid, *file, opt.owner_depth);
+
+    core::TetraGrid display = *grid;
+    core::Vec3Field<double> p = std::move(*rest_positions);
+    if (opt.level_up > 0)
+    {
+        auto plans = subdiv::make_plans(grid->level(), opt.level_up);
+        if (!plans)
+            return plans.error();
+        p = subdiv::refine_levels<double>(*plans, p);
+        if (u)
+            u = subdiv::refine_levels<double>(*plans, *u);
+        display = plans->back().fine_grid();
+        // Owners are labels, not smooth fields: a fine node takes the owner of the coarse node
+        // at its rounded-down coarse position.
+        std::vector<std::uint16_t> fine(display.node_count());
+        const int shift = opt.level_up;
+        for (int y = 0; y < display.ny(); ++y)
+            for (int x = 0; x < display.nx(); ++x)
+                fine[display.index(x, y).value] = owners[grid->index(x >> shift, y >> shift).value];
+        owners = std::move(fine);
+    }
+    if (u && displace)
+    {
+        // p = P + u N with rest normals N (DESIGN §4).
+        const core::Vec3Field<double> n = render::grid_normals(display, p);
+        for (std::size_t c = 0; c < 3; ++c)
+            for (int y = 0; y < display.ny(); ++y)
+                for (int x = 0; x < display.nx(); ++x)
+                    p[c].at(x, y) += u->at(x, y) * n[c].at(x, y);
+    }
+    return GridScene{std::move(display), std::move(p), std::move(u), std::move(owners)};
+}
+
+struct Target
+{
+    render::Framebuffer framebuffer;
+    int width;
+    int height;
+};
+
+core::Result<void> save(const Target& target, const fs::path& path)
+{
+    std::error_code ec;
+    if (path.has_parent_path())
+        fs::create_directories(path.parent_path(), ec);  // a failure shows up in write_png
+    return render::write_png(path, target.framebuffer.read_rgba8());
+}
+
+int run_frames(const RenderOptions& opt, render::DrawSettings settings, Target& target,
+               const GlobalOptions& global)
+{
+    std::error_code ec;
+    if (!fs::is_directory(opt.frames, ec))
+        return report(
+            {ErrorCode::IoError, "render: --frames " + opt.frames.string() + " is not a folder"});
+    std::vector<fs::path> files;
+    for (const auto& entry : fs::directory_iterator(opt.frames, ec))
+        if (entry.is_regular_file() && entry.path().extension() == ".pgrid")
+            files.push_back(entry.path());
+    std::sort(files.begin(), files.end());
+    if (files.empty())
+        return report({ErrorCode::EmptyInput, "render: no .pgrid files in " + opt.frames.string()});
+
+    std::optional<core::GridFile> rest;
+    if (!opt.input.empty())
+    {
+        auto loaded = core::load_grid(opt.input);
+        if (!loaded)
+            return report(loaded.error());
+        rest = std::move(*loaded);
+    }
+    auto renderer = render::GridRenderer::create();
+    if (!renderer)
+        return report(renderer.error());
+
+    const fs::path dir = opt.out.parent_path();
+    const std::string stem = opt.out.stem().string();
+    ProgressBar progress(global);
+    for (std::size_t i = 0; i < files.size(); ++i)
+    {
+        auto scene = load_grid_scene(files[i], opt, rest ? &*rest : nullptr);
+        if (!scene)
+            return report(scene.error());
+        renderer->upload(scene->grid, scene->positions, scene->u ? &*scene->u : nullptr);
+        renderer->upload_owners(scene->grid, scene->owners);
+        if (i == 0)
+        {
+            // One still camera for the whole sequence: aimed at the first frame's box.
+            settings.camera.fit_to = renderer->bounds();
+            if (settings.displacement_range <= 0.0F)
+                settings.displacement_range =
+                    static_cast<float>(std::max(renderer->max_abs_value(), 1e-12));
+        }
+        target.framebuffer.bind();
+        renderer->draw(settings, target.width, target.height);
+        std::array<char, 32> number{};
+        std::snprintf(number.data(), number.size(), "_%04zu.png", i);
+        const fs::path out = dir / (stem + number.data());
+        if (auto saved = save(target, out); !saved)
+            return report(saved.error());
+        progress.update("render", static_cast<double>(i + 1) / static_cast<double>(files.size()));
+    }
+    std::printf("%zu frames from %s -> %s\n", files.size(), opt.frames.string().c_str(),
+                (dir / (stem + "_NNNN.png")).string().c_str());
+    return 0;
+}
+
+int run_render(const RenderOptions& opt, const GlobalOptions& global)
+{
+    const auto start = std::chrono::steady_clock::now();
+    auto size = parse_size(opt.size);
+    if (!size)
+        return report(size.error());
+    auto camera = parse_camera(opt.camera);
+    if (!camera)
+        return report(camera.error());
+    if (opt.frames.empty() && opt.input.empty())
+        return report({ErrorCode::InvalidArgument, "render: give GRID or MESH, or --frames DIR"});
+    if (opt.out.extension() != ".png")
+        return report({ErrorCode::UnsupportedFormat,
+                       "render: output " + opt.out.string() + " must end in .png"});
+
+    render::DrawSettings settings;
+    settings.camera = *camera;
+    settings.wireframe = opt.wireframe;
+    settings.color = opt.color == "displacement" ? render::ColorMode::Displacement
+                     : opt.color == "owner"      ? render::ColorMode::Owner
+                                                 : render::ColorMode::None;
+
+    const render::GlBackend backend = opt.backend == "egl"      ? render::GlBackend::Egl
+                                      : opt.backend == "osmesa" ? render::GlBackend::OsMesa
+                                                                : render::GlBackend::Auto;
+    auto context = render::OffscreenContext::create(backend);
+    if (!context)
+        return report(context.error());
+    spdlog::debug("render: {} context, {}", render::to_string(context->backend()),
+                  context->description());
+    auto fb = render::Framebuffer::create((*size)[0], (*size)[1], render::PixelFormat::Rgba8,
+                                          opt.samples);
+    if (!fb)
+        return report(fb.error());
+    Target target{std::move(*fb), (*size)[0], (*size)[1]};
+
+    if (!opt.frames.empty())
+        return run_frames(opt, settings, target, global);
+
+    std::error_code ec;
+    if (!fs::is_regular_file(opt.input, ec))
+        return report({ErrorCode::IoError, "render: " + opt.input.string() + ": no such file"});
+    std::string what;
+    if (opt.input.extension() == ".pgrid")
+    {
+        auto scene = load_grid_scene(opt.input, opt, nullptr);
+        if (!scene)
+            return report(scene.error());
+        if (settings.color == render::ColorMode::Displacement && !scene->u)
+            spdlog::warn("render: {} has no displacement channel \"u\"; colouring by zero",
+                         opt.input.string());
+        auto renderer = render::GridRenderer::create();
+        if (!renderer)
+            return report(renderer.error());
+        renderer->upload(scene->grid, scene->positions, scene->u ? &*scene->u : nullptr);
+        renderer->upload_owners(scene->grid, scene->owners);
+        target.framebuffer.bind();
+        renderer->draw(settings, target.width, target.height);
+        what = "level " + std::to_string(scene->grid.level()) + " grid, " +
+               std::to_string(renderer->triangle_count()) + " triangles";
+    }
+    else
+    {
+        if (opt.level_up > 0)
+            return report({ErrorCode::InvalidArgument, "render: --level-up refines grids; remesh " +
+                                                           opt.input.string() +
+                                                           " first (`pliant remesh`)"});
+        auto mesh = mesh::import_mesh(opt.input);
+        if (!mesh)
+            return report(mesh.error());
+        if (settings.color != render::ColorMode::None)
+            spdlog::warn("render: --color {} applies to grids; drawing the mesh plain", opt.color);
+        auto renderer = render::MeshRenderer::create();
+        if (!renderer)
+            return report(renderer.error());
+        renderer->upload(mesh->positions, mesh->faces);
+        target.framebuffer.bind();
+        renderer->draw(settings, target.width, target.height);
+        what = "mesh, " + std::to_string(renderer->triangle_count()) + " triangles";
+    }
+    if (auto saved = save(target, opt.out); !saved)
+        return report(saved.error());
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    std::printf("%s: %dx%d, %s (%s) in %.2f s -> %s\n", opt.input.string().c_str(), target.width,
+                target.height, what.c_str(), render::to_string(context->backend()), seconds,
+                opt.out.string().c_str());
+    return 0;
+}
+
+void add_render_command(CLI::App& app, const GlobalOptions& global)
+{
+    auto opt = std::make_shared<RenderOptions>();
+    CLI::App* cmd = app.add_subcommand(
+        "render", "Render a grid or mesh to a PNG with no display (offscreen OpenGL).");
+    cmd->footer(
+        "GRID (.pgrid) is drawn with positions in a float texture and normals computed on the\n"
+        "GPU; its positions px/py/pz are drawn as stored (`pliant simulate` frames hold deformed\n"
+        "ones) and a channel \"u\" feeds --color displacement. Any other file is imported as a\n"
+        "mesh. Uses EGL (surfaceless, Mesa) or OSMesa: no window, no X server.\n"
+        "--frames DIR renders every DIR/*.pgrid in name order to OUT_0000.png, OUT_0001.png, ...\n"
+        "with the camera of the first frame (GRID, if given, supplies the rest positions P of\n"
+        "frames that carry only \"u\": those are drawn at P + u N). Owner colours come from a "
+        "channel \"owner\" or, without\n"
+        "one, from the quad-tree leaves at --owner-depth.\n\n"
+        "Examples:\n"
+        "  pliant render spot.pgrid -o spot.png\n"
+        "  pliant render spot.pgrid -o spot.png --size 800x800 --camera 40,25 --level-up 1\n"
+        "  pliant render spot.pgrid -o owners.png --color owner --wireframe\n"
+        "  pliant render data/spot.obj -o mesh.png\n"
+        "  pliant render --frames out/spot -o frames/f.png --color displacement");
+    cmd->add_option("GRID_OR_MESH", opt->input,
+                    "A .pgrid grid file or a mesh file (.obj, .ply, "
+                    "...)");
+    cmd->add_option("-o,--output", opt->out, "Output .png (with --frames: the name pattern)")
+        ->required();
+    cmd->add_option("--size", opt->size, "Image size WxH in pixels")->capture_default_str();
+    cmd->add_option("--camera", opt->camera,
+                    "AZIMUTH,ELEVATION[,DISTANCE]: degrees about +y and above the horizon, "
+                    "distance in model units (default 30,20 and fitted)");
+    cmd->add_option("--level-up", opt->level_up,
+                    "Refine a grid K levels by butterfly subdivision for display")
+        ->check(CLI::Range(0, 9))
+        ->capture_default_str();
+    cmd->add_option("--color", opt->color, "Colouring: none, displacement or owner")
+        ->check(CLI::IsMember({"none", "displacement", "owner"}))
+        ->capture_default_str();
+    cmd->add_flag("--wireframe", opt->wireframe, "Draw the triangle edges over the surface");
+    cmd->add_option("--frames", opt->frames, "Render every .pgrid in this folder (a sequence)");
+    cmd->add_option("--samples", opt->samples, "Multisampling (1 = off)")
+        ->check(CLI::Range(1, 16))
+        ->capture_default_str();
+    cmd->add_option("--owner-depth", opt->owner_depth,
+                    "Quad-tree depth of the stand-in owners (no \"owner\" channel)")
+        ->check(CLI::Range(0, 10))
+        ->capture_default_str();
+    cmd->add_option("--backend", opt->backend,
+                    "OpenGL set-up: auto (EGL, then OSMesa), egl, osmesa")
+        ->check(CLI::IsMember({"auto", "egl", "osmesa"}))
+        ->capture_default_str();
+    cmd->callback(
+        command_callback(global, [opt, &global]() -> int { return run_render(*opt, global); }));
+}
+
+const CommandRegistrar k_register{{"render", 60, &add_render_command}};
+
+}  // namespace
+}  // namespace pliant::cli

@@ -1,0 +1,116 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+// Frames per second of the Phong renderer at 1280x720, offscreen, for a sphere grid of levels
+// 6..9 (16K .. 1M triangles): the texture path (GridRenderer: positions uploaded every frame,
+// normals in the vertex shader) beside the plain vertex-buffer path (MeshRenderer: static
+// buffers, CPU normals) in the same run. Each iteration draws one frame and waits for it
+// (glFinish, as a buffer swap would in a window; no read-back). The counter "fps" is frames per
+// second of wall time; the line printed first names GL_RENDERER. upload:1 also re-uploads the
+// positions every frame, as the simulation loop does.
+//
+// Usage: bench_render [--benchmark_repetitions=3 --benchmark_report_aggregates_only=true]
+// Set PLIANT_GL_BACKEND=osmesa to measure OSMesa instead of EGL.
+
+#include <pliant/render/framebuffer.h>
+#include <pliant/render/gl_loader.h>
+#include <pliant/render/grid_renderer.h>
+#include <pliant/render/mesh_renderer.h>
+#include <pliant/render/offscreen_context.h>
+
+#include <benchmark/benchmark.h>
+
+#include "sphere_grid.h"
+
+#include <cstdio>
+#include <cstdlib>
+#include <optional>
+#include <vector>
+
+namespace
+{
+
+using namespace pliant;
+
+constexpr int k_width = 1280;
+constexpr int k_height = 720;
+
+render::OffscreenContext& context()
+{
+    static std::optional<render::OffscreenContext> ctx;
+    if (!ctx)
+    {
+        auto made = render::OffscreenContext::create();
+        if (!made)
+        {
+            std::fprintf(stderr, "bench_render: %s\n", made.error().message.c_str());
+            std::exit(1);
+        }
+        ctx.emplace(std::move(*made));
+        std::printf("bench_render: %s context: %s, %dx%d\n", render::to_string(ctx->backend()),
+                    ctx->description().c_str(), k_width, k_height);
+    }
+    return *ctx;
+}
+
+void BM_TexturePath(benchmark::State& state)
+{
+    context();
+    const int level = static_cast<int>(state.range(0));
+    const auto grid = core::TetraGrid::create(level).value();
+    const auto p = test::sphere_positions(grid);
+    auto renderer = render::GridRenderer::create().value();
+    auto fb = render::Framebuffer::create(k_width, k_height).value();
+    render::DrawSettings s;
+    const bool upload_each_frame = state.range(1) != 0;
+    renderer.upload(grid, p);
+    fb.bind();
+    for (auto _ : state)
+    {
+        if (upload_each_frame)  // as in the simulation loop: new positions every frame
+            renderer.upload(grid, p);
+        renderer.draw(s, k_width, k_height);
+        render::gl_finish();
+    }
+    state.counters["fps"] =
+        benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+    state.counters["triangles"] = static_cast<double>(renderer.triangle_count());
+}
+
+void BM_VertexBufferPath(benchmark::State& state)
+{
+    context();
+    const int level = static_cast<int>(state.range(0));
+    const auto grid = core::TetraGrid::create(level).value();
+    const auto p = test::sphere_positions(grid);
+    std::vector<core::Vec3> points;
+    for (const core::NodeIndex n : grid.node_of_unique())
+        points.push_back(test::node_position(p, n));
+    auto renderer = render::MeshRenderer::create().value();
+    renderer.upload(points, grid.triangles());
+    auto fb = render::Framebuffer::create(k_width, k_height).value();
+    render::DrawSettings s;
+    fb.bind();
+    for (auto _ : state)
+    {
+        renderer.draw(s, k_width, k_height);
+        render::gl_finish();
+    }
+    state.counters["fps"] =
+        benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+    state.counters["triangles"] = static_cast<double>(renderer.triangle_count());
+}
+
+}  // namespace
+
+BENCHMARK(BM_TexturePath)
+    ->ArgsProduct({{6, 7, 8, 9}, {0, 1}})
+    ->ArgNames({"level", "upload"})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK(BM_VertexBufferPath)
+    ->DenseRange(6, 9)
+    ->ArgName("level")
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+BENCHMARK_MAIN();

@@ -1,0 +1,88 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+#pragma once
+
+/// \file
+/// `GridRenderer`: draws a `TetraGrid` surface the way the reference paper does on the GPU
+/// (docs/rendering.md):
+/// - Positions live in an RGBA32F texture, one texel per grid node, padded by a ghost ring of
+///   one node filled through the grid's ghost map; w carries a per-node scalar (the
+///   displacement) for colouring.
+/// - One static index buffer per level holds the 4W^2 grid triangles over *canonical* node
+///   indices, so the two sides of a seam share vertices and cannot crack.
+/// - The vertex shader fetches its node's position and its six neighbours by `texelFetch`, sums
+///   the six face cross products into the area-weighted normal, and the fragment shader shades
+///   with Phong under a head light. Neighbours across a seam come from the ghost ring, which
+///   holds exactly the nodes on the other side, so the normals are continuous there.
+/// Only positions (and owners when they change) are streamed per frame; nothing is allocated
+/// after the first upload of a level.
+///
+/// Alternatives rejected: normals on the CPU in a second texture (another full pass and upload
+/// per frame: the point of the paper's scheme is that the GPU does it); a geometry shader for
+/// normals or the wireframe (slow on llvmpipe, and face normals are not smooth).
+///
+/// \pre every call: the OpenGL context the renderer was created in is current. Not thread-safe.
+
+#include <pliant/core/field.h>
+#include <pliant/core/result.h>
+#include <pliant/render/draw_settings.h>
+
+#include <cstdint>
+#include <memory>
+#include <span>
+
+namespace pliant::render
+{
+
+class GridRenderer
+{
+public:
+    /// Compiles the shaders. \pre a GL 3.3 context is current (`OffscreenContext` or the
+    /// viewer's window, with `load_gl` done). \return GraphicsError with the compiler's log.
+    static core::Result<GridRenderer> create();
+
+    GridRenderer(GridRenderer&&) noexcept;
+    GridRenderer& operator=(GridRenderer&&) noexcept;
+    GridRenderer(const GridRenderer&) = delete;
+    GridRenderer& operator=(const GridRenderer&) = delete;
+    ~GridRenderer();
+
+    /// Uploads positions (model units) and, optionally, a per-node scalar for
+    /// ColorMode::Displacement. Fields may have any ghost width; only in-range nodes are read.
+    /// \pre the fields were made for `grid`.
+    void upload(const core::TetraGrid& grid, const core::Vec3Field<double>& positions,
+                const core::Field<double>* values = nullptr);
+
+    /// Uploads deformed positions p = P + u N (rest positions P, rest unit normals N, normal
+    /// displacement u, DESIGN §4) with u as the colouring scalar.
+    void upload_displaced(const core::TetraGrid& grid, const core::Vec3Field<double>& rest,
+                          const core::Vec3Field<double>& rest_normals,
+                          const core::Field<double>& u);
+
+    /// Owner id per node (row-major, `grid.node_count()` entries; `k_no_owner` for none) for
+    /// ColorMode::Owner; an empty span clears the owners. \pre a grid was uploaded at the same
+    /// level.
+    void upload_owners(const core::TetraGrid& grid, std::span<const std::uint16_t> owners);
+
+    /// Draws into the bound framebuffer (viewport width x height), clearing it first unless
+    /// `settings.clear` is false. \pre something was uploaded.
+    void draw(const DrawSettings& settings, int width, int height) const;
+
+    /// The camera `draw` uses for these settings and this image size.
+    [[nodiscard]] CameraMatrices camera(const CameraSettings& settings, int width,
+                                        int height) const noexcept;
+    [[nodiscard]] const Bounds& bounds() const noexcept;
+    [[nodiscard]] int level() const noexcept;
+    /// Triangles per draw: 4W^2.
+    [[nodiscard]] std::size_t triangle_count() const noexcept;
+    /// The largest |scalar| of the last upload (the default displacement colour range).
+    [[nodiscard]] double max_abs_value() const noexcept;
+
+    struct Impl;
+
+private:
+    explicit GridRenderer(std::unique_ptr<Impl> impl);
+    std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace pliant::render

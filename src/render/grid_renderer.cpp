@@ -1,0 +1,291 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+#include <pliant/render/grid_renderer.h>
+
+#include "render/gl_api.h"
+#include "render/program.h"
+#include "render/shaders.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <vector>
+
+namespace pliant::render
+{
+
+struct GridRenderer::Impl
+{
+    Program program;
+    GLuint vao = 0;
+    GLuint positions = 0;                                       // RGBA32F, (nx + 2) x (ny + 2)
+    GLuint owners = 0;                                          // R16UI, same size
+    std::array<GLuint, core::k_max_level + 1> index_buffers{};  // per level, made on first use
+    int level = 0;
+    int nx = 0;
+    int ny = 0;
+    Bounds bounds{};
+    double max_abs_value = 0.0;
+    std::vector<float> staging;  // padded RGBA texels, reused between uploads
+    std::vector<std::uint16_t> owner_staging;
+
+    Impl() = default;
+    Impl(const Impl&) = delete;
+    Impl& operator=(const Impl&) = delete;
+    ~Impl()
+    {
+        for (const GLuint b : index_buffers)
+            if (b != 0U)
+                gl::glDeleteBuffers(1, &b);
+        const std::array<GLuint, 2> textures{positions, owners};
+        gl::glDeleteTextures(2, textures.data());
+        gl::glDeleteVertexArrays(1, &vao);
+    }
+
+    [[nodiscard]] int padded_width() const noexcept { return nx + 2; }
+    [[nodiscard]] int padded_height() const noexcept { return ny + 2; }
+
+    /// (Re)allocates the textures and the level's index buffer when the level changes.
+    void prepare_level(const core::TetraGrid& grid);
+    void upload_staging();
+    void fill_owner_texture(std::span<const std::uint16_t> owners);
+};
+
+namespace
+{
+
+void set_integer_sampling(GLuint texture)
+{
+    gl::glBindTexture(GL_TEXTURE_2D, texture);
+    gl::glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    gl::glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    gl::glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    gl::glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+}
+
+}  // namespace
+
+void GridRenderer::Impl::prepare_level(const core::TetraGrid& grid)
+{
+    if (index_buffers[static_cast<std::size_t>(grid.level())] == 0U)
+    {
+        // Twins are replaced by their canonical node: both sides of every seam then reference
+        // the same vertices, so they are transformed and shaded once and cannot crack.
+        std::vector<std::array<std::uint32_t, 3>> faces = grid.node_triangles();
+        for (auto& f : faces)
+            for (std::uint32_t& v : f)
+                v = grid.canonical(core::NodeIndex{v}).value;
+        GLuint buffer = 0;
+        gl::glGenBuffers(1, &buffer);
+        gl::glBindVertexArray(vao);
+        gl::glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, buffer);
+        gl::glBufferData(GL_ELEMENT_ARRAY_BUFFER,
+                         static_cast<GLsizeiptr>(faces.size() * sizeof(faces[0])), faces.data(),
+                         GL_STATIC_DRAW);
+        gl::glBindVertexArray(0);
+        index_buffers[static_cast<std::size_t>(grid.level())] = buffer;
+    }
+    if (grid.level() == level)
+        return;
+    level = grid.level();
+    nx = grid.nx();
+    ny = grid.ny();
+    staging.assign(
+        static_cast<std::size_t>(padded_width()) * static_cast<std::size_t>(padded_height()) * 4U,
+        0.0F);
+    gl::glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    gl::glBindTexture(GL_TEXTURE_2D, positions);
+    gl::glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, padded_width(), padded_height(), 0, GL_RGBA,
+                     GL_FLOAT, nullptr);
+    owner_staging.assign(
+        static_cast<std::size_t>(padded_width()) * static_cast<std::size_t>(padded_height()),
+        k_no_owner);
+    gl::glBindTexture(GL_TEXTURE_2D, owners);
+    gl::glTexImage2D(GL_TEXTURE_2D, 0, GL_R16UI, padded_width(), padded_height(), 0, GL_RED_INTEGER,
+                     GL_UNSIGNED_SHORT, owner_staging.data());
+}
+
+void GridRenderer::Impl::upload_staging()
+{
+    gl::glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    gl::glBindTexture(GL_TEXTURE_2D, positions);
+    gl::glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, padded_width(), padded_height(), GL_RGBA, GL_FLOAT,
+                        staging.data());
+}
+
+void GridRenderer::Impl::fill_owner_texture(std::span<const std::uint16_t> node_owners)
+{
+    std::fill(owner_staging.begin(), owner_staging.end(), k_no_owner);
+    const auto pw = static_cast<std::size_t>(padded_width());
+    if (!node_owners.empty())
+        for (int y = 0; y < ny; ++y)
+            for (int x = 0; x < nx; ++x)
+                owner_staging[static_cast<std::size_t>(y + 1) * pw +
+                              static_cast<std::size_t>(x + 1)] =
+                    node_owners[static_cast<std::size_t>(y) * static_cast<std::size_t>(nx) +
+                                static_cast<std::size_t>(x)];
+    gl::glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    gl::glBindTexture(GL_TEXTURE_2D, owners);
+    gl::glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, padded_width(), padded_height(), GL_RED_INTEGER,
+                        GL_UNSIGNED_SHORT, owner_staging.data());
+}
+
+core::Result<GridRenderer> GridRenderer::create()
+{
+    PLIANT_ASSERT(gl::is_loaded(), "GridRenderer::create: no GL context (call load_gl)");
+    auto program = Program::create(shaders::k_grid_vert, shaders::k_phong_frag, "grid");
+    if (!program)
+        return program.error();
+    auto impl = std::make_unique<Impl>();
+    impl->program = std::move(*program);
+    gl::glGenVertexArrays(1, &impl->vao);
+    std::array<GLuint, 2> textures{};
+    gl::glGenTextures(2, textures.data());
+    impl->positions = textures[0];
+    impl->owners = textures[1];
+    set_integer_sampling(impl->positions);
+    set_integer_sampling(impl->owners);
+    gl::glUseProgram(impl->program.id());
+    gl::glUniform1i(impl->program.uniform("u_positions"), 0);
+    gl::glUniform1i(impl->program.uniform("u_owners"), 1);
+    return GridRenderer(std::move(impl));
+}
+
+GridRenderer::GridRenderer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+GridRenderer::GridRenderer(GridRenderer&&) noexcept = default;
+GridRenderer& GridRenderer::operator=(GridRenderer&&) noexcept = default;
+GridRenderer::~GridRenderer() = default;
+
+void GridRenderer::upload(const core::TetraGrid& grid, const core::Vec3Field<double>& positions,
+                          const core::Field<double>* values)
+{
+    for (const auto& f : positions)
+        PLIANT_ASSERT(f.level() == grid.level(), "GridRenderer::upload: field of another level");
+    PLIANT_ASSERT(values == nullptr || values->level() == grid.level(),
+                  "GridRenderer::upload: values of another level");
+    Impl& s = *impl_;
+    s.prepare_level(grid);
+    const auto pw = static_cast<std::size_t>(s.padded_width());
+    core::Vec3 lo{positions[0].at(0, 0), positions[1].at(0, 0), positions[2].at(0, 0)};
+    core::Vec3 hi = lo;
+    double max_abs = 0.0;
+    for (int y = 0; y < s.ny; ++y)
+    {
+        float* row = s.staging.data() + (static_cast<std::size_t>(y + 1) * pw + 1U) * 4U;
+        for (int x = 0; x < s.nx; ++x)
+        {
+            const double px = positions[0].at(x, y);
+            const double py = positions[1].at(x, y);
+            const double pz = positions[2].at(x, y);
+            const double v = values != nullptr ? values->at(x, y) : 0.0;
+            float* texel = row + static_cast<std::size_t>(x) * 4U;
+            texel[0] = static_cast<float>(px);
+            texel[1] = static_cast<float>(py);
+            texel[2] = static_cast<float>(pz);
+            texel[3] = static_cast<float>(v);
+            lo = {std::min(lo.x, px), std::min(lo.y, py), std::min(lo.z, pz)};
+            hi = {std::max(hi.x, px), std::max(hi.y, py), std::max(hi.z, pz)};
+            max_abs = std::max(max_abs, std::abs(v));
+        }
+    }
+    // The ghost ring: the same table core::fill_ghosts applies to a Field with ghost width 1
+    // (its offsets address a plane of stride nx + 2, which is this texture's layout).
+    for (const core::GhostCopy& g : grid.ghost_table(1))
+        std::copy_n(s.staging.data() + g.src * 4, 4, s.staging.data() + g.dst * 4);
+    s.bounds = {lo, hi};
+    const core::Vec3 c = s.bounds.centre();
+    double r2 = 0.0;
+    for (int y = 0; y < s.ny; ++y)
+        for (int x = 0; x < s.nx; ++x)
+        {
+            const core::Vec3 d{positions[0].at(x, y) - c.x, positions[1].at(x, y) - c.y,
+                               positions[2].at(x, y) - c.z};
+            r2 = std::max(r2, core::dot(d, d));
+        }
+    s.bounds.point_radius = std::sqrt(r2);
+    s.max_abs_value = max_abs;
+    s.upload_staging();
+}
+
+void GridRenderer::upload_displaced(const core::TetraGrid& grid,
+                                    const core::Vec3Field<double>& rest,
+                                    const core::Vec3Field<double>& rest_normals,
+                                    const core::Field<double>& u)
+{
+    core::Vec3Field<double> p{core::Field<double>(grid), core::Field<double>(grid),
+                              core::Field<double>(grid)};
+    for (int c = 0; c < 3; ++c)
+    {
+        const auto i = static_cast<std::size_t>(c);
+        for (int y = 0; y < grid.ny(); ++y)
+            for (int x = 0; x < grid.nx(); ++x)
+                p[i].at(x, y) = rest[i].at(x, y) + u.at(x, y) * rest_normals[i].at(x, y);
+    }
+    upload(grid, p, &u);
+}
+
+void GridRenderer::upload_owners(const core::TetraGrid& grid, std::span<const std::uint16_t> owners)
+{
+    PLIANT_ASSERT(grid.level() == impl_->level, "GridRenderer::upload_owners: upload a grid first");
+    PLIANT_ASSERT(owners.empty() || owners.size() == grid.node_count(),
+                  "GridRenderer::upload_owners: one owner per node");
+    impl_->fill_owner_texture(owners);
+}
+
+CameraMatrices GridRenderer::camera(const CameraSettings& settings, int width,
+                                    int height) const noexcept
+{
+    return make_camera(settings, impl_->bounds, width, height);
+}
+
+void GridRenderer::draw(const DrawSettings& settings, int width, int height) const
+{
+    const Impl& s = *impl_;
+    PLIANT_ASSERT(s.level > 0, "GridRenderer::draw: nothing uploaded");
+    const CameraMatrices cam = camera(settings.camera, width, height);
+    set_draw_uniforms(s.program, settings, cam, static_cast<float>(s.max_abs_value));
+    gl::glUniform1i(s.program.uniform("u_nx"), s.nx);
+    gl::glBindVertexArray(s.vao);
+    gl::glActiveTexture(GL_TEXTURE0);
+    gl::glBindTexture(GL_TEXTURE_2D, s.positions);
+    gl::glActiveTexture(GL_TEXTURE1);
+    gl::glBindTexture(GL_TEXTURE_2D, s.owners);
+    gl::glActiveTexture(GL_TEXTURE0);
+    gl::glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, s.index_buffers[static_cast<std::size_t>(s.level)]);
+    const auto count = static_cast<GLsizei>(triangle_count() * 3U);
+    const auto nodes = static_cast<GLsizei>(s.nx * s.ny);
+    if (settings.points)
+    {
+        DrawSettings no_wire = settings;
+        no_wire.wireframe = false;
+        draw_passes(s.program, no_wire, width, height,
+                    [nodes] { gl::glDrawArrays(GL_POINTS, 0, nodes); });
+    }
+    else
+        draw_passes(s.program, settings, width, height,
+                    [count] { gl::glDrawElements(GL_TRIANGLES, count, GL_UNSIGNED_INT, nullptr); });
+    gl::glBindVertexArray(0);
+}
+
+const Bounds& GridRenderer::bounds() const noexcept
+{
+    return impl_->bounds;
+}
+
+int GridRenderer::level() const noexcept
+{
+    return impl_->level;
+}
+
+std::size_t GridRenderer::triangle_count() const noexcept
+{
+    const auto w = static_cast<std::size_t>(1) << static_cast<unsigned>(impl_->level);
+    return 4U * w * w;
+}
+
+double GridRenderer::max_abs_value() const noexcept
+{
+    return impl_->max_abs_value;
+}
+
+}  // namespace pliant::render

@@ -1,0 +1,122 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+#include "render/program.h"
+
+#include <array>
+#include <string>
+#include <vector>
+
+namespace pliant::render
+{
+namespace
+{
+
+core::Result<GLuint> compile(GLenum stage, const char* source, const char* name)
+{
+    const GLuint shader = gl::glCreateShader(stage);
+    gl::glShaderSource(shader, 1, &source, nullptr);
+    gl::glCompileShader(shader);
+    GLint ok = 0;
+    gl::glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
+    if (ok == GL_TRUE)
+        return shader;
+    GLint length = 0;
+    gl::glGetShaderiv(shader, GL_INFO_LOG_LENGTH, &length);
+    std::vector<char> log(static_cast<std::size_t>(length > 0 ? length : 1), '\0');
+    gl::glGetShaderInfoLog(shader, static_cast<GLsizei>(log.size()), nullptr, log.data());
+    gl::glDeleteShader(shader);
+    return core::fail(core::ErrorCode::GraphicsError,
+                      std::string("Program: ") + name +
+                          (stage == GL_VERTEX_SHADER ? " vertex" : " fragment") +
+                          " shader does not compile: " + log.data());
+}
+
+}  // namespace
+
+core::Result<Program> Program::create(const char* vertex_source, const char* fragment_source,
+                                      const char* name)
+{
+    auto vs = compile(GL_VERTEX_SHADER, vertex_source, name);
+    if (!vs)
+        return vs.error();
+    auto fs = compile(GL_FRAGMENT_SHADER, fragment_source, name);
+    if (!fs)
+    {
+        gl::glDeleteShader(*vs);
+        return fs.error();
+    }
+    Program program;
+    program.id_ = gl::glCreateProgram();
+    gl::glAttachShader(program.id_, *vs);
+    gl::glAttachShader(program.id_, *fs);
+    gl::glBindFragDataLocation(program.id_, 0, "frag_color");
+    gl::glLinkProgram(program.id_);
+    gl::glDeleteShader(*vs);
+    gl::glDeleteShader(*fs);
+    GLint ok = 0;
+    gl::glGetProgramiv(program.id_, GL_LINK_STATUS, &ok);
+    if (ok != GL_TRUE)
+    {
+        GLint length = 0;
+        gl::glGetProgramiv(program.id_, GL_INFO_LOG_LENGTH, &length);
+        std::vector<char> log(static_cast<std::size_t>(length > 0 ? length : 1), '\0');
+        gl::glGetProgramInfoLog(program.id_, static_cast<GLsizei>(log.size()), nullptr, log.data());
+        return core::fail(core::ErrorCode::GraphicsError,
+                          std::string("Program: ") + name + " does not link: " + log.data());
+    }
+    return program;
+}
+
+void set_draw_uniforms(const Program& program, const DrawSettings& settings,
+                       const CameraMatrices& camera, float value_range)
+{
+    gl::glUseProgram(program.id());
+    const std::array<float, 16> vp = camera.view_projection.to_float();
+    gl::glUniformMatrix4fv(program.uniform("u_view_projection"), 1, GL_FALSE, vp.data());
+    gl::glUniform3f(program.uniform("u_eye"), static_cast<float>(camera.eye.x),
+                    static_cast<float>(camera.eye.y), static_cast<float>(camera.eye.z));
+    gl::glUniform1i(program.uniform("u_color_mode"), static_cast<GLint>(settings.color));
+    gl::glUniform1i(program.uniform("u_shading"), static_cast<GLint>(settings.shading));
+    gl::glUniform1i(program.uniform("u_flat"), 0);
+    const Rgb& b = settings.base_color;
+    gl::glUniform3f(program.uniform("u_base_color"), b.r, b.g, b.b);
+    const Rgb& w = settings.wire_color;
+    gl::glUniform3f(program.uniform("u_wire_color"), w.r, w.g, w.b);
+    std::array<float, 24> palette{};
+    for (std::uint32_t i = 0; i < 8; ++i)
+    {
+        const Rgb c = owner_color(i);
+        palette[i * 3] = c.r;
+        palette[i * 3 + 1] = c.g;
+        palette[i * 3 + 2] = c.b;
+    }
+    gl::glUniform3fv(program.uniform("u_palette"), 8, palette.data());
+    const float range =
+        settings.displacement_range > 0.0F ? settings.displacement_range : value_range;
+    gl::glUniform1f(program.uniform("u_value_range"), range > 0.0F ? range : 1.0F);
+    gl::glUniform1f(program.uniform("u_ambient"), settings.ambient);
+    gl::glUniform1f(program.uniform("u_specular"), settings.specular);
+    gl::glUniform1f(program.uniform("u_shininess"), settings.shininess);
+}
+
+Rgb owner_color(std::uint32_t owner) noexcept
+{
+    // Okabe-Ito's colour-blind-safe palette (black replaced by a grey).
+    static constexpr std::array<Rgb, 8> k_palette{{{0.902F, 0.624F, 0.000F},
+                                                   {0.337F, 0.706F, 0.914F},
+                                                   {0.000F, 0.620F, 0.451F},
+                                                   {0.941F, 0.894F, 0.259F},
+                                                   {0.000F, 0.447F, 0.698F},
+                                                   {0.835F, 0.369F, 0.000F},
+                                                   {0.800F, 0.475F, 0.655F},
+                                                   {0.550F, 0.550F, 0.550F}}};
+    return k_palette[owner % 8U];
+}
+
+Program::~Program()
+{
+    if (id_ != 0U)
+        gl::glDeleteProgram(id_);
+}
+
+}  // namespace pliant::render
