@@ -24,7 +24,8 @@ enum class ErrorCode : std::uint16_t
     UnsupportedFormat = 3,  ///< file extension / content not a format pliant reads or writes
     ParseError = 4,         ///< a file's content is malformed (truncated, bad header, bad number)
     EmptyInput = 5,         ///< a file with no vertices or no faces
-                            // mesh validation (DESIGN §2.1)
+
+    // mesh validation (DESIGN §2.1)
     NonFiniteCoordinate = 20,      ///< a vertex coordinate is NaN or infinite
     DegenerateFace = 21,           ///< a face with repeated vertices or zero area
     NotConnected = 22,             ///< more than one connected component
@@ -34,16 +35,21 @@ enum class ErrorCode : std::uint16_t
     WrongGenus = 26,               ///< closed 2-manifold, but genus != 0
     InconsistentOrientation = 27,  ///< neighbouring faces traverse their shared edge the same way
     BadIndex = 28,                 ///< a face refers to a vertex that does not exist
-                                   // remesh
-    InvertedTriangles = 40,        ///< a spherical map with folded triangles (never written out)
-    NotConverged = 41,             ///< an iterative method ran out of iterations
-                                   // grid files
-    BadGrid = 60,                  ///< a grid file whose dimensions are not (2^(n+1)+1) x (2^n+1)
-                                   // scenarios and settings
-    BadScenario = 80,              ///< a scenario file with a missing or out-of-range key
-                                   // network (session level; the codec uses its own DecodeError)
+
+    // remesh
+    InvertedTriangles = 40,  ///< a spherical map with folded triangles (never written out)
+    NotConverged = 41,       ///< an iterative method ran out of iterations
+
+    // grid files
+    BadGrid = 60,  ///< a grid file whose dimensions are not (2^(n+1)+1) x (2^n+1)
+
+    // scenarios and settings
+    BadScenario = 80,  ///< a scenario file with a missing or out-of-range key
+
+    // network (session level; the codec uses its own DecodeError)
     NetworkError = 100,
-                                   // render
+
+    // render
     GraphicsError = 120,  ///< no OpenGL 3.3 context could be made, or GL refused a resource
 };
 
