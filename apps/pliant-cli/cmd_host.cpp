@@ -1,0 +1,142 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+// `pliant host [GRID] [--port P] [--mode exact|fast] [--duration S] [--script F] [--stats F.csv]`:
+// starts a collaborative session as its master over ENet (docs/session.md).
+#include <pliant/core/grid_io.h>
+#include <pliant/core/tetra_grid.h>
+#include <pliant/net/enet_transport.h>
+#include <pliant/session/runner.h>
+#include <pliant/session/session.h>
+#include <pliant/sim/membrane.h>
+
+#include <spdlog/spdlog.h>
+
+#include "../../scenes/grid_shapes.h"
+#include "cli_common.h"
+#include "commands.h"
+
+#include <cstdio>
+#include <memory>
+#include <optional>
+#include <string>
+
+namespace pliant::cli
+{
+namespace
+{
+
+struct HostOptions
+{
+    std::string grid;
+    int level = 5;
+    std::uint16_t port = 7777;
+    std::string mode = "exact";
+    double duration = 60.0;
+    std::string script;
+    std::string stats;
+    double dt = 1e-3;
+    std::string name = "master";
+};
+
+int run_host(const HostOptions& opt)
+{
+    std::optional<core::TetraGrid> grid;
+    core::Vec3Field<double> rest;
+    if (!opt.grid.empty())
+    {
+        auto file = core::load_grid(opt.grid);
+        if (!file)
+            return report(file.error());
+        auto g = core::TetraGrid::create(file->level);
+        if (!g)
+            return report(g.error());
+        auto positions = core::geometry_of(*g, *file);
+        if (!positions)
+            return report(positions.error());
+        grid = std::move(*g);
+        rest = std::move(*positions);
+    }
+    else
+    {
+        grid = core::TetraGrid::create(opt.level).value();
+        rest = scenes::sphere_grid(*grid, 1.0);
+    }
+    session::RunOptions run;
+    run.duration_s = opt.duration;
+    run.stats_csv = opt.stats;
+    if (!opt.script.empty())
+    {
+        auto script = session::load_script(opt.script);
+        if (!script)
+            return report(script.error());
+        run.script = std::move(*script);
+    }
+    auto transport = net::make_enet_transport();
+    auto bound = transport->open(net::Address{{0, 0, 0, 0}, opt.port});
+    if (!bound)
+        return report(bound.error());
+    sim::MembraneSettings material;
+    material.beta = 0.5;
+    material.k_f = 1.0;
+    material.fixed_dt = opt.dt;
+    material.fixed_step = opt.mode == "exact";
+    session::SessionSettings settings;
+    settings.coupling = opt.mode == "exact" ? session::Coupling::Exact : session::Coupling::Fast;
+    settings.name = opt.name;
+    settings.listen_port = bound->port;
+    auto s = session::Session::host(*transport, *grid, rest, material, settings);
+    if (!s)
+        return report(s.error());
+    spdlog::info("hosting level {} ({} mode) on port {}", grid->level(), opt.mode, bound->port);
+    std::printf("hosting on port %u\n", static_cast<unsigned>(bound->port));
+    std::fflush(stdout);
+    auto summary = session::run_peer(**s, run);
+    if (!summary)
+        return report(summary.error());
+    std::printf("host: %.1f s, tick %llu, %llu bytes out, %llu bytes in\n", summary->elapsed_s,
+                static_cast<unsigned long long>(summary->final_tick),
+                static_cast<unsigned long long>(summary->stats.bytes_sent),
+                static_cast<unsigned long long>(summary->stats.bytes_received));
+    return 0;
+}
+
+void add_host_command(CLI::App& app, const GlobalOptions& global)
+{
+    auto opt = std::make_shared<HostOptions>();
+    CLI::App* cmd = app.add_subcommand(
+        "host", "Start a collaborative session as its master (UDP through ENet).");
+    cmd->footer(
+        "Peers join with `pliant join HOST:PORT`; the welcome carries the model, so they need no\n"
+        "file. exact mode: lockstep with a common fixed step (--dt), identical to one process;\n"
+        "fast mode: each peer steps its leaves with its neighbours' streamed state as boundary.\n"
+        "--script: timed grabs and leave (docs/session.md); --stats: per-second CSV.\n\n"
+        "Examples:\n"
+        "  pliant host --duration 30 --stats host.csv            # sphere, level 5, port 7777\n"
+        "  pliant host spot.pgrid --port 9000 --mode fast --script grab.txt");
+    cmd->add_option("GRID", opt->grid,
+                    "Rest geometry (.pgrid from `pliant remesh`); omitted: a sphere of --level");
+    cmd->add_option("-l,--level", opt->level, "Sphere level when GRID is omitted")
+        ->check(CLI::Range(1, 10))
+        ->capture_default_str();
+    cmd->add_option("-p,--port", opt->port, "UDP port to listen on")->capture_default_str();
+    cmd->add_option("--mode", opt->mode, "Coupling: exact or fast")
+        ->check(CLI::IsMember({"exact", "fast"}))
+        ->capture_default_str();
+    cmd->add_option("--duration", opt->duration, "Run time [s]")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
+    cmd->add_option("--script", opt->script, "Script of timed grabs / leave")
+        ->check(CLI::ExistingFile);
+    cmd->add_option("--stats", opt->stats, "Per-second statistics CSV");
+    cmd->add_option("--dt", opt->dt, "Fixed step of exact mode [s]")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
+    cmd->add_option("--name", opt->name, "Peer name (printable ASCII, 1..32)")
+        ->capture_default_str();
+    cmd->callback(command_callback(global, [opt]() -> int { return run_host(*opt); }));
+}
+
+const CommandRegistrar k_register{{"host", 50, &add_host_command}};
+
+}  // namespace
+}  // namespace pliant::cli

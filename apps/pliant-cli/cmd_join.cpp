@@ -1,0 +1,103 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+// `pliant join HOST:PORT [--viewer] [--script F] [--duration S] [--stats F.csv]`: joins a
+// collaborative session as a participant or a viewer (docs/session.md).
+#include <pliant/net/enet_transport.h>
+#include <pliant/session/runner.h>
+#include <pliant/session/session.h>
+
+#include <spdlog/spdlog.h>
+
+#include "cli_common.h"
+#include "commands.h"
+
+#include <cstdio>
+#include <memory>
+#include <string>
+
+namespace pliant::cli
+{
+namespace
+{
+
+struct JoinOptions
+{
+    std::string master;
+    bool viewer = false;
+    std::uint16_t port = 0;
+    double duration = 60.0;
+    std::string script;
+    std::string stats;
+    std::string name = "peer";
+};
+
+int run_join(const JoinOptions& opt)
+{
+    auto master = net::parse_address(opt.master);
+    if (!master)
+        return report(master.error());
+    session::RunOptions run;
+    run.duration_s = opt.duration;
+    run.stats_csv = opt.stats;
+    if (!opt.script.empty())
+    {
+        auto script = session::load_script(opt.script);
+        if (!script)
+            return report(script.error());
+        run.script = std::move(*script);
+    }
+    auto transport = net::make_enet_transport();
+    auto bound = transport->open(net::Address{{0, 0, 0, 0}, opt.port});
+    if (!bound)
+        return report(bound.error());
+    session::SessionSettings settings;
+    settings.name = opt.name;
+    settings.listen_port = bound->port;
+    auto s = session::Session::join(
+        *transport, *master, opt.viewer ? net::Role::Viewer : net::Role::Participant, settings);
+    if (!s)
+        return report(s.error());
+    auto summary = session::run_peer(**s, run);
+    if (!summary)
+        return report(summary.error());
+    if (!(*s)->ready())
+    {
+        spdlog::error("join: never received the model from {}", opt.master);
+        return k_exit_failure;
+    }
+    std::printf("join (id %u): %.1f s, tick %llu, %llu bytes out, %llu bytes in\n",
+                static_cast<unsigned>((*s)->id().value), summary->elapsed_s,
+                static_cast<unsigned long long>(summary->final_tick),
+                static_cast<unsigned long long>(summary->stats.bytes_sent),
+                static_cast<unsigned long long>(summary->stats.bytes_received));
+    return 0;
+}
+
+void add_join_command(CLI::App& app, const GlobalOptions& global)
+{
+    auto opt = std::make_shared<JoinOptions>();
+    CLI::App* cmd = app.add_subcommand(
+        "join", "Join a collaborative session as a participant (default) or a viewer.");
+    cmd->footer(
+        "Examples:\n"
+        "  pliant join 127.0.0.1:7777 --script grab.txt --stats peer.csv\n"
+        "  pliant join 192.168.1.20:7777 --viewer --duration 30");
+    cmd->add_option("MASTER", opt->master, "The master's address HOST:PORT")->required();
+    cmd->add_flag("--viewer", opt->viewer, "Only watch (simulate nothing)");
+    cmd->add_option("-p,--port", opt->port, "UDP port to listen on for other peers (0: any)")
+        ->capture_default_str();
+    cmd->add_option("--duration", opt->duration, "Run time [s]")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
+    cmd->add_option("--script", opt->script, "Script of timed grabs / leave")
+        ->check(CLI::ExistingFile);
+    cmd->add_option("--stats", opt->stats, "Per-second statistics CSV");
+    cmd->add_option("--name", opt->name, "Peer name (printable ASCII, 1..32)")
+        ->capture_default_str();
+    cmd->callback(command_callback(global, [opt]() -> int { return run_join(*opt); }));
+}
+
+const CommandRegistrar k_register{{"join", 51, &add_join_command}};
+
+}  // namespace
+}  // namespace pliant::cli

@@ -1,0 +1,145 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+#pragma once
+
+/// \file
+/// Partitioning the quad-tree leaves among participants (DESIGN.md §5, issue 6 item 4).
+///
+/// Design
+/// - Leaf size: the smallest quad-tree depth at which every leaf's canonical nodes fit one
+///   LeafState datagram (73 nodes with f64 values, 147 with f32; docs/protocol.md §3), so a leaf
+///   is the unit of ownership, of streaming and of the wire Partition table.
+/// - `LeafGraph` holds, for one grid and depth, the leaves in `TetraGrid::leaves` order (which is
+///   the wire order), their canonical node counts, the canonical node -> leaf map and the leaf
+///   adjacency: two leaves are neighbours when a grid edge joins their nodes through the ghost
+///   map, so leaves across the glued seams of the tetrahedron are neighbours too.
+/// - `partition_leaves` is a multi-source region growing (a balanced BFS Voronoi) on that graph:
+///   each participant starts from the leaf holding its point of interest (participants without
+///   one get the leaf farthest, in hops, from the seeds already placed); then the participant
+///   with the fewest owned nodes (ties: the lower peer id) takes the next leaf of its own BFS
+///   frontier (first discovered first, neighbours in increasing leaf order). Growing the smallest
+///   first balances node counts to within about one leaf; growing along BFS fronts keeps each
+///   share compact (short borders) and connected unless it gets enclosed. Everything is a
+///   function of (grid, depth, sorted participants), so every peer computing it agrees.
+/// - Rejected: recursive coordinate bisection (balanced but ignores the points of interest and
+///   cuts across the seams arbitrarily); METIS-style multilevel partitioning (not in Debian's
+///   C++ packages we use, and non-deterministic across versions).
+
+#include <pliant/core/tetra_grid.h>
+#include <pliant/net/message.h>
+#include <pliant/net/types.h>
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <vector>
+
+namespace pliant::session
+{
+
+/// Largest canonical node count of any leaf at `depth`.
+[[nodiscard]] std::size_t max_leaf_nodes(const core::TetraGrid& grid, int depth);
+
+/// The smallest depth (0..min(level, 7)) whose leaves hold at most the nodes one LeafState of
+/// `encoding` carries (73 for f64, 147 for f32). Level >= 3 gives level - 3 with f64.
+[[nodiscard]] int leaf_depth_for(const core::TetraGrid& grid, net::ValueEncoding encoding);
+
+/// The leaf adjacency graph of one grid at one depth (see the file comment).
+class LeafGraph
+{
+public:
+    /// \pre 0 <= depth <= grid.level().
+    LeafGraph(const core::TetraGrid& grid, int depth);
+
+    [[nodiscard]] int depth() const noexcept { return depth_; }
+    [[nodiscard]] std::size_t size() const noexcept { return leaves_.size(); }
+    [[nodiscard]] std::span<const core::LeafId> leaves() const noexcept { return leaves_; }
+    [[nodiscard]] std::span<const core::Region> regions() const noexcept { return regions_; }
+    /// Canonical nodes of leaf `l`, row-major (the LeafState node order).
+    [[nodiscard]] std::span<const core::NodeIndex> nodes(std::size_t l) const noexcept
+    {
+        return {leaf_nodes_.data() + node_begin_[l], node_begin_[l + 1] - node_begin_[l]};
+    }
+    [[nodiscard]] std::size_t node_count(std::size_t l) const noexcept
+    {
+        return node_begin_[l + 1] - node_begin_[l];
+    }
+    /// Neighbouring leaves of `l`, increasing.
+    [[nodiscard]] std::span<const std::uint32_t> neighbours(std::size_t l) const noexcept
+    {
+        return {adjacency_.data() + adj_begin_[l], adj_begin_[l + 1] - adj_begin_[l]};
+    }
+    /// The leaf owning a node (twins and ghosts map to their canonical node's leaf).
+    [[nodiscard]] std::uint32_t leaf_of(core::NodeIndex n) const noexcept
+    {
+        return leaf_of_[n.value];
+    }
+    /// Index of a leaf id in `leaves()` (the wire order).
+    [[nodiscard]] std::size_t index_of(const core::LeafId& leaf) const noexcept;
+
+private:
+    int depth_ = 0;
+    std::vector<core::LeafId> leaves_;
+    std::vector<core::Region> regions_;
+    std::vector<std::size_t> node_begin_;
+    std::vector<core::NodeIndex> leaf_nodes_;
+    std::vector<std::uint32_t> leaf_of_;  ///< per grid node (twins: their canonical's leaf)
+    std::vector<std::size_t> adj_begin_;
+    std::vector<std::uint32_t> adjacency_;
+};
+
+/// A participant as the partitioner sees it: its id and, if it declared one, the node of its
+/// first point of interest.
+struct Seat
+{
+    net::PeerId peer;
+    std::optional<core::NodeIndex> seed;
+};
+
+/// Owner of every leaf (index as `LeafGraph::leaves()`), deterministic in its inputs (the seats
+/// are sorted by peer id first; their order does not matter). \pre seats non-empty, ids unique.
+[[nodiscard]] std::vector<net::PeerId> partition_leaves(const core::TetraGrid& grid,
+                                                        const LeafGraph& graph,
+                                                        std::span<const Seat> seats);
+
+/// Per-peer quality of a partition.
+struct PeerShare
+{
+    net::PeerId peer;
+    std::size_t leaves = 0;
+    std::size_t nodes = 0;         ///< canonical nodes owned
+    std::size_t fragments = 0;     ///< connected components of its leaves in the leaf graph
+    std::size_t border_edges = 0;  ///< surface edges with one end owned by it, one by another
+};
+
+struct PartitionQuality
+{
+    std::vector<PeerShare> shares;  ///< by increasing peer id
+    std::size_t border_edges = 0;   ///< surface edges whose ends have different owners
+    /// max |nodes - mean| / mean over the peers.
+    double imbalance = 0.0;
+};
+
+/// Measures a leaf -> owner table (every distinct owner gets a share).
+[[nodiscard]] PartitionQuality measure_partition(const core::TetraGrid& grid,
+                                                 const LeafGraph& graph,
+                                                 std::span<const net::PeerId> owners);
+
+/// `mask` (one flag per grid node, set on canonical nodes) grown by `rings` rings of grid
+/// neighbours through the ghost map.
+[[nodiscard]] std::vector<char> dilate_nodes(const core::TetraGrid& grid, std::vector<char> mask,
+                                             int rings);
+
+/// The canonical nodes whose flag is set as disjoint rectangles (maximal row runs, stacked when
+/// consecutive rows have the same span): the `owned` list of a restricted sim step.
+[[nodiscard]] std::vector<core::Region> node_runs(const core::TetraGrid& grid,
+                                                  const std::vector<char>& mask);
+
+/// The six grid neighbours of (x, y) through the ghost map, as canonical nodes (a corner lists
+/// some twice).
+[[nodiscard]] std::array<core::NodeIndex, 6> grid_neighbours(const core::TetraGrid& grid, int x,
+                                                             int y);
+
+}  // namespace pliant::session

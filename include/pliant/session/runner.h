@@ -1,0 +1,74 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+#pragma once
+
+/// \file
+/// Scripted peers for tests and demos (issue 6 item 7): a small text script of timed grabs and
+/// a `leave`, and the real-time loop that `pliant host` and `pliant join` run: poll, play the
+/// script, advance, and write a per-second statistics CSV, bounded by a duration.
+///
+/// Script format (one command per line, `#` starts a comment, times in seconds from the start
+/// of the process's loop):
+///
+///     # time  command
+///     0.5  grab face 700 force 0 0 0.5 for 1.0
+///     1.0  grab point 0 0 1 radius 0.3 force 0 0 -0.4 for 0.5
+///     2.0  poi face 700
+///     3.0  leave
+///
+/// A grab applies its force (N) to a face, or to the nodes within `radius` (m) of a point, for
+/// `for` seconds; it also declares the grabbed face or point as the peer's point of interest.
+
+#include <pliant/core/result.h>
+#include <pliant/net/message.h>
+#include <pliant/session/session.h>
+
+#include <filesystem>
+#include <string_view>
+#include <vector>
+
+namespace pliant::session
+{
+
+struct ScriptEvent
+{
+    enum class Kind : std::uint8_t
+    {
+        Grab,   ///< force on target for duration
+        Poi,    ///< declare target as point of interest
+        Leave,  ///< leave the session
+    };
+    Kind kind = Kind::Grab;
+    double time = 0.0;      ///< s
+    double duration = 0.0;  ///< s (grab)
+    net::UserForce force;   ///< target (+ force for Grab)
+};
+
+/// Parses a script. \return ParseError naming the line for a malformed command, a negative or
+/// non-finite number.
+core::Result<std::vector<ScriptEvent>> parse_script(std::string_view text);
+/// Reads and parses a script file. \return IoError or parse_script's errors.
+core::Result<std::vector<ScriptEvent>> load_script(const std::filesystem::path& path);
+
+struct RunOptions
+{
+    double duration_s = 10.0;  ///< the loop ends after this (wall clock), > 0
+    std::vector<ScriptEvent> script;
+    std::filesystem::path stats_csv;  ///< empty: none
+    double idle_sleep_s = 0.0002;     ///< sleep per loop iteration (keeps a core free)
+};
+
+struct RunSummary
+{
+    double elapsed_s = 0.0;
+    std::uint64_t final_tick = 0;
+    bool left = false;  ///< the peer left (script) or the master went away
+    SessionStats stats;
+};
+
+/// Runs `session` in real time until the duration, the session's end or the script's `leave`,
+/// then leaves (participants, viewers) or shuts the session down (master).
+/// \return IoError if the stats file cannot be written.
+core::Result<RunSummary> run_peer(Session& session, const RunOptions& options);
+
+}  // namespace pliant::session

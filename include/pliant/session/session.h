@@ -1,0 +1,189 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+#pragma once
+
+/// \file
+/// `Session`: one peer of a collaborative session (DESIGN.md §5, docs/session.md): the master
+/// (first peer, partitions), a participant (simulates its leaves, applies forces) or a viewer
+/// (only watches), all driving a `net::Messenger` over any `net::Transport`.
+///
+/// Design
+/// - Single-threaded and pumped by the caller: `poll()` handles every pending network event,
+///   `advance(now)` steps the simulation up to the caller's clock and streams state. Nothing
+///   blocks or sleeps, so several peers run deterministically in one thread over a
+///   `SimulatedNetwork` (tests), or each in its own process over ENet (`pliant host/join`).
+/// - Join: Hello -> Welcome (ids, level, epoch, time, blob sizes and hashes) -> Blob chunks of
+///   the model (level, material, rest positions) and of the master's current displayed state,
+///   then the current Partition; the joiner greets every listed peer (full mesh) and later peers
+///   greet it. Messages to a peer whose connection is not bound yet are queued in order.
+/// - `exact` coupling (lockstep, common fixed step): tick t is "published" by every member of the
+///   partitions used for steps t-1 and t: forces applying from t+1 and a Partition applying from
+///   t+1 (master) go first, then the halo values of tick t, then a Heartbeat(t), all on the
+///   reliable channel, so a peer holding every member's Heartbeat(t) holds everything that
+///   influences step t. Each peer integrates its owned nodes dilated by `halo_rings` rings
+///   (through the ghost map) with the sim's restricted step; the restricted step holds the other
+///   nodes fixed and the error this makes moves inwards as the stages read their neighbours, so
+///   nodes deep enough inside are bit-exact (3 rings suffice, see halo_rings); the halo (u, v of
+///   the dilated ring at the step start) comes from its owners every tick. One exchange per step
+///   instead of one per stage (docs/session.md explains why).
+/// - `fast` coupling (the paper's): no lockstep; every peer advances its owned leaves once per
+///   frame with the latest streamed state of all other nodes held as Dirichlet values.
+/// - Streaming: owners send their leaves' (u, v) to every peer at `stream_rate_hz`; every peer
+///   (viewers included) displays the whole object from its own leaves and what it received.
+/// - Leaving: a participant sends Leave; the master re-partitions; in exact mode the leaver keeps
+///   publishing until the tick where it owns nothing, and the others disconnect it once they are
+///   past that tick (so no halo of its is lost). The master cannot leave (the session ends).
+
+#include <pliant/core/field.h>
+#include <pliant/core/result.h>
+#include <pliant/core/tetra_grid.h>
+#include <pliant/core/vec3.h>
+#include <pliant/net/messenger.h>
+#include <pliant/net/transport.h>
+#include <pliant/session/partition.h>
+#include <pliant/sim/membrane.h>
+#include <pliant/sim/rkf45.h>
+
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace pliant::session
+{
+
+/// How the peers' simulations are coupled (docs/session.md §4).
+enum class Coupling : std::uint8_t
+{
+    Exact = 1,  ///< lockstep, common fixed step, equal to a single process to 1e-12
+    Fast = 2,   ///< halos once per frame held as Dirichlet values (the paper's)
+};
+
+struct SessionSettings
+{
+    Coupling coupling = Coupling::Exact;  ///< master's choice; joiners take the master's
+    double stream_rate_hz = 60.0;         ///< LeafState rate per owned leaf, > 0
+    net::ValueEncoding stream_encoding = net::ValueEncoding::F64;
+    /// Exact mode: dilation of the integrated set, >= 3 (3 are exact for the sim's fused RKF45,
+    /// tests/session/halo_rings_test.cpp; 6 also covers a scheme whose every stage reads the
+    /// previous one, at ~10 % more work per peer at level 8 with 2 peers).
+    int halo_rings = 6;
+    double frame_rate_hz = 60.0;    ///< fast mode: restricted advances per second, > 0
+    std::string name = "peer";      ///< 1..32 printable ASCII
+    std::uint16_t listen_port = 0;  ///< announced in Hello; 0: the port the master sees
+    std::uint32_t session_id = 0;   ///< master only; 0 picks a fixed non-zero id
+    std::uint64_t max_ticks = 0;    ///< stop stepping at this tick (0: never), for tests
+    int threads = 1;                ///< OpenMP threads of a step
+};
+
+enum class SessionRole : std::uint8_t
+{
+    Master,
+    Participant,
+    Viewer,
+};
+
+/// Cumulative counters (the CLI turns them into per-second rows).
+struct SessionStats
+{
+    std::uint64_t bytes_sent = 0;
+    std::uint64_t bytes_received = 0;
+    std::uint64_t packets_sent = 0;
+    std::uint64_t packets_received = 0;
+    std::uint64_t bad_datagrams = 0;  ///< dropped by the Messenger
+    std::uint64_t steps = 0;          ///< accepted steps of this peer
+    double step_seconds = 0.0;        ///< wall time spent in steps, s
+    std::size_t owned_nodes = 0;
+    double halo_age_s = 0.0;  ///< oldest streamed leaf shown, relative to the own time, s
+};
+
+class Session
+{
+public:
+    /// Starts a session as master on an opened transport. \return InvalidArgument for bad
+    /// settings or material; the model's errors (DegenerateFace, ...).
+    static core::Result<std::unique_ptr<Session>> host(net::Transport& transport,
+                                                       const core::TetraGrid& grid,
+                                                       const core::Vec3Field<double>& rest,
+                                                       const sim::MembraneSettings& material,
+                                                       const SessionSettings& settings);
+    /// Starts joining the master at `master` (the transport must be open). \return NetworkError
+    /// if connect() fails; InvalidArgument for bad settings.
+    static core::Result<std::unique_ptr<Session>> join(net::Transport& transport,
+                                                       const net::Address& master, net::Role role,
+                                                       const SessionSettings& settings);
+    ~Session();
+    Session(const Session&) = delete;
+    Session& operator=(const Session&) = delete;
+
+    /// Handles every pending network event (never waits).
+    void poll();
+    /// Steps and streams up to the caller's clock `now_s` (monotonic, s; any origin).
+    void advance(double now_s);
+
+    /// This peer's points of interest (participants): sent to the master, which re-partitions.
+    void set_points_of_interest(std::vector<net::Target> points);
+    /// This peer's user forces (replacing its previous list) from tick `from_tick` on, or from
+    /// the earliest tick every peer can still honour if that is later (exact mode: the tick after
+    /// the next one this peer publishes; fast mode: at once). Several calls queue in order.
+    void set_forces(std::vector<net::UserForce> forces, std::uint64_t from_tick = 0);
+    /// Leaves the session (participants and viewers); `left()` becomes true when done.
+    void leave();
+    /// Ends the session (master): disconnects every peer. `left()` becomes true.
+    void shutdown();
+
+    [[nodiscard]] SessionRole role() const noexcept { return role_; }
+    [[nodiscard]] net::PeerId id() const noexcept { return id_; }
+    [[nodiscard]] Coupling coupling() const noexcept { return coupling_; }
+    /// The model arrived (or was given) and the peer displays the object.
+    [[nodiscard]] bool ready() const noexcept { return model_ != nullptr; }
+    /// Left the session (after leave()), or the master went away.
+    [[nodiscard]] bool left() const noexcept { return left_; }
+    /// The tick of the integrated state (exact mode: the lockstep tick).
+    [[nodiscard]] std::uint64_t tick() const noexcept { return state_.tick; }
+    [[nodiscard]] double time() const noexcept { return state_.time; }
+    /// The newest partition known (epoch 0: none).
+    [[nodiscard]] std::uint32_t epoch() const noexcept;
+    /// Owner of every leaf under the newest partition (empty: none).
+    [[nodiscard]] std::vector<net::PeerId> owners() const;
+    [[nodiscard]] const LeafGraph* leaf_graph() const noexcept { return graph_.get(); }
+    [[nodiscard]] const sim::MembraneModel* model() const noexcept { return model_.get(); }
+    /// The integrated state (valid on the nodes this peer owns).
+    [[nodiscard]] const sim::MembraneState& state() const noexcept { return state_; }
+    /// What this peer shows: the whole object, its own leaves and the newest received ones
+    /// (ghost ring 1, twins synced).
+    [[nodiscard]] const core::Field<double>& display_u() const noexcept { return display_u_; }
+    [[nodiscard]] const core::Field<double>& display_v() const noexcept { return display_v_; }
+    /// Ids of the other peers this one knows (connected or not yet).
+    [[nodiscard]] std::vector<net::PeerId> peers() const;
+    [[nodiscard]] SessionStats stats() const;
+
+    struct Impl;
+
+private:
+    Session();
+    std::unique_ptr<Impl> impl_;
+    SessionRole role_ = SessionRole::Participant;
+    net::PeerId id_ = net::k_no_peer;
+    Coupling coupling_ = Coupling::Exact;
+    bool left_ = false;
+    std::unique_ptr<sim::MembraneModel> model_;
+    std::unique_ptr<LeafGraph> graph_;
+    sim::MembraneState state_;
+    core::Field<double> display_u_;
+    core::Field<double> display_v_;
+};
+
+/// Encodes a model (level, material, rest positions) as the Welcome's model blob.
+[[nodiscard]] std::vector<std::byte> encode_model(const sim::MembraneModel& model,
+                                                  Coupling coupling);
+/// Decodes a model blob. \return InvalidArgument for a malformed blob; the model's errors.
+core::Result<std::pair<sim::MembraneModel, Coupling>> decode_model(std::span<const std::byte> blob);
+
+/// The sim force of a wire force (face or point + radius).
+[[nodiscard]] sim::Force to_sim_force(const net::UserForce& force);
+
+}  // namespace pliant::session

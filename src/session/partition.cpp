@@ -1,0 +1,396 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+#include <pliant/core/assert.h>
+#include <pliant/session/partition.h>
+
+#include <algorithm>
+#include <deque>
+#include <limits>
+#include <map>
+#include <utility>
+
+namespace pliant::session
+{
+
+std::array<core::NodeIndex, 6> grid_neighbours(const core::TetraGrid& grid, int x, int y)
+{
+    return {grid.image(x + 1, y), grid.image(x - 1, y),     grid.image(x, y + 1),
+            grid.image(x, y - 1), grid.image(x + 1, y + 1), grid.image(x - 1, y - 1)};
+}
+
+std::vector<char> dilate_nodes(const core::TetraGrid& grid, std::vector<char> mask, int rings)
+{
+    PLIANT_ASSERT(mask.size() == grid.node_count(), "dilate_nodes: mask size");
+    std::vector<std::uint32_t> front;
+    for (std::uint32_t i = 0; i < mask.size(); ++i)
+        if (mask[i] != 0)
+            front.push_back(i);
+    for (int r = 0; r < rings; ++r)
+    {
+        std::vector<std::uint32_t> next;
+        for (const std::uint32_t i : front)
+        {
+            const core::GridCoord c = grid.coord(core::NodeIndex{i});
+            for (const core::NodeIndex m : grid_neighbours(grid, c.x, c.y))
+                if (mask[m.value] == 0)
+                {
+                    mask[m.value] = 1;
+                    next.push_back(m.value);
+                }
+        }
+        front = std::move(next);
+    }
+    return mask;
+}
+
+std::vector<core::Region> node_runs(const core::TetraGrid& grid, const std::vector<char>& mask)
+{
+    PLIANT_ASSERT(mask.size() == grid.node_count(), "node_runs: mask size");
+    auto in = [&](int x, int y)
+    {
+        const core::NodeIndex n = grid.index(x, y);
+        return grid.is_canonical(n) && mask[n.value] != 0;
+    };
+    // Row runs, merged with the run of the same span in the row above into one rectangle: the
+    // restricted step works region by region with a few rows of overhead each, so fewer, taller
+    // regions are cheaper (a union of leaves dilated by rings is mostly such rectangles).
+    std::vector<core::Region> runs;
+    std::vector<std::size_t> open;  // regions ending at the previous row
+    for (int y = 0; y < grid.ny(); ++y)
+    {
+        std::vector<std::size_t> now;
+        for (int x = 0; x < grid.nx();)
+        {
+            if (!in(x, y))
+            {
+                ++x;
+                continue;
+            }
+            const int x0 = x;
+            while (x < grid.nx() && in(x, y))
+                ++x;
+            bool merged = false;
+            for (const std::size_t k : open)
+                if (runs[k].x0 == x0 && runs[k].x1 == x && runs[k].y1 == y)
+                {
+                    runs[k].y1 = y + 1;
+                    now.push_back(k);
+                    merged = true;
+                    break;
+                }
+            if (!merged)
+            {
+                runs.push_back(core::Region{x0, y, x, y + 1});
+                now.push_back(runs.size() - 1);
+            }
+        }
+        open = std::move(now);
+    }
+    return runs;
+}
+
+std::size_t max_leaf_nodes(const core::TetraGrid& grid, int depth)
+{
+    std::size_t best = 0;
+    for (const core::LeafId& leaf : grid.leaves(depth))
+    {
+        const core::Region r = grid.leaf_region(leaf);
+        std::size_t n = 0;
+        for (int y = r.y0; y < r.y1; ++y)
+            for (int x = r.x0; x < r.x1; ++x)
+                n += grid.is_canonical(grid.index(x, y)) ? 1U : 0U;
+        best = std::max(best, n);
+    }
+    return best;
+}
+
+int leaf_depth_for(const core::TetraGrid& grid, net::ValueEncoding encoding)
+{
+    const std::size_t cap =
+        encoding == net::ValueEncoding::F64 ? net::k_max_leaf_nodes_f64 : net::k_max_leaf_nodes_f32;
+    const int deepest = std::min(grid.level(), net::k_max_partition_depth);
+    for (int d = 0; d < deepest; ++d)
+        if (max_leaf_nodes(grid, d) <= cap)
+            return d;
+    return deepest;
+}
+
+LeafGraph::LeafGraph(const core::TetraGrid& grid, int depth) : depth_(depth)
+{
+    PLIANT_ASSERT(depth >= 0 && depth <= grid.level(), "LeafGraph: depth out of range");
+    leaves_ = grid.leaves(depth);
+    regions_.reserve(leaves_.size());
+    leaf_of_.assign(grid.node_count(), std::numeric_limits<std::uint32_t>::max());
+    node_begin_.push_back(0);
+    for (std::size_t l = 0; l < leaves_.size(); ++l)
+    {
+        const core::Region r = grid.leaf_region(leaves_[l]);
+        regions_.push_back(r);
+        for (int y = r.y0; y < r.y1; ++y)
+            for (int x = r.x0; x < r.x1; ++x)
+            {
+                const core::NodeIndex n = grid.index(x, y);
+                if (!grid.is_canonical(n))
+                    continue;
+                PLIANT_ASSERT(leaf_of_[n.value] == std::numeric_limits<std::uint32_t>::max(),
+                              "LeafGraph: a canonical node lies in two leaves");
+                leaf_of_[n.value] = static_cast<std::uint32_t>(l);
+                leaf_nodes_.push_back(n);
+            }
+        node_begin_.push_back(leaf_nodes_.size());
+    }
+    for (std::uint32_t i = 0; i < leaf_of_.size(); ++i)
+    {
+        const std::uint32_t c = grid.canonical(core::NodeIndex{i}).value;
+        PLIANT_ASSERT(leaf_of_[c] != std::numeric_limits<std::uint32_t>::max(),
+                      "LeafGraph: a canonical node lies in no leaf");
+        leaf_of_[i] = leaf_of_[c];
+    }
+    // Leaf adjacency from the grid edges through the ghost map.
+    std::vector<std::vector<std::uint32_t>> adj(leaves_.size());
+    for (const core::NodeIndex n : leaf_nodes_)
+    {
+        const core::GridCoord c = grid.coord(n);
+        const std::uint32_t a = leaf_of_[n.value];
+        for (const core::NodeIndex m : grid_neighbours(grid, c.x, c.y))
+        {
+            const std::uint32_t b = leaf_of_[m.value];
+            if (b != a)
+                adj[a].push_back(b);
+        }
+    }
+    adj_begin_.push_back(0);
+    for (auto& list : adj)
+    {
+        std::sort(list.begin(), list.end());
+        list.erase(std::unique(list.begin(), list.end()), list.end());
+        adjacency_.insert(adjacency_.end(), list.begin(), list.end());
+        adj_begin_.push_back(adjacency_.size());
+    }
+}
+
+std::size_t LeafGraph::index_of(const core::LeafId& leaf) const noexcept
+{
+    const std::size_t side = std::size_t{1} << depth_;
+    return (leaf.square * side + leaf.iy) * side + leaf.ix;
+}
+
+namespace
+{
+
+constexpr std::uint32_t k_unowned = std::numeric_limits<std::uint32_t>::max();
+
+/// Hop distance from a set of sources (k_unowned where unreachable).
+std::vector<std::uint32_t> hops_from(const LeafGraph& g, std::span<const std::uint32_t> sources)
+{
+    std::vector<std::uint32_t> dist(g.size(), k_unowned);
+    std::deque<std::uint32_t> queue;
+    for (const std::uint32_t s : sources)
+        if (dist[s] == k_unowned)
+        {
+            dist[s] = 0;
+            queue.push_back(s);
+        }
+    while (!queue.empty())
+    {
+        const std::uint32_t a = queue.front();
+        queue.pop_front();
+        for (const std::uint32_t b : g.neighbours(a))
+            if (dist[b] == k_unowned)
+            {
+                dist[b] = dist[a] + 1;
+                queue.push_back(b);
+            }
+    }
+    return dist;
+}
+
+/// The first unowned leaf in BFS order from `start` (neighbours increasing).
+std::uint32_t nearest_free(const LeafGraph& g, std::uint32_t start,
+                           const std::vector<std::uint32_t>& owner)
+{
+    std::vector<bool> seen(g.size(), false);
+    std::deque<std::uint32_t> queue{start};
+    seen[start] = true;
+    while (!queue.empty())
+    {
+        const std::uint32_t a = queue.front();
+        queue.pop_front();
+        if (owner[a] == k_unowned)
+            return a;
+        for (const std::uint32_t b : g.neighbours(a))
+            if (!seen[b])
+            {
+                seen[b] = true;
+                queue.push_back(b);
+            }
+    }
+    return k_unowned;
+}
+
+}  // namespace
+
+std::vector<net::PeerId> partition_leaves(const core::TetraGrid& grid, const LeafGraph& graph,
+                                          std::span<const Seat> seats_in)
+{
+    PLIANT_ASSERT(!seats_in.empty(), "partition_leaves: no participant");
+    std::vector<Seat> seats(seats_in.begin(), seats_in.end());
+    std::sort(seats.begin(), seats.end(),
+              [](const Seat& a, const Seat& b) { return a.peer < b.peer; });
+    for (std::size_t k = 1; k < seats.size(); ++k)
+        PLIANT_ASSERT(seats[k - 1].peer != seats[k].peer, "partition_leaves: duplicate peer");
+    const std::size_t p = seats.size();
+    const std::size_t n = graph.size();
+    std::vector<std::uint32_t> owner(n, k_unowned);  // seat index
+    std::vector<std::uint32_t> seed(p, k_unowned);
+    std::vector<std::uint32_t> placed;
+
+    // Seeds: declared points first (in peer order), then the rest at the farthest free leaf.
+    auto take = [&](std::size_t s, std::uint32_t leaf)
+    {
+        seed[s] = leaf;
+        owner[leaf] = static_cast<std::uint32_t>(s);
+        placed.push_back(leaf);
+    };
+    for (std::size_t s = 0; s < p && placed.size() < n; ++s)
+        if (seats[s].seed)
+        {
+            PLIANT_ASSERT(seats[s].seed->value < grid.node_count(), "partition_leaves: bad seed");
+            take(s, nearest_free(graph, graph.leaf_of(*seats[s].seed), owner));
+        }
+    for (std::size_t s = 0; s < p && placed.size() < n; ++s)
+        if (!seats[s].seed)
+        {
+            std::uint32_t best = 0;
+            if (!placed.empty())
+            {
+                const auto dist = hops_from(graph, placed);
+                std::uint32_t far = 0;
+                for (std::uint32_t l = 0; l < n; ++l)
+                    if (owner[l] == k_unowned && dist[l] != k_unowned && dist[l] > far)
+                    {
+                        far = dist[l];
+                        best = l;
+                    }
+            }
+            take(s, best);
+        }
+
+    // Balanced growth along each seat's own BFS front.
+    std::vector<std::deque<std::uint32_t>> front(p);
+    std::vector<std::vector<bool>> seen(p, std::vector<bool>(n, false));
+    std::vector<std::size_t> count(p, 0);
+    auto grow_from = [&](std::size_t s, std::uint32_t leaf)
+    {
+        count[s] += graph.node_count(leaf);
+        for (const std::uint32_t b : graph.neighbours(leaf))
+            if (!seen[s][b])
+            {
+                seen[s][b] = true;
+                front[s].push_back(b);
+            }
+    };
+    for (std::size_t s = 0; s < p; ++s)
+        if (seed[s] != k_unowned)
+        {
+            seen[s][seed[s]] = true;
+            grow_from(s, seed[s]);
+        }
+    std::size_t free_left = n - placed.size();
+    while (free_left > 0)
+    {
+        std::size_t pick = p;
+        for (std::size_t s = 0; s < p; ++s)
+        {
+            while (!front[s].empty() && owner[front[s].front()] != k_unowned)
+                front[s].pop_front();
+            if (!front[s].empty() && (pick == p || count[s] < count[pick]))
+                pick = s;
+        }
+        if (pick == p)
+            break;  // every front is closed (cannot happen on a connected graph)
+        const std::uint32_t leaf = front[pick].front();
+        front[pick].pop_front();
+        owner[leaf] = static_cast<std::uint32_t>(pick);
+        grow_from(pick, leaf);
+        --free_left;
+    }
+    for (std::uint32_t l = 0; l < n; ++l)
+        if (owner[l] == k_unowned)
+        {
+            const auto smallest = std::min_element(count.begin(), count.end()) - count.begin();
+            owner[l] = static_cast<std::uint32_t>(smallest);
+            count[static_cast<std::size_t>(smallest)] += graph.node_count(l);
+        }
+    std::vector<net::PeerId> out(n);
+    for (std::size_t l = 0; l < n; ++l)
+        out[l] = seats[owner[l]].peer;
+    return out;
+}
+
+PartitionQuality measure_partition(const core::TetraGrid& grid, const LeafGraph& graph,
+                                   std::span<const net::PeerId> owners)
+{
+    PLIANT_ASSERT(owners.size() == graph.size(), "measure_partition: table size");
+    std::map<net::PeerId, PeerShare> shares;
+    for (std::size_t l = 0; l < owners.size(); ++l)
+    {
+        PeerShare& s = shares[owners[l]];
+        s.peer = owners[l];
+        ++s.leaves;
+        s.nodes += graph.node_count(l);
+    }
+    // Fragments: components of each peer's leaves.
+    std::vector<bool> seen(graph.size(), false);
+    for (std::size_t l = 0; l < graph.size(); ++l)
+    {
+        if (seen[l])
+            continue;
+        ++shares[owners[l]].fragments;
+        std::deque<std::size_t> queue{l};
+        seen[l] = true;
+        while (!queue.empty())
+        {
+            const std::size_t a = queue.front();
+            queue.pop_front();
+            for (const std::uint32_t b : graph.neighbours(a))
+                if (!seen[b] && owners[b] == owners[l])
+                {
+                    seen[b] = true;
+                    queue.push_back(b);
+                }
+        }
+    }
+    // Border edges: unique surface edges (canonical pairs) across owners.
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> edges;
+    for (std::size_t l = 0; l < graph.size(); ++l)
+        for (const core::NodeIndex a : graph.nodes(l))
+        {
+            const core::GridCoord c = grid.coord(a);
+            for (const core::NodeIndex b : grid_neighbours(grid, c.x, c.y))
+                if (a.value < b.value && owners[graph.leaf_of(b)] != owners[l])
+                    edges.emplace_back(a.value, b.value);
+        }
+    // A corner sees some neighbours twice through the ghost map: keep each pair once.
+    std::sort(edges.begin(), edges.end());
+    edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+    PartitionQuality q;
+    for (const auto& [a, b] : edges)
+    {
+        ++shares[owners[graph.leaf_of(core::NodeIndex{a})]].border_edges;
+        ++shares[owners[graph.leaf_of(core::NodeIndex{b})]].border_edges;
+    }
+    q.border_edges = edges.size();
+    double mean = 0.0;
+    for (const auto& [id, s] : shares)
+        mean += static_cast<double>(s.nodes);
+    mean /= static_cast<double>(shares.size());
+    for (const auto& [id, s] : shares)
+    {
+        q.imbalance = std::max(q.imbalance, std::abs(static_cast<double>(s.nodes) - mean) / mean);
+        q.shares.push_back(s);
+    }
+    return q;
+}
+
+}  // namespace pliant::session

@@ -1,0 +1,245 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+#include <pliant/session/runner.h>
+
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <thread>
+
+namespace pliant::session
+{
+
+namespace
+{
+
+core::Unexpected bad_line(std::size_t line, const std::string& why)
+{
+    return core::fail(core::ErrorCode::ParseError,
+                      "script line " + std::to_string(line) + ": " + why);
+}
+
+bool read_number(std::istringstream& in, double& out)
+{
+    std::string word;
+    if (!(in >> word))
+        return false;
+    char* end = nullptr;
+    out = std::strtod(word.c_str(), &end);
+    return end != nullptr && *end == '\0' && std::isfinite(out);
+}
+
+}  // namespace
+
+core::Result<std::vector<ScriptEvent>> parse_script(std::string_view text)
+{
+    std::vector<ScriptEvent> events;
+    std::istringstream lines{std::string(text)};
+    std::string raw;
+    std::size_t number = 0;
+    while (std::getline(lines, raw))
+    {
+        ++number;
+        if (const auto hash = raw.find('#'); hash != std::string::npos)
+            raw.erase(hash);
+        std::istringstream in(raw);
+        std::string first;
+        if (!(in >> first))
+            continue;
+        ScriptEvent e;
+        {
+            std::istringstream t(first);
+            if (!read_number(t, e.time) || e.time < 0.0)
+                return bad_line(number, "expected a time >= 0, got '" + first + "'");
+        }
+        std::string cmd;
+        in >> cmd;
+        if (cmd == "leave")
+            e.kind = ScriptEvent::Kind::Leave;
+        else if (cmd == "grab" || cmd == "poi")
+        {
+            e.kind = cmd == "grab" ? ScriptEvent::Kind::Grab : ScriptEvent::Kind::Poi;
+            std::string what;
+            in >> what;
+            if (what == "face")
+            {
+                double f = 0.0;
+                if (!read_number(in, f) || f < 0.0 || f >= net::k_max_face_index ||
+                    f != std::floor(f))
+                    return bad_line(number, "expected a face index");
+                e.force.target.kind = net::TargetKind::Face;
+                e.force.target.face = static_cast<std::uint32_t>(f);
+            }
+            else if (what == "point")
+            {
+                e.force.target.kind = net::TargetKind::Position;
+                for (double& c : e.force.target.position)
+                    if (!read_number(in, c))
+                        return bad_line(number, "expected three coordinates after 'point'");
+            }
+            else
+                return bad_line(number, "expected 'face' or 'point' after '" + cmd + "'");
+            std::string key;
+            while (in >> key)
+            {
+                if (key == "radius")
+                {
+                    if (!read_number(in, e.force.target.radius) || e.force.target.radius < 0.0)
+                        return bad_line(number, "expected a radius >= 0");
+                }
+                else if (key == "force" && e.kind == ScriptEvent::Kind::Grab)
+                {
+                    for (double& c : e.force.force)
+                        if (!read_number(in, c))
+                            return bad_line(number, "expected three force components");
+                }
+                else if (key == "for" && e.kind == ScriptEvent::Kind::Grab)
+                {
+                    if (!read_number(in, e.duration) || e.duration < 0.0)
+                        return bad_line(number, "expected a duration >= 0");
+                }
+                else
+                    return bad_line(number, "unknown key '" + key + "'");
+            }
+        }
+        else
+            return bad_line(number, "unknown command '" + cmd + "'");
+        events.push_back(e);
+    }
+    std::stable_sort(events.begin(), events.end(),
+                     [](const ScriptEvent& a, const ScriptEvent& b) { return a.time < b.time; });
+    return events;
+}
+
+core::Result<std::vector<ScriptEvent>> load_script(const std::filesystem::path& path)
+{
+    std::ifstream in(path);
+    if (!in)
+        return core::fail(core::ErrorCode::IoError, "cannot read script " + path.string());
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return parse_script(ss.str());
+}
+
+core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
+{
+    std::ofstream csv;
+    if (!options.stats_csv.empty())
+    {
+        csv.open(options.stats_csv);
+        if (!csv)
+            return core::fail(core::ErrorCode::IoError,
+                              "cannot write stats file " + options.stats_csv.string());
+        csv << "time_s,bytes_in,bytes_out,packets_in,packets_out,drops,steps,step_ms,"
+               "owned_nodes,halo_age_s,tick,peers\n";
+    }
+    using clock = std::chrono::steady_clock;
+    const auto t0 = clock::now();
+    auto elapsed = [&] { return std::chrono::duration<double>(clock::now() - t0).count(); };
+    std::size_t next_event = 0;
+    struct ActiveGrab
+    {
+        double until;
+        net::UserForce force;
+    };
+    std::vector<ActiveGrab> grabs;
+    bool leave_asked = false;
+    SessionStats last{};
+    double next_row = 1.0;
+    RunSummary summary;
+    auto write_row = [&](double t)
+    {
+        const SessionStats s = session.stats();
+        if (csv)
+        {
+            const double step_ms = s.steps > last.steps
+                                       ? 1e3 * (s.step_seconds - last.step_seconds) /
+                                             static_cast<double>(s.steps - last.steps)
+                                       : 0.0;
+            csv << t << ',' << s.bytes_received - last.bytes_received << ','
+                << s.bytes_sent - last.bytes_sent << ','
+                << s.packets_received - last.packets_received << ','
+                << s.packets_sent - last.packets_sent << ',' << s.bad_datagrams - last.bad_datagrams
+                << ',' << s.steps - last.steps << ',' << step_ms << ',' << s.owned_nodes << ','
+                << s.halo_age_s << ',' << session.tick() << ',' << session.peers().size() << '\n';
+            csv.flush();
+        }
+        last = s;
+    };
+    // Bounded by the duration (wall clock) and by an iteration cap.
+    for (std::uint64_t iteration = 0; iteration < 1'000'000'000ULL; ++iteration)
+    {
+        const double now = elapsed();
+        if (now >= options.duration_s || session.left())
+            break;
+        session.poll();
+        bool forces_changed = false;
+        while (next_event < options.script.size() && options.script[next_event].time <= now &&
+               session.ready())
+        {
+            const ScriptEvent& e = options.script[next_event++];
+            switch (e.kind)
+            {
+            case ScriptEvent::Kind::Grab:
+                grabs.push_back({now + e.duration, e.force});
+                session.set_points_of_interest({e.force.target});
+                forces_changed = true;
+                break;
+            case ScriptEvent::Kind::Poi: session.set_points_of_interest({e.force.target}); break;
+            case ScriptEvent::Kind::Leave:
+                leave_asked = true;
+                session.leave();
+                break;
+            }
+        }
+        const std::size_t before = grabs.size();
+        std::erase_if(grabs, [&](const ActiveGrab& g) { return g.until <= now; });
+        if (forces_changed || grabs.size() != before)
+        {
+            std::vector<net::UserForce> list;
+            for (std::size_t k = 0; k < grabs.size(); ++k)
+            {
+                list.push_back(grabs[k].force);
+                list.back().grab_id = static_cast<std::uint16_t>(k);
+            }
+            session.set_forces(std::move(list));
+        }
+        session.advance(now);
+        if (now >= next_row)
+        {
+            write_row(next_row);
+            next_row += 1.0;
+        }
+        if (options.idle_sleep_s > 0.0)
+            std::this_thread::sleep_for(std::chrono::duration<double>(options.idle_sleep_s));
+    }
+    // Wind down: a participant or viewer leaves (and waits, bounded, for the hand-over); the
+    // master shuts the session down.
+    if (session.role() == SessionRole::Master)
+        session.shutdown();
+    else
+    {
+        if (!leave_asked)
+            session.leave();
+        const double stop = elapsed() + 3.0;
+        while (!session.left() && elapsed() < stop)
+        {
+            session.poll();
+            session.advance(elapsed());
+            std::this_thread::sleep_for(std::chrono::microseconds(200));
+        }
+    }
+    summary.elapsed_s = elapsed();
+    write_row(summary.elapsed_s);
+    summary.final_tick = session.tick();
+    summary.left = session.left();
+    summary.stats = session.stats();
+    return summary;
+}
+
+}  // namespace pliant::session

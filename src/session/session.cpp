@@ -1,0 +1,1580 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+// The Session peer (include/pliant/session/session.h has the design; docs/session.md the story).
+#include <pliant/core/assert.h>
+#include <pliant/core/hash.h>
+#include <pliant/session/session.h>
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <bit>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <set>
+
+namespace pliant::session
+{
+
+namespace
+{
+
+constexpr std::uint32_t k_model_magic = 0x4D534C50;  // "PLSM"
+constexpr std::uint8_t k_model_version = 1;
+constexpr double k_leave_timeout_s = 5.0;
+
+// --- little-endian byte writer/reader for the blobs -------------------------------------------
+
+struct Writer
+{
+    std::vector<std::byte> out;
+    void u8(std::uint8_t v) { out.push_back(static_cast<std::byte>(v)); }
+    void u32(std::uint32_t v)
+    {
+        for (int k = 0; k < 4; ++k)
+            u8(static_cast<std::uint8_t>(v >> (8 * k)));
+    }
+    void u64(std::uint64_t v)
+    {
+        for (int k = 0; k < 8; ++k)
+            u8(static_cast<std::uint8_t>(v >> (8 * k)));
+    }
+    void f64(double v) { u64(std::bit_cast<std::uint64_t>(v)); }
+};
+
+struct Reader
+{
+    std::span<const std::byte> in;
+    std::size_t pos = 0;
+    bool ok = true;
+    std::uint8_t u8()
+    {
+        if (pos >= in.size())
+        {
+            ok = false;
+            return 0;
+        }
+        return static_cast<std::uint8_t>(in[pos++]);
+    }
+    std::uint32_t u32()
+    {
+        std::uint32_t v = 0;
+        for (int k = 0; k < 4; ++k)
+            v |= static_cast<std::uint32_t>(u8()) << (8 * k);
+        return v;
+    }
+    std::uint64_t u64()
+    {
+        std::uint64_t v = 0;
+        for (int k = 0; k < 8; ++k)
+            v |= static_cast<std::uint64_t>(u8()) << (8 * k);
+        return v;
+    }
+    double f64()
+    {
+        const double v = std::bit_cast<double>(u64());
+        if (!std::isfinite(v))
+            ok = false;
+        return v;
+    }
+};
+
+std::vector<std::byte> encode_state(const core::TetraGrid& g, const core::Field<double>& u,
+                                    const core::Field<double>& v, std::uint64_t tick, double time)
+{
+    Writer w;
+    w.u64(tick);
+    w.f64(time);
+    for (int y = 0; y < g.ny(); ++y)
+        for (int x = 0; x < g.nx(); ++x)
+        {
+            w.f64(u.at(x, y));
+            w.f64(v.at(x, y));
+        }
+    return std::move(w.out);
+}
+
+bool decode_state(const core::TetraGrid& g, std::span<const std::byte> blob, core::Field<double>& u,
+                  core::Field<double>& v)
+{
+    Reader r{blob};
+    (void)r.u64();
+    (void)r.f64();
+    for (int y = 0; y < g.ny(); ++y)
+        for (int x = 0; x < g.nx(); ++x)
+        {
+            u.at(x, y) = r.f64();
+            v.at(x, y) = r.f64();
+        }
+    return r.ok && r.pos == blob.size();
+}
+
+double seconds_since(std::chrono::steady_clock::time_point t0)
+{
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+std::vector<std::byte> encode_model(const sim::MembraneModel& model, Coupling coupling)
+{
+    const core::TetraGrid& g = model.grid();
+    const sim::MembraneSettings& s = model.settings();
+    Writer w;
+    w.u32(k_model_magic);
+    w.u8(k_model_version);
+    w.u8(static_cast<std::uint8_t>(g.level()));
+    w.u8(static_cast<std::uint8_t>(coupling));
+    w.u8(s.fixed_step ? 1 : 0);
+    w.u32(static_cast<std::uint32_t>(std::max(0, s.reassemble_every)));
+    for (const double v : {s.T, s.rho, s.beta, s.k_f, s.rtol, s.atol, s.dt_min, s.dt_max,
+                           s.dt_initial, s.safety, s.max_growth, s.min_shrink, s.fixed_dt})
+        w.f64(v);
+    for (int y = 0; y < g.ny(); ++y)
+        for (int x = 0; x < g.nx(); ++x)
+            for (int c = 0; c < 3; ++c)
+                w.f64(model.rest_positions()[static_cast<std::size_t>(c)].at(x, y));
+    return std::move(w.out);
+}
+
+core::Result<std::pair<sim::MembraneModel, Coupling>> decode_model(std::span<const std::byte> blob)
+{
+    Reader r{blob};
+    if (r.u32() != k_model_magic || r.u8() != k_model_version)
+        return core::fail(core::ErrorCode::InvalidArgument, "model blob: bad magic or version");
+    const int level = r.u8();
+    const std::uint8_t coupling = r.u8();
+    const std::uint8_t fixed = r.u8();
+    if (level < core::k_min_level || level > core::k_max_level || coupling < 1 || coupling > 2 ||
+        fixed > 1)
+        return core::fail(core::ErrorCode::InvalidArgument, "model blob: bad header");
+    sim::MembraneSettings s;
+    s.fixed_step = fixed == 1;
+    s.reassemble_every = static_cast<int>(std::min<std::uint32_t>(r.u32(), 1u << 30));
+    for (double* v : {&s.T, &s.rho, &s.beta, &s.k_f, &s.rtol, &s.atol, &s.dt_min, &s.dt_max,
+                      &s.dt_initial, &s.safety, &s.max_growth, &s.min_shrink, &s.fixed_dt})
+        *v = r.f64();
+    const core::TetraGrid g = core::TetraGrid::create(level).value();
+    const std::size_t expect = 12 + 13 * 8 + g.node_count() * 24;
+    if (!r.ok || blob.size() != expect)
+        return core::fail(core::ErrorCode::InvalidArgument, "model blob: bad length or value");
+    core::Vec3Field<double> rest{core::Field<double>(g), core::Field<double>(g),
+                                 core::Field<double>(g)};
+    for (int y = 0; y < g.ny(); ++y)
+        for (int x = 0; x < g.nx(); ++x)
+            for (int c = 0; c < 3; ++c)
+                rest[static_cast<std::size_t>(c)].at(x, y) = r.f64();
+    if (!r.ok)
+        return core::fail(core::ErrorCode::InvalidArgument, "model blob: non-finite position");
+    auto model = sim::MembraneModel::create(g, rest, s);
+    if (!model)
+        return core::fail(model.error().code, "model blob: " + model.error().message);
+    return std::pair<sim::MembraneModel, Coupling>{std::move(model).value(),
+                                                   static_cast<Coupling>(coupling)};
+}
+
+sim::Force to_sim_force(const net::UserForce& f)
+{
+    sim::Force out;
+    if (f.target.kind == net::TargetKind::Face)
+        out.face = static_cast<std::int64_t>(f.target.face);
+    else
+    {
+        out.face = -1;
+        out.point = {f.target.position[0], f.target.position[1], f.target.position[2]};
+        out.radius = f.target.radius;
+    }
+    out.vector = {f.force[0], f.force[1], f.force[2]};
+    return out;
+}
+
+// --- Impl ------------------------------------------------------------------------------------
+
+struct ForceEntry
+{
+    std::uint64_t apply_tick = 0;
+    std::vector<net::UserForce> forces;
+};
+
+struct PartitionEntry
+{
+    std::uint64_t apply_tick = 0;
+    std::uint32_t epoch = 0;
+    std::vector<net::PeerId> owners;
+    std::vector<net::PeerId> members;  ///< distinct owners, increasing
+};
+
+struct RemotePeer
+{
+    net::PeerInfo info;
+    bool info_known = false;
+    std::optional<net::PeerHandle> handle;
+    std::vector<std::pair<net::Message, net::SendMode>> queued;  ///< until the handle is bound
+    bool has_heartbeat = false;
+    std::uint64_t heartbeat = 0;  ///< newest Heartbeat tick (exact mode)
+    std::vector<ForceEntry> forces;
+    std::vector<net::Target> points;
+    bool ready = false;  ///< sent its points of interest (participants): may be partitioned
+    bool leaving = false;
+    bool departed = false;
+};
+
+struct HaloBuffer
+{
+    std::uint64_t tick = 0;
+    double time = 0.0;
+    std::vector<std::uint32_t> nodes;
+    std::vector<double> u, v;
+};
+
+struct Session::Impl
+{
+    Session& s;
+    net::Transport& transport;
+    net::Messenger messenger;
+    SessionSettings settings;
+    std::uint32_t session_id = 0;
+    net::PeerId master_id{0};
+    std::optional<net::PeerHandle> master_handle;  // joiner: the first connection
+    bool welcomed = false;
+    std::uint16_t next_peer_id = 1;
+    std::map<std::uint16_t, RemotePeer> peers;
+    std::map<net::PeerHandle, std::uint16_t> handle_ids;  // bound connections
+    std::map<net::PeerHandle, std::uint16_t> dialing;     // joiner -> listed peers
+    std::map<net::PeerHandle, net::PeerStats> last_stats;
+    net::PeerStats closed_stats;
+
+    // Blobs being received (joiner).
+    net::Welcome welcome;
+    std::uint64_t welcome_tick = 0;
+    std::vector<std::byte> model_blob, state_blob;
+    std::size_t model_got = 0, state_got = 0;
+
+    // Simulation.
+    std::unique_ptr<sim::Rkf45Workspace> ws;
+    std::vector<PartitionEntry> partitions;
+    std::vector<ForceEntry> my_forces;
+    std::vector<ForceEntry> pending_forces;  // apply_tick = the earliest tick asked for
+    std::vector<net::Target> my_points;
+    bool points_dirty = false;
+    bool repartition_pending = false;
+    std::uint32_t next_epoch = 1;
+    bool lockstep = false;    // exact: a member stepping in lockstep
+    bool published = false;   // exact: tick state_.tick published
+    bool state_exact = true;  // exact: joiner before its first halos
+    std::uint64_t exact_from = 0;
+    std::deque<HaloBuffer> halos;
+    std::vector<std::uint64_t> leaf_tick;
+    std::vector<double> leaf_time;
+
+    // Cached sets for (prev, next) partition epochs.
+    std::uint32_t cache_prev = 0, cache_next = 0;
+    std::vector<core::Region> integrate_runs;                      // exact: dilated own set
+    std::map<std::uint16_t, std::vector<std::uint32_t>> halo_out;  // receiver -> nodes
+    std::uint32_t fast_epoch = 0;
+    std::vector<core::Region> owned_regions;  // fast: own leaves
+    std::vector<std::uint32_t> my_leaves;     // streamed leaves
+    std::uint32_t my_leaves_epoch = std::numeric_limits<std::uint32_t>::max();
+
+    // Clock.
+    bool clock_set = false;
+    double clock_offset = 0.0;  // sim time = now + clock_offset
+    double last_now = 0.0;
+    double next_stream = 0.0;
+    double next_frame = 0.0;
+    bool leaving = false;
+    double leave_started = 0.0;
+
+    SessionStats counters;
+
+    Impl(Session& session, net::Transport& t, const SessionSettings& set)
+        : s(session), transport(t), messenger(t), settings(set)
+    {
+    }
+
+    // --- sending -------------------------------------------------------------------------------
+
+    net::Message make(net::Body body, std::uint64_t tick) const
+    {
+        net::Message m;
+        m.header.session = session_id;
+        m.header.sender = s.id_;
+        m.header.tick = tick;
+        m.body = std::move(body);
+        return m;
+    }
+
+    void send_to(std::uint16_t id, const net::Message& m,
+                 net::SendMode mode = net::SendMode::Default)
+    {
+        auto it = peers.find(id);
+        if (it == peers.end() || it->second.departed)
+            return;
+        RemotePeer& p = it->second;
+        const bool reliable = mode == net::SendMode::Reliable ||
+                              net::default_channel(m.type()) == net::Channel::Control;
+        if (!p.handle)
+        {
+            if (reliable)
+                p.queued.emplace_back(m, mode);
+            return;
+        }
+        auto r = messenger.send(*p.handle, m, mode);
+        if (!r)
+            spdlog::debug("session: send to {} failed: {}", id, r.error().message);
+    }
+
+    void send_all(const net::Message& m, net::SendMode mode = net::SendMode::Default)
+    {
+        for (auto& [id, p] : peers)
+            send_to(id, m, mode);
+    }
+
+    void bind(net::PeerHandle h, std::uint16_t id)
+    {
+        messenger.bind(h, net::PeerId{id});
+        handle_ids[h] = id;
+        RemotePeer& p = peers[id];
+        p.handle = h;
+        auto queued = std::move(p.queued);
+        p.queued.clear();
+        for (auto& [m, mode] : queued)
+            (void)messenger.send(h, m, mode);
+    }
+
+    // --- model and partitions ------------------------------------------------------------------
+
+    void install_model(sim::MembraneModel model)
+    {
+        s.model_ = std::make_unique<sim::MembraneModel>(std::move(model));
+        const core::TetraGrid& g = s.model_->grid();
+        s.graph_ = std::make_unique<LeafGraph>(g, leaf_depth_for(g, net::ValueEncoding::F64));
+        ws = std::make_unique<sim::Rkf45Workspace>(*s.model_, settings.threads);
+        s.state_ = sim::MembraneState::at_rest(g);
+        s.display_u_ = core::Field<double>(g, 1);
+        s.display_v_ = core::Field<double>(g, 1);
+        leaf_tick.assign(s.graph_->size(), 0);
+        leaf_time.assign(s.graph_->size(), 0.0);
+    }
+
+    const PartitionEntry* partition_at(std::uint64_t tick) const
+    {
+        const PartitionEntry* best = nullptr;
+        for (const PartitionEntry& p : partitions)
+            if (p.apply_tick <= tick && (best == nullptr || p.epoch > best->epoch))
+                best = &p;
+        return best;
+    }
+    const PartitionEntry* newest() const
+    {
+        const PartitionEntry* best = nullptr;
+        for (const PartitionEntry& p : partitions)
+            if (best == nullptr || p.epoch > best->epoch)
+                best = &p;
+        return best;
+    }
+    static bool member(const PartitionEntry* p, net::PeerId id)
+    {
+        return p != nullptr && std::binary_search(p->members.begin(), p->members.end(), id);
+    }
+
+    void add_partition(std::uint64_t apply, std::uint32_t epoch, std::vector<net::PeerId> owners)
+    {
+        for (const PartitionEntry& p : partitions)
+            if (p.epoch == epoch)
+                return;
+        PartitionEntry e{apply, epoch, std::move(owners), {}};
+        e.members = e.owners;
+        std::sort(e.members.begin(), e.members.end());
+        e.members.erase(std::unique(e.members.begin(), e.members.end()), e.members.end());
+        partitions.push_back(std::move(e));
+        // Keep the table short: drop entries superseded before the oldest tick still needed.
+        const std::uint64_t keep = s.state_.tick > 2 ? s.state_.tick - 2 : 0;
+        const PartitionEntry* base = partition_at(keep);
+        if (base != nullptr)
+        {
+            const std::uint32_t base_epoch = base->epoch;
+            std::erase_if(partitions,
+                          [&](const PartitionEntry& p) { return p.epoch < base_epoch; });
+        }
+    }
+
+    std::optional<core::NodeIndex> seed_of(const std::vector<net::Target>& pts) const
+    {
+        if (pts.empty())
+            return std::nullopt;
+        const core::TetraGrid& g = s.model_->grid();
+        const net::Target& t = pts.front();
+        if (t.kind == net::TargetKind::Face)
+        {
+            if (t.face >= g.face_count())
+                return std::nullopt;
+            const std::uint32_t cell = t.face / 2;
+            const int x = static_cast<int>(cell % static_cast<std::uint32_t>(2 * g.w()));
+            const int y = static_cast<int>(cell / static_cast<std::uint32_t>(2 * g.w()));
+            return g.canonical(g.index(x, y));
+        }
+        double best = std::numeric_limits<double>::infinity();
+        core::NodeIndex out{};
+        const auto& P = s.model_->rest_positions();
+        for (const core::NodeIndex n : g.node_of_unique())
+        {
+            const core::GridCoord c = g.coord(n);
+            const double dx = P[0].at(c.x, c.y) - t.position[0];
+            const double dy = P[1].at(c.x, c.y) - t.position[1];
+            const double dz = P[2].at(c.x, c.y) - t.position[2];
+            const double d = dx * dx + dy * dy + dz * dz;
+            if (d < best)
+            {
+                best = d;
+                out = n;
+            }
+        }
+        return out;
+    }
+
+    /// Master: the partition over the ready participants (itself included).
+    std::vector<net::PeerId> compute_partition() const
+    {
+        std::vector<Seat> seats{Seat{s.id_, seed_of(my_points)}};
+        for (const auto& [id, p] : peers)
+            if (p.ready && !p.leaving && !p.departed && p.info.role == net::Role::Participant)
+                seats.push_back(Seat{net::PeerId{id}, seed_of(p.points)});
+        return partition_leaves(s.model_->grid(), *s.graph_, seats);
+    }
+
+    void master_repartition(std::uint64_t apply)
+    {
+        repartition_pending = false;
+        auto owners = compute_partition();
+        const PartitionEntry* cur = newest();
+        if (cur != nullptr && cur->owners == owners)
+            return;
+        const std::uint32_t epoch = next_epoch++;
+        add_partition(apply, epoch, owners);
+        net::Partition msg;
+        msg.epoch = epoch;
+        msg.leaf_depth = static_cast<std::uint8_t>(s.graph_->depth());
+        msg.owners = std::move(owners);
+        send_all(make(msg, apply));
+        spdlog::debug("session: master partition epoch {} from tick {}", epoch, apply);
+    }
+
+    // --- node sets -----------------------------------------------------------------------------
+
+    std::vector<char> owned_mask(const PartitionEntry* p, net::PeerId id) const
+    {
+        const core::TetraGrid& g = s.model_->grid();
+        std::vector<char> mask(g.node_count(), 0);
+        if (p == nullptr)
+            return mask;
+        for (std::size_t l = 0; l < p->owners.size(); ++l)
+            if (p->owners[l] == id)
+                for (const core::NodeIndex n : s.graph_->nodes(l))
+                    mask[n.value] = 1;
+        return mask;
+    }
+
+    std::vector<char> dilate(std::vector<char> mask, int rings) const
+    {
+        return dilate_nodes(s.model_->grid(), std::move(mask), rings);
+    }
+
+    std::vector<core::Region> runs_of(const std::vector<char>& mask) const
+    {
+        return node_runs(s.model_->grid(), mask);
+    }
+
+    /// Exact mode sets for publishing tick t / stepping from t.
+    void refresh_exact_sets(const PartitionEntry* prev, const PartitionEntry* next)
+    {
+        const std::uint32_t pe = prev != nullptr ? prev->epoch : 0;
+        const std::uint32_t ne = next != nullptr ? next->epoch : 0;
+        if (pe == cache_prev && ne == cache_next && !integrate_runs.empty())
+            return;
+        cache_prev = pe;
+        cache_next = ne;
+        integrate_runs = runs_of(dilate(owned_mask(next, s.id_), settings.halo_rings));
+        halo_out.clear();
+        const std::vector<char> mine = owned_mask(prev, s.id_);
+        if (next == nullptr)
+            return;
+        for (const net::PeerId r : next->members)
+        {
+            if (r == s.id_)
+                continue;
+            const std::vector<char> need = dilate(owned_mask(next, r), settings.halo_rings);
+            const std::vector<char> has = owned_mask(prev, r);
+            std::vector<std::uint32_t> nodes;
+            for (std::uint32_t i = 0; i < need.size(); ++i)
+                if (need[i] != 0 && mine[i] != 0 && has[i] == 0)
+                    nodes.push_back(i);
+            if (!nodes.empty())
+                halo_out[r.value] = std::move(nodes);
+        }
+    }
+
+    void refresh_my_leaves(const PartitionEntry* p)
+    {
+        const std::uint32_t e = p != nullptr ? p->epoch : 0;
+        if (e == my_leaves_epoch)
+            return;
+        my_leaves_epoch = e;
+        my_leaves.clear();
+        owned_regions.clear();
+        if (p == nullptr)
+            return;
+        for (std::uint32_t l = 0; l < p->owners.size(); ++l)
+            if (p->owners[l] == s.id_)
+            {
+                my_leaves.push_back(l);
+                owned_regions.push_back(s.graph_->regions()[l]);
+            }
+    }
+
+    // --- forces --------------------------------------------------------------------------------
+
+    /// The entry with the greatest apply tick <= tick (ties: the later one).
+    static const ForceEntry* active(const std::vector<ForceEntry>& table, std::uint64_t tick)
+    {
+        const ForceEntry* best = nullptr;
+        for (const ForceEntry& e : table)
+            if (e.apply_tick <= tick && (best == nullptr || e.apply_tick >= best->apply_tick))
+                best = &e;
+        return best;
+    }
+
+    std::vector<sim::Force> forces_at(std::uint64_t tick) const
+    {
+        // Order: by sender id (the master, id 0, first), then each sender's list order.
+        std::vector<std::pair<std::uint16_t, const ForceEntry*>> entries;
+        entries.emplace_back(s.id_.value, active(my_forces, tick));
+        for (const auto& [id, p] : peers)
+            entries.emplace_back(id, active(p.forces, tick));
+        std::sort(entries.begin(), entries.end(),
+                  [](const auto& a, const auto& b) { return a.first < b.first; });
+        std::vector<sim::Force> out;
+        for (const auto& [id, e] : entries)
+            if (e != nullptr)
+                for (const net::UserForce& f : e->forces)
+                    out.push_back(to_sim_force(f));
+        if (!sim::validate_forces(*s.model_, out))
+            out.clear();
+        return out;
+    }
+
+    /// Sends the queued force lists; none applies before `earliest` (exact mode: the tick after
+    /// the one being published, so every peer has it before it steps that tick).
+    void flush_forces(std::uint64_t earliest)
+    {
+        for (ForceEntry& e : pending_forces)
+        {
+            e.apply_tick = std::max(e.apply_tick, earliest);
+            net::Force msg;
+            msg.forces = e.forces;
+            send_all(make(msg, e.apply_tick));
+            my_forces.push_back(std::move(e));
+        }
+        pending_forces.clear();
+        trim(my_forces);
+    }
+
+    /// Keeps a force table short: entries superseded before the current tick go.
+    void trim(std::vector<ForceEntry>& table) const
+    {
+        const ForceEntry* cur = active(table, s.state_.tick > 2 ? s.state_.tick - 2 : 0);
+        if (cur == nullptr)
+            return;
+        const std::uint64_t base = cur->apply_tick;
+        const ForceEntry* keep = cur;
+        std::vector<ForceEntry> out;
+        for (const ForceEntry& e : table)
+            if (&e == keep || e.apply_tick > base)
+                out.push_back(e);
+        table = std::move(out);
+    }
+
+    // --- exact mode ----------------------------------------------------------------------------
+
+    void send_halos(std::uint64_t t)
+    {
+        const PartitionEntry* next = partition_at(t);
+        const std::uint32_t epoch = next != nullptr ? next->epoch : 0;
+        const core::TetraGrid& g = s.model_->grid();
+        for (const auto& [rid, nodes] : halo_out)
+        {
+            net::Halo h;
+            auto flush = [&]
+            {
+                if (h.ranges.empty())
+                    return;
+                send_to(rid, make(h, t), net::SendMode::Reliable);
+                h.ranges.clear();
+                h.u.clear();
+                h.v.clear();
+            };
+            h.epoch = epoch;
+            h.stage = net::k_max_halo_stage;
+            h.encoding = net::ValueEncoding::F64;
+            h.time = s.state_.time;
+            h.has_u = true;
+            h.has_v = true;
+            for (const std::uint32_t n : nodes)
+            {
+                const bool extend = !h.ranges.empty() &&
+                                    h.ranges.back().first + h.ranges.back().count == n &&
+                                    h.ranges.back().count < 0xFFFF;
+                const std::size_t r = h.ranges.size() + (extend ? 0 : 1);
+                const std::size_t bytes = 16 + 8 * r + 16 * (h.u.size() + 1);
+                if (bytes > net::k_max_state_payload || r > net::k_max_halo_ranges)
+                {
+                    flush();
+                    h.ranges.push_back(net::NodeRange{n, 1});
+                }
+                else if (extend)
+                    ++h.ranges.back().count;
+                else
+                    h.ranges.push_back(net::NodeRange{n, 1});
+                const core::GridCoord c = g.coord(core::NodeIndex{n});
+                h.u.push_back(s.state_.u.at(c.x, c.y));
+                h.v.push_back(s.state_.v.at(c.x, c.y));
+            }
+            flush();
+        }
+    }
+
+    /// Peers whose Heartbeat(t) this peer needs before stepping from t.
+    std::vector<std::uint16_t> barrier_set(std::uint64_t t) const
+    {
+        std::set<std::uint16_t> ids;
+        for (const PartitionEntry* p : {t > 0 ? partition_at(t - 1) : nullptr, partition_at(t)})
+            if (p != nullptr)
+                for (const net::PeerId m : p->members)
+                    ids.insert(m.value);
+        ids.erase(s.id_.value);
+        std::vector<std::uint16_t> out;
+        for (const std::uint16_t id : ids)
+        {
+            auto it = peers.find(id);
+            if (it != peers.end() && !it->second.departed)
+                out.push_back(id);
+        }
+        return out;
+    }
+
+    void publish(std::uint64_t t)
+    {
+        if (s.role_ == SessionRole::Master && repartition_pending)
+            master_repartition(t + 1);
+        flush_forces(t + 1);
+        const PartitionEntry* prev =
+            t > exact_from ? partition_at(t - 1) : (state_exact ? partition_at(t) : nullptr);
+        refresh_exact_sets(prev, partition_at(t));
+        send_halos(t);
+        net::Heartbeat hb;
+        hb.epoch = partition_at(t) != nullptr ? partition_at(t)->epoch : 0;
+        for (const std::uint16_t id : barrier_set(t))
+            send_to(id, make(hb, t), net::SendMode::Reliable);
+        published = true;
+    }
+
+    bool barrier_ok(std::uint64_t t) const
+    {
+        for (const std::uint16_t id : barrier_set(t))
+        {
+            const RemotePeer& p = peers.at(id);
+            if (!p.has_heartbeat || p.heartbeat < t)
+                return false;
+        }
+        return true;
+    }
+
+    void apply_halos(std::uint64_t t)
+    {
+        const core::TetraGrid& g = s.model_->grid();
+        while (!halos.empty() && halos.front().tick < t)
+            halos.pop_front();
+        for (const HaloBuffer& h : halos)
+        {
+            if (h.tick != t)
+                continue;
+            for (std::size_t k = 0; k < h.nodes.size(); ++k)
+            {
+                const core::GridCoord c = g.coord(core::NodeIndex{h.nodes[k]});
+                s.state_.u.at(c.x, c.y) = h.u[k];
+                s.state_.v.at(c.x, c.y) = h.v[k];
+            }
+            if (!state_exact)
+                s.state_.time = h.time;
+        }
+        state_exact = true;
+        s.model_->sync(s.state_.u);
+        s.model_->sync(s.state_.v);
+    }
+
+    bool may_step(std::uint64_t t) const
+    {
+        if (settings.max_ticks != 0 && t >= settings.max_ticks)
+            return false;
+        if (!clock_set)
+            return false;
+        const double dt = s.model_->settings().fixed_dt;
+        const double sim_now = last_now + clock_offset;
+        return (static_cast<double>(t) + 1.0) * dt <= sim_now + 1e-9 * dt;
+    }
+
+    void exact_advance()
+    {
+        // Bounded: each pass either steps once or returns.
+        for (int guard = 0; guard < 100000; ++guard)
+        {
+            const std::uint64_t t = s.state_.tick;
+            if (!member(partition_at(t), s.id_) &&
+                !member(t > 0 ? partition_at(t - 1) : nullptr, s.id_))
+            {
+                if (leaving)
+                    finish_leave_soon();
+                return;
+            }
+            if (!published)
+                publish(t);
+            else
+            {
+                // Tick t is out already: a peer may have stepped to t+1 on it and published
+                // t+1 without this news, but none can step t+1 before our Heartbeat(t+1), so
+                // what we send now applies from t+2.
+                if (s.role_ == SessionRole::Master && repartition_pending)
+                    master_repartition(t + 2);
+                flush_forces(t + 2);
+            }
+            if (!member(partition_at(t), s.id_))
+            {
+                // Published the hand-over tick; nothing more to integrate.
+                if (leaving)
+                    finish_leave_soon();
+                return;
+            }
+            if (!barrier_ok(t) || !may_step(t))
+                return;
+            apply_halos(t);
+            const PartitionEntry* prev = t > exact_from ? partition_at(t - 1) : partition_at(t);
+            refresh_exact_sets(prev, partition_at(t));
+            const auto forces = forces_at(t);
+            sim::StepOptions opt;
+            opt.owned = integrate_runs;
+            const auto t0 = std::chrono::steady_clock::now();
+            const sim::StepReport r = sim::step(*s.model_, s.state_, *ws, forces, opt);
+            counters.step_seconds += seconds_since(t0);
+            ++counters.steps;
+            if (sim::has_flag(r.status, sim::StepStatus::NonFinite))
+                spdlog::warn("session: non-finite step at tick {}", t);
+            published = false;
+            copy_own_to_display(partition_at(t));
+            disconnect_finished_leavers();
+        }
+    }
+
+    void become_member(std::uint64_t apply)
+    {
+        // A joiner (or re-admitted peer) enters the lockstep at `apply`; its state comes from
+        // the halos of that tick.
+        lockstep = true;
+        published = false;
+        state_exact = false;
+        exact_from = apply;
+        s.state_.tick = apply;
+    }
+
+    // --- fast mode -----------------------------------------------------------------------------
+
+    void fast_advance()
+    {
+        const PartitionEntry* p = newest();
+        refresh_my_leaves(p);
+        if (my_leaves.empty() || !clock_set)
+            return;
+        const core::TetraGrid& g = s.model_->grid();
+        const double frame = 1.0 / settings.frame_rate_hz;
+        for (int guard = 0; guard < 64 && next_frame <= last_now; ++guard)
+        {
+            if (settings.max_ticks != 0 && s.state_.tick >= settings.max_ticks)
+                return;
+            // Dirichlet values: the newest displayed state of every node not owned.
+            std::vector<char> mine = owned_mask(p, s.id_);
+            for (int y = 0; y < g.ny(); ++y)
+                for (int x = 0; x < g.nx(); ++x)
+                    if (mine[g.canonical(g.index(x, y)).value] == 0)
+                    {
+                        s.state_.u.at(x, y) = s.display_u_.at(x, y);
+                        s.state_.v.at(x, y) = s.display_v_.at(x, y);
+                    }
+            const double target = next_frame + clock_offset;
+            sim::StepOptions opt;
+            opt.owned = owned_regions;
+            const auto t0 = std::chrono::steady_clock::now();
+            const auto rep = sim::advance_to(*s.model_, s.state_, *ws, target,
+                                             forces_at(s.state_.tick), opt, 100000);
+            counters.step_seconds += seconds_since(t0);
+            counters.steps += rep.steps;
+            next_frame += frame;
+            copy_own_to_display(p);
+        }
+    }
+
+    // --- display and streaming -----------------------------------------------------------------
+
+    void copy_own_to_display(const PartitionEntry* p)
+    {
+        refresh_my_leaves(p);
+        for (const std::uint32_t l : my_leaves)
+        {
+            for (const core::NodeIndex n : s.graph_->nodes(l))
+            {
+                const core::GridCoord c = s.model_->grid().coord(n);
+                s.display_u_.at(c.x, c.y) = s.state_.u.at(c.x, c.y);
+                s.display_v_.at(c.x, c.y) = s.state_.v.at(c.x, c.y);
+            }
+            leaf_tick[l] = s.state_.tick;
+            leaf_time[l] = s.state_.time;
+        }
+        s.model_->sync(s.display_u_);
+        s.model_->sync(s.display_v_);
+    }
+
+    const PartitionEntry* stream_partition() const
+    {
+        if (s.coupling_ == Coupling::Fast)
+            return newest();
+        if (!lockstep || !state_exact)
+            return nullptr;
+        const std::uint64_t t = s.state_.tick;
+        return t > exact_from ? partition_at(t - 1) : partition_at(t);
+    }
+
+    void stream()
+    {
+        const PartitionEntry* p = stream_partition();
+        if (p == nullptr)
+            return;
+        refresh_my_leaves(p);
+        const core::TetraGrid& g = s.model_->grid();
+        for (const std::uint32_t l : my_leaves)
+        {
+            net::LeafState m;
+            m.epoch = p->epoch;
+            const core::LeafId id = s.graph_->leaves()[l];
+            m.leaf = net::WireLeafId{id.square, id.depth, id.ix, id.iy};
+            m.encoding = settings.stream_encoding;
+            m.time = s.state_.time;
+            for (const core::NodeIndex n : s.graph_->nodes(l))
+            {
+                const core::GridCoord c = g.coord(n);
+                m.u.push_back(s.state_.u.at(c.x, c.y));
+                m.v.push_back(s.state_.v.at(c.x, c.y));
+            }
+            send_all(make(m, s.state_.tick));
+        }
+    }
+
+    // --- leaving -------------------------------------------------------------------------------
+
+    void finish_leave_soon()
+    {
+        // The others disconnect us once past the hand-over; a timeout guards against a peer that
+        // never does.
+        if (last_now - leave_started > k_leave_timeout_s)
+            close_all(net::DisconnectReason::Quit);
+    }
+
+    void close_all(net::DisconnectReason reason)
+    {
+        for (const net::PeerHandle h : transport.peers())
+            transport.disconnect(h, reason);
+        transport.flush();
+        s.left_ = true;
+    }
+
+    void disconnect_finished_leavers()
+    {
+        const std::uint64_t t = s.state_.tick;
+        for (auto& [id, p] : peers)
+            if (p.leaving && !p.departed && p.handle && !member(partition_at(t), net::PeerId{id}) &&
+                !member(t > 0 ? partition_at(t - 1) : nullptr, net::PeerId{id}))
+            {
+                transport.disconnect(*p.handle, net::DisconnectReason::Quit);
+                p.departed = true;
+            }
+    }
+
+    // --- receiving -----------------------------------------------------------------------------
+
+    void on_connected(net::PeerHandle h)
+    {
+        if (master_handle && h == *master_handle && !welcomed)
+        {
+            net::Hello hello;
+            hello.role =
+                s.role_ == SessionRole::Viewer ? net::Role::Viewer : net::Role::Participant;
+            hello.listen_port = settings.listen_port;
+            hello.name = settings.name;
+            net::Message m;
+            m.header.sender = net::k_no_peer;
+            m.body = hello;
+            (void)messenger.send(h, m);
+            return;
+        }
+        auto it = dialing.find(h);
+        if (it != dialing.end())
+        {
+            net::Hello hello;
+            hello.role =
+                s.role_ == SessionRole::Viewer ? net::Role::Viewer : net::Role::Participant;
+            hello.listen_port = settings.listen_port;
+            hello.name = settings.name;
+            (void)messenger.send(h, make(hello, s.state_.tick));
+            bind(h, it->second);
+            dialing.erase(it);
+        }
+    }
+
+    void on_disconnected(net::PeerHandle h, net::DisconnectReason reason)
+    {
+        auto ls = last_stats.find(h);
+        if (ls != last_stats.end())
+        {
+            closed_stats.bytes_sent += ls->second.bytes_sent;
+            closed_stats.bytes_received += ls->second.bytes_received;
+            closed_stats.packets_sent += ls->second.packets_sent;
+            closed_stats.packets_received += ls->second.packets_received;
+            closed_stats.bad_datagrams += ls->second.bad_datagrams;
+            last_stats.erase(ls);
+        }
+        auto it = handle_ids.find(h);
+        if (it == handle_ids.end())
+        {
+            if (master_handle && h == *master_handle && !welcomed)
+                s.left_ = true;  // refused or unreachable
+            return;
+        }
+        const std::uint16_t id = it->second;
+        handle_ids.erase(it);
+        RemotePeer& p = peers[id];
+        p.handle.reset();
+        p.departed = true;
+        spdlog::debug("session: peer {} disconnected ({})", id, net::to_string(reason));
+        if (net::PeerId{id} == master_id && s.role_ != SessionRole::Master)
+            close_all(net::DisconnectReason::Shutdown);
+        if (leaving && handle_ids.empty())
+            s.left_ = true;
+        if (s.role_ == SessionRole::Master)
+        {
+            repartition_pending = true;
+            net::PeerLeft msg;
+            msg.peer = net::PeerId{id};
+            msg.reason =
+                reason == net::DisconnectReason::None ? net::DisconnectReason::TimedOut : reason;
+            send_all(make(msg, s.state_.tick));
+            if (s.coupling_ == Coupling::Fast)
+                master_repartition(s.state_.tick);
+        }
+    }
+
+    void on_hello(net::PeerHandle h, const net::Message& m, const net::Hello& hello)
+    {
+        if (s.role_ == SessionRole::Master && m.header.sender == net::k_no_peer)
+        {
+            if (!s.model_ || next_peer_id >= 0xFFFE)
+            {
+                transport.disconnect(h, net::DisconnectReason::SessionFull);
+                return;
+            }
+            const std::uint16_t id = next_peer_id++;
+            RemotePeer& p = peers[id];
+            p.info.id = net::PeerId{id};
+            p.info.role = hello.role;
+            const auto addr = transport.remote_address(h);
+            p.info.ipv4 = addr ? addr->ipv4 : std::array<std::uint8_t, 4>{127, 0, 0, 1};
+            p.info.port = hello.listen_port != 0 ? hello.listen_port : (addr ? addr->port : 1);
+            if (p.info.port == 0)
+                p.info.port = 1;
+            p.info.name = hello.name;
+            p.info_known = true;
+            bind(h, id);
+            send_welcome(id);
+            net::PeerJoined joined;
+            joined.peer = p.info;
+            for (auto& [oid, op] : peers)
+                if (oid != id)
+                    send_to(oid, make(joined, s.state_.tick));
+            return;
+        }
+        // A peer greeting us after its Welcome.
+        if (m.header.sender == net::k_no_peer || handle_ids.count(h) != 0)
+            return;
+        bind(h, m.header.sender.value);
+        RemotePeer& p = peers[m.header.sender.value];
+        p.info.role = hello.role;
+        greet_new_peer(m.header.sender.value);
+    }
+
+    /// Sends a newly known peer what it needs from us that it cannot have seen: our newest force.
+    void greet_new_peer(std::uint16_t id)
+    {
+        for (const ForceEntry& e : my_forces)
+        {
+            net::Force f;
+            f.forces = e.forces;
+            send_to(id, make(f, e.apply_tick));
+        }
+    }
+
+    void send_welcome(std::uint16_t id)
+    {
+        const core::TetraGrid& g = s.model_->grid();
+        const auto model = encode_model(*s.model_, s.coupling_);
+        const auto state =
+            encode_state(g, s.display_u_, s.display_v_, s.state_.tick, s.state_.time);
+        net::Welcome w;
+        w.your_id = net::PeerId{id};
+        w.master_id = s.id_;
+        w.grid_level = static_cast<std::uint8_t>(g.level());
+        w.leaf_depth = static_cast<std::uint8_t>(s.graph_->depth());
+        w.epoch = newest() != nullptr ? newest()->epoch : 0;
+        w.time = s.state_.time;
+        w.model_size = static_cast<std::uint32_t>(model.size());
+        w.model_hash = core::hash_bytes(model);
+        w.state_size = static_cast<std::uint32_t>(state.size());
+        w.state_hash = core::hash_bytes(state);
+        net::PeerInfo me;
+        me.id = s.id_;
+        me.role = net::Role::Participant;
+        me.port = settings.listen_port != 0 ? settings.listen_port : 1;
+        me.name = settings.name;
+        w.peers.push_back(me);
+        for (const auto& [oid, op] : peers)
+            if (!op.departed && op.info_known && w.peers.size() < net::k_max_welcome_peers)
+                w.peers.push_back(op.info);
+        send_to(id, make(w, s.state_.tick));
+        for (const auto& [kind, blob] :
+             {std::pair{net::BlobKind::Model, &model}, std::pair{net::BlobKind::State, &state}})
+            for (std::size_t off = 0; off < blob->size(); off += net::k_max_blob_chunk)
+            {
+                net::Blob b;
+                b.kind = kind;
+                b.total_size = static_cast<std::uint32_t>(blob->size());
+                b.offset = static_cast<std::uint32_t>(off);
+                const std::size_t len = std::min(net::k_max_blob_chunk, blob->size() - off);
+                b.data.assign(blob->begin() + static_cast<std::ptrdiff_t>(off),
+                              blob->begin() + static_cast<std::ptrdiff_t>(off + len));
+                send_to(id, make(b, s.state_.tick));
+            }
+        // The partitions the joiner needs to follow the lockstep, then our forces.
+        for (const PartitionEntry& p : partitions)
+        {
+            net::Partition msg;
+            msg.epoch = p.epoch;
+            msg.leaf_depth = static_cast<std::uint8_t>(s.graph_->depth());
+            msg.owners = p.owners;
+            send_to(id, make(msg, p.apply_tick));
+        }
+        greet_new_peer(id);
+    }
+
+    void on_welcome(net::PeerHandle h, const net::Message& m, const net::Welcome& w)
+    {
+        if (welcomed || !master_handle || h != *master_handle)
+            return;
+        welcomed = true;
+        welcome = w;
+        welcome_tick = m.header.tick;
+        s.id_ = w.your_id;
+        master_id = w.master_id;
+        session_id = m.header.session;
+        messenger.set_session(session_id);
+        bind(h, master_id.value);
+        model_blob.assign(w.model_size, std::byte{0});
+        state_blob.assign(w.state_size, std::byte{0});
+        for (const net::PeerInfo& info : w.peers)
+        {
+            if (info.id == s.id_)
+                continue;
+            RemotePeer& p = peers[info.id.value];
+            p.info = info;
+            p.info_known = true;
+            if (info.id == master_id)
+                continue;
+            auto handle = transport.connect(net::Address{info.ipv4, info.port});
+            if (handle)
+                dialing[*handle] = info.id.value;
+        }
+    }
+
+    void on_blob(const net::Blob& b)
+    {
+        if (!welcomed || s.model_)
+            return;
+        std::vector<std::byte>& dst = b.kind == net::BlobKind::Model ? model_blob : state_blob;
+        std::size_t& got = b.kind == net::BlobKind::Model ? model_got : state_got;
+        if (b.total_size != dst.size() || b.offset + b.data.size() > dst.size())
+            return;
+        std::copy(b.data.begin(), b.data.end(), dst.begin() + b.offset);
+        got += b.data.size();
+        if (model_got < model_blob.size() || state_got < state_blob.size())
+            return;
+        if (core::hash_bytes(model_blob) != welcome.model_hash ||
+            core::hash_bytes(state_blob) != welcome.state_hash)
+        {
+            spdlog::error("session: model or state blob hash mismatch");
+            close_all(net::DisconnectReason::ProtocolMismatch);
+            return;
+        }
+        auto decoded = decode_model(model_blob);
+        if (!decoded)
+        {
+            spdlog::error("session: {}", decoded.error().message);
+            close_all(net::DisconnectReason::ProtocolMismatch);
+            return;
+        }
+        s.coupling_ = decoded->second;
+        install_model(std::move(decoded->first));
+        const core::TetraGrid& g = s.model_->grid();
+        if (!state_blob.empty() && decode_state(g, state_blob, s.display_u_, s.display_v_))
+        {
+            s.model_->sync(s.display_u_);
+            s.model_->sync(s.display_v_);
+            for (int y = 0; y < g.ny(); ++y)
+                for (int x = 0; x < g.nx(); ++x)
+                {
+                    s.state_.u.at(x, y) = s.display_u_.at(x, y);
+                    s.state_.v.at(x, y) = s.display_v_.at(x, y);
+                }
+        }
+        s.state_.time = welcome.time;
+        s.state_.tick = welcome_tick;  // fast mode: ticks line up with the master's
+        clock_offset = welcome.time - last_now;
+        clock_set = true;
+        next_stream = last_now;
+        next_frame = last_now;
+        model_blob.clear();
+        state_blob.clear();
+        // Partitions that arrived with the blobs.
+        for (auto& m : early)
+            handle(m.first, m.second);
+        early.clear();
+        if (s.role_ == SessionRole::Participant)
+        {
+            points_dirty = true;
+            send_points();
+        }
+    }
+
+    std::vector<std::pair<net::PeerHandle, net::Message>> early;  // before the model
+
+    void send_points()
+    {
+        if (!points_dirty || !s.model_ || s.role_ != SessionRole::Participant || leaving)
+            return;
+        points_dirty = false;
+        net::PointsOfInterest poi;
+        poi.points = my_points;
+        send_to(master_id.value, make(poi, s.state_.tick));
+    }
+
+    void on_partition(const net::Message& m, const net::Partition& p)
+    {
+        if (p.leaf_depth != s.graph_->depth() || p.owners.size() != s.graph_->size())
+            return;
+        add_partition(m.header.tick, p.epoch, p.owners);
+        if (s.coupling_ == Coupling::Exact && !lockstep && member(newest(), s.id_) &&
+            s.role_ == SessionRole::Participant)
+            become_member(m.header.tick);
+    }
+
+    void on_halo(const net::Message& m, const net::Halo& h)
+    {
+        if (!h.has_u || !h.has_v)
+            return;
+        const core::TetraGrid& g = s.model_->grid();
+        HaloBuffer buf;
+        buf.tick = m.header.tick;
+        buf.time = h.time;
+        for (const net::NodeRange& r : h.ranges)
+            for (std::uint32_t k = 0; k < r.count; ++k)
+            {
+                const std::uint32_t n = r.first + k;
+                if (n >= g.node_count())
+                    return;  // not our grid: ignore the whole message
+                buf.nodes.push_back(n);
+            }
+        buf.u = h.u;
+        buf.v = h.v;
+        // Keep the buffer ordered by tick (arrivals per sender are in order; merge by tick).
+        auto it = std::upper_bound(halos.begin(), halos.end(), buf.tick,
+                                   [](std::uint64_t t, const HaloBuffer& b) { return t < b.tick; });
+        halos.insert(it, std::move(buf));
+    }
+
+    void on_leaf_state(const net::Message& m, const net::LeafState& ls)
+    {
+        if (ls.leaf.depth != s.graph_->depth())
+            return;
+        const std::size_t side = std::size_t{1} << ls.leaf.depth;
+        if (ls.leaf.ix >= side || ls.leaf.iy >= side)
+            return;
+        const std::size_t l =
+            s.graph_->index_of(core::LeafId{ls.leaf.square, ls.leaf.depth, ls.leaf.ix, ls.leaf.iy});
+        const auto nodes = s.graph_->nodes(l);
+        if (ls.node_offset + ls.u.size() > nodes.size())
+            return;
+        // Our own leaves come from our own state.
+        if (std::find(my_leaves.begin(), my_leaves.end(), l) != my_leaves.end() &&
+            stream_partition() != nullptr)
+            return;
+        if (m.header.tick < leaf_tick[l])
+            return;
+        leaf_tick[l] = m.header.tick;
+        leaf_time[l] = ls.time;
+        const core::TetraGrid& g = s.model_->grid();
+        for (std::size_t k = 0; k < ls.u.size(); ++k)
+        {
+            const core::GridCoord c = g.coord(nodes[ls.node_offset + k]);
+            s.display_u_.at(c.x, c.y) = ls.u[k];
+            s.display_v_.at(c.x, c.y) = ls.v[k];
+        }
+        display_dirty = true;
+    }
+    bool display_dirty = false;
+
+    void handle(net::PeerHandle h, const net::Message& m)
+    {
+        auto idit = handle_ids.find(h);
+        const bool bound = idit != handle_ids.end();
+        switch (m.type())
+        {
+        case net::MessageType::Hello: on_hello(h, m, std::get<net::Hello>(m.body)); return;
+        case net::MessageType::Welcome: on_welcome(h, m, std::get<net::Welcome>(m.body)); return;
+        case net::MessageType::Reject: close_all(net::DisconnectReason::Refused); return;
+        case net::MessageType::Blob: on_blob(std::get<net::Blob>(m.body)); return;
+        default: break;
+        }
+        if (!bound)
+            return;
+        const std::uint16_t from = idit->second;
+        if (!s.model_)
+        {
+            early.emplace_back(h, m);
+            return;
+        }
+        RemotePeer& p = peers[from];
+        switch (m.type())
+        {
+        case net::MessageType::PeerJoined:
+        {
+            const auto& pj = std::get<net::PeerJoined>(m.body);
+            if (pj.peer.id == s.id_)
+                return;
+            RemotePeer& np = peers[pj.peer.id.value];
+            np.info = pj.peer;
+            np.info_known = true;
+            greet_new_peer(pj.peer.id.value);
+            return;
+        }
+        case net::MessageType::PeerLeft:
+        {
+            const auto& pl = std::get<net::PeerLeft>(m.body);
+            auto it = peers.find(pl.peer.value);
+            if (it != peers.end() && s.coupling_ == Coupling::Fast)
+                it->second.departed = true;
+            return;
+        }
+        case net::MessageType::PointsOfInterest:
+            if (s.role_ == SessionRole::Master && p.info.role == net::Role::Participant &&
+                !p.leaving)
+            {
+                p.points = std::get<net::PointsOfInterest>(m.body).points;
+                p.ready = true;
+                repartition_pending = true;
+                if (s.coupling_ == Coupling::Fast)
+                    master_repartition(s.state_.tick);
+            }
+            return;
+        case net::MessageType::Partition:
+            if (net::PeerId{from} == master_id)
+                on_partition(m, std::get<net::Partition>(m.body));
+            return;
+        case net::MessageType::Force:
+            p.forces.push_back(ForceEntry{m.header.tick, std::get<net::Force>(m.body).forces});
+            trim(p.forces);
+            return;
+        case net::MessageType::Leave:
+            p.leaving = true;
+            if (s.role_ == SessionRole::Master)
+            {
+                repartition_pending = true;
+                if (s.coupling_ == Coupling::Fast)
+                    master_repartition(s.state_.tick);
+            }
+            if (s.coupling_ == Coupling::Fast || s.role_ == SessionRole::Viewer || !lockstep)
+            {
+                if (p.handle)
+                    transport.disconnect(*p.handle, net::DisconnectReason::Quit);
+                p.departed = true;
+            }
+            return;
+        case net::MessageType::LeafState:
+            on_leaf_state(m, std::get<net::LeafState>(m.body));
+            return;
+        case net::MessageType::Halo: on_halo(m, std::get<net::Halo>(m.body)); return;
+        case net::MessageType::Heartbeat:
+            if (!p.has_heartbeat || m.header.tick > p.heartbeat)
+                p.heartbeat = m.header.tick;
+            p.has_heartbeat = true;
+            return;
+        case net::MessageType::Ping:
+        {
+            net::Pong pong;
+            pong.nonce = std::get<net::Ping>(m.body).nonce;
+            pong.time_us = std::get<net::Ping>(m.body).time_us;
+            send_to(from, make(pong, s.state_.tick));
+            return;
+        }
+        default: return;
+        }
+    }
+
+    void poll()
+    {
+        for (int guard = 0; guard < 100000; ++guard)
+        {
+            auto ev = messenger.poll(0);
+            if (!ev)
+                break;
+            switch (ev->kind)
+            {
+            case net::MessengerEvent::Kind::Connected: on_connected(ev->peer); break;
+            case net::MessengerEvent::Kind::Disconnected:
+                on_disconnected(ev->peer, ev->reason);
+                break;
+            case net::MessengerEvent::Kind::Received: handle(ev->peer, ev->message); break;
+            }
+        }
+        if (display_dirty && s.model_)
+        {
+            s.model_->sync(s.display_u_);
+            s.model_->sync(s.display_v_);
+            display_dirty = false;
+        }
+        for (const net::PeerHandle h : transport.peers())
+            if (auto st = transport.stats(h))
+                last_stats[h] = *st;
+    }
+
+    void advance(double now)
+    {
+        last_now = now;
+        if (!s.model_ || s.left_)
+            return;
+        if (!clock_set)
+        {
+            clock_offset = s.state_.time - now;
+            clock_set = true;
+            next_stream = now;
+            next_frame = now;
+        }
+        send_points();
+        if (s.role_ == SessionRole::Master && repartition_pending && s.coupling_ == Coupling::Fast)
+            master_repartition(s.state_.tick);
+        if (s.coupling_ == Coupling::Exact)
+        {
+            if (lockstep || s.role_ == SessionRole::Master)
+                exact_advance();
+        }
+        else if (s.role_ != SessionRole::Viewer)
+        {
+            flush_forces(0);
+            fast_advance();
+        }
+        if (leaving && s.coupling_ == Coupling::Fast)
+            close_all(net::DisconnectReason::Quit);
+        if (leaving && !lockstep && s.coupling_ == Coupling::Exact)
+            finish_leave_soon();
+        if (now >= next_stream && s.role_ != SessionRole::Viewer && !s.left_)
+        {
+            stream();
+            next_stream = std::max(next_stream + 1.0 / settings.stream_rate_hz,
+                                   now - 1.0 / settings.stream_rate_hz);
+        }
+        transport.flush();
+    }
+};
+
+Session::Session() = default;
+Session::~Session() = default;
+
+core::Result<std::unique_ptr<Session>> Session::host(net::Transport& transport,
+                                                     const core::TetraGrid& grid,
+                                                     const core::Vec3Field<double>& rest,
+                                                     const sim::MembraneSettings& material,
+                                                     const SessionSettings& settings)
+{
+    if (!(settings.stream_rate_hz > 0.0) || !(settings.frame_rate_hz > 0.0) ||
+        settings.halo_rings < 3 || settings.name.empty() ||
+        settings.name.size() > net::k_max_name_length)
+        return core::fail(core::ErrorCode::InvalidArgument, "Session::host: bad settings");
+    sim::MembraneSettings m = material;
+    m.threads = settings.threads;
+    if (settings.coupling == Coupling::Exact)
+    {
+        // Lockstep needs a common fixed step, and re-assembly would need the whole state.
+        m.fixed_step = true;
+        m.reassemble_every = 0;
+    }
+    auto model = sim::MembraneModel::create(grid, rest, m);
+    if (!model)
+        return core::fail(model.error().code, model.error().message);
+    std::unique_ptr<Session> s(new Session());
+    s->impl_ = std::make_unique<Impl>(*s, transport, settings);
+    Impl& im = *s->impl_;
+    s->role_ = SessionRole::Master;
+    s->id_ = net::PeerId{0};
+    s->coupling_ = settings.coupling;
+    im.session_id = settings.session_id != 0 ? settings.session_id : 0x5E55u;
+    im.messenger.set_session(im.session_id);
+    im.master_id = s->id_;
+    im.welcomed = true;
+    im.install_model(std::move(model).value());
+    im.add_partition(0, im.next_epoch++, im.compute_partition());
+    im.lockstep = settings.coupling == Coupling::Exact;
+    im.copy_own_to_display(im.newest());
+    return s;
+}
+
+core::Result<std::unique_ptr<Session>> Session::join(net::Transport& transport,
+                                                     const net::Address& master, net::Role role,
+                                                     const SessionSettings& settings)
+{
+    if (!(settings.stream_rate_hz > 0.0) || !(settings.frame_rate_hz > 0.0) ||
+        settings.halo_rings < 3 || settings.name.empty() ||
+        settings.name.size() > net::k_max_name_length)
+        return core::fail(core::ErrorCode::InvalidArgument, "Session::join: bad settings");
+    std::unique_ptr<Session> s(new Session());
+    s->impl_ = std::make_unique<Impl>(*s, transport, settings);
+    s->role_ = role == net::Role::Viewer ? SessionRole::Viewer : SessionRole::Participant;
+    auto h = transport.connect(master);
+    if (!h)
+        return core::fail(h.error().code, h.error().message);
+    s->impl_->master_handle = *h;
+    return s;
+}
+
+void Session::poll()
+{
+    impl_->poll();
+}
+void Session::advance(double now_s)
+{
+    impl_->advance(now_s);
+}
+
+void Session::set_points_of_interest(std::vector<net::Target> points)
+{
+    if (points.size() > net::k_max_points)
+        points.resize(net::k_max_points);
+    impl_->my_points = std::move(points);
+    impl_->points_dirty = true;
+    if (role_ == SessionRole::Master)
+    {
+        impl_->repartition_pending = true;
+        impl_->points_dirty = false;
+    }
+}
+
+void Session::set_forces(std::vector<net::UserForce> forces, std::uint64_t from_tick)
+{
+    if (forces.size() > net::k_max_points)
+        forces.resize(net::k_max_points);
+    impl_->pending_forces.push_back(ForceEntry{from_tick, std::move(forces)});
+}
+
+void Session::leave()
+{
+    if (role_ == SessionRole::Master || impl_->leaving)
+        return;
+    impl_->leaving = true;
+    impl_->leave_started = impl_->last_now;
+    net::Leave msg;
+    msg.reason = net::DisconnectReason::Quit;
+    impl_->send_all(impl_->make(msg, state_.tick));
+    impl_->transport.flush();
+    if (!impl_->lockstep || coupling_ == Coupling::Fast)
+        left_ = impl_->handle_ids.empty();
+}
+
+void Session::shutdown()
+{
+    impl_->close_all(net::DisconnectReason::Shutdown);
+}
+
+std::uint32_t Session::epoch() const noexcept
+{
+    const PartitionEntry* p = impl_->newest();
+    return p != nullptr ? p->epoch : 0;
+}
+
+std::vector<net::PeerId> Session::owners() const
+{
+    const PartitionEntry* p = impl_->newest();
+    return p != nullptr ? p->owners : std::vector<net::PeerId>{};
+}
+
+std::vector<net::PeerId> Session::peers() const
+{
+    std::vector<net::PeerId> out;
+    for (const auto& [id, p] : impl_->peers)
+        if (!p.departed)
+            out.push_back(net::PeerId{id});
+    return out;
+}
+
+SessionStats Session::stats() const
+{
+    SessionStats st = impl_->counters;
+    net::PeerStats sum = impl_->closed_stats;
+    for (const auto& [h, ps] : impl_->last_stats)
+    {
+        sum.bytes_sent += ps.bytes_sent;
+        sum.bytes_received += ps.bytes_received;
+        sum.packets_sent += ps.packets_sent;
+        sum.packets_received += ps.packets_received;
+        sum.bad_datagrams += ps.bad_datagrams;
+    }
+    st.bytes_sent = sum.bytes_sent;
+    st.bytes_received = sum.bytes_received;
+    st.packets_sent = sum.packets_sent;
+    st.packets_received = sum.packets_received;
+    st.bad_datagrams = sum.bad_datagrams;
+    if (model_)
+    {
+        // Age of the oldest leaf shown that this peer does not compute, against its own time
+        // (participants) or the newest leaf received (viewers).
+        const PartitionEntry* p = impl_->newest();
+        double newest_leaf = state_.time;
+        if (role_ == SessionRole::Viewer)
+            for (const double t : impl_->leaf_time)
+                newest_leaf = std::max(newest_leaf, t);
+        double age = 0.0;
+        if (p != nullptr)
+            for (std::size_t l = 0; l < p->owners.size(); ++l)
+            {
+                if (p->owners[l] == id_)
+                    st.owned_nodes += graph_->node_count(l);
+                else
+                    age = std::max(age, newest_leaf - impl_->leaf_time[l]);
+            }
+        st.halo_age_s = age;
+    }
+    return st;
+}
+
+}  // namespace pliant::session

@@ -1,0 +1,197 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+// Partitioning: leaf size against the datagram limit, ownership against a brute-force count over
+// every node, determinism, balance for 2-4 participants at levels 5-8, and recomputation on leave.
+#include <pliant/session/partition.h>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <map>
+#include <set>
+
+namespace pliant::session
+{
+namespace
+{
+
+core::TetraGrid grid_of(int level)
+{
+    return core::TetraGrid::create(level).value();
+}
+
+// Brute force: the canonical nodes of a leaf's region counted straight from the grid.
+std::size_t brute_leaf_nodes(const core::TetraGrid& g, const core::Region& r)
+{
+    std::size_t n = 0;
+    for (int y = r.y0; y < r.y1; ++y)
+        for (int x = r.x0; x < r.x1; ++x)
+            n += g.is_canonical(g.index(x, y)) ? 1U : 0U;
+    return n;
+}
+
+std::vector<Seat> seats_of(const core::TetraGrid& g, int p, bool with_points)
+{
+    std::vector<Seat> seats;
+    for (int k = 0; k < p; ++k)
+    {
+        Seat s{net::PeerId{static_cast<std::uint16_t>(3 * k + 1)}, std::nullopt};
+        if (with_points)  // spread points along the rectangle's diagonal
+            s.seed = g.index((k * 2 * g.w()) / p + 1, (k * g.w()) / p + 1);
+        seats.push_back(s);
+    }
+    return seats;
+}
+
+TEST(LeafDepth, SmallestDepthWhoseLeavesFitOneDatagram)
+{
+    for (int level = 1; level <= 10; ++level)
+    {
+        const auto g = grid_of(level);
+        const int d64 = leaf_depth_for(g, net::ValueEncoding::F64);
+        EXPECT_LE(max_leaf_nodes(g, d64), net::k_max_leaf_nodes_f64) << level;
+        if (d64 > 0)
+        {
+            EXPECT_GT(max_leaf_nodes(g, d64 - 1), net::k_max_leaf_nodes_f64) << level;
+        }
+        if (level >= 3)
+        {
+            EXPECT_EQ(d64, level - 3);  // docs/protocol.md §3: 8 x 8 cell leaves
+        }
+        const int d32 = leaf_depth_for(g, net::ValueEncoding::F32);
+        EXPECT_LE(max_leaf_nodes(g, d32), net::k_max_leaf_nodes_f32);
+        EXPECT_LE(d32, d64);
+    }
+}
+
+TEST(LeafGraph, EveryCanonicalNodeInExactlyOneLeafAndSeamNeighbours)
+{
+    const auto g = grid_of(5);
+    const LeafGraph graph(g, 2);
+    ASSERT_EQ(graph.size(), 32U);
+    std::vector<int> hits(g.node_count(), 0);
+    std::size_t total = 0;
+    for (std::size_t l = 0; l < graph.size(); ++l)
+    {
+        EXPECT_EQ(graph.node_count(l), brute_leaf_nodes(g, graph.regions()[l]));
+        for (const core::NodeIndex n : graph.nodes(l))
+        {
+            ++hits[n.value];
+            EXPECT_EQ(graph.leaf_of(n), l);
+        }
+        total += graph.node_count(l);
+        for (const std::uint32_t b : graph.neighbours(l))  // symmetric
+        {
+            const auto nb = graph.neighbours(b);
+            EXPECT_TRUE(std::find(nb.begin(), nb.end(), l) != nb.end());
+        }
+    }
+    EXPECT_EQ(total, g.unique_count());
+    for (std::uint32_t i = 0; i < g.node_count(); ++i)
+        EXPECT_EQ(hits[i], g.is_canonical(core::NodeIndex{i}) ? 1 : 0);
+    // Across the x = 0 / x = 2W seam: the leaf at square 0, ix 0 touches square 1, ix 3.
+    const auto n0 = graph.neighbours(graph.index_of(core::LeafId{0, 2, 0, 1}));
+    EXPECT_TRUE(std::find(n0.begin(), n0.end(), graph.index_of(core::LeafId{1, 2, 3, 1})) !=
+                n0.end());
+}
+
+TEST(Partition, EveryNodeOwnedOnceBalancedAndDeterministic)
+{
+    for (int level = 5; level <= 8; ++level)
+    {
+        const auto g = grid_of(level);
+        const LeafGraph graph(g, leaf_depth_for(g, net::ValueEncoding::F64));
+        for (int p = 2; p <= 4; ++p)
+            for (const bool points : {true, false})
+            {
+                auto seats = seats_of(g, p, points);
+                const auto owners = partition_leaves(g, graph, seats);
+                std::reverse(seats.begin(), seats.end());  // order of the input does not matter
+                EXPECT_EQ(owners, partition_leaves(g, graph, seats));
+                // Brute force: count owners per canonical node straight from the regions.
+                std::map<std::uint16_t, std::size_t> per_peer;
+                std::vector<int> owned(g.node_count(), 0);
+                for (std::size_t l = 0; l < owners.size(); ++l)
+                {
+                    const core::Region r = graph.regions()[l];
+                    for (int y = r.y0; y < r.y1; ++y)
+                        for (int x = r.x0; x < r.x1; ++x)
+                            if (g.is_canonical(g.index(x, y)))
+                            {
+                                ++owned[g.index(x, y).value];
+                                ++per_peer[owners[l].value];
+                            }
+                }
+                for (std::uint32_t i = 0; i < g.node_count(); ++i)
+                    ASSERT_EQ(owned[i], g.is_canonical(core::NodeIndex{i}) ? 1 : 0);
+                ASSERT_EQ(per_peer.size(), static_cast<std::size_t>(p));
+                const auto q = measure_partition(g, graph, owners);
+                const double mean = static_cast<double>(g.unique_count()) / p;
+                for (const auto& s : q.shares)
+                {
+                    EXPECT_EQ(s.nodes, per_peer[s.peer.value]);
+                    EXPECT_LE(std::abs(static_cast<double>(s.nodes) - mean), 0.10 * mean)
+                        << "level " << level << " p " << p;
+                    EXPECT_GE(s.fragments, 1U);
+                }
+                EXPECT_LE(q.imbalance, 0.10);
+                std::size_t frags = 0;
+                for (const auto& s : q.shares)
+                    frags += s.fragments;
+                std::printf(
+                    "level %d peers %d points %d: imbalance %.3f, border edges %zu, "
+                    "fragments %zu\n",
+                    level, p, points ? 1 : 0, q.imbalance, q.border_edges, frags);
+            }
+    }
+}
+
+TEST(Partition, PeersGetTheLeafOfTheirPoint)
+{
+    const auto g = grid_of(6);
+    const LeafGraph graph(g, 3);
+    const auto seats = seats_of(g, 3, true);
+    const auto owners = partition_leaves(g, graph, seats);
+    for (const Seat& s : seats)
+        EXPECT_EQ(owners[graph.leaf_of(*s.seed)], s.peer);
+}
+
+TEST(Partition, RecomputedOnLeave)
+{
+    const auto g = grid_of(6);
+    const LeafGraph graph(g, 3);
+    auto seats = seats_of(g, 3, true);
+    const auto before = partition_leaves(g, graph, seats);
+    const net::PeerId gone = seats[1].peer;
+    seats.erase(seats.begin() + 1);
+    const auto after = partition_leaves(g, graph, seats);
+    EXPECT_EQ(std::count(after.begin(), after.end(), gone), 0);
+    EXPECT_NE(before, after);
+    const auto q = measure_partition(g, graph, after);
+    ASSERT_EQ(q.shares.size(), 2U);
+    EXPECT_LE(q.imbalance, 0.10);
+    EXPECT_EQ(q.shares[0].nodes + q.shares[1].nodes, g.unique_count());
+}
+
+TEST(Partition, BorderEdgesAgainstBruteForce)
+{
+    const auto g = grid_of(4);
+    const LeafGraph graph(g, 1);
+    const auto owners = partition_leaves(g, graph, seats_of(g, 2, true));
+    // Brute force over the faces: an edge is a pair of unique ids of a triangle.
+    std::set<std::pair<std::uint32_t, std::uint32_t>> edges;
+    const auto uniq = g.node_of_unique();
+    for (const auto& t : g.triangles())
+        for (int k = 0; k < 3; ++k)
+        {
+            const core::NodeIndex a = uniq[t[k]];
+            const core::NodeIndex b = uniq[t[(k + 1) % 3]];
+            if (owners[graph.leaf_of(a)] != owners[graph.leaf_of(b)])
+                edges.insert({std::min(a.value, b.value), std::max(a.value, b.value)});
+        }
+    EXPECT_EQ(measure_partition(g, graph, owners).border_edges, edges.size());
+}
+
+}  // namespace
+}  // namespace pliant::session

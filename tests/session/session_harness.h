@@ -1,0 +1,166 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+#pragma once
+
+// Shared by the session tests: a sphere model, a single-process reference run with a force
+// schedule, and a harness pumping several Session peers in one thread over a SimulatedNetwork.
+
+#include <pliant/net/simulated_transport.h>
+#include <pliant/session/session.h>
+#include <pliant/sim/rkf45.h>
+
+#include "grid_shapes.h"
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <memory>
+#include <vector>
+
+namespace pliant::session::test
+{
+
+inline sim::MembraneSettings material()
+{
+    sim::MembraneSettings m;
+    m.T = 1.0;
+    m.rho = 1.0;
+    m.beta = 0.5;
+    m.k_f = 1.0;
+    m.fixed_step = true;
+    m.fixed_dt = 1e-3;
+    m.threads = 1;
+    return m;
+}
+
+/// A scheduled force list of one sender: applies from `from` (tick) on.
+struct Scheduled
+{
+    std::uint16_t sender = 0;
+    std::uint64_t from = 0;
+    std::vector<net::UserForce> forces;
+};
+
+inline net::UserForce face_pull(std::uint32_t face, double fz)
+{
+    net::UserForce f;
+    f.target.kind = net::TargetKind::Face;
+    f.target.face = face;
+    f.force = {0.3 * fz, 0.2 * fz, fz};
+    return f;
+}
+
+inline net::UserForce point_push(double x, double y, double z, double r, double f)
+{
+    net::UserForce u;
+    u.target.kind = net::TargetKind::Position;
+    u.target.position = {x, y, z};
+    u.target.radius = r;
+    u.force = {-f * x, -f * y, -f * z};
+    return u;
+}
+
+/// The obvious single-process run: forces of tick t are each sender's newest list with
+/// from <= t, concatenated by increasing sender id.
+inline sim::MembraneState reference_run(int level, std::uint64_t ticks,
+                                        const std::vector<Scheduled>& schedule)
+{
+    const core::TetraGrid grid = core::TetraGrid::create(level).value();
+    auto model =
+        sim::MembraneModel::create(grid, scenes::sphere_grid(grid, 1.0), material()).value();
+    sim::MembraneState state = sim::MembraneState::at_rest(grid);
+    sim::Rkf45Workspace ws(model, 1);
+    for (std::uint64_t t = 0; t < ticks; ++t)
+    {
+        std::vector<sim::Force> forces;
+        for (std::uint16_t sender = 0; sender < 16; ++sender)
+        {
+            const Scheduled* best = nullptr;
+            for (const Scheduled& s : schedule)
+                if (s.sender == sender && s.from <= t && (best == nullptr || s.from >= best->from))
+                    best = &s;
+            if (best != nullptr)
+                for (const net::UserForce& f : best->forces)
+                    forces.push_back(to_sim_force(f));
+        }
+        sim::step(model, state, ws, forces);
+    }
+    return state;
+}
+
+/// Largest |a - b| over canonical nodes where `mask` holds (all when empty), and max |b|.
+struct Diff
+{
+    double max_abs = 0.0;
+    double max_ref = 0.0;
+    [[nodiscard]] double relative() const { return max_ref > 0.0 ? max_abs / max_ref : max_abs; }
+};
+
+inline Diff compare(const core::TetraGrid& g, const core::Field<double>& a,
+                    const core::Field<double>& b, const std::function<bool(core::NodeIndex)>& use)
+{
+    Diff d;
+    for (const core::NodeIndex n : g.node_of_unique())
+    {
+        const core::GridCoord c = g.coord(n);
+        d.max_ref = std::max(d.max_ref, std::fabs(b.at(c.x, c.y)));
+        if (!use || use(n))
+            d.max_abs = std::max(d.max_abs, std::fabs(a.at(c.x, c.y) - b.at(c.x, c.y)));
+    }
+    return d;
+}
+
+/// Several peers in one thread over one simulated network with a virtual clock.
+struct Harness
+{
+    explicit Harness(const net::SimulatedNetworkSettings& s = {}) : net(s) {}
+
+    net::SimulatedNetwork net;
+    std::vector<std::unique_ptr<net::Transport>> transports;
+    std::vector<std::unique_ptr<Session>> peers;
+    net::Address master_address;
+    double now = 0.0;
+
+    Session& host(int level, const SessionSettings& settings)
+    {
+        transports.push_back(net.create_endpoint());
+        master_address = transports.back()->open({}).value();
+        const core::TetraGrid grid = core::TetraGrid::create(level).value();
+        peers.push_back(Session::host(*transports.back(), grid, scenes::sphere_grid(grid, 1.0),
+                                      material(), settings)
+                            .value());
+        return *peers.back();
+    }
+
+    Session& join(net::Role role, const SessionSettings& settings)
+    {
+        transports.push_back(net.create_endpoint());
+        (void)transports.back()->open({}).value();
+        peers.push_back(Session::join(*transports.back(), master_address, role, settings).value());
+        return *peers.back();
+    }
+
+    void pump_once(double dt)
+    {
+        for (auto& p : peers)
+            p->poll();
+        for (auto& p : peers)
+            p->advance(now);
+        net.advance(dt);
+        now += dt;
+    }
+
+    /// Pumps until `done` or `max_iterations` (bounded); \return whether `done` held.
+    bool pump_until(const std::function<bool()>& done, int max_iterations, double dt = 0.0005)
+    {
+        for (int k = 0; k < max_iterations; ++k)
+        {
+            if (done())
+                return true;
+            pump_once(dt);
+        }
+        return done();
+    }
+};
+
+}  // namespace pliant::session::test
