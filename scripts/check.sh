@@ -17,8 +17,8 @@ cd "$(dirname "$0")/.."
 legs=${PLIANT_CHECK_LEGS:-"format includes release asan fuzz"}
 jobs=${PLIANT_JOBS:-$(nproc)}
 has_leg() { [[ " $legs " == *" $1 "* ]]; }
-banner() { printf '\n==== %s ====\n' "$*"; }
 start=$(date +%s)
+banner() { printf '\n==== %s (at %d s) ====\n' "$*" "$(( $(date +%s) - start ))"; }
 
 banner "dependencies"
 bash scripts/install-deps.sh
