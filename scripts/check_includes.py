@@ -20,11 +20,11 @@ ALLOWED = {
     "session": {"core", "sim", "subdiv", "net"},
     "render": {"core"},
 }
-# Third-party headers a module may not use (only the viewer links GLFW/ImGui, only render GL,
+# Third-party headers a module may not use (only the viewer, apps/pliant-cli/viewer/, links GLFW/ImGui, only render GL,
 # only net's ENet adapter includes ENet).
 FORBIDDEN_THIRD_PARTY = {
-    "GLFW/": lambda path: path.parts[:2] == ("apps", "pliant-viewer"),
-    "imgui": lambda path: path.parts[:2] == ("apps", "pliant-viewer"),
+    "GLFW/": lambda path: path.parts[:3] == ("apps", "pliant-cli", "viewer"),
+    "imgui": lambda path: path.parts[:3] == ("apps", "pliant-cli", "viewer"),
     "enet/": lambda path: path.as_posix() == "src/net/enet_transport.cpp",
 }
 PLIANT_INCLUDE = re.compile(r'^\s*#\s*include\s*[<"]pliant/([a-z_]+)/')

@@ -1,18 +1,31 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: 2026 pliant contributors
 // `pliant demo`: the README's main job. On the bundled mesh (or --mesh FILE), with no other
-// argument: validate, remesh onto the tetrahedral grid, simulate two users pulling and pushing
-// different parts of the membrane, refine each frame by butterfly subdivision for display, render
-// the frames offscreen to PNG and print a summary table. Everything lands in demo-out/.
+// argument: validate and remesh onto the tetrahedral grid, then run a real collaborative session
+// on this machine: a master and two participants over UDP on 127.0.0.1 (ENet), each simulating
+// the leaves the master gave it around its user's point of interest, two users grabbing
+// different parts, and a viewer joining late. Every frame is rendered offscreen from what a peer
+// displays (the viewer once it has joined), in owner colours; the master records the inputs and
+// the recording is replayed on one process at the end, which must give the same state bit for
+// bit. Everything lands in demo-out/.
+//
+// The peers run in this one thread and share a virtual clock that advances one stream interval
+// at a time; each interval is pumped (poll and advance every peer) until every member reached its
+// tick. So the frames, the statistics and the recording are the same on a slow machine as on a
+// fast one, and the wall time is the cost of the work, not of waiting. Real-time sessions between
+// processes are `pliant host` and `pliant join`.
 #include <pliant/core/grid_io.h>
 #include <pliant/mesh/io.h>
 #include <pliant/mesh/validate.h>
+#include <pliant/net/enet_transport.h>
 #include <pliant/remesh/remesh.h>
 #include <pliant/render/draw_settings.h>
 #include <pliant/render/framebuffer.h>
 #include <pliant/render/grid_renderer.h>
 #include <pliant/render/image.h>
 #include <pliant/render/offscreen_context.h>
+#include <pliant/session/recording.h>
+#include <pliant/session/session.h>
 #include <pliant/sim/membrane.h>
 #include <pliant/sim/rkf45.h>
 #include <pliant/subdiv/refine.h>
@@ -27,8 +40,10 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -48,10 +63,12 @@ struct DemoOptions
     fs::path out = "demo-out";
     int level = 6;
     int display_levels = 1;
-    double duration = 3.0;
+    double duration = 4.0;
     double fps = 12.0;
+    double dt = 0.0;  // 0: from the model's stability bound
     int width = 640;
     int height = 480;
+    double wall_limit = 150.0;
     bool quick = false;
     bool render = true;
 };
@@ -61,18 +78,25 @@ double seconds_since(Clock::time_point start)
     return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-/// A scripted user: a point force on the rest surface, switched on for [start, end).
-struct ScriptedUser
+std::string fmt(const char* format, double v)
 {
-    std::string name;
-    sim::Force force;
+    std::array<char, 64> b{};
+    std::snprintf(b.data(), b.size(), format, v);
+    return b.data();
+}
+
+/// A user's grab: a force on the nodes within `radius` of a rest point, held over [start, end).
+struct Grab
+{
+    net::UserForce force;
+    core::GridCoord node;  // the grid node nearest the point (for the latency probe)
     double start = 0.0;
     double end = 0.0;
 };
 
 /// Two users grabbing opposite ends of the object along its longest axis: the first pulls its
 /// end outward, the second pushes its end inward, overlapping in time.
-std::vector<ScriptedUser> make_users(const sim::MembraneModel& model, double duration)
+std::array<Grab, 2> make_grabs(const sim::MembraneModel& model, double duration)
 {
     const auto& P = model.rest_positions();
     const auto& N = model.normals();
@@ -88,34 +112,174 @@ std::vector<ScriptedUser> make_users(const sim::MembraneModel& model, double dur
     const core::Vec3 extent = hi - lo;
     const int axis =
         extent.x >= extent.y && extent.x >= extent.z ? 0 : (extent.y >= extent.z ? 1 : 2);
-    auto coord = [&](int x, int y) { return P[static_cast<std::size_t>(axis)].at(x, y); };
+    auto coord = [&](core::GridCoord c) { return P[static_cast<std::size_t>(axis)].at(c.x, c.y); };
     core::GridCoord first{0, 0}, second{0, 0};
     for (int y = 0; y < g.ny(); ++y)
         for (int x = 0; x < g.nx(); ++x)
         {
-            if (coord(x, y) > coord(first.x, first.y))
+            if (coord({x, y}) > coord(first))
                 first = {x, y};
-            if (coord(x, y) < coord(second.x, second.y))
+            if (coord({x, y}) < coord(second))
                 second = {x, y};
         }
     const double diag = core::norm(extent);
     const double radius = 0.08 * diag;
-    // Force scale: enough to displace the grabbed patch by a few per cent of the diagonal
-    // against the elastic foundation (static u ~ F / (rho pi r^2 k_f)).
+    // Force scale: displaces the grabbed patch by a few per cent of the diagonal against the
+    // elastic foundation (static u ~ F / (rho pi r^2 k_f)).
     const double magnitude =
         0.6 * model.settings().rho * 3.14159 * radius * radius * model.settings().k_f * 0.12 * diag;
-    auto user = [&](const char* name, core::GridCoord c, double sign, double t0, double t1)
+    auto grab = [&](core::GridCoord c, double sign, double t0, double t1)
     {
-        const core::Vec3 p{P[0].at(c.x, c.y), P[1].at(c.x, c.y), P[2].at(c.x, c.y)};
-        const core::Vec3 n{N[0].at(c.x, c.y), N[1].at(c.x, c.y), N[2].at(c.x, c.y)};
-        sim::Force f;
-        f.point = p;
-        f.radius = radius;
-        f.vector = n * (sign * magnitude);
-        return ScriptedUser{name, f, t0, t1};
+        Grab out;
+        out.node = c;
+        out.force.target.kind = net::TargetKind::Position;
+        out.force.target.position = {P[0].at(c.x, c.y), P[1].at(c.x, c.y), P[2].at(c.x, c.y)};
+        out.force.target.radius = radius;
+        for (std::size_t k = 0; k < 3; ++k)
+            out.force.force[k] = sign * magnitude * N[k].at(c.x, c.y);
+        out.start = t0;
+        out.end = t1;
+        return out;
     };
-    return {user("user A (pulls)", first, +1.0, 0.1 * duration, 0.55 * duration),
-            user("user B (pushes)", second, -1.0, 0.35 * duration, 0.8 * duration)};
+    return {grab(first, +1.0, 0.1 * duration, 0.55 * duration),
+            grab(second, -1.0, 0.3 * duration, 0.8 * duration)};
+}
+
+/// One peer of the demo: its own UDP socket on 127.0.0.1 and its session.
+struct Peer
+{
+    std::string name;
+    std::unique_ptr<net::Transport> transport;
+    net::Address address;
+    std::unique_ptr<session::Session> session;
+};
+
+/// Offscreen pictures of what a peer displays, refined for display, in owner colours.
+class FramePainter
+{
+public:
+    static std::optional<FramePainter> create(int width, int height)
+    {
+        auto ctx = render::OffscreenContext::create();
+        if (!ctx)
+        {
+            spdlog::warn("demo: no offscreen OpenGL ({}); continuing without pictures",
+                         ctx.error().message);
+            return std::nullopt;
+        }
+        auto fb = render::Framebuffer::create(width, height, render::PixelFormat::Rgba8, 4);
+        auto gr = render::GridRenderer::create();
+        if (!fb || !gr)
+        {
+            spdlog::warn("demo: cannot render offscreen ({}); continuing without pictures",
+                         !fb ? fb.error().message : gr.error().message);
+            return std::nullopt;
+        }
+        return FramePainter(std::move(*ctx), std::move(*fb), std::move(*gr), width, height);
+    }
+
+    /// Renders `peer`'s displayed surface with `levels` butterfly levels added, to `path`.
+    core::Result<void> paint(const session::Session& peer, int levels, const fs::path& path)
+    {
+        const sim::MembraneModel& model = *peer.model();
+        const core::TetraGrid& grid = model.grid();
+        model.positions(peer.display_u(), positions_);
+        core::Vec3Field<double> shown = positions_;
+        if (levels > 0)
+        {
+            auto refined = subdiv::refine_levels(positions_, levels);
+            if (!refined)
+                return core::fail(refined.error().code, refined.error().message);
+            shown = std::move(*refined);
+        }
+        if (!display_ || display_->level() != shown[0].level())
+            display_ = core::TetraGrid::create(shown[0].level()).value();
+        renderer_.upload(*display_, shown, nullptr);
+        // Owner of each display node: the owner of the nearest simulation node.
+        const auto owners = peer.owners();
+        const session::LeafGraph* leaves = peer.leaf_graph();
+        owner_ids_.assign(display_->node_count(), render::k_no_owner);
+        if (!owners.empty() && leaves != nullptr)
+        {
+            const int half = levels > 0 ? 1 << (levels - 1) : 0;
+            for (int y = 0; y < display_->ny(); ++y)
+                for (int x = 0; x < display_->nx(); ++x)
+                {
+                    const int cx = std::min((x + half) >> levels, grid.nx() - 1);
+                    const int cy = std::min((y + half) >> levels, grid.ny() - 1);
+                    const auto leaf = leaves->leaf_of(grid.index(cx, cy));
+                    owner_ids_[display_->index(x, y).value] =
+                        static_cast<std::uint16_t>(owners[leaf].value);
+                }
+        }
+        renderer_.upload_owners(*display_, owner_ids_);
+        if (!camera_fixed_)
+        {
+            draw_.camera.fit_to = renderer_.bounds();
+            camera_fixed_ = true;
+        }
+        framebuffer_.bind();
+        renderer_.draw(draw_, width_, height_);
+        return render::write_png(path, framebuffer_.read_rgba8());
+    }
+
+private:
+    FramePainter(render::OffscreenContext ctx, render::Framebuffer fb, render::GridRenderer gr,
+                 int width, int height)
+        : context_(std::move(ctx)),
+          framebuffer_(std::move(fb)),
+          renderer_(std::move(gr)),
+          width_(width),
+          height_(height)
+    {
+        draw_.color = render::ColorMode::Owner;
+        draw_.camera.azimuth_deg = 35.0;
+        draw_.camera.elevation_deg = 20.0;
+    }
+
+    render::OffscreenContext context_;
+    render::Framebuffer framebuffer_;
+    render::GridRenderer renderer_;
+    int width_ = 0;
+    int height_ = 0;
+    render::DrawSettings draw_;
+    bool camera_fixed_ = false;
+    std::optional<core::TetraGrid> display_;
+    core::Vec3Field<double> positions_;
+    std::vector<std::uint16_t> owner_ids_;
+};
+
+/// Single-quotes `text` for /bin/sh.
+std::string shell_quote(const std::string& text)
+{
+    std::string out = "'";
+    for (const char c : text)
+        out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return out + "'";
+}
+
+bool have_tool(const char* probe)
+{
+    return std::system((std::string(probe) + " >/dev/null 2>&1").c_str()) == 0;
+}
+
+/// An animated GIF of the frames with ImageMagick or ffmpeg, when either is installed.
+std::string make_animation(const fs::path& dir, double fps)
+{
+    const std::string frames = shell_quote((dir / "frame_").string());
+    const std::string gif = shell_quote((dir / "demo.gif").string());
+    std::string cmd;
+    if (have_tool("convert -version | grep -q ImageMagick"))
+        cmd = "convert -delay " + std::to_string(std::lround(100.0 / fps)) + " -loop 0 " + frames +
+              "*.png -layers Optimize " + gif;
+    else if (have_tool("ffmpeg -version"))
+        cmd = "ffmpeg -y -loglevel error -framerate " + fmt("%g", fps) + " -i " + frames +
+              "%04d.png -vf 'split[a][b];[a]palettegen[p];[b][p]paletteuse' " + gif;
+    else
+        return "skipped (install imagemagick or ffmpeg)";
+    if (std::system((cmd + " >/dev/null 2>&1").c_str()) != 0)
+        return "failed: " + cmd;
+    return "demo.gif";
 }
 
 int run_demo(const DemoOptions& opt_in, const GlobalOptions& global)
@@ -124,8 +288,8 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global)
     if (opt.quick)
     {
         opt.level = std::min(opt.level, 5);
-        opt.duration = std::min(opt.duration, 1.5);
-        opt.fps = std::min(opt.fps, 8.0);
+        opt.duration = std::min(opt.duration, 2.0);
+        opt.fps = std::min(opt.fps, 6.0);
         opt.width = std::min(opt.width, 320);
         opt.height = std::min(opt.height, 240);
     }
@@ -136,19 +300,18 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global)
     if (ec)
         return report({core::ErrorCode::IoError,
                        "demo: cannot create " + opt.out.string() + ": " + ec.message()});
+    for (const auto& entry : fs::directory_iterator(opt.out, ec))
+        if (entry.path().filename().string().rfind("frame_", 0) == 0)
+            fs::remove(entry.path(), ec);  // no stale frames from a longer earlier run
 
-    // 1. Import and validate.
-    auto t0 = Clock::now();
+    // 1. Import, validate, remesh.
     auto mesh = mesh::import_mesh(mesh_path);
     if (!mesh)
         return report(mesh.error());
     if (auto ok = mesh::validate(*mesh, mesh_path.filename().string()); !ok)
         return report(ok.error());
-    const double t_import = seconds_since(t0);
     spdlog::info("demo: {} ({} vertices, {} faces) is a closed genus-0 surface",
                  mesh_path.filename().string(), mesh->vertex_count(), mesh->face_count());
-
-    // 2. Remesh onto the tetrahedral grid.
     ProgressBar progress(global);
     remesh::RemeshSettings rs;
     rs.level = opt.level;
@@ -156,177 +319,317 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global)
     if (!remeshed)
         return report(remeshed.error());
     const core::TetraGrid& grid = remeshed->grid;
-    const fs::path grid_path = opt.out / "grid.pgrid";
-    if (auto saved =
-            core::save_grid(grid_path, core::make_geometry_file(grid, remeshed->positions));
+    if (auto saved = core::save_grid(opt.out / "grid.pgrid",
+                                     core::make_geometry_file(grid, remeshed->positions));
         !saved)
         return report(saved.error());
+    std::ofstream(opt.out / "remesh-report.json") << remesh::to_json(remeshed->report) << "\n";
+
+    // 2. The material and a common fixed step the explicit integrator is stable at.
+    sim::MembraneSettings material;
+    material.T = 2.0;
+    material.rho = 1.0;
+    material.beta = 1.5;
+    material.k_f = 6.0;
+    material.fixed_step = true;
+    auto probe = sim::MembraneModel::create(grid, remeshed->positions, material);
+    if (!probe)
+        return report(probe.error());
+    const double stable = sim::stable_fixed_step(*probe);
+    const double want = opt.dt > 0.0 ? opt.dt : 0.9 * stable;
+    // A whole number of ticks per frame, so every frame shows a tick boundary.
+    const auto ticks_per_frame =
+        static_cast<std::uint64_t>(std::ceil(1.0 / (opt.fps * want) - 1e-9));
+    const double dt = 1.0 / (opt.fps * static_cast<double>(ticks_per_frame));
+    if (dt > stable)
+        spdlog::warn("demo: --dt {:.3g} s is above the stability bound {:.3g} s", dt, stable);
+    material.fixed_dt = dt;
+    const std::array<Grab, 2> grabs = make_grabs(*probe, opt.duration);
+
+    // 3. Four peers on 127.0.0.1: master, two participants, a viewer that joins late.
+    std::array<Peer, 4> peers;
+    const std::array<const char*, 4> names{"master", "user-A", "user-B", "viewer"};
+    for (std::size_t k = 0; k < peers.size(); ++k)
     {
-        std::ofstream(opt.out / "remesh-report.json") << remesh::to_json(remeshed->report) << "\n";
+        Peer& p = peers[k];
+        p.name = names[k];
+        p.transport = net::make_enet_transport();
+        auto bound = p.transport->open(net::Address{{127, 0, 0, 1}, 0});
+        if (!bound)
+            return report({core::ErrorCode::NetworkError,
+                           "demo: cannot open a UDP socket on 127.0.0.1 (" + bound.error().message +
+                               "); is the loopback interface up?"});
+        p.address = *bound;
+    }
+    session::SessionSettings settings;
+    settings.coupling = session::Coupling::Exact;
+    settings.threads = 1;
+    auto settings_for = [&](const Peer& p)
+    {
+        session::SessionSettings s = settings;
+        s.name = p.name;
+        s.listen_port = p.address.port;
+        return s;
+    };
+    auto hosted = session::Session::host(*peers[0].transport, grid, remeshed->positions, material,
+                                         settings_for(peers[0]));
+    if (!hosted)
+        return report(hosted.error());
+    peers[0].session = std::move(*hosted);
+    if (auto rec = peers[0].session->start_recording(); !rec)
+        return report(rec.error());
+    for (std::size_t k = 1; k <= 2; ++k)
+    {
+        auto joined = session::Session::join(*peers[k].transport, peers[0].address,
+                                             net::Role::Participant, settings_for(peers[k]));
+        if (!joined)
+            return report(joined.error());
+        peers[k].session = std::move(*joined);
+        peers[k].session->set_points_of_interest({grabs[k - 1].force.target});
     }
 
-    // 3. The membrane and two scripted users.
-    sim::MembraneSettings ms;
-    ms.T = 2.0;
-    ms.rho = 1.0;
-    ms.beta = 1.5;
-    ms.k_f = 6.0;
-    ms.rtol = 1e-4;
-    // Below level 8 a step is too short to share between threads (measured: two threads were
-    // slower at level 6, and far slower on a loaded machine).
-    ms.threads = grid.level() >= 8 ? 0 : 1;
-    auto model = sim::MembraneModel::create(grid, remeshed->positions, ms);
-    if (!model)
-        return report(model.error());
-    sim::MembraneState state = sim::MembraneState::at_rest(grid);
-    sim::Rkf45Workspace workspace(*model);
-    const std::vector<ScriptedUser> users = make_users(*model, opt.duration);
+    const auto t_session = Clock::now();
+    auto out_of_time = [&] { return seconds_since(t_session) > opt.wall_limit; };
+    auto pump = [&](double now)
+    {
+        for (Peer& p : peers)
+            if (p.session)
+                p.session->poll();
+        for (Peer& p : peers)
+            if (p.session)
+                p.session->advance(now);
+    };
+    auto members_at = [&](std::uint64_t tick)
+    {
+        for (std::size_t k = 0; k < 3; ++k)
+            if (peers[k].session->tick() < tick)
+                return false;
+        return true;
+    };
+    // Everyone joins and is partitioned before the clock starts.
+    while (!out_of_time())
+    {
+        pump(0.0);
+        auto owners = peers[0].session->owners();
+        std::sort(owners.begin(), owners.end());
+        if (peers[1].session->ready() && peers[2].session->ready() &&
+            std::unique(owners.begin(), owners.end()) - owners.begin() == 3)
+            break;
+    }
+    if (out_of_time())
+        return report({core::ErrorCode::NetworkError,
+                       "demo: the participants were not partitioned within the time limit"});
+    const double t_joined = seconds_since(t_session);
 
-    // 4. Offscreen rendering of every frame, refined for display.
-    std::optional<render::OffscreenContext> context;
-    std::optional<render::Framebuffer> framebuffer;
-    std::optional<render::GridRenderer> renderer;
+    // 4. The scripted collaboration, one stream interval of virtual time at a time.
+    std::optional<FramePainter> painter;
     if (opt.render)
-    {
-        auto ctx = render::OffscreenContext::create();
-        if (!ctx)
-        {
-            spdlog::warn("demo: no offscreen OpenGL ({}); continuing without pictures",
-                         ctx.error().message);
-            opt.render = false;
-        }
-        else
-        {
-            context.emplace(std::move(*ctx));
-            auto fb =
-                render::Framebuffer::create(opt.width, opt.height, render::PixelFormat::Rgba8, 4);
-            auto gr = render::GridRenderer::create();
-            if (!fb || !gr)
-                return report(!fb ? fb.error() : gr.error());
-            framebuffer.emplace(std::move(*fb));
-            renderer.emplace(std::move(*gr));
-        }
-    }
+        painter = FramePainter::create(opt.width, opt.height);
     const int display_levels = std::clamp(opt.display_levels, 0, core::k_max_level - grid.level());
-
     const int frames = std::max(1, static_cast<int>(std::lround(opt.duration * opt.fps)));
-    double step_seconds = 0.0, render_seconds = 0.0, max_u = 0.0;
-    std::uint64_t steps = 0, rejections = 0;
-    std::vector<sim::Force> active;
-    core::Vec3Field<double> positions;
-    std::ofstream energy_csv(opt.out / "energy.csv");
-    energy_csv << "time,kinetic,strain,foundation,total,steps,rejections,active_users\n";
-    render::DrawSettings draw;
-    draw.color = render::ColorMode::Displacement;
-    draw.camera.azimuth_deg = 35.0;
-    draw.camera.elevation_deg = 20.0;
+    const int substeps =
+        std::max(1, static_cast<int>(std::ceil(settings.stream_rate_hz / opt.fps)));
+    const double t_viewer = 0.4 * opt.duration;
+    std::array<bool, 2> grabbing{false, false};
+    double grab_set_at = -1.0, grab_seen_at = -1.0, viewer_ready_at = -1.0;
+    const double probe_base = peers[0].session->display_u().at(grabs[0].node.x, grabs[0].node.y);
+    std::ofstream energy_csv(opt.out / "timeline.csv");
+    energy_csv << "time,ticks,owner_nodes_master,owner_nodes_A,owner_nodes_B,max_u\n";
+    double max_u = 0.0;
+    int painted = 0;
     for (int frame = 1; frame <= frames; ++frame)
     {
-        const double t_frame = opt.duration * frame / frames;
-        // Forces change only at frame boundaries (as a viewer would sample its input).
-        active.clear();
-        for (const ScriptedUser& u : users)
-            if (state.time >= u.start && state.time < u.end)
-                active.push_back(u.force);
-        const auto ts = Clock::now();
-        const sim::AdvanceReport ar = sim::advance_to(*model, state, workspace, t_frame, active);
-        step_seconds += seconds_since(ts);
-        steps += ar.steps;
-        rejections += ar.rejections;
-        if (sim::has_flag(ar.status, sim::StepStatus::NonFinite))
-            return report(
-                {core::ErrorCode::NotConverged, "demo: the simulation became non-finite at t = " +
-                                                    std::to_string(state.time) + " s"});
-        const sim::Energy e = sim::energy(*model, state);
-        energy_csv << state.time << ',' << e.kinetic << ',' << e.strain << ',' << e.foundation
-                   << ',' << e.total() << ',' << steps << ',' << rejections << ',' << active.size()
-                   << '\n';
+        for (int sub = 1; sub <= substeps; ++sub)
+        {
+            const double now = (frame - 1 + static_cast<double>(sub) / substeps) / opt.fps;
+            const double previous = (frame - 1 + static_cast<double>(sub - 1) / substeps) / opt.fps;
+            // The users act on what they saw: grabs start and end between intervals.
+            for (std::size_t k = 0; k < 2; ++k)
+            {
+                const bool on = previous >= grabs[k].start && previous < grabs[k].end;
+                if (on != grabbing[k])
+                {
+                    peers[k + 1].session->set_forces(
+                        on ? std::vector<net::UserForce>{grabs[k].force}
+                           : std::vector<net::UserForce>{});
+                    grabbing[k] = on;
+                    if (k == 0 && on)
+                        grab_set_at = previous;
+                }
+            }
+            if (!peers[3].session && previous >= t_viewer)
+            {
+                auto joined = session::Session::join(*peers[3].transport, peers[0].address,
+                                                     net::Role::Viewer, settings_for(peers[3]));
+                if (!joined)
+                    return report(joined.error());
+                peers[3].session = std::move(*joined);
+            }
+            const auto target = static_cast<std::uint64_t>(std::floor(now / dt + 1e-9));
+            while (!members_at(target) && !out_of_time())
+                pump(now);
+            pump(now);  // one more pass streams the states of this interval
+            if (out_of_time())
+                return report({core::ErrorCode::NotConverged,
+                               "demo: the session fell behind the wall-clock limit of " +
+                                   fmt("%.0f", opt.wall_limit) +
+                                   " s (a heavily loaded machine? try --quick)"});
+            if (viewer_ready_at < 0.0 && peers[3].session && peers[3].session->ready())
+                viewer_ready_at = now;
+            const double seen = peers[0].session->display_u().at(grabs[0].node.x, grabs[0].node.y);
+            if (grab_set_at >= 0.0 && grab_seen_at < 0.0 && seen != probe_base)
+                grab_seen_at = now;
+        }
+        const bool from_viewer = peers[3].session && peers[3].session->ready();
+        const session::Session& shown = *peers[from_viewer ? 3 : 0].session;
+        const core::Field<double>& u = shown.display_u();
         for (int y = 0; y < grid.ny(); ++y)
             for (int x = 0; x < grid.nx(); ++x)
-                max_u = std::max(max_u, std::abs(state.u.at(x, y)));
-
-        if (opt.render)
+                max_u = std::max(max_u, std::abs(u.at(x, y)));
+        energy_csv << shown.time() << ',' << peers[0].session->tick();
+        for (std::size_t k = 0; k < 3; ++k)
+            energy_csv << ',' << peers[k].session->stats().owned_nodes;
+        energy_csv << ',' << max_u << '\n';
+        if (painter)
         {
-            const auto tr = Clock::now();
-            model->positions(state.u, positions);
-            core::Vec3Field<double> shown = positions;
-            core::Field<double> u_shown(grid);
-            for (int y = 0; y < grid.ny(); ++y)
-                for (int x = 0; x < grid.nx(); ++x)
-                    u_shown.at(x, y) = state.u.at(x, y);
-            if (display_levels > 0)
-            {
-                auto refined = subdiv::refine_levels(positions, display_levels);
-                auto refined_u = subdiv::refine_levels(u_shown, display_levels);
-                if (!refined || !refined_u)
-                    return report(!refined ? refined.error() : refined_u.error());
-                shown = std::move(*refined);
-                u_shown = std::move(*refined_u);
-            }
-            const core::TetraGrid display = core::TetraGrid::create(shown[0].level()).value();
-            renderer->upload(display, shown, &u_shown);
-            if (frame == 1)
-            {
-                // One still camera, and a colour range of 3 % of the size for the whole run.
-                draw.camera.fit_to = renderer->bounds();
-                draw.displacement_range = static_cast<float>(0.03 * renderer->bounds().radius());
-            }
-            framebuffer->bind();
-            renderer->draw(draw, opt.width, opt.height);
             std::array<char, 32> name{};
             std::snprintf(name.data(), name.size(), "frame_%04d.png", frame);
-            if (auto w = render::write_png(opt.out / name.data(), framebuffer->read_rgba8()); !w)
+            if (auto w = painter->paint(shown, display_levels, opt.out / name.data()); !w)
                 return report(w.error());
-            render_seconds += seconds_since(tr);
+            ++painted;
         }
-        progress.update("simulate + render", static_cast<double>(frame) / frames);
+        progress.update("session + render", static_cast<double>(frame) / frames);
     }
+    const double t_run = seconds_since(t_session) - t_joined;
 
-    // 5. Summary.
+    // 5. The final state, assembled from every member's own leaves, and its replay.
+    core::Field<double> final_u(grid), final_v(grid);
+    for (std::size_t k = 0; k < 3; ++k)
+    {
+        const session::Session& s = *peers[k].session;
+        const auto owners = s.owners();
+        for (const core::NodeIndex n : grid.node_of_unique())
+            if (owners[s.leaf_graph()->leaf_of(n)] == s.id())
+            {
+                const core::GridCoord c = grid.coord(n);
+                final_u.at(c.x, c.y) = s.state().u.at(c.x, c.y);
+                final_v.at(c.x, c.y) = s.state().v.at(c.x, c.y);
+            }
+    }
+    session::Recording recording = peers[0].session->recording();
+    recording.final_hash = session::state_hash(grid, final_u, final_v);
+    if (auto saved = session::save_recording(opt.out / "session.prec", recording); !saved)
+        return report(saved.error());
+    std::vector<session::SessionStats> stats;
+    std::vector<double> rtt_ms;
+    for (Peer& p : peers)
+    {
+        stats.push_back(p.session ? p.session->stats() : session::SessionStats{});
+        double sum = 0.0;
+        int n = 0;
+        for (const net::PeerHandle h : p.transport->peers())
+            if (const auto st = p.transport->stats(h))
+            {
+                sum += st->rtt_s;
+                ++n;
+            }
+        rtt_ms.push_back(n > 0 ? 1e3 * sum / n : 0.0);
+    }
+    const auto t_replay = Clock::now();
+    auto replayed = session::replay(recording);
+    if (!replayed)
+        return report(replayed.error());
+    const double replay_seconds = seconds_since(t_replay);
+    const bool identical =
+        session::state_hash(grid, replayed->state.u, replayed->state.v) == recording.final_hash;
+
+    // The master ends the session; everyone disconnects (bounded).
+    peers[0].session->shutdown();
+    for (int k = 0; k < 2000; ++k)
+    {
+        bool all_left = true;
+        for (Peer& p : peers)
+            if (p.session)
+            {
+                p.session->poll();
+                all_left = all_left && p.session->left();
+            }
+        if (all_left)
+            break;
+    }
+    const std::string animation =
+        painted > 1 ? make_animation(opt.out, opt.fps) : std::string("skipped (no frames)");
+
+    // 6. Summary.
     const auto& q = remeshed->report;
-    const double total = seconds_since(t_start);
     std::string table;
-    char line[256];
-    auto add = [&](const char* key, const std::string& value)
+    auto row = [&](const std::string& key, const std::string& value)
     {
-        std::snprintf(line, sizeof line, "| %-34s | %-36s |\n", key, value.c_str());
-        table += line;
+        table += "| " + key + std::string(key.size() < 34 ? 34 - key.size() : 0, ' ') + " | " +
+                 value + " |\n";
     };
-    auto num = [](double v, const char* fmt)
+    table += "| pliant demo                        | |\n|---|---|\n";
+    row("input mesh", mesh_path.filename().string() + " (" + std::to_string(mesh->vertex_count()) +
+                          " vertices, " + std::to_string(mesh->face_count()) + " faces)");
+    row("grid level / vertices / triangles", std::to_string(grid.level()) + " / " +
+                                                 std::to_string(grid.unique_count()) + " / " +
+                                                 std::to_string(grid.face_count()));
+    row("display level (butterfly)", std::to_string(grid.level() + display_levels));
+    row("remesh", fmt("%.2f s", q.total_seconds) + ", " + q.sphere_method + ", PSNR " +
+                      (q.measured ? fmt("%.1f dB", q.distance.psnr_db) : std::string("n/a")) +
+                      ", inverted triangles " +
+                      std::to_string(q.inverted_mesh + q.inverted_domain));
+    row("coupling / fixed step", "exact lockstep / " + fmt("%.3f ms", 1e3 * dt) +
+                                     " (stability bound " + fmt("%.3f ms)", 1e3 * stable));
+    row("simulated time / ticks / frames", fmt("%.2f s", opt.duration) + " / " +
+                                               std::to_string(peers[0].session->tick()) + " / " +
+                                               std::to_string(frames));
+    row("session wall time", fmt("%.1f s", t_run) + " (" +
+                                 fmt("%.2f", opt.duration / std::max(t_run, 1e-9)) +
+                                 " x real time, all peers in one thread)");
+    row("grab -> seen by the master",
+        grab_seen_at >= 0.0 ? fmt("%.0f ms of session time", 1e3 * (grab_seen_at - grab_set_at))
+                            : std::string("not seen"));
+    row("viewer joined at / shown from",
+        fmt("%.2f s", t_viewer) + " / " +
+            (viewer_ready_at >= 0.0 ? fmt("%.2f s", viewer_ready_at) : std::string("never")));
+    row("largest |u| shown", fmt("%.4f", max_u));
+    row("replay of session.prec", std::string(identical ? "bit-identical" : "DIFFERS") + " (" +
+                                      fmt("%.1f s", replay_seconds) + ", 1 thread)");
+    row("frames", painter ? std::to_string(painted) + " PNG frames, animation: " + animation
+                          : std::string("skipped"));
+    row("total wall time", fmt("%.1f s", seconds_since(t_start)));
+    table +=
+        "\n| peer | role | owned nodes | steps | step time | sent | received | RTT |\n"
+        "|---|---|---:|---:|---:|---:|---:|---:|\n";
+    const std::array<const char*, 4> roles{"master", "participant", "participant", "viewer"};
+    for (std::size_t k = 0; k < peers.size(); ++k)
     {
-        char b[64];
-        std::snprintf(b, sizeof b, fmt, v);
-        return std::string(b);
-    };
-    table += "| pliant demo                        |                                      |\n";
-    table += "|------------------------------------|--------------------------------------|\n";
-    add("input mesh", mesh_path.filename().string() + " (" + std::to_string(mesh->vertex_count()) +
-                          " v, " + std::to_string(mesh->face_count()) + " f)");
-    add("grid level / vertices / faces", std::to_string(grid.level()) + " / " +
-                                             std::to_string(grid.unique_count()) + " / " +
-                                             std::to_string(grid.face_count()));
-    add("remesh time", num(q.total_seconds, "%.2f s") + " (" + q.sphere_method + ")");
-    add("remesh PSNR",
-        q.measured ? num(q.distance.psnr_db, "%.1f dB") : std::string("not measured"));
-    add("inverted spherical triangles", std::to_string(q.inverted_mesh + q.inverted_domain));
-    add("simulated time / frames", num(opt.duration, "%.2f s") + " / " + std::to_string(frames));
-    add("RKF45 steps / rejections", std::to_string(steps) + " / " + std::to_string(rejections));
-    add("step time (mean)",
-        num(steps > 0 ? 1e3 * step_seconds / static_cast<double>(steps) : 0.0, "%.3f ms"));
-    add("simulation speed", num(opt.duration / std::max(step_seconds, 1e-9), "%.1f x real time"));
-    add("largest |u|", num(max_u, "%.4f m"));
-    add("render", opt.render
-                      ? std::to_string(frames) + " PNG frames, " +
-                            num(1e3 * render_seconds / frames, "%.0f ms each") +
-                            " (display level " + std::to_string(grid.level() + display_levels) + ")"
-                      : std::string("skipped"));
-    add("total wall time", num(total, "%.1f s"));
-    add("import + validate", num(t_import, "%.2f s"));
+        const session::SessionStats& s = stats[k];
+        const double seconds = k == 3 && viewer_ready_at >= 0.0
+                                   ? opt.duration - viewer_ready_at
+                                   : opt.duration;  // simulated seconds the peer took part
+        table += "| " + peers[k].name + " | " + roles[k] + " | " + std::to_string(s.owned_nodes) +
+                 " | " + std::to_string(s.steps) + " | " +
+                 (s.steps > 0 ? fmt("%.3f ms", 1e3 * s.step_seconds / static_cast<double>(s.steps))
+                              : std::string("-")) +
+                 " | " + fmt("%.0f kbit/s", 8e-3 * static_cast<double>(s.bytes_sent) / seconds) +
+                 " | " +
+                 fmt("%.0f kbit/s", 8e-3 * static_cast<double>(s.bytes_received) / seconds) +
+                 " | " + fmt("%.1f ms", rtt_ms[k]) + " |\n";
+    }
+    table += "\nBandwidth is per second of session time (states stream at " +
+             fmt("%.0f Hz", settings.stream_rate_hz) +
+             "); RTT is ENet's smoothed round trip over 127.0.0.1.\n";
     std::printf("%s", table.c_str());
     std::ofstream(opt.out / "summary.md") << table;
     std::printf(
-        "\nwrote %s (grid.pgrid, frame_*.png, energy.csv, remesh-report.json, summary.md)\n",
-        opt.out.string().c_str());
+        "\nwrote %s (grid.pgrid, frame_*.png, %s, session.prec, timeline.csv, "
+        "remesh-report.json, summary.md)\n",
+        opt.out.string().c_str(), animation == "demo.gif" ? "demo.gif" : "no GIF");
+    if (!identical)
+        return report({core::ErrorCode::NotConverged,
+                       "demo: replaying the recording did not reproduce the session's state"});
     return 0;
 }
 
@@ -335,32 +638,40 @@ void add_demo_command(CLI::App& app, const GlobalOptions& global)
     auto opt = std::make_shared<DemoOptions>();
     CLI::App* cmd = app.add_subcommand(
         "demo",
-        "Run the whole pipeline on the bundled mesh: validate, remesh, simulate two users\n"
-        "deforming the object, refine and render every frame offscreen, and print a summary.\n"
-        "Output (in --out, default demo-out/): grid.pgrid, frame_NNNN.png, energy.csv,\n"
-        "remesh-report.json, summary.md.\n\n"
+        "Run the whole system on the bundled mesh: remesh it, then a collaborative session on\n"
+        "this machine: a master and two participants over UDP on 127.0.0.1, each simulating its\n"
+        "own part, two users grabbing different ends, a viewer joining late; frames rendered\n"
+        "offscreen in owner colours, the inputs recorded and replayed bit for bit.\n"
+        "Output (in --out, default demo-out/): frame_NNNN.png, demo.gif (with ImageMagick or\n"
+        "ffmpeg), summary.md, session.prec (`pliant replay`), grid.pgrid, timeline.csv,\n"
+        "remesh-report.json.\n\n"
         "Examples:\n"
-        "  pliant demo                      # the bundled cow, level 6, 3 s at 12 fps\n"
-        "  pliant demo --quick              # smaller and shorter (used by the tests)\n"
+        "  pliant demo                      # the bundled cow, level 6, 4 s at 12 fps\n"
+        "  pliant demo --quick              # level 5, 2 s at 6 fps, 320x240 (the tests)\n"
         "  pliant demo --mesh my.obj --level 7 --out /tmp/run");
     cmd->add_option("--mesh", opt->mesh, "Closed genus-0 mesh (default: the bundled data/spot.obj)")
         ->check(CLI::ExistingFile);
     cmd->add_option("-o,--out", opt->out, "Output folder")->capture_default_str();
     cmd->add_option("-l,--level", opt->level, "Simulation grid level (W = 2^level)")
-        ->check(CLI::Range(2, 9))
+        ->check(CLI::Range(3, 8))
         ->capture_default_str();
     cmd->add_option("--display-levels", opt->display_levels, "Butterfly levels added for display")
         ->check(CLI::Range(0, 3))
         ->capture_default_str();
-    cmd->add_option("--duration", opt->duration, "Simulated seconds")
-        ->check(CLI::Range(0.1, 600.0))
+    cmd->add_option("--duration", opt->duration, "Session time [s]")
+        ->check(CLI::Range(0.5, 120.0))
         ->capture_default_str();
-    cmd->add_option("--fps", opt->fps, "Frames per simulated second")
-        ->check(CLI::Range(1.0, 120.0))
+    cmd->add_option("--fps", opt->fps, "Frames per second of session time")
+        ->check(CLI::Range(1.0, 60.0))
         ->capture_default_str();
+    cmd->add_option("--dt", opt->dt, "Fixed step [s] (default: 0.9 x the stability bound)")
+        ->check(CLI::PositiveNumber);
     cmd->add_option("--width", opt->width, "Frame width [pixels]")->check(CLI::Range(16, 4096));
     cmd->add_option("--height", opt->height, "Frame height [pixels]")->check(CLI::Range(16, 4096));
-    cmd->add_flag("--quick", opt->quick, "Level 5, 1.5 s, 8 fps, 320x240 (for tests)");
+    cmd->add_option("--wall-limit", opt->wall_limit, "Give up after this many wall seconds")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
+    cmd->add_flag("--quick", opt->quick, "Level 5, 2 s, 6 fps, 320x240 (for tests)");
     cmd->add_flag("!--no-render", opt->render, "Skip the pictures (no OpenGL needed)");
     cmd->callback(command_callback(global, [opt, &global]() { return run_demo(*opt, global); }));
 }

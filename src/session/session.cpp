@@ -3,6 +3,7 @@
 // The Session peer (include/pliant/session/session.h has the design; docs/session.md the story).
 #include <pliant/core/assert.h>
 #include <pliant/core/hash.h>
+#include <pliant/session/recording.h>
 #include <pliant/session/session.h>
 
 #include <spdlog/spdlog.h>
@@ -256,6 +257,8 @@ struct Session::Impl
     std::vector<PartitionEntry> partitions;
     std::vector<ForceEntry> my_forces;
     std::vector<ForceEntry> pending_forces;  // apply_tick = the earliest tick asked for
+    bool recording = false;
+    std::vector<ForceRecord> force_log;  // every force list seen, when recording
     std::vector<net::Target> my_points;
     bool points_dirty = false;
     bool repartition_pending = false;
@@ -574,6 +577,8 @@ struct Session::Impl
             net::Force msg;
             msg.forces = e.forces;
             send_all(make(msg, e.apply_tick));
+            if (recording)
+                force_log.push_back(ForceRecord{s.id_.value, e.apply_tick, e.forces});
             my_forces.push_back(std::move(e));
         }
         pending_forces.clear();
@@ -1305,6 +1310,9 @@ struct Session::Impl
             return;
         case net::MessageType::Force:
             p.forces.push_back(ForceEntry{m.header.tick, std::get<net::Force>(m.body).forces});
+            if (recording)
+                force_log.push_back(
+                    ForceRecord{from, m.header.tick, std::get<net::Force>(m.body).forces});
             trim(p.forces);
             return;
         case net::MessageType::Leave:
@@ -1509,6 +1517,27 @@ void Session::leave()
     impl_->transport.flush();
     if (!impl_->lockstep || coupling_ == Coupling::Fast)
         left_ = impl_->handle_ids.empty();
+}
+
+core::Result<void> Session::start_recording()
+{
+    if (role_ != SessionRole::Master || coupling_ != Coupling::Exact || state_.tick != 0 ||
+        !impl_->my_forces.empty())
+        return core::fail(core::ErrorCode::InvalidArgument,
+                          "recording needs the master of an exact-mode session, before its first "
+                          "step");
+    impl_->recording = true;
+    return {};
+}
+
+Recording Session::recording() const
+{
+    Recording r;
+    if (model_ != nullptr)
+        r.model = encode_model(*model_, coupling_);
+    r.final_tick = state_.tick;
+    r.forces = impl_->force_log;
+    return r;
 }
 
 void Session::shutdown()

@@ -245,5 +245,63 @@ TEST(Rkf45, FixedStepAdvanceTakesWholeSteps)
     EXPECT_NEAR(s.time, 0.2, 1e-12);
 }
 
+double largest_omega(const MembraneModel& m)
+{
+    // The exact largest frequency: omega^2 = largest eigenvalue of (K + k_f M, M).
+    const test::Reference ref = test::reference_assembly(m);
+    const Eigen::MatrixXd M = ref.M.asDiagonal();
+    const Eigen::MatrixXd K = Eigen::MatrixXd(ref.K) + m.settings().k_f * M;
+    Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eig(K, M, Eigen::EigenvaluesOnly);
+    return std::sqrt(eig.eigenvalues().maxCoeff());
+}
+
+/// Energy after `steps` fixed steps of `dt` from a start holding every mode, over the start's.
+double energy_growth(MembraneModel& m, double dt, int steps)
+{
+    MembraneSettings s = m.settings();
+    s.fixed_step = true;
+    s.fixed_dt = dt;
+    EXPECT_TRUE(m.set_settings(s));
+    MembraneState st = MembraneState::at_rest(m.grid());
+    test::set_field(m, st.u,
+                    [](const core::Vec3& p)
+                    { return 1e-3 * std::sin(40.0 * p.x + 31.0 * p.y + 17.0 * p.z); });
+    Rkf45Workspace ws(m, 1);
+    const double e0 = energy(m, st).total();
+    double e = e0;
+    for (int k = 1; k <= steps && e < 1e6 * e0; ++k)
+    {
+        (void)step(m, st, ws, {});
+        if (k % 100 == 0 || k == steps)
+            e = energy(m, st).total();
+    }
+    return e / e0;
+}
+
+TEST(Rkf45, StableFixedStepHoldsWithDampingAndWithout)
+{
+    for (const double beta : {0.0, 0.2, 2.0})
+    {
+        MembraneSettings set = ode_settings();
+        set.beta = beta;
+        MembraneModel m = test::sphere_model(3, set);
+        const double omega = largest_omega(m);
+        const double dt = stable_fixed_step(m);
+        std::printf("beta %.1f: omega_max %.2f, stable step %.4g s, omega_max dt %.3f\n", beta,
+                    omega, dt, omega * dt);
+        // Without damping the bound keeps the growth below 1e-7 per step (energy: twice that).
+        EXPECT_LE(energy_growth(m, dt, 3000), beta > 0.0 ? 1.0 : 1.0 + 3000 * 2.2e-7) << beta;
+        // Far beyond it every explicit 6-stage method is unstable (|omega dt| > 5).
+        EXPECT_GT(energy_growth(m, 5.5 / omega, 3000), 1e3) << beta;
+        if (beta >= 2.0)
+        {
+            // With real damping the bound is not needlessly small: |omega dt| near 3, where
+            // Fehlberg's region ends (3.5 at most on these rays); at 4.5 the top modes grow.
+            EXPECT_GE(omega * dt, 2.0);
+            EXPECT_GT(energy_growth(m, 4.5 / omega, 3000), 1.0);
+        }
+    }
+}
+
 }  // namespace
 }  // namespace pliant::sim

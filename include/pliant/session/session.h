@@ -79,6 +79,8 @@ struct SessionSettings
     int threads = 1;                ///< OpenMP threads of a step
 };
 
+struct Recording;
+
 enum class SessionRole : std::uint8_t
 {
     Master,
@@ -132,6 +134,12 @@ public:
     void set_forces(std::vector<net::UserForce> forces, std::uint64_t from_tick = 0);
     /// Leaves the session (participants and viewers); `left()` becomes true when done.
     void leave();
+    /// Starts recording every force list of every peer (recording.h) for deterministic replay.
+    /// \return InvalidArgument unless this is the master of an exact-mode session that has not
+    /// stepped yet (a recording starts at rest).
+    core::Result<void> start_recording();
+    /// The inputs recorded so far, with `final_tick` = this peer's tick (final_hash unset).
+    [[nodiscard]] Recording recording() const;
     /// Ends the session (master): disconnects every peer. `left()` becomes true.
     void shutdown();
 

@@ -1,0 +1,93 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+#pragma once
+
+/// \file
+/// Recording and deterministic replay of a session's inputs (issue 9 item 4, docs/session.md §9).
+///
+/// Design
+/// - In exact coupling the session's state is a pure function of the model and of every peer's
+///   force lists with the ticks they apply from (tests/session: a distributed run equals the
+///   single-process run bit for bit). So a recording holds only those inputs: the model blob
+///   (`encode_model`: level, material, rest positions) and each force list as the wire's own
+///   `Force` datagram (sender id in the header, apply tick in the header's tick). Reading a
+///   recording therefore reuses the wire codec's validation of every field; nothing else is
+///   trusted.
+/// - Replay steps one process from rest with the session's rule for combining forces (each
+///   sender's newest list whose tick has come, senders in increasing id, the whole set dropped
+///   if any force is invalid) and reproduces the session's final state bit for bit.
+/// - Fast coupling depends on timing (who saw which streamed state when), so its recordings
+///   replay the same inputs on one process but the result differs; `replay` says so by
+///   returning the coupling, and `pliant replay` warns.
+///
+/// File (little-endian): "PLIANTR\0", u32 version = 1, u64 final tick, u64 final state hash
+/// (0 = unknown), u32 model blob size, the blob, u32 entry count, per entry u16 size and the
+/// datagram; then u64 hash_bytes of everything before it.
+
+#include <pliant/core/field.h>
+#include <pliant/core/progress.h>
+#include <pliant/core/result.h>
+#include <pliant/core/tetra_grid.h>
+#include <pliant/net/message.h>
+#include <pliant/session/session.h>
+#include <pliant/sim/membrane.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <vector>
+
+namespace pliant::session
+{
+
+/// One force list of one sender, applying from `apply_tick` on (until that sender's next list).
+struct ForceRecord
+{
+    std::uint16_t sender = 0;
+    std::uint64_t apply_tick = 0;
+    std::vector<net::UserForce> forces;  ///< 0..net::k_max_points
+    friend bool operator==(const ForceRecord&, const ForceRecord&) = default;
+};
+
+/// A session's inputs from its start (tick 0, at rest) to `final_tick`.
+struct Recording
+{
+    std::vector<std::byte> model;  ///< encode_model's blob
+    std::uint64_t final_tick = 0;
+    std::uint64_t final_hash = 0;     ///< state_hash of the session's final state; 0: unknown
+    std::vector<ForceRecord> forces;  ///< in the order the recorder saw them
+};
+
+/// Writes `recording` to `path`. \return IoError if the file cannot be written;
+/// InvalidArgument if a force list breaks the wire's rules.
+core::Result<void> save_recording(const std::filesystem::path& path, const Recording& recording);
+
+/// Reads a recording. \return IoError if unreadable; ParseError naming the file and the byte
+/// offset for a wrong magic or version, a truncated or corrupted file (checksum), or a force
+/// entry the wire codec refuses.
+core::Result<Recording> load_recording(const std::filesystem::path& path);
+
+/// The forces of tick `tick` under the session's rule (see the file comment).
+[[nodiscard]] std::vector<sim::Force> forces_at(const sim::MembraneModel& model,
+                                                const std::vector<ForceRecord>& records,
+                                                std::uint64_t tick);
+
+/// What a replay produced.
+struct ReplayResult
+{
+    sim::MembraneModel model;
+    Coupling coupling = Coupling::Exact;
+    sim::MembraneState state;  ///< at recording.final_tick
+};
+
+/// Replays `recording` on one process with `threads` threads (the result does not depend on it)
+/// up to `until` ticks (0: the recording's final tick), reporting progress as phase "replay".
+/// \return decode_model's errors; InvalidArgument if the model is not fixed-step.
+core::Result<ReplayResult> replay(const Recording& recording, int threads = 1,
+                                  std::uint64_t until = 0, core::ProgressSink* progress = nullptr);
+
+/// A hash of u and v over the canonical nodes (bit-exact identity of a state).
+[[nodiscard]] std::uint64_t state_hash(const core::TetraGrid& grid, const core::Field<double>& u,
+                                       const core::Field<double>& v);
+
+}  // namespace pliant::session

@@ -1,0 +1,234 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+#include <pliant/core/hash.h>
+#include <pliant/net/codec.h>
+#include <pliant/session/recording.h>
+#include <pliant/sim/rkf45.h>
+
+#include <algorithm>
+#include <array>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <string>
+
+namespace pliant::session
+{
+namespace
+{
+
+constexpr std::array<char, 8> k_magic{'P', 'L', 'I', 'A', 'N', 'T', 'R', '\0'};
+constexpr std::uint32_t k_version = 1;
+
+void put(std::vector<std::byte>& out, std::uint64_t value, int bytes)
+{
+    for (int i = 0; i < bytes; ++i)
+        out.push_back(static_cast<std::byte>((value >> (8 * i)) & 0xFFu));
+}
+
+/// Bounds-checked little-endian reader; `ok` turns false on the first read past the end.
+struct Reader
+{
+    std::span<const std::byte> data;
+    std::size_t pos = 0;
+    bool ok = true;
+
+    std::uint64_t get(int bytes)
+    {
+        if (!ok || data.size() - pos < static_cast<std::size_t>(bytes))
+        {
+            ok = false;
+            return 0;
+        }
+        std::uint64_t v = 0;
+        for (int i = 0; i < bytes; ++i)
+            v |= static_cast<std::uint64_t>(data[pos + static_cast<std::size_t>(i)]) << (8 * i);
+        pos += static_cast<std::size_t>(bytes);
+        return v;
+    }
+    std::span<const std::byte> take(std::size_t n)
+    {
+        if (!ok || data.size() - pos < n)
+        {
+            ok = false;
+            return {};
+        }
+        auto s = data.subspan(pos, n);
+        pos += n;
+        return s;
+    }
+};
+
+core::Unexpected bad_file(const std::filesystem::path& path, std::size_t offset,
+                          const std::string& why)
+{
+    return core::fail(core::ErrorCode::ParseError,
+                      path.string() + ": byte " + std::to_string(offset) + ": " + why);
+}
+
+}  // namespace
+
+core::Result<void> save_recording(const std::filesystem::path& path, const Recording& recording)
+{
+    std::vector<std::byte> out;
+    for (const char c : k_magic)
+        out.push_back(static_cast<std::byte>(c));
+    put(out, k_version, 4);
+    put(out, recording.final_tick, 8);
+    put(out, recording.final_hash, 8);
+    put(out, recording.model.size(), 4);
+    out.insert(out.end(), recording.model.begin(), recording.model.end());
+    put(out, recording.forces.size(), 4);
+    std::vector<std::byte> datagram(net::k_max_datagram_size);
+    for (const ForceRecord& r : recording.forces)
+    {
+        net::Message m;
+        m.header.session = 1;
+        m.header.sender = net::PeerId{r.sender};
+        m.header.tick = r.apply_tick;
+        m.body = net::Force{r.forces};
+        const auto n = net::encode(m, datagram);
+        if (!n)
+            return core::fail(core::ErrorCode::InvalidArgument,
+                              "save_recording: a force list of peer " + std::to_string(r.sender) +
+                                  " breaks the wire's rules");
+        put(out, *n, 2);
+        out.insert(out.end(), datagram.begin(), datagram.begin() + static_cast<std::ptrdiff_t>(*n));
+    }
+    put(out, core::hash_bytes(out), 8);
+    std::ofstream file(path, std::ios::binary | std::ios::trunc);
+    file.write(reinterpret_cast<const char*>(out.data()), static_cast<std::streamsize>(out.size()));
+    if (!file)
+        return core::fail(core::ErrorCode::IoError, "cannot write recording " + path.string());
+    return {};
+}
+
+core::Result<Recording> load_recording(const std::filesystem::path& path)
+{
+    std::ifstream file(path, std::ios::binary);
+    if (!file)
+        return core::fail(core::ErrorCode::IoError, "cannot read recording " + path.string());
+    std::vector<char> raw((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+    const std::span<const std::byte> bytes = std::as_bytes(std::span<const char>(raw));
+    if (bytes.size() < k_magic.size() + 8 ||
+        std::memcmp(raw.data(), k_magic.data(), k_magic.size()) != 0)
+        return bad_file(path, 0, "not a pliant recording (magic PLIANTR)");
+    const std::size_t body = bytes.size() - 8;
+    Reader tail{bytes.subspan(body)};
+    if (tail.get(8) != core::hash_bytes(bytes.first(body)))
+        return bad_file(path, body, "checksum mismatch (truncated or corrupted)");
+    Reader r{bytes.first(body), k_magic.size()};
+    if (const auto v = r.get(4); v != k_version)
+        return bad_file(
+            path, 8,
+            "version " + std::to_string(v) + ", this build reads " + std::to_string(k_version));
+    Recording rec;
+    rec.final_tick = r.get(8);
+    rec.final_hash = r.get(8);
+    const auto model_size = r.get(4);
+    const auto model = r.take(model_size);
+    rec.model.assign(model.begin(), model.end());
+    const auto count = r.get(4);
+    if (!r.ok)
+        return bad_file(path, r.pos, "truncated header");
+    for (std::uint64_t i = 0; i < count; ++i)
+    {
+        const std::size_t at = r.pos;
+        const auto size = r.get(2);
+        const auto datagram = r.take(size);
+        if (!r.ok)
+            return bad_file(path, at, "truncated force entry " + std::to_string(i));
+        auto m = net::decode(datagram);
+        if (!m)
+            return bad_file(
+                path, at,
+                "force entry " + std::to_string(i) + ": " + std::string(net::to_string(m.error())));
+        const auto* force = std::get_if<net::Force>(&m->body);
+        if (force == nullptr)
+            return bad_file(path, at, "entry " + std::to_string(i) + " is not a force list");
+        rec.forces.push_back(ForceRecord{m->header.sender.value, m->header.tick, force->forces});
+    }
+    if (r.pos != body)
+        return bad_file(path, r.pos, "trailing bytes after the last entry");
+    return rec;
+}
+
+std::vector<sim::Force> forces_at(const sim::MembraneModel& model,
+                                  const std::vector<ForceRecord>& records, std::uint64_t tick)
+{
+    // Each sender's newest list that applies (ties: the later record), senders by id.
+    std::vector<const ForceRecord*> active;
+    for (const ForceRecord& r : records)
+    {
+        if (r.apply_tick > tick)
+            continue;
+        auto it = std::find_if(active.begin(), active.end(),
+                               [&](const ForceRecord* a) { return a->sender == r.sender; });
+        if (it == active.end())
+            active.push_back(&r);
+        else if (r.apply_tick >= (*it)->apply_tick)
+            *it = &r;
+    }
+    std::sort(active.begin(), active.end(),
+              [](const ForceRecord* a, const ForceRecord* b) { return a->sender < b->sender; });
+    std::vector<sim::Force> out;
+    for (const ForceRecord* r : active)
+        for (const net::UserForce& f : r->forces)
+            out.push_back(to_sim_force(f));
+    if (!sim::validate_forces(model, out))
+        out.clear();
+    return out;
+}
+
+core::Result<ReplayResult> replay(const Recording& recording, int threads, std::uint64_t until,
+                                  core::ProgressSink* progress)
+{
+    const std::uint64_t ticks = until != 0 ? until : recording.final_tick;
+    auto decoded = decode_model(recording.model);
+    if (!decoded)
+        return core::fail(decoded.error().code, decoded.error().message);
+    auto [model, coupling] = std::move(decoded).value();
+    if (!model.settings().fixed_step)
+        return core::fail(core::ErrorCode::InvalidArgument,
+                          "replay: the recorded model is not fixed-step");
+    sim::MembraneState state = sim::MembraneState::at_rest(model.grid());
+    sim::Rkf45Workspace ws(model, threads);
+    // Force lists change rarely: recombine only at ticks where one starts.
+    std::vector<std::uint64_t> changes;
+    for (const ForceRecord& r : recording.forces)
+        changes.push_back(r.apply_tick);
+    std::sort(changes.begin(), changes.end());
+    std::vector<sim::Force> forces = forces_at(model, recording.forces, 0);
+    auto next = std::upper_bound(changes.begin(), changes.end(), std::uint64_t{0});
+    const std::uint64_t report_every = std::max<std::uint64_t>(1, ticks / 100);
+    for (std::uint64_t t = 0; t < ticks; ++t)
+    {
+        if (progress != nullptr && t % report_every == 0)
+            progress->update("replay", static_cast<double>(t) / static_cast<double>(ticks));
+        if (next != changes.end() && *next <= t)
+        {
+            forces = forces_at(model, recording.forces, t);
+            next = std::upper_bound(changes.begin(), changes.end(), t);
+        }
+        sim::step(model, state, ws, forces);
+    }
+    if (progress != nullptr)
+        progress->update("replay", 1.0);
+    return ReplayResult{std::move(model), coupling, std::move(state)};
+}
+
+std::uint64_t state_hash(const core::TetraGrid& grid, const core::Field<double>& u,
+                         const core::Field<double>& v)
+{
+    std::vector<double> values;
+    values.reserve(2 * grid.unique_count());
+    for (const core::NodeIndex n : grid.node_of_unique())
+    {
+        const core::GridCoord c = grid.coord(n);
+        values.push_back(u.at(c.x, c.y));
+        values.push_back(v.at(c.x, c.y));
+    }
+    return core::hash_span(std::span<const double>(values));
+}
+
+}  // namespace pliant::session

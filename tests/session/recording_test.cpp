@@ -1,0 +1,202 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+// Recording and replay: a recorded exact-mode session replays bit for bit on one process; the
+// file round-trips exactly and refuses corruption; the replay's force rule equals the obvious
+// reference schedule.
+#include <pliant/session/recording.h>
+
+#include <gtest/gtest.h>
+
+#include "session_harness.h"
+#include "support/test_paths.h"
+
+#include <fstream>
+#include <iterator>
+
+namespace pliant::session::test
+{
+namespace
+{
+
+constexpr int k_level = 4;
+constexpr std::uint64_t k_ticks = 300;
+
+SessionSettings exact(const char* name)
+{
+    SessionSettings s;
+    s.max_ticks = k_ticks;
+    s.name = name;
+    return s;
+}
+
+/// Runs master + 2 participants with forces from every peer, the master recording.
+struct RecordedRun
+{
+    Harness h;
+    Recording recording;
+    core::Field<double> u, v;  ///< the whole state assembled from every owner
+};
+
+void record_session(RecordedRun& run)
+{
+    Harness& h = run.h;
+    Session& master = h.host(k_level, exact("master"));
+    ASSERT_TRUE(master.start_recording());
+    for (int k = 0; k < 2; ++k)
+    {
+        Session& p = h.join(net::Role::Participant, exact("part"));
+        p.set_points_of_interest({net::Target{
+            net::TargetKind::Face, static_cast<std::uint32_t>(100 + 400 * k), {0, 0, 0}, 0.0}});
+    }
+    h.peers[0]->set_forces({point_push(0.0, 0.0, 1.0, 0.4, 0.4)}, 40);
+    h.peers[1]->set_forces({face_pull(100, 0.7)}, 60);
+    h.peers[1]->set_forces({}, 180);
+    h.peers[2]->set_forces({point_push(0.0, 0.0, -1.0, 0.3, 0.5), face_pull(500, -0.3)}, 90);
+    ASSERT_TRUE(h.pump_until(
+        [&]
+        {
+            for (const auto& p : h.peers)
+                if (p->tick() < k_ticks)
+                    return false;
+            return true;
+        },
+        40000));
+    run.recording = master.recording();
+    const core::TetraGrid& g = master.model()->grid();
+    run.u = core::Field<double>(g);
+    run.v = core::Field<double>(g);
+    for (const auto& p : h.peers)
+    {
+        const auto owners = p->owners();
+        for (const core::NodeIndex n : g.node_of_unique())
+            if (owners[p->leaf_graph()->leaf_of(n)] == p->id())
+            {
+                const core::GridCoord c = g.coord(n);
+                run.u.at(c.x, c.y) = p->state().u.at(c.x, c.y);
+                run.v.at(c.x, c.y) = p->state().v.at(c.x, c.y);
+            }
+    }
+    run.recording.final_hash = state_hash(g, run.u, run.v);
+}
+
+TEST(Recording, ReplayOfARecordedSessionIsBitIdentical)
+{
+    RecordedRun run;
+    record_session(run);
+    if (HasFatalFailure())
+        return;
+    EXPECT_EQ(run.recording.final_tick, k_ticks);
+    // Four lists: the master's, participant 1's two, participant 2's.
+    ASSERT_EQ(run.recording.forces.size(), 4U);
+    auto replayed = replay(run.recording);
+    ASSERT_TRUE(replayed) << replayed.error().message;
+    const core::TetraGrid& g = replayed->model.grid();
+    EXPECT_EQ(replayed->coupling, Coupling::Exact);
+    EXPECT_EQ(replayed->state.tick, k_ticks);
+    const Diff du = compare(g, replayed->state.u, run.u, {});
+    EXPECT_EQ(du.max_abs, 0.0);
+    EXPECT_GT(du.max_ref, 1e-4);  // the forces moved the surface
+    EXPECT_EQ(compare(g, replayed->state.v, run.v, {}).max_abs, 0.0);
+    EXPECT_EQ(state_hash(g, replayed->state.u, replayed->state.v), run.recording.final_hash);
+    // And with two threads (the sim is thread-count independent).
+    auto two = replay(run.recording, 2);
+    ASSERT_TRUE(two);
+    EXPECT_EQ(state_hash(g, two->state.u, two->state.v), run.recording.final_hash);
+}
+
+TEST(Recording, ReplayRuleEqualsTheReferenceSchedule)
+{
+    // A hand-made recording (no session) against reference_run's independent rule.
+    const std::vector<Scheduled> sched{{0, 10, {point_push(0.0, 0.0, 1.0, 0.4, 0.5)}},
+                                       {2, 30, {face_pull(200, 0.5)}},
+                                       {0, 80, {}},
+                                       {2, 30, {face_pull(201, -0.5)}},  // same tick: later wins
+                                       {1, 50, {point_push(1.0, 0.0, 0.0, 0.3, 0.2)}}};
+    const core::TetraGrid grid = core::TetraGrid::create(k_level).value();
+    auto model =
+        sim::MembraneModel::create(grid, scenes::sphere_grid(grid, 1.0), material()).value();
+    Recording rec;
+    rec.model = encode_model(model, Coupling::Exact);
+    rec.final_tick = 150;
+    for (const Scheduled& s : sched)
+        rec.forces.push_back(ForceRecord{s.sender, s.from, s.forces});
+    auto replayed = replay(rec);
+    ASSERT_TRUE(replayed) << replayed.error().message;
+    // reference_run takes, per sender, the entry with the greatest `from` (ties: the later one).
+    const sim::MembraneState ref = reference_run(k_level, 150, sched);
+    EXPECT_EQ(compare(grid, replayed->state.u, ref.u, {}).max_abs, 0.0);
+    EXPECT_EQ(compare(grid, replayed->state.v, ref.v, {}).max_abs, 0.0);
+    EXPECT_GT(compare(grid, replayed->state.u, ref.u, {}).max_ref, 1e-5);
+}
+
+std::vector<char> read_all(const std::filesystem::path& p)
+{
+    std::ifstream in(p, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+void write_all(const std::filesystem::path& p, const std::vector<char>& bytes)
+{
+    std::ofstream(p, std::ios::binary | std::ios::trunc)
+        .write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+}
+
+TEST(Recording, FileRoundTripsExactlyAndRefusesCorruption)
+{
+    const core::TetraGrid grid = core::TetraGrid::create(3).value();
+    auto model =
+        sim::MembraneModel::create(grid, scenes::sphere_grid(grid, 1.0), material()).value();
+    Recording rec;
+    rec.model = encode_model(model, Coupling::Exact);
+    rec.final_tick = 1234;
+    rec.final_hash = 0x0123456789ABCDEFULL;
+    rec.forces.push_back(ForceRecord{0, 5, {point_push(0.1, 0.2, 0.9, 0.25, 0.5)}});
+    rec.forces.push_back(ForceRecord{3, 77, {face_pull(12, 0.25), face_pull(13, -0.5)}});
+    rec.forces.push_back(ForceRecord{3, 90, {}});
+    const auto dir = pliant::test::scratch_dir("recording");
+    const auto path = dir / "a.prec";
+    ASSERT_TRUE(save_recording(path, rec));
+    auto back = load_recording(path);
+    ASSERT_TRUE(back) << back.error().message;
+    EXPECT_EQ(back->model, rec.model);
+    EXPECT_EQ(back->final_tick, rec.final_tick);
+    EXPECT_EQ(back->final_hash, rec.final_hash);
+    EXPECT_EQ(back->forces, rec.forces);
+
+    const std::vector<char> good = read_all(path);
+    auto expect_refused = [&](std::vector<char> bytes, const char* why)
+    {
+        const auto bad = dir / "bad.prec";
+        write_all(bad, bytes);
+        auto r = load_recording(bad);
+        ASSERT_FALSE(r) << why;
+        EXPECT_EQ(r.error().code, core::ErrorCode::ParseError) << why;
+        EXPECT_NE(r.error().message.find("bad.prec"), std::string::npos) << r.error().message;
+    };
+    std::vector<char> flipped = good;
+    flipped[flipped.size() / 2] = static_cast<char>(flipped[flipped.size() / 2] ^ 0x10);
+    expect_refused(flipped, "one flipped bit");
+    expect_refused(std::vector<char>(good.begin(), good.end() - 9), "truncated");
+    std::vector<char> magic = good;
+    magic[0] = 'X';
+    expect_refused(magic, "wrong magic");
+    expect_refused({}, "empty file");
+    EXPECT_EQ(load_recording(dir / "missing.prec").error().code, core::ErrorCode::IoError);
+}
+
+TEST(Recording, OnlyTheMasterOfAnExactSessionRecordsFromTheStart)
+{
+    Harness h;
+    Session& master = h.host(3, exact("master"));
+    Session& part = h.join(net::Role::Participant, exact("part"));
+    EXPECT_FALSE(part.start_recording());
+    ASSERT_TRUE(h.pump_until([&] { return master.tick() >= 5; }, 4000));
+    EXPECT_FALSE(master.start_recording()) << "a recording starts at rest";
+    Harness f;
+    SessionSettings fast = exact("fast");
+    fast.coupling = Coupling::Fast;
+    EXPECT_FALSE(f.host(3, fast).start_recording());
+}
+
+}  // namespace
+}  // namespace pliant::session::test
