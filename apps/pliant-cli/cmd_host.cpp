@@ -5,6 +5,7 @@
 #include <pliant/core/grid_io.h>
 #include <pliant/core/tetra_grid.h>
 #include <pliant/net/enet_transport.h>
+#include <pliant/net/secure_transport.h>
 #include <pliant/session/runner.h>
 #include <pliant/session/session.h>
 #include <pliant/sim/membrane.h>
@@ -16,6 +17,7 @@
 #include "commands.h"
 
 #include <cstdio>
+#include <cstdlib>
 #include <memory>
 #include <optional>
 #include <string>
@@ -24,6 +26,34 @@ namespace pliant::cli
 {
 namespace
 {
+
+// Wraps `inner` in net::SecureTransport when --passphrase, --key-file or PLIANT_PASSPHRASE gives a
+// key (in that order); otherwise warns once and returns it unencrypted (docs/operations.md).
+core::Result<std::unique_ptr<net::Transport>> secure_or_plain(std::unique_ptr<net::Transport> inner,
+                                                              const std::string& passphrase,
+                                                              const std::string& key_file)
+{
+    std::optional<core::Result<net::SecretKey>> key;
+    const char* env = std::getenv("PLIANT_PASSPHRASE");
+    if (!passphrase.empty())
+        key = net::derive_key(passphrase);
+    else if (!key_file.empty())
+        key = net::key_from_file(key_file);
+    else if (env != nullptr && *env != '\0')
+        key = net::derive_key(env);
+    if (!key)
+    {
+        spdlog::warn(
+            "no --passphrase, --key-file or PLIANT_PASSPHRASE: the session is neither "
+            "encrypted nor authenticated");
+        return inner;
+    }
+    if (!*key)
+        return core::fail((*key).error().code, (*key).error().message);
+    spdlog::info("datagrams are authenticated and encrypted (ChaCha20-Poly1305)");
+    return std::unique_ptr<net::Transport>(
+        std::make_unique<net::SecureTransport>(std::move(inner), **key));
+}
 
 struct HostOptions
 {
@@ -36,6 +66,8 @@ struct HostOptions
     std::string stats;
     double dt = 1e-3;
     std::string name = "master";
+    std::string passphrase;
+    std::string key_file;
 };
 
 int run_host(const HostOptions& opt)
@@ -71,7 +103,10 @@ int run_host(const HostOptions& opt)
             return report(script.error());
         run.script = std::move(*script);
     }
-    auto transport = net::make_enet_transport();
+    auto secured = secure_or_plain(net::make_enet_transport(), opt.passphrase, opt.key_file);
+    if (!secured)
+        return report(secured.error());
+    auto transport = std::move(*secured);
     auto bound = transport->open(net::Address{{0, 0, 0, 0}, opt.port});
     if (!bound)
         return report(bound.error());
@@ -112,7 +147,10 @@ void add_host_command(CLI::App& app, const GlobalOptions& global)
         "--script: timed grabs and leave (docs/session.md); --stats: per-second CSV.\n\n"
         "Examples:\n"
         "  pliant host --duration 30 --stats host.csv            # sphere, level 5, port 7777\n"
-        "  pliant host spot.pgrid --port 9000 --mode fast --script grab.txt");
+        "  pliant host spot.pgrid --port 9000 --mode fast --script grab.txt\n"
+        "  pliant host --key-file session.key     # head -c 32 /dev/urandom > session.key\n"
+        "--passphrase / --key-file / PLIANT_PASSPHRASE: every datagram authenticated and\n"
+        "encrypted; peers without the same secret are refused (docs/operations.md).");
     cmd->add_option("GRID", opt->grid,
                     "Rest geometry (.pgrid from `pliant remesh`); omitted: a sphere of --level");
     cmd->add_option("-l,--level", opt->level, "Sphere level when GRID is omitted")
@@ -133,6 +171,11 @@ void add_host_command(CLI::App& app, const GlobalOptions& global)
         ->capture_default_str();
     cmd->add_option("--name", opt->name, "Peer name (printable ASCII, 1..32)")
         ->capture_default_str();
+    cmd->add_option("--passphrase", opt->passphrase,
+                    "Shared secret of the session (Argon2id); or set PLIANT_PASSPHRASE");
+    cmd->add_option("--key-file", opt->key_file, "File whose bytes are the shared secret")
+        ->check(CLI::ExistingFile)
+        ->excludes("--passphrase");
     cmd->callback(command_callback(global, [opt]() -> int { return run_host(*opt); }));
 }
 

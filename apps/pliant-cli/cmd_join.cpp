@@ -3,6 +3,7 @@
 // `pliant join HOST:PORT [--viewer] [--script F] [--duration S] [--stats F.csv]`: joins a
 // collaborative session as a participant or a viewer (docs/session.md).
 #include <pliant/net/enet_transport.h>
+#include <pliant/net/secure_transport.h>
 #include <pliant/session/runner.h>
 #include <pliant/session/session.h>
 
@@ -12,13 +13,43 @@
 #include "commands.h"
 
 #include <cstdio>
+#include <cstdlib>
 #include <memory>
+#include <optional>
 #include <string>
 
 namespace pliant::cli
 {
 namespace
 {
+
+// Wraps `inner` in net::SecureTransport when --passphrase, --key-file or PLIANT_PASSPHRASE gives a
+// key (in that order); otherwise warns once and returns it unencrypted (docs/operations.md).
+core::Result<std::unique_ptr<net::Transport>> secure_or_plain(std::unique_ptr<net::Transport> inner,
+                                                              const std::string& passphrase,
+                                                              const std::string& key_file)
+{
+    std::optional<core::Result<net::SecretKey>> key;
+    const char* env = std::getenv("PLIANT_PASSPHRASE");
+    if (!passphrase.empty())
+        key = net::derive_key(passphrase);
+    else if (!key_file.empty())
+        key = net::key_from_file(key_file);
+    else if (env != nullptr && *env != '\0')
+        key = net::derive_key(env);
+    if (!key)
+    {
+        spdlog::warn(
+            "no --passphrase, --key-file or PLIANT_PASSPHRASE: the session is neither "
+            "encrypted nor authenticated");
+        return inner;
+    }
+    if (!*key)
+        return core::fail((*key).error().code, (*key).error().message);
+    spdlog::info("datagrams are authenticated and encrypted (ChaCha20-Poly1305)");
+    return std::unique_ptr<net::Transport>(
+        std::make_unique<net::SecureTransport>(std::move(inner), **key));
+}
 
 struct JoinOptions
 {
@@ -29,6 +60,8 @@ struct JoinOptions
     std::string script;
     std::string stats;
     std::string name = "peer";
+    std::string passphrase;
+    std::string key_file;
 };
 
 int run_join(const JoinOptions& opt)
@@ -46,7 +79,10 @@ int run_join(const JoinOptions& opt)
             return report(script.error());
         run.script = std::move(*script);
     }
-    auto transport = net::make_enet_transport();
+    auto secured = secure_or_plain(net::make_enet_transport(), opt.passphrase, opt.key_file);
+    if (!secured)
+        return report(secured.error());
+    auto transport = std::move(*secured);
     auto bound = transport->open(net::Address{{0, 0, 0, 0}, opt.port});
     if (!bound)
         return report(bound.error());
@@ -81,7 +117,10 @@ void add_join_command(CLI::App& app, const GlobalOptions& global)
     cmd->footer(
         "Examples:\n"
         "  pliant join 127.0.0.1:7777 --script grab.txt --stats peer.csv\n"
-        "  pliant join 192.168.1.20:7777 --viewer --duration 30");
+        "  pliant join 192.168.1.20:7777 --viewer --duration 30\n"
+        "  PLIANT_PASSPHRASE='long shared secret' pliant join 203.0.113.5:7777\n"
+        "Use the master's --passphrase/--key-file (or PLIANT_PASSPHRASE): without one the\n"
+        "session is unencrypted; with a different one the master refuses the connection.");
     cmd->add_option("MASTER", opt->master, "The master's address HOST:PORT")->required();
     cmd->add_flag("--viewer", opt->viewer, "Only watch (simulate nothing)");
     cmd->add_option("-p,--port", opt->port, "UDP port to listen on for other peers (0: any)")
@@ -94,6 +133,11 @@ void add_join_command(CLI::App& app, const GlobalOptions& global)
     cmd->add_option("--stats", opt->stats, "Per-second statistics CSV");
     cmd->add_option("--name", opt->name, "Peer name (printable ASCII, 1..32)")
         ->capture_default_str();
+    cmd->add_option("--passphrase", opt->passphrase,
+                    "Shared secret of the session (Argon2id); or set PLIANT_PASSPHRASE");
+    cmd->add_option("--key-file", opt->key_file, "File whose bytes are the shared secret")
+        ->check(CLI::ExistingFile)
+        ->excludes("--passphrase");
     cmd->callback(command_callback(global, [opt]() -> int { return run_join(*opt); }));
 }
 

@@ -4,11 +4,20 @@
 // the mapping). A connection's handle is stored in ENetPeer::data, so ENet's peer slots (which it
 // reuses) never alias an old handle: a handle is issued once per connection and never again.
 // Nothing here throws, so nothing unwinds through ENet's C frames (STYLE.md §5).
+//
+// Connection-attempt filter: ENet's intercept callback sees every received UDP datagram before
+// ENet parses it. A datagram whose header peer id is ENET_PROTOCOL_MAXIMUM_PEER_ID is addressed
+// to no peer, which ENet accepts only for a CONNECT; those pass two token buckets (per source
+// address, and total) or are dropped unanswered. The callback has no user pointer, so the
+// transport being serviced is found through a thread-local set around enet_host_service (a host
+// is serviced by one thread at a time).
 
 #include <pliant/net/enet_transport.h>
 
 #include <enet/enet.h>
+#include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstring>
 #include <deque>
@@ -59,6 +68,32 @@ Address from_enet(const ENetAddress& e) noexcept
     return a;
 }
 
+// A token bucket: `rate` tokens per second up to `burst`; one token per attempt.
+struct Bucket
+{
+    double tokens = 0.0;
+    Clock::time_point last{};
+};
+
+void refill(Bucket& b, double rate, double burst, Clock::time_point now) noexcept
+{
+    const double dt = std::chrono::duration<double>(now - b.last).count();
+    b.tokens = std::min(burst, b.tokens + rate * std::max(0.0, dt));
+    b.last = now;
+}
+
+bool take(Bucket& b, double rate, double burst, Clock::time_point now) noexcept
+{
+    refill(b, rate, burst, now);
+    if (b.tokens < 1.0)
+        return false;
+    b.tokens -= 1.0;
+    return true;
+}
+
+class EnetTransport;
+thread_local EnetTransport* t_servicing = nullptr;
+
 struct Connection
 {
     ENetPeer* peer = nullptr;
@@ -102,6 +137,9 @@ public:
         if (host_ == nullptr)
             return core::fail(core::ErrorCode::NetworkError,
                               "EnetTransport::open: cannot bind " + to_string(bind));
+        host_->intercept = &EnetTransport::intercept;
+        total_.tokens = settings_.connect_burst_total;
+        total_.last = Clock::now();
         ENetAddress bound{};
         if (enet_socket_get_address(host_->socket, &bound) != 0)
             return core::fail(core::ErrorCode::NetworkError,
@@ -166,8 +204,11 @@ public:
         if (!pending_.empty())
             return pop_pending();
         ENetEvent ev{};
+        t_servicing = this;
         const int r = enet_host_service(host_, &ev,
                                         timeout_ms < 0 ? 0u : static_cast<enet_uint32>(timeout_ms));
+        t_servicing = nullptr;
+        reset_half_open();
         if (r <= 0)
             return std::nullopt;
         switch (ev.type)
@@ -290,7 +331,94 @@ public:
         return out;
     }
 
+    [[nodiscard]] EnetCounters counters() const noexcept { return counters_; }
+
+    static int ENET_CALLBACK intercept(ENetHost* host, ENetEvent* /*event*/)
+    {
+        EnetTransport* self = t_servicing;
+        if (self == nullptr || self->host_ != host || host->receivedDataLength < 2)
+            return 0;  // ENet drops what it cannot parse
+        // Header: u16 big-endian: flags (2 bits), session (2 bits), peer id (12 bits).
+        const unsigned peer_id =
+            ((static_cast<unsigned>(host->receivedData[0]) << 8) | host->receivedData[1]) &
+            ~static_cast<unsigned>(ENET_PROTOCOL_HEADER_FLAG_MASK |
+                                   ENET_PROTOCOL_HEADER_SESSION_MASK) &
+            0xFFFFu;
+        if (peer_id != ENET_PROTOCOL_MAXIMUM_PEER_ID)
+            return 0;
+        return self->admit(host->receivedAddress) ? 0 : 1;  // 1: consumed, never answered
+    }
+
 private:
+    bool admit(const ENetAddress& from) noexcept
+    {
+        ++counters_.connect_attempts;
+        const auto now = Clock::now();
+        bool ok = true;
+        if (settings_.connect_rate_per_source > 0.0)
+        {
+            constexpr std::size_t k_max_sources = 4096;
+            if (sources_.size() >= k_max_sources)
+                for (auto it = sources_.begin(); it != sources_.end();)
+                {
+                    // A bucket that refilled completely holds no information: forget it.
+                    refill(it->second, settings_.connect_rate_per_source,
+                           settings_.connect_burst_per_source, now);
+                    if (it->second.tokens >= settings_.connect_burst_per_source)
+                        it = sources_.erase(it);
+                    else
+                        ++it;
+                }
+            auto it = sources_.find(from.host);
+            if (it == sources_.end() && sources_.size() < k_max_sources)
+                it = sources_.emplace(from.host, Bucket{settings_.connect_burst_per_source, now})
+                         .first;
+            if (it != sources_.end())
+                ok = take(it->second, settings_.connect_rate_per_source,
+                          settings_.connect_burst_per_source, now);
+        }
+        if (ok && settings_.connect_rate_total > 0.0)
+            ok = take(total_, settings_.connect_rate_total, settings_.connect_burst_total, now);
+        if (!ok)
+        {
+            ++counters_.connects_rate_limited;
+            if (now - last_warning_ > std::chrono::seconds(10))
+            {
+                last_warning_ = now;
+                spdlog::warn("net: connection attempts rate-limited ({} so far, latest from {})",
+                             counters_.connects_rate_limited, to_string(from_enet(from)));
+            }
+        }
+        return ok;
+    }
+
+    // Resets incoming handshakes that were never acknowledged (spoofed or dead sources), so ENet
+    // stops retransmitting VERIFY_CONNECT to them. Scans the peer array at most every 100 ms.
+    void reset_half_open()
+    {
+        const auto now = Clock::now();
+        if (now - last_scan_ < std::chrono::milliseconds(100))
+            return;
+        last_scan_ = now;
+        const auto limit = std::chrono::milliseconds(settings_.half_open_timeout_ms);
+        for (std::size_t k = 0; k < host_->peerCount; ++k)
+        {
+            ENetPeer* p = &host_->peers[k];
+            if (p->state != ENET_PEER_STATE_ACKNOWLEDGING_CONNECT)
+            {
+                half_open_.erase(p);
+                continue;
+            }
+            auto [it, fresh] = half_open_.try_emplace(p, now);
+            if (!fresh && now - it->second > limit)
+            {
+                enet_peer_reset(p);
+                half_open_.erase(it);
+                ++counters_.half_open_reset;
+            }
+        }
+    }
+
     PeerHandle adopt(ENetPeer* peer)
     {
         const std::uint32_t handle = next_handle_++;
@@ -345,9 +473,23 @@ private:
     std::uint32_t next_handle_ = 1;
     std::map<std::uint32_t, Connection> connections_;
     std::deque<TransportEvent> pending_;
+    std::map<enet_uint32, Bucket> sources_;
+    Bucket total_;
+    std::map<const ENetPeer*, Clock::time_point> half_open_;
+    Clock::time_point last_scan_{};
+    Clock::time_point last_warning_{};
+    EnetCounters counters_;
 };
 
 }  // namespace
+
+std::optional<EnetCounters> enet_counters(const Transport& transport) noexcept
+{
+    const auto* t = dynamic_cast<const EnetTransport*>(&transport);
+    if (t == nullptr)
+        return std::nullopt;
+    return t->counters();
+}
 
 std::unique_ptr<Transport> make_enet_transport(const EnetSettings& settings)
 {

@@ -14,6 +14,14 @@
 /// is lost, never silently upgraded to reliable), Unsequenced -> ENET_PACKET_FLAG_UNSEQUENCED.
 /// The disconnect reason travels as ENet's disconnect data; ENet reports 0 on a timeout.
 ///
+/// Connection attempts are rate-limited before ENet sees them (an ENet intercept callback): a
+/// datagram addressed to no peer (ENet's CONNECT) passes only if a token bucket for its source
+/// IPv4 address and one for the whole host both have a token; otherwise it is dropped unanswered,
+/// so a flood of spoofed CONNECTs cannot make this host reflect its handshake replies at a victim
+/// faster than `connect_rate_total` (docs/protocol.md §10.5). A half-open incoming connection
+/// (VERIFY_CONNECT sent, no acknowledgement) is reset after `half_open_timeout_ms`, which bounds
+/// ENet's retransmissions of VERIFY_CONNECT.
+///
 /// Threading: single-threaded (ENet's FAQ: an ENetHost must not be used from two threads).
 /// Keep calling poll() while waiting: an unserviced host stops acknowledging, and its peers time
 /// it out after `timeout_min_ms`.
@@ -23,6 +31,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <optional>
 
 namespace pliant::net
 {
@@ -34,7 +43,27 @@ struct EnetSettings
     std::uint32_t timeout_min_ms = 5000;   ///< a silent peer is dropped after at least this
     std::uint32_t timeout_max_ms = 30000;  ///< and at most this
     std::uint32_t connect_timeout_ms = 5000;
+    /// New connection attempts accepted per second from one source IPv4 address (any port);
+    /// <= 0: no limit per source.
+    double connect_rate_per_source = 2.0;
+    double connect_burst_per_source = 4.0;  ///< attempts a quiet source may make at once
+    /// New connection attempts accepted per second over all sources; <= 0: no limit.
+    double connect_rate_total = 20.0;
+    double connect_burst_total = 40.0;
+    /// An incoming connection still unacknowledged after this is reset silently, ms.
+    std::uint32_t half_open_timeout_ms = 1200;
 };
+
+/// Counters of the connection-attempt filter since open().
+struct EnetCounters
+{
+    std::uint64_t connect_attempts = 0;       ///< datagrams addressed to no peer (CONNECTs)
+    std::uint64_t connects_rate_limited = 0;  ///< of those, dropped by the rate limit
+    std::uint64_t half_open_reset = 0;        ///< incoming handshakes reset unacknowledged
+};
+
+/// The counters of a transport made by make_enet_transport(); nothing for another transport.
+[[nodiscard]] std::optional<EnetCounters> enet_counters(const Transport& transport) noexcept;
 
 /// A Transport over ENet. ENet is initialised on first use in the process (reference counted).
 /// \return nullptr never; errors appear at open().
