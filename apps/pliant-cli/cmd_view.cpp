@@ -1,0 +1,123 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+// `pliant view [GRID|MESH|HOST:PORT]`: the interactive viewer (GLFW + Dear ImGui,
+// docs/viewer.md). This file only parses the options; the viewer lives in viewer/ and is built
+// when viewer/viewer.cmake finds GLFW and ImGui (PLIANT_HAVE_VIEWER). Without them the command
+// still exists and says what to install.
+#include "cli_common.h"
+#include "commands.h"
+
+#ifdef PLIANT_HAVE_VIEWER
+#include "viewer/viewer.h"
+#endif
+
+#include <spdlog/spdlog.h>
+
+#include <cstdio>
+#include <memory>
+#include <string>
+
+namespace pliant::cli
+{
+namespace
+{
+
+struct ViewOptions
+{
+    std::string input;
+    int level = 6;
+    int display_level = -1;
+    std::string size = "1280x720";
+    std::string script;
+    std::string screenshot;
+    double exit_after = 0.0;
+    bool participant = false;
+    std::string name = "viewer";
+    std::uint16_t port = 0;
+    bool no_vsync = false;
+    bool hide_panels = false;
+};
+
+int run_view(const ViewOptions& opt)
+{
+#ifdef PLIANT_HAVE_VIEWER
+    int w = 0;
+    int h = 0;
+    char x = 0;
+    if (std::sscanf(opt.size.c_str(), "%d%c%d", &w, &x, &h) != 3 || (x != 'x' && x != 'X') ||
+        w < 64 || h < 64 || w > 8192 || h > 8192)
+        return report({core::ErrorCode::InvalidArgument,
+                       "view: --size " + opt.size + " is not WxH with 64 <= W, H <= 8192"});
+    viewer::ViewerOptions v;
+    v.input = opt.input;
+    v.bundled_mesh = bundled_mesh();
+    v.level = opt.level;
+    v.display_level = opt.display_level;
+    v.width = w;
+    v.height = h;
+    v.script = opt.script;
+    v.screenshot = opt.screenshot;
+    v.exit_after = opt.exit_after;
+    v.participant = opt.participant;
+    v.name = opt.name;
+    v.port = opt.port;
+    v.vsync = !opt.no_vsync;
+    v.hide_panels = opt.hide_panels;
+    return viewer::run_viewer(v);
+#else
+    (void)opt;
+    spdlog::error(
+        "view: pliant was built without the viewer (libglfw3-dev, libimgui-dev); install them "
+        "and reconfigure");
+    return k_exit_failure;
+#endif
+}
+
+void add_view_command(CLI::App& app, const GlobalOptions& global)
+{
+    auto opt = std::make_shared<ViewOptions>();
+    CLI::App* cmd = app.add_subcommand(
+        "view", "Interactive viewer: simulate, drag the surface, join or host a session.");
+    cmd->footer(
+        "INPUT is a .pgrid grid, a mesh (remeshed at --level on a worker thread), or HOST:PORT\n"
+        "of a session's master (joins as a viewer, or with --participant). Without INPUT the\n"
+        "bundled spot.obj is remeshed. Left drag on the surface pulls it; on the background it\n"
+        "orbits; the wheel zooms; P or F12 saves a screenshot; W wireframe; C colouring; Space\n"
+        "pause; R rest; H hides the panels. --script, --screenshot and --exit-after make a\n"
+        "headless run for tests (docs/viewer.md); their clocks start when the object shows.\n\n"
+        "Examples:\n"
+        "  pliant view                                   # the bundled cow, level 6\n"
+        "  pliant view spot.pgrid --display-level 8\n"
+        "  pliant view 127.0.0.1:7777 --participant\n"
+        "  xvfb-run -a pliant view grid.pgrid --script drag.txt --screenshot v.png "
+        "--exit-after 3");
+    cmd->add_option("INPUT", opt->input, "GRID (.pgrid), MESH, or HOST:PORT");
+    cmd->add_option("-l,--level", opt->level, "Remeshing level for a mesh")
+        ->check(CLI::Range(1, 10))
+        ->capture_default_str();
+    cmd->add_option("--display-level", opt->display_level,
+                    "Display level (butterfly refinement of the simulated surface); default: "
+                    "simulation level + 1, at most 8")
+        ->check(CLI::Range(1, 10));
+    cmd->add_option("--size", opt->size, "Window size WxH")->capture_default_str();
+    cmd->add_option("--script", opt->script, "Timed mouse events (docs/viewer.md)")
+        ->check(CLI::ExistingFile);
+    cmd->add_option("--screenshot", opt->screenshot, "Write a PNG of the last frame at exit");
+    cmd->add_option("--exit-after", opt->exit_after,
+                    "Quit this many seconds after the object first shows (0: never)")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
+    cmd->add_flag("--participant", opt->participant,
+                  "Join HOST:PORT as a participant (simulates, may pull)");
+    cmd->add_option("--name", opt->name, "Peer name in sessions")->capture_default_str();
+    cmd->add_option("-p,--port", opt->port, "UDP port for sessions (0: any)")
+        ->capture_default_str();
+    cmd->add_flag("--no-vsync", opt->no_vsync, "Draw as fast as possible (for measuring fps)");
+    cmd->add_flag("--hide-panels", opt->hide_panels, "Start with the panels hidden (H toggles)");
+    cmd->callback(command_callback(global, [opt]() -> int { return run_view(*opt); }));
+}
+
+const CommandRegistrar k_register{{"view", 65, &add_view_command}};
+
+}  // namespace
+}  // namespace pliant::cli

@@ -1,0 +1,172 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+#include "input_script.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+
+namespace pliant::viewer
+{
+namespace
+{
+
+core::Error parse_error(std::size_t line, const std::string& what)
+{
+    return {core::ErrorCode::ParseError,
+            "view --script: line " + std::to_string(line) + ": " + what};
+}
+
+bool read_number(std::istringstream& in, double& out)
+{
+    std::string word;
+    if (!(in >> word))
+        return false;
+    char* end = nullptr;
+    out = std::strtod(word.c_str(), &end);
+    return end != word.c_str() && *end == '\0' && std::isfinite(out);
+}
+
+}  // namespace
+
+core::Result<std::vector<ScriptEvent>> parse_input_script(std::string_view text)
+{
+    std::vector<ScriptEvent> events;
+    std::istringstream lines{std::string(text)};
+    std::string line;
+    std::size_t number = 0;
+    while (std::getline(lines, line))
+    {
+        ++number;
+        if (const std::size_t hash = line.find('#'); hash != std::string::npos)
+            line.resize(hash);
+        std::istringstream in(line);
+        ScriptEvent e;
+        if (!read_number(in, e.time))
+        {
+            if (line.find_first_not_of(" \t\r") == std::string::npos)
+                continue;  // blank or comment
+            return parse_error(number, "expected a time in seconds first");
+        }
+        if (e.time < 0.0)
+            return parse_error(number, "negative time");
+        std::string command;
+        in >> command;
+        if (command == "drag")
+        {
+            e.kind = ScriptEvent::Kind::Drag;
+            std::string arrow;
+            std::string for_word;
+            if (!read_number(in, e.x0) || !read_number(in, e.y0) || !(in >> arrow) ||
+                arrow != "->" || !read_number(in, e.x1) || !read_number(in, e.y1) ||
+                !(in >> for_word) || for_word != "for" || !read_number(in, e.duration))
+                return parse_error(number, "expected `TIME drag X0 Y0 -> X1 Y1 for SECONDS`");
+            if (e.duration < 0.0)
+                return parse_error(number, "negative drag duration");
+        }
+        else if (command == "wheel")
+        {
+            e.kind = ScriptEvent::Kind::Wheel;
+            if (!read_number(in, e.x0) || !read_number(in, e.y0) || !read_number(in, e.clicks))
+                return parse_error(number, "expected `TIME wheel X Y CLICKS`");
+        }
+        else if (command == "key")
+        {
+            e.kind = ScriptEvent::Kind::Key;
+            if (!(in >> e.key))
+                return parse_error(number, "expected `TIME key NAME`");
+            std::transform(e.key.begin(), e.key.end(), e.key.begin(),
+                           [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+        }
+        else
+            return parse_error(number,
+                               "unknown command `" + command + "` (expected drag, wheel or key)");
+        std::string extra;
+        if (in >> extra)
+            return parse_error(number, "unexpected `" + extra + "` at the end");
+        events.push_back(std::move(e));
+    }
+    std::stable_sort(events.begin(), events.end(),
+                     [](const ScriptEvent& a, const ScriptEvent& b) { return a.time < b.time; });
+    double drag_end = -1.0;
+    for (const ScriptEvent& e : events)
+    {
+        if (e.kind != ScriptEvent::Kind::Drag)
+            continue;
+        if (e.time < drag_end)
+            return core::fail(core::ErrorCode::ParseError,
+                              "view --script: the drag at " + std::to_string(e.time) +
+                                  " s starts before the previous drag ends");
+        drag_end = e.time + e.duration;
+    }
+    return events;
+}
+
+core::Result<std::vector<ScriptEvent>> load_input_script(const std::filesystem::path& path)
+{
+    std::ifstream in(path);
+    if (!in)
+        return core::fail(core::ErrorCode::IoError, "view --script: cannot read " + path.string());
+    std::stringstream text;
+    text << in.rdbuf();
+    return parse_input_script(text.str());
+}
+
+ScriptPlayer::ScriptPlayer(std::vector<ScriptEvent> events) : events_(std::move(events)) {}
+
+void ScriptPlayer::play(double t, InputSink& sink)
+{
+    // Finish (or advance) the drag in progress first, so a drag that ends and another event
+    // due in the same frame keep their order.
+    auto step_drag = [&](double now)
+    {
+        const ScriptEvent& d = *drag_;
+        const double end = d.time + d.duration;
+        if (now >= end)
+        {
+            sink.mouse_move(d.x1, d.y1);
+            sink.mouse_button(false, d.x1, d.y1);
+            drag_ = nullptr;
+            return;
+        }
+        const double s = d.duration > 0.0 ? (now - d.time) / d.duration : 1.0;
+        sink.mouse_move(d.x0 + s * (d.x1 - d.x0), d.y0 + s * (d.y1 - d.y0));
+    };
+    if (drag_ != nullptr)
+        step_drag(t);
+    while (next_ < events_.size() && events_[next_].time <= t)
+    {
+        const ScriptEvent& e = events_[next_++];
+        switch (e.kind)
+        {
+        case ScriptEvent::Kind::Drag:
+            sink.mouse_move(e.x0, e.y0);
+            sink.mouse_button(true, e.x0, e.y0);
+            drag_ = &e;
+            // A drag wholly in the past (a long frame) still ends with its release.
+            if (t >= e.time + e.duration)
+                step_drag(t);
+            break;
+        case ScriptEvent::Kind::Wheel: sink.wheel(e.x0, e.y0, e.clicks); break;
+        case ScriptEvent::Kind::Key: sink.key(e.key); break;
+        }
+    }
+}
+
+bool ScriptPlayer::finished() const noexcept
+{
+    return next_ == events_.size() && drag_ == nullptr;
+}
+
+double ScriptPlayer::end_time() const noexcept
+{
+    double end = 0.0;
+    for (const ScriptEvent& e : events_)
+        end = std::max(end, e.time + e.duration);
+    return end;
+}
+
+}  // namespace pliant::viewer

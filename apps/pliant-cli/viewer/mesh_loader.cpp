@@ -1,0 +1,104 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+#include "mesh_loader.h"
+
+#include <pliant/core/grid_io.h>
+#include <pliant/mesh/io.h>
+#include <pliant/mesh/validate.h>
+#include <pliant/remesh/remesh.h>
+
+#include <chrono>
+#include <cstdio>
+
+namespace pliant::viewer
+{
+
+class LoadJob::Sink final : public core::ProgressSink
+{
+public:
+    explicit Sink(LoadJob& job) : job_(job) {}
+    void update(std::string_view phase, double fraction) noexcept override
+    {
+        const std::lock_guard<std::mutex> lock(job_.mutex_);
+        job_.phase_.assign(phase);
+        job_.fraction_ = fraction;
+    }
+
+private:
+    LoadJob& job_;
+};
+
+LoadJob::LoadJob(std::filesystem::path path, int level) : path_(std::move(path)), level_(level)
+{
+    thread_ = std::thread([this] { run(); });
+}
+
+LoadJob::~LoadJob()
+{
+    if (thread_.joinable())
+        thread_.join();
+}
+
+std::pair<std::string, double> LoadJob::progress() const
+{
+    const std::lock_guard<std::mutex> lock(mutex_);
+    return {phase_, fraction_};
+}
+
+core::Result<LoadedSurface> LoadJob::take()
+{
+    if (thread_.joinable())
+        thread_.join();
+    if (!result_)
+        return core::fail(core::ErrorCode::InvalidArgument, "view: load result taken twice");
+    core::Result<LoadedSurface> out = std::move(*result_);
+    result_.reset();
+    return out;
+}
+
+void LoadJob::run() noexcept
+{
+    const auto start = std::chrono::steady_clock::now();
+    auto finish = [&](core::Result<LoadedSurface> r)
+    {
+        result_.emplace(std::move(r));
+        done_.store(true, std::memory_order_release);
+    };
+    const std::string name = path_.filename().string();
+    if (path_.extension() == ".pgrid")
+    {
+        Sink(*this).update("reading " + name, 0.0);
+        auto file = core::load_grid(path_);
+        if (!file)
+            return finish(file.error());
+        auto grid = core::TetraGrid::create(file->level);
+        if (!grid)
+            return finish(grid.error());
+        auto positions = core::geometry_of(*grid, *file);
+        if (!positions)
+            return finish(positions.error());
+        std::string what = name + " (level " + std::to_string(grid->level()) + " grid)";
+        return finish(LoadedSurface{std::move(*grid), std::move(*positions), std::move(what)});
+    }
+    Sink sink(*this);
+    sink.update("importing " + name, 0.0);
+    auto mesh = mesh::import_mesh(path_);
+    if (!mesh)
+        return finish(mesh.error());
+    if (auto ok = mesh::validate(*mesh, name); !ok)
+        return finish(ok.error());
+    remesh::RemeshSettings settings;
+    settings.level = level_;
+    settings.measure = false;  // the quality report is not shown; it would double the wait
+    auto remeshed = remesh::remesh(*mesh, settings, &sink);
+    if (!remeshed)
+        return finish(remeshed.error());
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    char what[256];
+    std::snprintf(what, sizeof what, "%s remeshed at level %d in %.1f s", name.c_str(), level_,
+                  seconds);
+    finish(LoadedSurface{std::move(remeshed->grid), std::move(remeshed->positions), what});
+}
+
+}  // namespace pliant::viewer

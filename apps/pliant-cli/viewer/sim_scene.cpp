@@ -1,0 +1,169 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+#include "sim_scene.h"
+
+#include <pliant/subdiv/refine.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numbers>
+
+namespace pliant::viewer
+{
+
+sim::MembraneSettings default_material(int level)
+{
+    sim::MembraneSettings ms;
+    ms.T = 2.0;
+    ms.rho = 1.0;
+    ms.beta = 1.5;
+    ms.k_f = 6.0;
+    ms.rtol = 1e-4;
+    // Below level 8 a step is too short to share between threads (cmd_demo.cpp measured it).
+    ms.threads = level >= 8 ? 0 : 1;
+    return ms;
+}
+
+core::Result<LocalSim> LocalSim::create(const core::TetraGrid& grid,
+                                        const core::Vec3Field<double>& rest,
+                                        const sim::MembraneSettings& settings)
+{
+    auto model = sim::MembraneModel::create(grid, rest, settings);
+    if (!model)
+        return model.error();
+    LocalSim s;
+    s.model_ = std::make_unique<sim::MembraneModel>(std::move(*model));
+    s.workspace_ = std::make_unique<sim::Rkf45Workspace>(*s.model_, settings.threads);
+    s.state_ = sim::MembraneState::at_rest(grid);
+    s.rest_ = rest;
+    return s;
+}
+
+sim::AdvanceReport LocalSim::advance(double wall_dt, std::span<const sim::Force> forces,
+                                     double max_interval, std::uint64_t max_steps)
+{
+    const auto start = std::chrono::steady_clock::now();
+    const double target = state_.time + std::clamp(wall_dt, 0.0, max_interval);
+    sim::AdvanceReport report =
+        sim::advance_to(*model_, state_, *workspace_, target, forces, {}, max_steps);
+    last_step_s_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (sim::has_flag(report.status, sim::StepStatus::NonFinite))
+        reset();
+    return report;
+}
+
+core::Result<void> LocalSim::set_settings(const sim::MembraneSettings& settings)
+{
+    auto model = sim::MembraneModel::create(model_->grid(), rest_, settings);
+    if (!model)
+        return model.error();
+    const double dt = workspace_->next_dt();
+    model_ = std::make_unique<sim::MembraneModel>(std::move(*model));
+    workspace_ = std::make_unique<sim::Rkf45Workspace>(*model_, settings.threads);
+    workspace_->set_next_dt(std::clamp(dt, settings.dt_min, settings.dt_max));
+    return {};
+}
+
+void LocalSim::reset()
+{
+    state_ = sim::MembraneState::at_rest(model_->grid());
+}
+
+void SurfaceView::update(const sim::MembraneModel& model, const core::Field<double>& u,
+                         int display_levels)
+{
+    const core::TetraGrid& grid = model.grid();
+    display_levels = std::clamp(display_levels, 0, core::k_max_level - grid.level());
+    if (grid.level() != level_ || display_levels != display_levels_ || levels_.empty())
+    {
+        level_ = grid.level();
+        display_levels_ = display_levels;
+        grid_ = grid;
+        plans_.clear();
+        if (display_levels > 0)
+            plans_ = subdiv::make_plans(level_, display_levels).value();
+        levels_.clear();
+        for (int k = 0; k <= display_levels; ++k)
+        {
+            const core::TetraGrid& g =
+                k == 0 ? grid : plans_[static_cast<std::size_t>(k - 1)].fine_grid();
+            Planes planes;
+            for (auto& p : planes.p)
+                p = core::Field<double>(g, 1);
+            planes.u = core::Field<double>(g, 1);
+            levels_.push_back(std::move(planes));
+        }
+        faces_ = grid.triangles();
+        unique_.assign(grid.unique_count(), core::Vec3{});
+        rest_.assign(grid.unique_count(), core::Vec3{});
+        const auto& P = model.rest_positions();
+        for (std::size_t i = 0; i < rest_.size(); ++i)
+        {
+            const core::NodeIndex n = grid.node_of_unique()[i];
+            rest_[i] = {P[0][n], P[1][n], P[2][n]};
+        }
+    }
+    // p = P + u N at the sim level (twins equal because P, N and u have equal twins).
+    const auto& P = model.rest_positions();
+    const auto& N = model.normals();
+    Planes& base = levels_.front();
+    double max_u = 0.0;
+    for (int y = 0; y < grid.ny(); ++y)
+        for (int x = 0; x < grid.nx(); ++x)
+        {
+            const double ux = u.at(x, y);
+            max_u = std::max(max_u, std::abs(ux));
+            for (std::size_t c = 0; c < 3; ++c)
+                base.p[c].at(x, y) = P[c].at(x, y) + ux * N[c].at(x, y);
+            base.u.at(x, y) = ux;
+        }
+    max_abs_u_ = max_u;
+    for (std::size_t i = 0; i < unique_.size(); ++i)
+    {
+        const core::NodeIndex n = grid.node_of_unique()[i];
+        unique_[i] = {base.p[0][n], base.p[1][n], base.p[2][n]};
+    }
+    for (auto& plane : base.p)
+        core::fill_ghosts(grid, plane);
+    core::fill_ghosts(grid, base.u);
+    for (std::size_t k = 0; k < plans_.size(); ++k)
+    {
+        subdiv::refine(plans_[k], levels_[k].p, levels_[k + 1].p);
+        subdiv::refine(plans_[k], levels_[k].u, levels_[k + 1].u);
+    }
+}
+
+core::Vec3 Grab::current(const SurfaceView& view) const noexcept
+{
+    const auto& f = view.faces()[face];
+    const auto& p = view.positions();
+    return p[f[0]] * (1.0 - b1 - b2) + p[f[1]] * b1 + p[f[2]] * b2;
+}
+
+core::Vec3 Grab::rest(const SurfaceView& view) const noexcept
+{
+    const auto& f = view.faces()[face];
+    const auto& p = view.rest_positions();
+    return p[f[0]] * (1.0 - b1 - b2) + p[f[1]] * b1 + p[f[2]] * b2;
+}
+
+sim::Force Grab::force(const SurfaceView& view) const noexcept
+{
+    sim::Force f;
+    f.point = rest(view);
+    f.radius = radius;
+    f.vector = (target - current(view)) * stiffness;
+    return f;
+}
+
+double default_grab_stiffness(const sim::MembraneSettings& material, double radius)
+{
+    // A patch of radius r resists a normal displacement with about rho pi r^2 k_f (the
+    // foundation) plus 2 pi T (tension; the logarithmic factor of a point-loaded membrane is of
+    // order one here). A spring as stiff as the patch holds it halfway to the mouse.
+    return material.rho * std::numbers::pi * radius * radius * material.k_f +
+           2.0 * std::numbers::pi * material.T;
+}
+
+}  // namespace pliant::viewer

@@ -1,0 +1,38 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+#pragma once
+
+// `pliant view`: the interactive viewer (GLFW + Dear ImGui, docs/viewer.md). Only built when
+// viewer.cmake found GLFW and ImGui (PLIANT_HAVE_VIEWER); cmd_view.cpp parses the options.
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+
+namespace pliant::viewer
+{
+
+struct ViewerOptions
+{
+    /// A `.pgrid`, a mesh file (remeshed at `level`), HOST:PORT (join a session), or empty (the
+    /// bundled mesh).
+    std::string input;
+    std::filesystem::path bundled_mesh;  ///< used when `input` is empty
+    int level = 6;                       ///< remeshing level for meshes
+    int display_level = -1;              ///< absolute display level; -1: sim level + 1, <= 8
+    int width = 1280;
+    int height = 720;
+    std::filesystem::path script;      ///< timed mouse events (input_script.h)
+    std::filesystem::path screenshot;  ///< written at exit
+    double exit_after = 0.0;           ///< s after the object first shows; 0: never
+    bool participant = false;          ///< join HOST:PORT as a participant (default viewer)
+    std::string name = "viewer";       ///< peer name in sessions
+    std::uint16_t port = 0;            ///< UDP port for sessions (0: any when joining)
+    bool vsync = true;
+    bool hide_panels = false;
+};
+
+/// Runs the viewer until the window closes or `exit_after`. \return the process exit code.
+int run_viewer(const ViewerOptions& options);
+
+}  // namespace pliant::viewer

@@ -1,0 +1,36 @@
+# SPDX-License-Identifier: MIT
+# SPDX-FileCopyrightText: 2026 pliant contributors
+# End-to-end test of `pliant view` (docs/viewer.md) under Xvfb with Mesa's software OpenGL: the
+# bundled mesh is remeshed at level 4 on the viewer's worker thread, a scripted drag pulls the
+# surface, and a screenshot is written at exit. Only when the viewer was built and xvfb-run
+# exists.
+find_program(PLIANT_XVFB_RUN xvfb-run)
+if(TARGET pliant AND PLIANT_HAVE_VIEWER AND PLIANT_XVFB_RUN)
+    set(_viewer_png ${CMAKE_CURRENT_BINARY_DIR}/viewer.png)
+    add_test(NAME cli_view_scripted_drag
+             COMMAND ${PLIANT_XVFB_RUN} -a -s "-screen 0 1280x800x24"
+                     $<TARGET_FILE:pliant> view ${PROJECT_SOURCE_DIR}/data/spot.obj --level 4
+                     --size 640x480 --script ${CMAKE_CURRENT_SOURCE_DIR}/viewer_drag.txt
+                     --screenshot ${_viewer_png} --exit-after 3)
+    # The drag must move the surface by at least 0.5 % of its radius (the pull gives several per
+    # cent; an unpicked or ignored drag gives 0.000 %), and the object must cover at least 5 % of
+    # the picture (a failed read-back or an empty view gives 0).
+    set_tests_properties(cli_view_scripted_drag PROPERTIES
+        TIMEOUT 120
+        FIXTURES_SETUP viewer_png
+        PASS_REGULAR_EXPRESSION
+            "largest \\|u\\| reached [0-9.e+-]+ m = ([1-9][0-9]*|0\\.[5-9][0-9]*)\\.?[0-9]* % of the object radius.*covers ([5-9]|[1-9][0-9])\\.[0-9] % of the 3D view"
+        ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0;LIBGL_ALWAYS_SOFTWARE=1;OMP_NUM_THREADS=1")
+    add_test(NAME cli_view_screenshot_png
+             COMMAND ${CMAKE_COMMAND} -DPNG=${_viewer_png} -DMIN_BYTES=8000
+                     -P ${CMAKE_CURRENT_SOURCE_DIR}/viewer_check_png.cmake)
+    set_tests_properties(cli_view_screenshot_png PROPERTIES FIXTURES_REQUIRED viewer_png)
+endif()
+# The viewer's window-free parts (picking, input scripts) as unit tests.
+if(TARGET pliant_render AND TARGET pliant_test_support)
+    pliant_add_test(viewer_picking_test
+        SOURCES viewer_picking_test.cpp
+                ${PROJECT_SOURCE_DIR}/apps/pliant-cli/viewer/picking.cpp
+                ${PROJECT_SOURCE_DIR}/apps/pliant-cli/viewer/input_script.cpp
+        LIBS pliant::render pliant::core)
+endif()
