@@ -4,16 +4,30 @@
 // large control messages) and the round trip of a Ping/Pong over ENet on 127.0.0.1 through the
 // Messenger (encode, ENet, decode, both ways). Timing is noisy on shared machines: compare
 // medians of --benchmark_repetitions runs.
+//
+// Before the timed part, the state-streaming bandwidth per peer for levels 4..8 (no timing: it
+// follows from the protocol): every leaf of the partition depth is encoded as the LeafState
+// datagram the session streams (f64 and f32 values), and the bytes of one full-object broadcast
+// give, at the stream rate R, P peers each owning 1/P of the leaves and sending them to the P - 1
+// others: bytes/s out per peer = total * (P - 1) / P * R. Payload bytes (as SessionStats counts
+// them) and, on the wire, + 28 B of UDP/IPv4 and ~10 B of ENet headers per datagram.
+//
+//   bench_net [--quick] [--json FILE] [--csv FILE] [--stream-rate HZ] [Google Benchmark flags]
 
 #include <pliant/net/codec.h>
 #include <pliant/net/enet_transport.h>
 #include <pliant/net/messenger.h>
+#include <pliant/session/partition.h>
 
 #include <benchmark/benchmark.h>
 
+#include "gbench_report.h"
 #include "net/sample_messages.h"
 
 #include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
 
 namespace
 {
@@ -134,6 +148,108 @@ void BM_EnetLoopbackRoundTrip(benchmark::State& state)
 }
 BENCHMARK(BM_EnetLoopbackRoundTrip)->Arg(0)->Arg(1)->UseRealTime();
 
+// Per-datagram overhead below the payload: UDP + IPv4 headers, and ENet's protocol header plus
+// an unreliable-sequenced command header (about 10 B).
+constexpr double k_udp_ip_bytes = 28.0;
+constexpr double k_enet_bytes = 10.0;
+
+/// Payload bytes and datagrams of one broadcast of every leaf's state at `level`.
+std::pair<double, double> broadcast_bytes(int level, ValueEncoding encoding)
+{
+    const auto grid = pliant::core::TetraGrid::create(level).value();
+    const pliant::session::LeafGraph graph(grid, pliant::session::leaf_depth_for(grid, encoding));
+    double bytes = 0.0;
+    double datagrams = 0.0;
+    for (std::size_t l = 0; l < graph.size(); ++l)
+    {
+        const auto id = graph.leaves()[l];
+        LeafState st;
+        st.epoch = 1;
+        st.leaf = WireLeafId{id.square, id.depth, id.ix, id.iy};
+        st.encoding = encoding;
+        st.u.assign(graph.node_count(l), 0.0);
+        st.v.assign(graph.node_count(l), 0.0);
+        Message m{Header{1, PeerId{1}, 0, 0}, st};
+        bytes += static_cast<double>(encoded_size(m));
+        datagrams += 1.0;
+    }
+    return {bytes, datagrams};
+}
+
+void streaming_bandwidth(pliant::bench::Report& report, double rate_hz)
+{
+    std::printf(
+        "state streaming at %.0f Hz: bytes/s out per peer (payload; wire adds %.0f B per "
+        "datagram)\n",
+        rate_hz, k_udp_ip_bytes + k_enet_bytes);
+    std::printf("%5s %9s %5s %10s %12s %12s %12s\n", "level", "vertices", "enc", "datagrams",
+                "2 peers MB/s", "2 peers Mbit", "4 peers MB/s");
+    for (int level = 4; level <= 8; ++level)
+    {
+        const auto grid = pliant::core::TetraGrid::create(level).value();
+        const double vertices = static_cast<double>(grid.unique_count());
+        for (const ValueEncoding enc : {ValueEncoding::F64, ValueEncoding::F32})
+        {
+            const auto [bytes, datagrams] = broadcast_bytes(level, enc);
+            const std::string name = enc == ValueEncoding::F64 ? "f64" : "f32";
+            const double wire = bytes + datagrams * (k_udp_ip_bytes + k_enet_bytes);
+            for (const int peers : {2, 3, 4})
+            {
+                const double share = static_cast<double>(peers - 1) / peers * rate_hz;
+                const std::string c = name + " " + std::to_string(peers) + " peers";
+                report.add(c, level, vertices, "vertices", "stream_bytes_per_s_per_peer",
+                           bytes * share, "B/s");
+                report.add(c, level, vertices, "vertices", "stream_wire_bits_per_s_per_peer",
+                           wire * share * 8.0, "bit/s");
+            }
+            report.add(name, level, vertices, "vertices", "datagrams_per_broadcast", datagrams,
+                       "1");
+            std::printf("%5d %9.0f %5s %10.0f %12.2f %12.2f %12.2f\n", level, vertices,
+                        name.c_str(), datagrams, bytes * 0.5 * rate_hz / 1e6,
+                        wire * 0.5 * rate_hz * 8.0 / 1e6, bytes * 0.75 * rate_hz / 1e6);
+        }
+    }
+    std::fflush(stdout);
+}
+
 }  // namespace
 
-BENCHMARK_MAIN();
+int main(int argc, char** argv)
+{
+    pliant::bench::Report report("net");
+    double rate_hz = 60.0;
+    // --stream-rate is ours; everything else goes to Google Benchmark.
+    for (int i = 1; i + 1 < argc; ++i)
+        if (std::strcmp(argv[i], "--stream-rate") == 0)
+        {
+            rate_hz = std::atof(argv[i + 1]);
+            for (int k = i; k + 2 <= argc; ++k)
+                argv[k] = argv[k + 2];
+            argc -= 2;
+            break;
+        }
+    if (!(rate_hz > 0.0))
+    {
+        std::fprintf(stderr, "bench_net: --stream-rate must be > 0\n");
+        return 2;
+    }
+    report.meta("stream_rate_hz", std::to_string(rate_hz));
+    streaming_bandwidth(report, rate_hz);  // cheap: the same in quick and full runs
+    return pliant::bench::run_with_report(
+        report, argc, argv,
+        [&report](const benchmark::BenchmarkReporter::Run& r)
+        {
+            const double s = pliant::bench::real_seconds(r);
+            const std::string name = r.benchmark_name();
+            if (name.rfind("BM_EnetLoopbackRoundTrip", 0) == 0)
+                report.add(r.report_label, -1, 0.0, "", "round_trip_us", s * 1e6, "us");
+            else
+            {
+                const double items = pliant::bench::counter(r, "items_per_second");
+                const double bytes = pliant::bench::counter(r, "bytes_per_second");
+                const std::string op = name.rfind("BM_Encode", 0) == 0 ? "encode " : "decode ";
+                report.add(op + r.report_label, -1, 0.0, "", "messages_per_s", items, "1/s");
+                report.add(op + r.report_label, -1, 0.0, "", "bytes_per_s", bytes, "B/s");
+            }
+        });
+}

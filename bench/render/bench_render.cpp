@@ -9,6 +9,9 @@
 // positions every frame, as the simulation loop does.
 //
 // Usage: bench_render [--benchmark_repetitions=3 --benchmark_report_aggregates_only=true]
+//        bench_render [--quick] [--json FILE] [--csv FILE]    (what `pliant bench` runs)
+// --quick: levels 6..8 and 0.3 s per figure; the rows (bench/common/bench_report.h) give fps and
+// ms per frame sized by triangles, and the metadata GL_RENDERER.
 // Set PLIANT_GL_BACKEND=osmesa to measure OSMesa instead of EGL.
 
 #include <pliant/render/framebuffer.h>
@@ -19,11 +22,13 @@
 
 #include <benchmark/benchmark.h>
 
+#include "gbench_report.h"
 #include "sphere_grid.h"
 
 #include <cstdio>
 #include <cstdlib>
 #include <optional>
+#include <string>
 #include <vector>
 
 namespace
@@ -33,6 +38,8 @@ using namespace pliant;
 
 constexpr int k_width = 1280;
 constexpr int k_height = 720;
+
+bench::Report g_report("render");
 
 render::OffscreenContext& context()
 {
@@ -46,6 +53,8 @@ render::OffscreenContext& context()
             std::exit(1);
         }
         ctx.emplace(std::move(*made));
+        g_report.meta("gl_backend", render::to_string(ctx->backend()));
+        g_report.meta("gl_renderer", ctx->description());
         std::printf("bench_render: %s context: %s, %dx%d\n", render::to_string(ctx->backend()),
                     ctx->description().c_str(), k_width, k_height);
     }
@@ -102,15 +111,40 @@ void BM_VertexBufferPath(benchmark::State& state)
 
 }  // namespace
 
-BENCHMARK(BM_TexturePath)
-    ->ArgsProduct({{6, 7, 8, 9}, {0, 1}})
-    ->ArgNames({"level", "upload"})
-    ->Unit(benchmark::kMillisecond)
-    ->UseRealTime();
-BENCHMARK(BM_VertexBufferPath)
-    ->DenseRange(6, 9)
-    ->ArgName("level")
-    ->Unit(benchmark::kMillisecond)
-    ->UseRealTime();
-
-BENCHMARK_MAIN();
+int main(int argc, char** argv)
+{
+    bool quick = false;
+    for (int i = 1; i < argc; ++i)
+        quick = quick || std::string(argv[i]) == "--quick";
+    const std::int64_t max_level = quick ? 8 : 9;
+    std::vector<std::int64_t> levels;
+    for (std::int64_t l = 6; l <= max_level; ++l)
+        levels.push_back(l);
+    benchmark::RegisterBenchmark("BM_TexturePath", BM_TexturePath)
+        ->ArgsProduct({levels, {0, 1}})
+        ->ArgNames({"level", "upload"})
+        ->Unit(benchmark::kMillisecond)
+        ->UseRealTime();
+    benchmark::RegisterBenchmark("BM_VertexBufferPath", BM_VertexBufferPath)
+        ->DenseRange(6, static_cast<int>(max_level))
+        ->ArgName("level")
+        ->Unit(benchmark::kMillisecond)
+        ->UseRealTime();
+    return bench::run_with_report(
+        g_report, argc, argv,
+        [](const benchmark::BenchmarkReporter::Run& r)
+        {
+            const std::string fn = r.run_name.function_name;
+            const std::string& args = r.run_name.args;
+            const auto lp = args.find("level:");
+            const int level = lp == std::string::npos ? -1 : std::atoi(args.c_str() + lp + 6);
+            std::string c = fn == "BM_TexturePath" ? "texture path" : "vertex-buffer path";
+            if (args.find("upload:1") != std::string::npos)
+                c += " + upload";
+            const double tris = bench::counter(r, "triangles");
+            g_report.add(c, level, tris, "triangles", "fps", bench::counter(r, "fps"), "1/s");
+            g_report.add(c, level, tris, "triangles", "ms_per_frame", bench::real_seconds(r) * 1e3,
+                         "ms");
+        },
+        0.3);
+}

@@ -4,12 +4,20 @@
 // one-way latency): per level and peer count, the partition's balance and fragments, the CPU time
 // of each peer's steps per simulated second against one process stepping everything, the bytes
 // each peer sends per simulated second, and the fast-vs-exact error of a scripted pull.
-//   pliant_bench_session [levels...]      (default: 5 6)
+//   pliant_bench_session [levels...] [--quick] [--json FILE] [--csv FILE]   (default: 5 6 7;
+//   quick: 5 6 without the 1 kHz-frame variant)
+// --json/--csv rows (bench/common/bench_report.h), sized by the number of peers (1..4): per
+// coupling ("exact", "fast", "fast 1 kHz") the step seconds per simulated second of the busiest
+// peer and the mean peer, their ratio to one process stepping every node, the payload bytes sent
+// per simulated second per peer and the fast-vs-exact error; "no partitioning" is that one
+// process (every peer of an unpartitioned session steps every node); the partition's imbalance,
+// fragments and border edges.
 #include <pliant/net/simulated_transport.h>
 #include <pliant/session/partition.h>
 #include <pliant/session/session.h>
 #include <pliant/sim/rkf45.h>
 
+#include "bench_report.h"
 #include "grid_shapes.h"
 
 #include <algorithm>
@@ -18,6 +26,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
+#include <string>
 #include <vector>
 
 using namespace pliant;
@@ -87,7 +96,8 @@ RunResult run(int level, int peers, session::Coupling coupling, std::uint64_t ti
     // Scripted pull: the master's face from tick 100 to 400, the last peer's from 200.
     s[0]->set_forces({pull(faces / 7)}, 100);
     s[0]->set_forces({}, 400);
-    s.back()->set_forces({pull(faces / 2 + 5)}, 200);
+    if (peers > 1)
+        s.back()->set_forces({pull(faces / 2 + 5)}, 200);
     double now = 0.0;
     auto all_done = [&]
     {
@@ -150,13 +160,47 @@ sim::MembraneState reference(sim::MembraneModel& model, int peers, std::uint64_t
 
 }  // namespace
 
+namespace
+{
+
+/// Adds the rows of one coupling's run.
+void add_rows(bench::Report& report, const std::string& name, int level, int peers,
+              const RunResult& r, double single_s, double sim_seconds)
+{
+    double worst = 0.0;
+    double sum = 0.0;
+    double bytes = 0.0;
+    for (std::size_t k = 0; k < r.step_s.size(); ++k)
+    {
+        worst = std::max(worst, r.step_s[k]);
+        sum += r.step_s[k];
+        bytes += r.bytes_out[k];
+    }
+    const double n = static_cast<double>(peers);
+    report.add(name, level, n, "peers", "step_s_per_sim_s_max", worst / sim_seconds, "s/s");
+    report.add(name, level, n, "peers", "step_s_per_sim_s_mean", sum / n / sim_seconds, "s/s");
+    report.add(name, level, n, "peers", "compute_vs_single_max", worst / single_s, "1");
+    report.add(name, level, n, "peers", "compute_vs_single_mean", sum / n / single_s, "1");
+    report.add(name, level, n, "peers", "bytes_out_per_sim_s_per_peer", bytes / n / sim_seconds,
+               "B/s");
+    if (r.max_u > 0.0)
+        report.add(name, level, n, "peers", "error_vs_single_rel", r.max_u_diff / r.max_u, "1");
+}
+
+}  // namespace
+
 int main(int argc, char** argv)
 {
+    bench::Report report("session");
+    if (!report.parse_args(argc, argv))
+        return 2;
     std::vector<int> levels;
     for (int k = 1; k < argc; ++k)
         levels.push_back(std::atoi(argv[k]));
     if (levels.empty())
-        levels = {5, 6};
+        levels = report.quick() ? std::vector<int>{5, 6} : std::vector<int>{5, 6, 7};
+    report.meta("network", "SimulatedNetwork, 5 ms one-way latency, all peers in one thread");
+    report.meta("material", "unit sphere, T=1, rho=1, beta=0.5, k_f=1, fixed dt 1 ms");
     const std::uint64_t ticks = 500;
     std::printf("# simulated network, 5 ms one-way latency, fixed dt 1 ms, %llu ticks, 1 thread\n",
                 static_cast<unsigned long long>(ticks));
@@ -179,13 +223,31 @@ int main(int argc, char** argv)
                 sim::step(model, st, ws, {});
             single_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         }
+        // Fast vs exact: every peer's owned nodes against the single-process run (which the
+        // exact coupling equals bit for bit, tests/session).
+        const sim::MembraneState ref = reference(model, 0, ticks);
+        const double vertices = static_cast<double>(grid.unique_count());
+        report.add("single process", level, vertices, "vertices", "step_s_per_sim_s",
+                   single_s / sim_seconds, "s/s");
+        for (int peers = 1; peers <= 4; ++peers)
+        {
+            report.add("no partitioning", level, peers, "peers", "step_s_per_sim_s_max",
+                       single_s / sim_seconds, "s/s");
+            report.add("no partitioning", level, peers, "peers", "compute_vs_single_max", 1.0, "1");
+        }
+        {
+            // One peer alone through the session (its per-tick overheads, no partner).
+            const RunResult alone = run(level, 1, session::Coupling::Fast, ticks, nullptr);
+            add_rows(report, "fast", level, 1, alone, single_s, sim_seconds);
+            const RunResult alone_exact = run(level, 1, session::Coupling::Exact, ticks, nullptr);
+            add_rows(report, "exact", level, 1, alone_exact, single_s, sim_seconds);
+        }
         for (int peers = 2; peers <= 4; ++peers)
         {
-            // Fast vs exact: every peer's owned nodes against the single-process run (which the
-            // exact coupling equals bit for bit, tests/session).
-            const sim::MembraneState ref = reference(model, peers, ticks);
             const RunResult exact = run(level, peers, session::Coupling::Exact, ticks, &ref);
             const RunResult fast = run(level, peers, session::Coupling::Fast, ticks, &ref);
+            add_rows(report, "exact", level, peers, exact, single_s, sim_seconds);
+            add_rows(report, "fast", level, peers, fast, single_s, sim_seconds);
             const session::LeafGraph graph(grid,
                                            session::leaf_depth_for(grid, net::ValueEncoding::F64));
             std::vector<session::Seat> seats;
@@ -196,6 +258,12 @@ int main(int argc, char** argv)
             std::size_t frags = 0;
             for (const auto& sh : q.shares)
                 frags += sh.fragments;
+            const double n = static_cast<double>(peers);
+            report.add("partition", level, n, "peers", "imbalance", q.imbalance, "1");
+            report.add("partition", level, n, "peers", "fragments", static_cast<double>(frags),
+                       "1");
+            report.add("partition", level, n, "peers", "border_edges",
+                       static_cast<double>(q.border_edges), "1");
             double worst = 0.0;
             double bytes = 0.0;
             for (std::size_t k = 0; k < exact.step_s.size(); ++k)
@@ -222,8 +290,14 @@ int main(int argc, char** argv)
                 "| %7.2f (fast)\n",
                 level, peers, fworst / single_s,
                 fbytes / static_cast<double>(peers) / sim_seconds / 1e6);
+            if (report.quick())
+            {
+                std::fflush(stdout);
+                continue;  // quick: no 1 kHz-frame variant
+            }
             const RunResult fast1k =
                 run(level, peers, session::Coupling::Fast, ticks, &ref, 1000.0);
+            add_rows(report, "fast 1 kHz", level, peers, fast1k, single_s, sim_seconds);
             double kworst = 0.0;
             double kbytes = 0.0;
             for (std::size_t k = 0; k < fast1k.step_s.size(); ++k)
@@ -237,7 +311,8 @@ int main(int argc, char** argv)
                 level, peers, kworst / single_s,
                 kbytes / static_cast<double>(peers) / sim_seconds / 1e6,
                 fast1k.max_u > 0.0 ? fast1k.max_u_diff / fast1k.max_u : 0.0);
+            std::fflush(stdout);
         }
     }
-    return 0;
+    return report.write() ? 0 : 1;
 }

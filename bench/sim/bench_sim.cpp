@@ -5,15 +5,23 @@
 //   step,<level>,<threads>,<grid nodes>,<ns per node-step>,<node-steps/s>,<GB/s effective>
 //   realtime,<level>,<threads>,<simulated s>,<wall s>,<ratio>,<steps>
 // Usage: pliant_bench_sim [max_level=10] [realtime_seconds=1.5] [min_level=6] [kernel]
+//                         [--quick] [--json FILE] [--csv FILE]
 //   "kernel" runs only the step timing, 1 thread, 10 steps per level (for callgrind, whose
 //   instruction counts are exactly repeatable on a shared machine).
+//   --quick: levels 5..8, 0.6 s per real-time run, 3 repetitions; --json/--csv: the same figures
+//   as rows (bench/common/bench_report.h) plus the CPU share of the real-time scenario: process
+//   CPU seconds per simulated second (the fraction of one core the simulation needs to keep up
+//   with real time; load-independent where wall time is not), and the same estimated from the
+//   fixed-step time per step times the adaptive run's steps per simulated second.
 // Timings are medians of repeated runs; the machine is shared, so compare ratios within a run.
 
 #include <pliant/sim/membrane.h>
 #include <pliant/sim/rkf45.h>
 
 #include <omp.h>
+#include <time.h>
 
+#include "bench_report.h"
 #include "grid_shapes.h"
 
 #include <algorithm>
@@ -32,6 +40,14 @@ using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0)
 {
     return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+// CPU time of the whole process (every thread), s.
+double process_cpu_seconds()
+{
+    timespec ts{};
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
 double median(std::vector<double> v)
@@ -83,18 +99,37 @@ constexpr double k_doubles_per_node_step = 64.0;
 
 int main(int argc, char** argv)
 {
-    const int max_level = argc > 1 ? std::atoi(argv[1]) : 10;
-    const double rt_seconds = argc > 2 ? std::atof(argv[2]) : 1.5;
-    const int min_level = argc > 3 ? std::atoi(argv[3]) : 6;
+    bench::Report report("sim");
+    if (!report.parse_args(argc, argv))
+        return 2;
+    const bool quick = report.quick();
+    const int max_level = argc > 1 ? std::atoi(argv[1]) : (quick ? 8 : 10);
+    const double rt_seconds = argc > 2 ? std::atof(argv[2]) : (quick ? 0.6 : 1.5);
+    const int min_level = argc > 3 ? std::atoi(argv[3]) : (quick ? 5 : 6);
     const bool kernel_only = argc > 4 && std::string(argv[4]) == "kernel";
+    const int reps = quick ? 3 : 5;
+    const double node_steps_per_rep = quick ? 3e6 : 3e7;
+    const double rep_cap_s = quick ? 0.4 : 4.0;  // wall seconds per repetition at most
 #if defined(PLIANT_NATIVE_ISA)
     std::printf("build: -march=native, -ffp-contract=off, double state\n");
+    report.meta("isa", "-march=native");
 #else
     std::printf("build: portable ISA, -ffp-contract=off, double state\n");
+    report.meta("isa", "portable");
 #endif
+    report.meta("material",
+                "unit sphere, T=1 N/m, rho=1 kg/m2, beta=0.5 1/s, k_f=1 1/s2, "
+                "rtol=1e-4, one moving point force, frames of 1/60 s");
     if (!kernel_only)
         for (const int threads : {1, 2})
-            std::printf("triad,%d,%.2f\n", threads, triad_gbs(threads));
+        {
+            const double gbs = triad_gbs(threads);
+            std::printf("triad,%d,%.2f\n", threads, gbs);
+            report.add(std::to_string(threads) + (threads == 1 ? " thread" : " threads"), -1,
+                       threads, "threads", "triad_bandwidth", gbs * 1e9, "B/s");
+        }
+    // ms per fixed step at 1 thread, per level (for the CPU share estimated from step time).
+    std::vector<double> ms_per_step_1(11, 0.0);
 
     for (int level = min_level; level <= max_level; ++level)
     {
@@ -114,27 +149,47 @@ int main(int argc, char** argv)
             const sim::Force force{-1, {1.0, 0.0, 0.0}, 0.2, {-1.0, 0.0, 0.0}};
             sim::set_forces(model, ws, std::span<const sim::Force>(&force, 1));
             const double nodes = static_cast<double>(grid.node_count());
-            const int steps = kernel_only ? 10 : std::max(3, static_cast<int>(3e7 / nodes));
+            const int steps =
+                kernel_only ? 10 : std::max(3, static_cast<int>(node_steps_per_rep / nodes));
             for (int k = 0; k < 2; ++k)
                 (void)sim::step_prepared(model, state, ws);
             std::vector<double> per;
-            for (int rep = 0; rep < (kernel_only ? 1 : 5); ++rep)
+            std::vector<double> per_cpu;  // process CPU seconds per step (load-independent)
+            for (int rep = 0; rep < (kernel_only ? 1 : reps); ++rep)
             {
+                // Bounded in wall time too: on a loaded machine two OpenMP threads can run 100x
+                // slower than one, and a quick run must still end in seconds.
                 const auto t0 = Clock::now();
-                for (int k = 0; k < steps; ++k)
+                const double c0 = process_cpu_seconds();
+                int done = 0;
+                while (done < steps && (done < 3 || seconds_since(t0) < rep_cap_s))
+                {
                     (void)sim::step_prepared(model, state, ws);
-                per.push_back(seconds_since(t0) / steps);
+                    ++done;
+                }
+                per.push_back(seconds_since(t0) / done);
+                per_cpu.push_back((process_cpu_seconds() - c0) / done);
             }
             const double t = median(per);
             const double ns = t / nodes * 1e9;
             std::printf("step,%d,%d,%.0f,%.2f,%.3e,%.2f\n", level, threads, nodes, ns, nodes / t,
                         k_doubles_per_node_step * 8.0 * nodes / t / 1e9);
+            const std::string c = std::to_string(threads) + (threads == 1 ? " thread" : " threads");
+            report.add(c, level, nodes, "nodes", "ns_per_node_step", ns, "ns");
+            report.add(c, level, nodes, "nodes", "ms_per_step", t * 1e3, "ms");
+            report.add(c, level, nodes, "nodes", "cpu_ns_per_node_step",
+                       median(per_cpu) / nodes * 1e9, "ns");
+            report.add(c, level, nodes, "nodes", "node_steps_per_s", nodes / t, "1/s");
+            report.add(c, level, nodes, "nodes", "effective_bandwidth",
+                       k_doubles_per_node_step * 8.0 * nodes / t, "B/s");
+            if (threads == 1)
+                ms_per_step_1[static_cast<std::size_t>(level)] = t * 1e3;
             std::fflush(stdout);
         }
     }
 
     if (kernel_only)
-        return 0;
+        return report.write() ? 0 : 1;
     // Real time: the benchmark scenario (adaptive, one moving force), frames of 1/60 s.
     for (const int threads : {1, 2})
         for (int level = min_level; level <= max_level; ++level)
@@ -147,6 +202,7 @@ int main(int argc, char** argv)
             sim::MembraneState state = sim::MembraneState::at_rest(grid);
             sim::Rkf45Workspace ws(model, threads);
             const auto t0 = Clock::now();
+            const double cpu0 = process_cpu_seconds();
             std::uint64_t steps = 0;
             int frame = 0;
             while (seconds_since(t0) < rt_seconds && frame < 600)
@@ -160,11 +216,22 @@ int main(int argc, char** argv)
                         .steps;
             }
             const double wall = seconds_since(t0);
+            const double cpu = process_cpu_seconds() - cpu0;
             std::printf("realtime,%d,%d,%.3f,%.3f,%.3f,%llu\n", level, threads, state.time, wall,
                         state.time / wall, static_cast<unsigned long long>(steps));
             std::fflush(stdout);
+            const std::string c = std::to_string(threads) + (threads == 1 ? " thread" : " threads");
+            const double nodes = static_cast<double>(grid.node_count());
+            const double steps_per_sim_s = static_cast<double>(steps) / state.time;
+            report.add(c, level, nodes, "nodes", "realtime_ratio", state.time / wall, "1");
+            report.add(c, level, nodes, "nodes", "steps_per_simulated_s", steps_per_sim_s, "1/s");
+            report.add(c, level, nodes, "nodes", "cpu_share", cpu / state.time, "1");
+            if (threads == 1 && ms_per_step_1[static_cast<std::size_t>(level)] > 0.0)
+                report.add(c, level, nodes, "nodes", "cpu_share_from_step_time",
+                           ms_per_step_1[static_cast<std::size_t>(level)] * 1e-3 * steps_per_sim_s,
+                           "1");
             if (state.time < wall * 0.5)
                 break;  // far from real time: finer levels only get slower
         }
-    return 0;
+    return report.write() ? 0 : 1;
 }

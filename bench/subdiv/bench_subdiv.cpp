@@ -5,7 +5,10 @@
 // number of bytes, all in one run (ratios measured together; TESTING-NOTES.md: timings on a
 // shared VM vary by +-20 %, so every figure is a median of repeated runs).
 //
-//   bench_subdiv [--quick] [--min-time SECONDS]
+//   bench_subdiv [--quick] [--min-time SECONDS] [--json FILE] [--csv FILE]
+//
+// --quick: levels 6->7 .. 8->9, 0.05 s per figure, one OpenMesh run; --json/--csv: one row per
+// figure (bench/common/bench_report.h), sized by the output surface vertices.
 //
 // Columns: median time per refinement; output vertices per second (unique surface vertices of
 // the fine level, 2(2W)^2+2, the same count OpenMesh produces); effective bandwidth = bytes of
@@ -15,6 +18,7 @@
 
 #include <omp.h>
 
+#include "bench_report.h"
 #include "grid_shapes.h"
 #include "reference_openmesh.h"
 
@@ -88,18 +92,21 @@ struct Row
 
 int main(int argc, char** argv)
 {
-    bool quick = false;
+    bench::Report report("subdiv");
+    if (!report.parse_args(argc, argv))
+        return 2;
+    const bool quick = report.quick();
     double min_time = 0.5;
     for (int i = 1; i < argc; ++i)
     {
         const std::string a = argv[i];
-        if (a == "--quick")
-            quick = true;
-        else if (a == "--min-time" && i + 1 < argc)
+        if (a == "--min-time" && i + 1 < argc)
             min_time = std::stod(argv[++i]);
         else
         {
-            std::fprintf(stderr, "usage: bench_subdiv [--quick] [--min-time SECONDS]\n");
+            std::fprintf(stderr,
+                         "usage: bench_subdiv [--quick] [--min-time SECONDS] [--json FILE] "
+                         "[--csv FILE]\n");
             return 2;
         }
     }
@@ -118,6 +125,9 @@ int main(int argc, char** argv)
 #else
     const char* vec = "SSE2";
 #endif
+    report.meta("isa", isa);
+    report.meta("vector", vec);
+    report.meta("omp_max_threads", std::to_string(omp_get_max_threads()));
     std::printf(
         "bench_subdiv: butterfly refinement of positions (3 planes), %s (%s), "
         "OpenMP max threads %d, min time %.2f s per figure\n",
@@ -125,7 +135,7 @@ int main(int argc, char** argv)
     std::printf("%-5s %-26s %10s %12s %9s %10s %9s\n", "step", "variant", "median ms",
                 "Mvert/s out", "GB/s", "x OpenMesh", "x copy");
 
-    for (int level = 6; level <= 9; ++level)
+    for (int level = 6; level <= (quick ? 8 : 9); ++level)
     {
         const subdiv::ConvolutionPlan plan = subdiv::ConvolutionPlan::create(level).value();
         const core::TetraGrid& g = plan.coarse_grid();
@@ -212,10 +222,33 @@ int main(int argc, char** argv)
                         is_copy || r.bytes == 0 ? "-" : std::to_string(rate / om_rate).c_str(),
                         r.bytes > 0 ? (r.bytes / r.seconds) / copy_bw : 0.0);
         }
+        for (const Row& r : rows)
+        {
+            const bool is_copy = r.what.rfind("STREAM", 0) == 0;
+            std::string c = r.what;  // "refine float, 1 thread" -> "refine float 1 thread"
+            if (const auto comma = c.find(", "); comma != std::string::npos)
+                c.erase(comma, 1);
+            const double rate = out_vertices / r.seconds;
+            report.add(c, level + 1, out_vertices, "vertices", "ms", r.seconds * 1e3, "ms");
+            if (!is_copy)
+            {
+                report.add(c, level + 1, out_vertices, "vertices", "output_vertices_per_s", rate,
+                           "1/s");
+                report.add(c, level + 1, out_vertices, "vertices", "x_openmesh", rate / om_rate,
+                           "1");
+            }
+            if (r.bytes > 0)
+            {
+                report.add(c, level + 1, out_vertices, "vertices", "bandwidth", r.bytes / r.seconds,
+                           "B/s");
+                report.add(c, level + 1, out_vertices, "vertices", "x_copy_1_thread",
+                           (r.bytes / r.seconds) / copy_bw, "1");
+            }
+        }
         std::printf("%d->%d 1 vs 2 threads bit-identical: %s\n", level, level + 1,
                     identical ? "yes" : "NO");
         if (!identical)
             return 1;
     }
-    return 0;
+    return report.write() ? 0 : 1;
 }

@@ -1,0 +1,63 @@
+# SPDX-License-Identifier: MIT
+# SPDX-FileCopyrightText: 2026 pliant contributors
+# Checks what `pliant bench SUITE --out DIR` wrote (tests/apps/bench.cmake):
+#   cmake -DDIR=<out> -DSUITE=<suite> -P check_bench_outputs.cmake
+# DIR/SUITE.csv starts with the shared header and has data rows of eight fields naming the suite;
+# DIR/SUITE.json and DIR/results.json parse and hold rows with every field; results.json
+# describes the machine. Values are never checked (timings vary).
+cmake_minimum_required(VERSION 3.25)  # list() keeps empty fields (CMP0007)
+foreach(var DIR SUITE)
+    if(NOT DEFINED ${var})
+        message(FATAL_ERROR "check_bench_outputs: -D${var}=... is required")
+    endif()
+endforeach()
+
+set(csv ${DIR}/${SUITE}.csv)
+if(NOT EXISTS ${csv})
+    message(FATAL_ERROR "missing ${csv}")
+endif()
+file(STRINGS ${csv} lines)
+list(LENGTH lines n)
+if(n LESS 2)
+    message(FATAL_ERROR "${csv}: ${n} lines, expected a header and rows")
+endif()
+list(GET lines 0 header)
+if(NOT header STREQUAL "suite,case,level,size,size_unit,metric,value,unit")
+    message(FATAL_ERROR "${csv}: unexpected header '${header}'")
+endif()
+list(GET lines 1 first)
+string(REPLACE "," ";" fields "${first}")
+list(LENGTH fields nf)
+list(GET fields 0 suite)
+if(NOT nf EQUAL 8 OR NOT suite STREQUAL SUITE)
+    message(FATAL_ERROR "${csv}: bad row '${first}'")
+endif()
+
+foreach(json ${DIR}/${SUITE}.json ${DIR}/results.json)
+    if(NOT EXISTS ${json})
+        message(FATAL_ERROR "missing ${json}")
+    endif()
+endforeach()
+file(READ ${DIR}/${SUITE}.json text)
+string(JSON suite_name GET "${text}" suite)
+string(JSON rows LENGTH "${text}" rows)
+if(NOT suite_name STREQUAL SUITE OR rows LESS 1)
+    message(FATAL_ERROR "${DIR}/${SUITE}.json: suite '${suite_name}', ${rows} rows")
+endif()
+foreach(key case level size size_unit metric value unit)
+    string(JSON v ERROR_VARIABLE err GET "${text}" rows 0 ${key})
+    if(err)
+        message(FATAL_ERROR "${DIR}/${SUITE}.json: rows[0] has no '${key}': ${err}")
+    endif()
+endforeach()
+
+file(READ ${DIR}/results.json all)
+string(JSON cpu GET "${all}" machine cpu_model)
+string(JSON load LENGTH "${all}" machine load_average_start)
+string(JSON code GET "${all}" suites ${SUITE} exit_code)
+string(JSON all_rows LENGTH "${all}" suites ${SUITE} rows)
+if(cpu STREQUAL "" OR NOT load EQUAL 3 OR NOT code EQUAL 0 OR NOT all_rows EQUAL rows)
+    message(FATAL_ERROR "results.json: cpu '${cpu}', load entries ${load}, exit code ${code}, "
+                        "${all_rows} rows (suite file: ${rows})")
+endif()
+message(STATUS "${SUITE}: ${n} CSV lines, ${rows} JSON rows, machine '${cpu}'")

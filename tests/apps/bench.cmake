@@ -1,0 +1,27 @@
+# SPDX-License-Identifier: MIT
+# SPDX-FileCopyrightText: 2026 pliant contributors
+# `pliant bench`: argument errors (every build), and one cheap suite end to end where the
+# benchmark programs are built (not under the sanitizers: PLIANT_BUILD_BENCH is OFF there; the
+# bench/ folder is configured after tests/, so the option, not the target, is checked). Never
+# asserts on timings.
+if(TARGET pliant)
+    add_test(NAME cli_bench_unknown_suite
+             COMMAND pliant bench subdiv nosuch --out ${CMAKE_CURRENT_BINARY_DIR}/bench-unknown)
+    set_tests_properties(cli_bench_unknown_suite PROPERTIES
+        PASS_REGULAR_EXPRESSION "unknown suite 'nosuch' \\(suites: subdiv net sim session")
+    add_test(NAME cli_bench_missing_program
+             COMMAND pliant bench net --bench-dir ${CMAKE_CURRENT_BINARY_DIR}/no-such-bench-dir
+                     --out ${CMAKE_CURRENT_BINARY_DIR}/bench-missing)
+    set_tests_properties(cli_bench_missing_program PROPERTIES
+        PASS_REGULAR_EXPRESSION "bench_net is missing: build the benchmark programs with the release preset")
+    if(PLIANT_BUILD_BENCH)
+        add_test(NAME cli_bench_net_quick
+                 COMMAND pliant bench net --quick --out ${CMAKE_CURRENT_BINARY_DIR}/bench-quick)
+        set_tests_properties(cli_bench_net_quick PROPERTIES TIMEOUT 120)
+        add_test(NAME cli_bench_net_quick_outputs
+                 COMMAND ${CMAKE_COMMAND} -DDIR=${CMAKE_CURRENT_BINARY_DIR}/bench-quick -DSUITE=net
+                         -P ${PROJECT_SOURCE_DIR}/apps/pliant-cli/bench/check_bench_outputs.cmake)
+        set_tests_properties(cli_bench_net_quick_outputs PROPERTIES
+            DEPENDS cli_bench_net_quick)
+    endif()
+endif()
