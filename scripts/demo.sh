@@ -6,7 +6,7 @@
 # `pliant demo` on the bundled mesh. Extra arguments go to `pliant demo` (try --help).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/install-deps.sh
+bash scripts/install-deps.sh --demo
 cmake --preset release >/dev/null
 cmake --build --preset release -j "${PLIANT_JOBS:-$(nproc)}" --target pliant
 exec build/release/apps/pliant-cli/pliant demo "$@"

@@ -4,7 +4,8 @@
 #
 # Installs the Debian 12 packages pliant needs, and only those that are missing.
 # Idempotent: a second run installs nothing and takes about a second.
-# Usage: scripts/install-deps.sh            (as root, or with sudo available)
+# Usage: scripts/install-deps.sh [--demo]   (as root, or with sudo available)
+#   --demo  also ImageMagick, with which `pliant demo` assembles its frames into demo.gif
 set -euo pipefail
 
 packages=(
@@ -18,7 +19,12 @@ packages=(
     # rendering (offscreen through EGL/OSMesa, viewer through GLFW + Dear ImGui)
     libglm-dev libglfw3-dev libimgui-dev libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri
     libosmesa6-dev xvfb
+    # plots of `pliant bench`
+    gnuplot-nox
 )
+if [ "${1:-}" = "--demo" ]; then
+    packages+=(imagemagick)
+fi
 
 missing=()
 for p in "${packages[@]}"; do

@@ -63,12 +63,12 @@ struct DemoOptions
     fs::path out = "demo-out";
     int level = 6;
     int display_levels = 1;
-    double duration = 4.0;
+    double duration = 3.0;
     double fps = 12.0;
     double dt = 0.0;  // 0: from the model's stability bound
     int width = 640;
     int height = 480;
-    double wall_limit = 150.0;
+    double wall_limit = 600.0;
     bool quick = false;
     bool render = true;
 };
@@ -646,7 +646,7 @@ void add_demo_command(CLI::App& app, const GlobalOptions& global)
         "ffmpeg), summary.md, session.prec (`pliant replay`), grid.pgrid, timeline.csv,\n"
         "remesh-report.json.\n\n"
         "Examples:\n"
-        "  pliant demo                      # the bundled cow, level 6, 4 s at 12 fps\n"
+        "  pliant demo                      # the bundled cow, level 6, 3 s at 12 fps\n"
         "  pliant demo --quick              # level 5, 2 s at 6 fps, 320x240 (the tests)\n"
         "  pliant demo --mesh my.obj --level 7 --out /tmp/run");
     cmd->add_option("--mesh", opt->mesh, "Closed genus-0 mesh (default: the bundled data/spot.obj)")
