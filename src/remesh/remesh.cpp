@@ -95,10 +95,12 @@ core::Result<RemeshResult> remesh(const mesh::TriMesh& input, const RemeshSettin
 
     t0 = Clock::now();
     SampleStats stats;
-    auto positions = sample_surface(*grid, domain, *m, map->points, &stats);
+    auto positions = settings.sampler ? settings.sampler(*grid, domain, *m, map->points)
+                                      : sample_surface(*grid, domain, *m, map->points, &stats);
     if (!positions)
         return positions.error();
     report.brute_force_locations = stats.brute_force;
+    report.sampler = settings.sampler ? settings.sampler_name : std::string("cpu");
     report.phases.push_back({"sample", seconds_since(t0)});
     if (progress != nullptr)
         progress->update("sample", 1.0);
@@ -159,6 +161,7 @@ std::string to_json(const QualityReport& r)
     kv("area_min_over_max", num(r.areas.min_over_max));
     kv("area_cv", num(r.areas.cv));
     kv("brute_force_locations", std::to_string(r.brute_force_locations));
+    kv("sampler", "\"" + r.sampler + "\"");
     std::string phases = "{";
     for (std::size_t i = 0; i < r.phases.size(); ++i)
         phases += (i ? ", \"" : "\"") + r.phases[i].name + "\": " + num(r.phases[i].seconds);
@@ -196,6 +199,7 @@ std::string to_text(const QualityReport& r)
     std::snprintf(buf, sizeof buf, "triangle areas: min/max %.4g, cv %.4f\n", r.areas.min_over_max,
                   r.areas.cv);
     s += buf;
+    s += "sampler: " + r.sampler + "\n";
     s += "time:";
     for (const PhaseTime& p : r.phases)
     {

@@ -15,12 +15,24 @@
 #include <pliant/remesh/quality.h>
 #include <pliant/remesh/sphere_map.h>
 
+#include <functional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
 
 namespace pliant::remesh
 {
+
+/// A replacement for the sampling phase, called by remesh() with exactly the inputs of
+/// sample_surface (the grid, domain_sphere(grid), the outward-facing input mesh and its
+/// fold-free sphere map) and held to its contract: every node's 3D position, twins equal, ghost
+/// width 0; an error aborts remesh() and is returned as is. The GPU sampler
+/// (render::sample_on_gpu, `pliant remesh --gpu`) plugs in here; remesh itself stays free of
+/// any GPU dependency.
+using Sampler = std::function<core::Result<core::Vec3Field<double>>(
+    const core::TetraGrid& grid, const core::Vec3Field<double>& domain, const mesh::TriMesh& mesh,
+    std::span<const core::Vec3> sphere)>;
 
 struct RemeshSettings
 {
@@ -29,6 +41,10 @@ struct RemeshSettings
     bool measure = true;  ///< compute the distance part of the report (takes about as long as
                           ///< the remeshing itself)
     DistanceSettings distance;
+    /// Empty: the CPU sampler (sample_surface). Otherwise called in its place.
+    Sampler sampler;
+    /// The report's `sampler` entry when `sampler` is set (e.g. "gpu").
+    std::string sampler_name = "custom";
 };
 
 struct PhaseTime
@@ -56,7 +72,8 @@ struct QualityReport
     bool measured = false;  ///< whether `distance` was computed
     SurfaceDistance distance;
     AreaSpread areas;
-    std::size_t brute_force_locations = 0;
+    std::size_t brute_force_locations = 0;  ///< CPU sampler only (0 for another sampler)
+    std::string sampler = "cpu";            ///< "cpu", or RemeshSettings::sampler_name
     std::vector<PhaseTime> phases;
     double total_seconds = 0.0;
 };
