@@ -3,7 +3,7 @@
 // `pliant refine GRID --levels K -o OUT`: modified butterfly refinement of a native grid file
 // (docs/subdivision.md). Every channel of the file (positions px/py/pz and any other per-node
 // field, e.g. a displacement u) is refined by the same operator; OUT is a .pgrid with the same
-// channels, or an .obj/.ply surface of the refined positions.
+// channels, or an .obj/.ply/.gltf/.glb surface of the refined positions.
 #include <pliant/core/grid_io.h>
 #include <pliant/core/tetra_grid.h>
 #include <pliant/mesh/io.h>
@@ -48,10 +48,10 @@ int run_refine(const RefineOptions& opt)
 {
     using core::ErrorCode;
     const std::string ext = lower_extension(opt.out);
-    if (ext != ".pgrid" && ext != ".obj" && ext != ".ply")
-        return report(
-            {ErrorCode::UnsupportedFormat, "refine: output " + opt.out.string() +
-                                               " must end in .pgrid (native grid), .obj or .ply"});
+    if (ext != ".pgrid" && ext != ".obj" && ext != ".ply" && ext != ".gltf" && ext != ".glb")
+        return report({ErrorCode::UnsupportedFormat,
+                       "refine: output " + opt.out.string() +
+                           " must end in .pgrid (native grid), .obj, .ply, .gltf or .glb"});
     std::error_code ec;
     if (!std::filesystem::is_regular_file(opt.grid, ec))
         return report({ErrorCode::IoError, "refine: " + opt.grid.string() +
@@ -163,7 +163,8 @@ void add_refine_command(CLI::App& app, const GlobalOptions& global)
     cmd->footer(
         "Every channel of GRID (positions px/py/pz and any other per-node field such as a\n"
         "displacement u) is refined by the same operator. A .pgrid OUT keeps all channels; an\n"
-        ".obj or .ply OUT gets the refined surface (2W^2+2 vertices, 4W^2 faces, W = 2^level).\n"
+        ".obj, .ply, .gltf or .glb OUT gets the refined surface (2W^2+2 vertices, 4W^2 faces,\n"
+        "W = 2^level; glTF stores float32, a .gltf writes its buffer to OUT's stem + .bin).\n"
         "The level of GRID plus --levels may be at most 10.\n\n"
         "Examples:\n"
         "  pliant refine spot.pgrid --levels 2 -o spot_fine.pgrid\n"
@@ -173,7 +174,8 @@ void add_refine_command(CLI::App& app, const GlobalOptions& global)
     cmd->add_option("-l,--levels", opt->levels, "Number of levels to refine (level + K <= 10)")
         ->check(CLI::Range(1, 9))
         ->capture_default_str();
-    cmd->add_option("-o,--output", opt->out, "Output file: .pgrid, .obj or .ply")->required();
+    cmd->add_option("-o,--output", opt->out, "Output file: .pgrid, .obj, .ply, .gltf or .glb")
+        ->required();
     cmd->add_option("-j,--threads", opt->threads,
                     "Threads for the convolution (results are identical for any count)")
         ->check(CLI::Range(1, 256))

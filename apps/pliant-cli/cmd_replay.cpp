@@ -37,10 +37,12 @@ int run_replay(const ReplayOptions& opt, const GlobalOptions& global)
     std::string ext = opt.out.extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(),
                    [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    if (!opt.out.empty() && ext != ".pgrid" && ext != ".obj" && ext != ".ply")
+    if (!opt.out.empty() && ext != ".pgrid" && ext != ".obj" && ext != ".ply" && ext != ".gltf" &&
+        ext != ".glb")
         return report({core::ErrorCode::UnsupportedFormat,
                        "replay: output " + opt.out.string() +
-                           " must end in .pgrid (u, v and deformed positions), .obj or .ply"});
+                           " must end in .pgrid (u, v and deformed positions), .obj, .ply, .gltf "
+                           "or .glb"});
     auto recording = session::load_recording(opt.recording);
     if (!recording)
         return report(recording.error());
@@ -125,7 +127,8 @@ void add_replay_command(CLI::App& app, const GlobalOptions& global)
     cmd->add_option("RECORDING", opt->recording, "Recording file (.prec)")
         ->required()
         ->check(CLI::ExistingFile);
-    cmd->add_option("-o,--out", opt->out, "Write the final surface: .pgrid, .obj or .ply");
+    cmd->add_option("-o,--out", opt->out,
+                    "Write the final surface: .pgrid, .obj, .ply, .gltf or .glb");
     cmd->add_option("--until", opt->until, "Stop at this tick (default: the recording's end)");
     cmd->add_option("-j,--threads", opt->threads, "Threads of the replay (same result)")
         ->check(CLI::Range(1, 256))

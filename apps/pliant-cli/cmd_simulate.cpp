@@ -2,7 +2,8 @@
 // SPDX-FileCopyrightText: 2026 pliant contributors
 // `pliant simulate [GRID] --scenario FILE.toml -o DIR`: runs a membrane scenario headless
 // (docs/physics.md). The scenario (TOML) names the material, the integrator, the duration, the
-// frame rate and timed forces; the run writes one .pgrid (or .ply) per frame and energy.csv.
+// frame rate and timed forces; the run writes one .pgrid (or a .ply/.obj/.gltf/.glb surface) per
+// frame and energy.csv.
 // TOML stays in this file: the sim library knows no file formats.
 #include <pliant/core/grid_io.h>
 #include <pliant/core/tetra_grid.h>
@@ -321,7 +322,7 @@ core::Result<void> write_frame(const SimulateOptions& opt, const sim::MembraneMo
     const std::filesystem::path path = opt.out / name;
     core::Vec3Field<double> p;
     model.positions(state.u, p);
-    if (opt.format == "ply")
+    if (opt.format != "pgrid")
         return mesh::export_mesh(path, mesh::from_grid(model.grid(), p));
     core::GridFile file = core::make_geometry_file(model.grid(), p);
     using Channel = std::pair<const char*, const core::Field<double>*>;
@@ -461,8 +462,9 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global)
         "or point + radius [m], optional 'to' for a moving point, vector [N]); see\n"
         "scenes/pull.toml and docs/physics.md. Errors name the key and its line.\n\n"
         "DIR receives frame_NNNNN.pgrid per frame (channels px py pz = deformed positions\n"
-        "P + u N, u [m], v [m/s]; or .ply surfaces with --format ply) and energy.csv (frame,\n"
-        "time, kinetic, strain, foundation, total energy [J], steps, rejections, flags).\n\n"
+        "P + u N, u [m], v [m/s]; or surfaces with --format ply, obj, gltf or glb) and\n"
+        "energy.csv (frame, time, kinetic, strain, foundation, total energy [J], steps,\n"
+        "rejections, flags).\n\n"
         "Examples:\n"
         "  pliant simulate --scenario scenes/pull.toml -o out/pull            # sphere, level 6\n"
         "  pliant simulate spot.pgrid --scenario scenes/pull.toml -o out/spot --format ply");
@@ -472,8 +474,8 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global)
         ->required()
         ->check(CLI::ExistingFile);
     cmd->add_option("-o,--output", opt->out, "Output folder (created if missing)")->required();
-    cmd->add_option("--format", opt->format, "Frame format: pgrid or ply")
-        ->check(CLI::IsMember({"pgrid", "ply"}))
+    cmd->add_option("--format", opt->format, "Frame format: pgrid, ply, obj, gltf or glb")
+        ->check(CLI::IsMember({"pgrid", "ply", "obj", "gltf", "glb"}))
         ->capture_default_str();
     cmd->add_option("-l,--level", opt->level, "Sphere level when GRID is omitted")
         ->check(CLI::Range(1, 10))

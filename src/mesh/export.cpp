@@ -1,24 +1,48 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: 2026 pliant contributors
 //
-// Mesh export (our own writers, not Assimp's exporter: we control precision and order) and the
-// geometry-image -> TriMesh conversion.
+// Mesh export and the geometry-image -> TriMesh conversion.
 //
 // - OBJ: ascii, `v x y z` with 17 significant digits (enough to round-trip any double), 1-based
-//   `f a b c`. Vertex and face order are kept.
+//   `f a b c`. Vertex and face order are kept. Our own writer: we control precision and order.
 // - PLY: binary little-endian, `double` x y z and a `uchar`/`uint` index list: lossless for any
-//   TriMesh (float would round), 8 bytes per coordinate. Assimp reads both back exactly for
-//   coordinates that are floats (everything `import_mesh` produced); see docs/mesh.md.
+//   TriMesh (float would round), 8 bytes per coordinate. Our own writer too. Assimp reads both
+//   back exactly for coordinates that are floats (everything `import_mesh` produced); see
+//   docs/mesh.md.
+// - glTF 2.0 (`.gltf`, `.glb`): through Assimp's exporter (format ids "gltf2" / "glb2"), since
+//   the format (JSON + binary buffers, accessors, materials) is not worth a second writer. An
+//   aiScene is built here: one node, one mesh, one plain grey material (Assimp's glTF 2 exporter
+//   expects one per mesh), positions as float (glTF stores float32, so the round trip is exact
+//   only to float) and area-weighted unit vertex normals (viewers shade smoothly; import_mesh
+//   ignores them). Assimp always runs JoinIdenticalVertices before this exporter: vertices whose
+//   float positions (and normals) agree within a few float ulps are merged and unused vertices
+//   dropped; order is otherwise kept. The export goes to memory (ExportToBlob, with the blob
+//   name set to the file's stem) and the files are written here: `.glb` is one file; `.gltf`
+//   is the JSON plus its buffer in a side file `<stem>.bin` next to it, referenced by that
+//   relative name (Assimp cannot embed a data URI, and writing through Assimp's file system
+//   would put the absolute path into the URI).
 
+#include <pliant/core/vec3.h>
 #include <pliant/mesh/io.h>
+
+#include <assimp/Exporter.hpp>
+#include <assimp/cexport.h>
+#include <assimp/config.h>
+#include <assimp/material.h>
+#include <assimp/scene.h>
 
 #include <algorithm>
 #include <array>
 #include <bit>
 #include <cctype>
+#include <cfenv>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <exception>
 #include <fstream>
+#include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -92,6 +116,179 @@ std::vector<char> ply_bytes(const TriMesh& mesh)
     return out;
 }
 
+/// Holds floating-point traps off while Assimp runs (as import.cpp does): feholdexcept saves the
+/// environment and masks all exceptions; fesetenv restores it without raising what was set.
+class FpHold
+{
+public:
+    FpHold() { feholdexcept(&saved_); }
+    ~FpHold()
+    {
+        feclearexcept(FE_ALL_EXCEPT);
+        fesetenv(&saved_);
+    }
+    FpHold(const FpHold&) = delete;
+    FpHold& operator=(const FpHold&) = delete;
+
+private:
+    std::fenv_t saved_{};
+};
+
+core::Result<void> write_file(const std::filesystem::path& path, const char* data, std::size_t size)
+{
+    std::ofstream out(path, std::ios::binary | std::ios::trunc);
+    if (!out)
+        return fail(ErrorCode::IoError,
+                    "export_mesh: " + path.string() + ": cannot open for writing");
+    out.write(data, static_cast<std::streamsize>(size));
+    out.close();
+    if (!out)
+        return fail(ErrorCode::IoError, "export_mesh: " + path.string() + ": write failed");
+    return {};
+}
+
+/// Area-weighted vertex normals (the sum of the unnormalised face normals), unit length; a vertex
+/// with no face or only degenerate ones gets +z (glTF requires unit normals).
+std::vector<core::Vec3> vertex_normals(const TriMesh& mesh)
+{
+    std::vector<core::Vec3> n(mesh.positions.size(), core::Vec3{0.0, 0.0, 0.0});
+    for (const Face& f : mesh.faces)
+    {
+        const core::Vec3& a = mesh.positions[f[0]];
+        const core::Vec3 c = core::cross(mesh.positions[f[1]] - a, mesh.positions[f[2]] - a);
+        for (const std::uint32_t v : f)
+            n[v] += c;
+    }
+    for (core::Vec3& v : n)
+    {
+        const double len = core::norm(v);
+        v = len > 0.0 && std::isfinite(len) ? v * (1.0 / len) : core::Vec3{0.0, 0.0, 1.0};
+    }
+    return n;
+}
+
+aiVector3D to_float(const core::Vec3& p)
+{
+    return {static_cast<float>(p.x), static_cast<float>(p.y), static_cast<float>(p.z)};
+}
+
+/// The aiScene Assimp's glTF 2 exporter gets: root node -> mesh 0 -> material 0.
+/// \pre every face index < vertex count.
+std::unique_ptr<aiScene> make_scene(const TriMesh& mesh)
+{
+    auto scene = std::make_unique<aiScene>();
+    scene->mRootNode = new aiNode("pliant");
+    scene->mRootNode->mNumMeshes = 1;
+    scene->mRootNode->mMeshes = new unsigned[1]{0};
+
+    auto* material = new aiMaterial();
+    const aiString material_name("pliant-surface");
+    material->AddProperty(&material_name, AI_MATKEY_NAME);
+    const aiColor4D grey(0.8F, 0.8F, 0.8F, 1.0F);
+    material->AddProperty(&grey, 1, AI_MATKEY_COLOR_DIFFUSE);
+    scene->mNumMaterials = 1;
+    scene->mMaterials = new aiMaterial* [1] { material };
+
+    auto* m = new aiMesh();
+    scene->mNumMeshes = 1;
+    scene->mMeshes = new aiMesh* [1] { m };
+    m->mName = aiString("surface");
+    m->mPrimitiveTypes = aiPrimitiveType_TRIANGLE;
+    m->mMaterialIndex = 0;
+    const std::vector<core::Vec3> normals = vertex_normals(mesh);
+    m->mNumVertices = static_cast<unsigned>(mesh.positions.size());
+    m->mVertices = new aiVector3D[mesh.positions.size()];
+    m->mNormals = new aiVector3D[mesh.positions.size()];
+    for (std::size_t i = 0; i < mesh.positions.size(); ++i)
+    {
+        m->mVertices[i] = to_float(mesh.positions[i]);
+        m->mNormals[i] = to_float(normals[i]);
+    }
+    m->mNumFaces = static_cast<unsigned>(mesh.faces.size());
+    m->mFaces = new aiFace[mesh.faces.size()];
+    for (std::size_t i = 0; i < mesh.faces.size(); ++i)
+    {
+        aiFace& face = m->mFaces[i];
+        face.mNumIndices = 3;
+        face.mIndices = new unsigned[3]{mesh.faces[i][0], mesh.faces[i][1], mesh.faces[i][2]};
+    }
+    return scene;
+}
+
+/// Checks what Assimp would otherwise read out of bounds or write as garbage.
+core::Result<void> check_for_gltf(const std::filesystem::path& path, const TriMesh& mesh)
+{
+    const std::string name = "export_mesh: " + path.string();
+    if (mesh.faces.empty())
+        return fail(ErrorCode::EmptyInput, name + ": no faces to write");
+    if (mesh.positions.size() > std::numeric_limits<std::uint32_t>::max() / 2 ||
+        mesh.faces.size() > std::numeric_limits<std::uint32_t>::max() / 4)
+        return fail(ErrorCode::InvalidArgument, name + ": too large for glTF through Assimp");
+    for (std::size_t i = 0; i < mesh.faces.size(); ++i)
+        for (const std::uint32_t v : mesh.faces[i])
+            if (v >= mesh.positions.size())
+                return fail(ErrorCode::BadIndex, name + ": face " + std::to_string(i) +
+                                                     " refers to vertex " + std::to_string(v) +
+                                                     " but there are " +
+                                                     std::to_string(mesh.positions.size()));
+    constexpr double k_float_max = static_cast<double>(std::numeric_limits<float>::max());
+    for (std::size_t i = 0; i < mesh.positions.size(); ++i)
+    {
+        const core::Vec3& p = mesh.positions[i];
+        for (const double c : {p.x, p.y, p.z})
+            if (!(std::abs(c) <= k_float_max))
+                return fail(ErrorCode::NonFiniteCoordinate,
+                            name + ": vertex " + std::to_string(i) +
+                                " has a coordinate that is not a finite float (glTF stores "
+                                "float32)");
+    }
+    return {};
+}
+
+core::Result<void> write_gltf(const std::filesystem::path& path, const TriMesh& mesh, bool binary)
+{
+    if (auto ok = check_for_gltf(path, mesh); !ok)
+        return ok;
+    const std::string name = "export_mesh: " + path.string();
+    // The blob name is the stem: the exporter names the .gltf's buffer "<stem>.bin" after it.
+    const std::string stem = path.stem().string();
+    const std::unique_ptr<aiScene> scene = make_scene(mesh);
+    FpHold hold;
+    Assimp::Exporter exporter;
+    Assimp::ExportProperties properties;
+    properties.SetPropertyString(AI_CONFIG_EXPORT_BLOB_NAME, stem);
+    const aiExportDataBlob* blob = nullptr;
+    try
+    {
+        blob = exporter.ExportToBlob(scene.get(), binary ? "glb2" : "gltf2", 0U, &properties);
+    }
+    catch (const std::exception& e)
+    {
+        return fail(ErrorCode::IoError, name + ": Assimp's glTF exporter failed: " + e.what());
+    }
+    if (blob == nullptr)
+    {
+        std::string why = exporter.GetErrorString();
+        if (why.empty())
+            why = "no output and no message";
+        return fail(ErrorCode::IoError, name + ": Assimp's glTF exporter failed: " + why);
+    }
+    // Side files first (the buffer), so a written .gltf never names a missing file.
+    for (const aiExportDataBlob* side = blob->next; side != nullptr; side = side->next)
+    {
+        const std::filesystem::path side_name(side->name.C_Str());
+        if (side_name.empty() || side_name.has_parent_path() || side_name == path.filename())
+            return fail(ErrorCode::IoError,
+                        name + ": Assimp's glTF exporter produced an unexpected side file '" +
+                            side_name.string() + "'");
+        if (auto ok = write_file(path.parent_path() / side_name,
+                                 static_cast<const char*>(side->data), side->size);
+            !ok)
+            return ok;
+    }
+    return write_file(path, static_cast<const char*>(blob->data), blob->size);
+}
+
 }  // namespace
 
 core::Result<void> export_mesh(const std::filesystem::path& path, const TriMesh& mesh)
@@ -104,19 +301,13 @@ core::Result<void> export_mesh(const std::filesystem::path& path, const TriMesh&
         bytes = obj_bytes(mesh);
     else if (ext == ".ply")
         bytes = ply_bytes(mesh);
+    else if (ext == ".gltf" || ext == ".glb")
+        return write_gltf(path, mesh, ext == ".glb");
     else
-        return fail(ErrorCode::UnsupportedFormat, "export_mesh: " + path.string() +
-                                                      ": unsupported format '" + ext +
-                                                      "' (pliant writes .obj and .ply)");
-    std::ofstream out(path, std::ios::binary | std::ios::trunc);
-    if (!out)
-        return fail(ErrorCode::IoError,
-                    "export_mesh: " + path.string() + ": cannot open for writing");
-    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-    out.close();
-    if (!out)
-        return fail(ErrorCode::IoError, "export_mesh: " + path.string() + ": write failed");
-    return {};
+        return fail(ErrorCode::UnsupportedFormat,
+                    "export_mesh: " + path.string() + ": unsupported format '" + ext +
+                        "' (pliant writes .obj, .ply, .gltf and .glb)");
+    return write_file(path, bytes.data(), bytes.size());
 }
 
 TriMesh from_grid(const core::TetraGrid& grid, const core::Vec3Field<double>& positions)

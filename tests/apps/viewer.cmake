@@ -2,11 +2,18 @@
 # SPDX-FileCopyrightText: 2026 pliant contributors
 # End-to-end test of `pliant view` (docs/viewer.md) under Xvfb with Mesa's software OpenGL: the
 # bundled mesh is remeshed at level 4 on the viewer's worker thread, a scripted drag pulls the
-# surface, and a screenshot is written at exit. Only when the viewer was built and xvfb-run
-# exists.
+# surface, the surface is exported (glTF binary and OBJ) and re-imported, and a screenshot is
+# written at exit. Only when the viewer was built and xvfb-run exists.
 find_program(PLIANT_XVFB_RUN xvfb-run)
 if(TARGET pliant AND PLIANT_HAVE_VIEWER AND PLIANT_XVFB_RUN)
     set(_viewer_png ${CMAKE_CURRENT_BINARY_DIR}/viewer.png)
+    # The script exports the surface after the drag (`export viewer_export.glb`, then key E:
+    # pliant-view-0000.obj, the first free name) into the test's working folder; stale copies
+    # from an earlier run are removed first so the checks below see this run's files.
+    set(_viewer_exports ${CMAKE_CURRENT_BINARY_DIR}/viewer_export.glb
+                        ${CMAKE_CURRENT_BINARY_DIR}/pliant-view-0000.obj)
+    add_test(NAME cli_view_export_clean COMMAND ${CMAKE_COMMAND} -E rm -f ${_viewer_exports})
+    set_tests_properties(cli_view_export_clean PROPERTIES FIXTURES_SETUP viewer_export_clean)
     add_test(NAME cli_view_scripted_drag
              COMMAND ${PLIANT_XVFB_RUN} -a -s "-screen 0 1280x800x24"
                      $<TARGET_FILE:pliant> view ${PROJECT_SOURCE_DIR}/data/spot.obj --level 4
@@ -17,7 +24,9 @@ if(TARGET pliant AND PLIANT_HAVE_VIEWER AND PLIANT_XVFB_RUN)
     # the picture (a failed read-back or an empty view gives 0).
     set_tests_properties(cli_view_scripted_drag PROPERTIES
         TIMEOUT 120
-        FIXTURES_SETUP viewer_png
+        WORKING_DIRECTORY ${CMAKE_CURRENT_BINARY_DIR}
+        FIXTURES_SETUP "viewer_png;viewer_export"
+        FIXTURES_REQUIRED viewer_export_clean
         PASS_REGULAR_EXPRESSION
             "largest \\|u\\| reached [0-9.e+-]+ m = ([1-9][0-9]*|0\\.[5-9][0-9]*)\\.?[0-9]* % of the object radius.*covers ([5-9]|[1-9][0-9])\\.[0-9] % of the 3D view"
         ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0;LIBGL_ALWAYS_SOFTWARE=1;OMP_NUM_THREADS=1")
@@ -25,6 +34,17 @@ if(TARGET pliant AND PLIANT_HAVE_VIEWER AND PLIANT_XVFB_RUN)
              COMMAND ${CMAKE_COMMAND} -DPNG=${_viewer_png} -DMIN_BYTES=8000
                      -P ${CMAKE_CURRENT_SOURCE_DIR}/viewer_check_png.cmake)
     set_tests_properties(cli_view_screenshot_png PROPERTIES FIXTURES_REQUIRED viewer_png)
+    # Each export re-imports as a closed genus-0 surface (`pliant info` exits 0) with the
+    # simulation level's 4W^2 = 1024 faces (level 4).
+    foreach(_export IN LISTS _viewer_exports)
+        get_filename_component(_ext ${_export} LAST_EXT)
+        string(SUBSTRING ${_ext} 1 -1 _ext)
+        add_test(NAME cli_view_export_${_ext}
+                 COMMAND ${CMAKE_COMMAND} -DPLIANT=$<TARGET_FILE:pliant> -DFILE=${_export}
+                         -DFACES=1024 -P ${CMAKE_CURRENT_SOURCE_DIR}/viewer_check_export.cmake)
+        set_tests_properties(cli_view_export_${_ext} PROPERTIES FIXTURES_REQUIRED viewer_export
+                             ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0")
+    endforeach()
 endif()
 # The viewer's window-free parts (picking, input scripts) as unit tests.
 if(TARGET pliant_render AND TARGET pliant_test_support)

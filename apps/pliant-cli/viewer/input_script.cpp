@@ -81,9 +81,21 @@ core::Result<std::vector<ScriptEvent>> parse_input_script(std::string_view text)
             std::transform(e.key.begin(), e.key.end(), e.key.begin(),
                            [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
         }
+        else if (command == "export")
+        {
+            e.kind = ScriptEvent::Kind::Export;
+            if (!(in >> e.file))
+                return parse_error(number, "expected `TIME export FILE`");
+            std::string ext = std::filesystem::path(e.file).extension().string();
+            std::transform(ext.begin(), ext.end(), ext.begin(),
+                           [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+            if (ext != ".obj" && ext != ".ply" && ext != ".gltf" && ext != ".glb")
+                return parse_error(
+                    number, "export file `" + e.file + "` must end in .obj, .ply, .gltf or .glb");
+        }
         else
-            return parse_error(number,
-                               "unknown command `" + command + "` (expected drag, wheel or key)");
+            return parse_error(
+                number, "unknown command `" + command + "` (expected drag, wheel, key or export)");
         std::string extra;
         if (in >> extra)
             return parse_error(number, "unexpected `" + extra + "` at the end");
@@ -152,6 +164,7 @@ void ScriptPlayer::play(double t, InputSink& sink)
             break;
         case ScriptEvent::Kind::Wheel: sink.wheel(e.x0, e.y0, e.clicks); break;
         case ScriptEvent::Kind::Key: sink.key(e.key); break;
+        case ScriptEvent::Kind::Export: sink.export_file(e.file); break;
         }
     }
 }

@@ -10,7 +10,9 @@
 //     0.5  drag 320 240 -> 360 200 for 1.0   # left button down at (320, 240), moved linearly,
 //                                           # released at (360, 200) 1.0 s later
 //     2.0  wheel 320 240 -1                  # scroll one click (negative: zoom out)
-//     2.5  key p                             # a key: p (screenshot), w, c, space, ...
+//     2.5  key p                             # a key: p (screenshot), e (export), w, c, ...
+//     2.8  export out.glb                    # export the surface to a file (.obj .ply .gltf
+//                                           # .glb; relative to the working folder)
 //
 // Events may overlap in time only if they are not both drags.
 
@@ -32,6 +34,7 @@ struct ScriptEvent
         Drag,
         Wheel,
         Key,
+        Export,
     };
     Kind kind = Kind::Drag;
     double time = 0.0;      ///< s
@@ -40,10 +43,12 @@ struct ScriptEvent
     double x1 = 0.0, y1 = 0.0;  ///< end point (drag)
     double clicks = 0.0;        ///< wheel
     std::string key;            ///< key name (lower case)
+    std::string file;           ///< export: the file to write (one word, no spaces)
 };
 
 /// Parses a script. \return ParseError naming the line for an unknown command, a missing or
-/// non-finite number, a negative time or duration, or overlapping drags.
+/// non-finite number, a negative time or duration, overlapping drags, or an export file whose
+/// extension is not .obj, .ply, .gltf or .glb.
 core::Result<std::vector<ScriptEvent>> parse_input_script(std::string_view text);
 /// Reads and parses a script file. \return IoError or parse_input_script's errors.
 core::Result<std::vector<ScriptEvent>> load_input_script(const std::filesystem::path& path);
@@ -57,6 +62,8 @@ public:
     virtual void mouse_button(bool down, double x, double y) = 0;
     virtual void wheel(double x, double y, double clicks) = 0;
     virtual void key(std::string_view name) = 0;
+    /// `TIME export FILE`: write the current surface to FILE (default: ignored).
+    virtual void export_file(std::string_view /*file*/) {}
 };
 
 /// Plays a script against a clock: `play(t)` sends every event due by time t, and for a drag in

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: 2026 pliant contributors
-// The viewer's window, frame loop, input, sessions and screenshots (design: viewer_app.h).
+// The viewer's window, frame loop, input, sessions, screenshots and surface export (design:
+// viewer_app.h).
+#include <pliant/mesh/io.h>
 #include <pliant/net/enet_transport.h>
 #include <pliant/render/camera.h>
 #include <pliant/render/gl_loader.h>
@@ -141,6 +143,7 @@ void on_key(GLFWwindow* window, int key, int /*scancode*/, int action, int /*mod
     case GLFW_KEY_F12: v->key("p"); break;
     case GLFW_KEY_W: v->key("w"); break;
     case GLFW_KEY_C: v->key("c"); break;
+    case GLFW_KEY_E: v->key("e"); break;
     case GLFW_KEY_H: v->key("h"); break;
     case GLFW_KEY_R: v->key("r"); break;
     case GLFW_KEY_SPACE: v->key("space"); break;
@@ -153,6 +156,9 @@ void on_glfw_error(int code, const char* message)
 {
     spdlog::error("view: GLFW error {}: {}", code, message);
 }
+
+/// The export formats of the panel's combo box (viewer_panels.cpp), in its order.
+constexpr std::array<const char*, 4> k_export_extensions{"obj", "ply", "gltf", "glb"};
 
 double seconds(std::chrono::steady_clock::duration d)
 {
@@ -600,6 +606,8 @@ void Viewer::key(std::string_view name)
 {
     if (name == "p" || name == "f12")
         request_screenshot(std::nullopt);
+    else if (name == "e")
+        export_surface(std::nullopt);
     else if (name == "w")
         draw_.wireframe = !draw_.wireframe;
     else if (name == "c")
@@ -641,6 +649,57 @@ bool Viewer::write_screenshot(const std::filesystem::path& path, int width, int 
         return false;
     }
     set_status("screenshot " + path.string(), false);
+    return true;
+}
+
+// --- export --------------------------------------------------------------------------------------
+
+void Viewer::export_file(std::string_view file)
+{
+    export_surface(std::filesystem::path(file));
+}
+
+bool Viewer::export_surface(std::optional<std::filesystem::path> path)
+{
+    if (!object_shown())
+    {
+        set_status("export: nothing to export yet", true);
+        return false;
+    }
+    if (!path)
+    {
+        // The first free name, so an export never overwrites an earlier one (bounded search).
+        const std::size_t format = static_cast<std::size_t>(std::clamp(export_format_, 0, 3));
+        std::error_code ec;
+        for (int k = 0; k < 10000 && !path; ++k)
+        {
+            char name[64];
+            std::snprintf(name, sizeof name, "pliant-view-%04d.%s", k, k_export_extensions[format]);
+            if (!std::filesystem::exists(name, ec))
+                path = std::filesystem::path(name);
+        }
+        if (!path)
+        {
+            set_status("export: pliant-view-0000 ... 9999 all exist in the working folder", true);
+            return false;
+        }
+    }
+    // The simulation-level surface: the state itself, not its refined display.
+    mesh::TriMesh surface;
+    surface.positions = view_.positions();
+    surface.faces = view_.faces();
+    if (auto ok = mesh::export_mesh(*path, surface); !ok)
+    {
+        set_status(ok.error().message, true);
+        return false;
+    }
+    const int level = model() != nullptr ? model()->grid().level() : 0;
+    set_status("exported " + path->string() + " (" + std::to_string(surface.vertex_count()) +
+                   " vertices, " + std::to_string(surface.face_count()) +
+                   " faces, simulation level " + std::to_string(level) + ")",
+               false);
+    std::printf("view: exported %s (%zu vertices, %zu faces, simulation level %d)\n",
+                path->string().c_str(), surface.vertex_count(), surface.face_count(), level);
     return true;
 }
 

@@ -68,6 +68,7 @@ public:
     void mouse_button(bool down, double x, double y) override;
     void wheel(double x, double y, double clicks) override;
     void key(std::string_view name) override;
+    void export_file(std::string_view file) override;
 
     // Panels (viewer_panels.cpp).
     void draw_panels();
@@ -138,6 +139,7 @@ public:
     std::uint64_t frames_ = 0;
     int screenshot_counter_ = 0;
     std::optional<std::filesystem::path> screenshot_request_;
+    int export_format_ = 0;  ///< index into k_export_extensions (viewer.cpp): obj ply gltf glb
     double last_coverage_ = -1.0;
 
     // Helpers (viewer.cpp).
@@ -157,6 +159,11 @@ public:
     void set_status(std::string message, bool error);
     void request_screenshot(std::optional<std::filesystem::path> path);
     bool write_screenshot(const std::filesystem::path& path, int width, int height);
+    /// Writes the simulation-level deformed surface p = P + u N (what is simulated and picked,
+    /// not the refined display surface) with mesh::export_mesh; no path: the first free
+    /// pliant-view-NNNN.<format> in the working folder. \return false (and an error status)
+    /// when nothing is shown yet or the file cannot be written.
+    bool export_surface(std::optional<std::filesystem::path> path);
 };
 
 }  // namespace pliant::viewer

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: 2026 pliant contributors
 // The viewer's ImGui panels (one collapsing section per stage, STYLE.md §9): status and
-// loading, display, material and integrator, grab, plots, session.
+// loading, display, export, material and integrator, grab, plots, session.
 #include <pliant/render/draw_settings.h>
 
 #include <imgui.h>
@@ -106,6 +106,18 @@ void Viewer::draw_panels()
         ImGui::SameLine();
         if (ImGui::Button("screenshot (P)"))
             request_screenshot(std::nullopt);
+    }
+
+    if (ImGui::CollapsingHeader("Export") && m != nullptr)
+    {
+        ImGui::Combo("format", &export_format_,
+                     "OBJ\0PLY (binary, double)\0glTF (.gltf + .bin)\0GLB (binary glTF)\0");
+        if (ImGui::Button("export (E)"))
+            export_surface(std::nullopt);
+        ImGui::TextWrapped(
+            "Writes the simulation-level surface p = P + u N (%zu vertices) to "
+            "pliant-view-NNNN in the working folder.",
+            view_.positions().size());
     }
 
     if (ImGui::CollapsingHeader("Material and integrator") && m != nullptr)

@@ -3,9 +3,9 @@
 #pragma once
 
 /// \file
-/// Reading meshes from files (through Assimp), writing them back (our own OBJ / PLY writers), and
-/// turning a geometry image back into a `TriMesh`. docs/mesh.md describes the formats, the
-/// welding and the error messages.
+/// Reading meshes from files (through Assimp), writing them back (our own OBJ / PLY writers,
+/// Assimp's glTF 2 exporter), and turning a geometry image back into a `TriMesh`. docs/mesh.md
+/// describes the formats, the welding and the error messages.
 
 #include <pliant/core/field.h>
 #include <pliant/core/result.h>
@@ -54,13 +54,24 @@ struct ImportReport
 [[nodiscard]] core::Result<TriMesh> import_mesh(const std::filesystem::path& path,
                                                 ImportReport* report = nullptr);
 
-/// Writes `mesh` by extension: `.obj` (ascii, every coordinate with 17 significant digits) or
-/// `.ply` (binary little-endian, double-precision coordinates, uint32 indices); vertex and face
-/// order are kept. Both files hold the doubles exactly. `import_mesh` of what `import_mesh`
-/// produced gives the identical mesh back (tested on the data meshes); since Assimp reads floats,
-/// a double mesh comes back rounded to float: exactly so through PLY, within one float ulp
-/// through OBJ (Assimp's fast_atof on exponent notation). docs/mesh.md has the details.
-/// \return IoError when the file cannot be written, UnsupportedFormat for another extension.
+/// Writes `mesh` by extension (case-insensitive):
+///   - `.obj` (ascii, every coordinate with 17 significant digits) or `.ply` (binary
+///     little-endian, double-precision coordinates, uint32 indices): vertex and face order are
+///     kept and the file holds the doubles exactly. Since Assimp reads floats, a double mesh
+///     comes back from `import_mesh` rounded to float: exactly so through PLY, within one float
+///     ulp through OBJ (Assimp's fast_atof on exponent notation).
+///   - `.gltf` / `.glb` (glTF 2.0, through Assimp's exporter): one mesh with float32 positions,
+///     unit vertex normals (area-weighted) and one plain material. `.gltf` writes its buffer to
+///     a side file `<stem>.bin` in the same folder (referenced by that relative name; keep the
+///     two together); `.glb` is self-contained. Positions are rounded to float; Assimp merges
+///     vertices whose float positions agree within a few ulps and drops unused ones, otherwise
+///     order is kept: `import_mesh` gives back the same faces with the float-rounded positions.
+/// `import_mesh` of what `import_mesh` produced gives the identical mesh back through every
+/// format (tested on the data meshes). docs/mesh.md has the details.
+/// \return IoError when a file cannot be written or Assimp's exporter fails (the message names
+///   the file and carries Assimp's); UnsupportedFormat for another extension (the message lists
+///   the four); for glTF also EmptyInput (no faces), BadIndex (a face index >= vertex count) and
+///   NonFiniteCoordinate (a coordinate that is not a finite float).
 [[nodiscard]] core::Result<void> export_mesh(const std::filesystem::path& path,
                                              const TriMesh& mesh);
 
