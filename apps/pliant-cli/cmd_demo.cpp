@@ -14,6 +14,12 @@
 // tick. So the frames, the statistics and the recording are the same on a slow machine as on a
 // fast one, and the wall time is the cost of the work, not of waiting. Real-time sessions between
 // processes are `pliant host` and `pliant join`.
+//
+// `--view` runs the same peers on a second thread, paced to the wall clock and repeating the
+// grabs every --duration seconds, and opens the viewer (GLFW + ImGui) on the main thread, where
+// it joins the master over 127.0.0.1 in place of the scripted late viewer; closing the window
+// ends the session. No offscreen frames are rendered then, and the replay is left to
+// `pliant replay` (the recording is still written).
 #include <pliant/core/grid_io.h>
 #include <pliant/mesh/io.h>
 #include <pliant/mesh/validate.h>
@@ -35,8 +41,13 @@
 #include "cli_common.h"
 #include "commands.h"
 
+#ifdef PLIANT_HAVE_VIEWER
+#include "viewer/viewer.h"
+#endif
+
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -44,9 +55,11 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <future>
 #include <memory>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace pliant::cli
@@ -71,6 +84,25 @@ struct DemoOptions
     double wall_limit = 600.0;
     bool quick = false;
     bool render = true;
+    bool view = false;                 // open the viewer on the running session
+    std::filesystem::path screenshot;  // --view: PNG of the viewer's last frame
+    double exit_after = 0.0;           // --view: close the viewer after this many seconds
+};
+
+/// The link between the session thread and the viewer of `pliant demo --view`: the session
+/// thread announces the master's port once every participant is partitioned (0: it failed
+/// before that); the viewer thread asks it to stop when its window closes.
+struct LiveLink
+{
+    std::atomic<bool> stop{false};
+    std::promise<std::uint16_t> master_port;
+    std::atomic<bool> announced{false};
+
+    void announce(std::uint16_t port)
+    {
+        if (!announced.exchange(true))
+            master_port.set_value(port);
+    }
 };
 
 double seconds_since(Clock::time_point start)
@@ -282,9 +314,12 @@ std::string make_animation(const fs::path& dir, double fps)
     return "demo.gif";
 }
 
-int run_demo(const DemoOptions& opt_in, const GlobalOptions& global)
+int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* live_link)
 {
     DemoOptions opt = opt_in;
+    const bool live = live_link != nullptr;  // --view: paced, repeating, until the window closes
+    if (live)
+        opt.render = false;
     if (opt.quick)
     {
         opt.level = std::min(opt.level, 5);
@@ -389,7 +424,14 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global)
     }
 
     const auto t_session = Clock::now();
-    auto out_of_time = [&] { return seconds_since(t_session) > opt.wall_limit; };
+    // With --view the session runs until the window closes; --wall-limit still bounds the wait
+    // for the participants to be partitioned.
+    auto out_of_time = [&]
+    {
+        if (live && live_link->stop.load())
+            return true;
+        return (!live || !live_link->announced.load()) && seconds_since(t_session) > opt.wall_limit;
+    };
     auto pump = [&](double now)
     {
         for (Peer& p : peers)
@@ -420,6 +462,8 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global)
         return report({core::ErrorCode::NetworkError,
                        "demo: the participants were not partitioned within the time limit"});
     const double t_joined = seconds_since(t_session);
+    if (live)
+        live_link->announce(peers[0].address.port);
 
     // 4. The scripted collaboration, one stream interval of virtual time at a time.
     std::optional<FramePainter> painter;
@@ -437,27 +481,35 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global)
     energy_csv << "time,ticks,owner_nodes_master,owner_nodes_A,owner_nodes_B,max_u\n";
     double max_u = 0.0;
     int painted = 0;
-    for (int frame = 1; frame <= frames; ++frame)
+    int frames_run = 0;
+    double reached = 0.0;  // session time reached, s
+    const auto t_clock = Clock::now();
+    for (int frame = 1; live ? !live_link->stop.load() : frame <= frames; ++frame)
     {
         for (int sub = 1; sub <= substeps; ++sub)
         {
             const double now = (frame - 1 + static_cast<double>(sub) / substeps) / opt.fps;
             const double previous = (frame - 1 + static_cast<double>(sub - 1) / substeps) / opt.fps;
-            // The users act on what they saw: grabs start and end between intervals.
+            if (live)  // the viewer shows the session in real time
+                std::this_thread::sleep_until(t_clock + std::chrono::duration_cast<Clock::duration>(
+                                                            std::chrono::duration<double>(now)));
+            // The users act on what they saw: grabs start and end between intervals (with
+            // --view the script repeats every --duration seconds).
+            const double phase = live ? std::fmod(previous, opt.duration) : previous;
             for (std::size_t k = 0; k < 2; ++k)
             {
-                const bool on = previous >= grabs[k].start && previous < grabs[k].end;
+                const bool on = phase >= grabs[k].start && phase < grabs[k].end;
                 if (on != grabbing[k])
                 {
                     peers[k + 1].session->set_forces(
                         on ? std::vector<net::UserForce>{grabs[k].force}
                            : std::vector<net::UserForce>{});
                     grabbing[k] = on;
-                    if (k == 0 && on)
+                    if (k == 0 && on && grab_set_at < 0.0)  // the first grab is timed
                         grab_set_at = previous;
                 }
             }
-            if (!peers[3].session && previous >= t_viewer)
+            if (!live && !peers[3].session && previous >= t_viewer)
             {
                 auto joined = session::Session::join(*peers[3].transport, peers[0].address,
                                                      net::Role::Viewer, settings_for(peers[3]));
@@ -469,6 +521,8 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global)
             while (!members_at(target) && !out_of_time())
                 pump(now);
             pump(now);  // one more pass streams the states of this interval
+            if (live && out_of_time())
+                break;  // the viewer's window closed
             if (out_of_time())
                 return report({core::ErrorCode::NotConverged,
                                "demo: the session fell behind the wall-clock limit of " +
@@ -479,7 +533,11 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global)
             const double seen = peers[0].session->display_u().at(grabs[0].node.x, grabs[0].node.y);
             if (grab_set_at >= 0.0 && grab_seen_at < 0.0 && seen != probe_base)
                 grab_seen_at = now;
+            reached = now;
         }
+        if (live && live_link->stop.load())
+            break;
+        ++frames_run;
         const bool from_viewer = peers[3].session && peers[3].session->ready();
         const session::Session& shown = *peers[from_viewer ? 3 : 0].session;
         const core::Field<double>& u = shown.display_u();
@@ -498,7 +556,8 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global)
                 return report(w.error());
             ++painted;
         }
-        progress.update("session + render", static_cast<double>(frame) / frames);
+        if (!live)
+            progress.update("session + render", static_cast<double>(frame) / frames);
     }
     const double t_run = seconds_since(t_session) - t_joined;
 
@@ -535,13 +594,19 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global)
             }
         rtt_ms.push_back(n > 0 ? 1e3 * sum / n : 0.0);
     }
+    // The replay check (skipped with --view: a long interactive session is left to
+    // `pliant replay`, which checks the same hash).
     const auto t_replay = Clock::now();
-    auto replayed = session::replay(recording);
-    if (!replayed)
-        return report(replayed.error());
+    bool identical = true;
+    if (!live)
+    {
+        auto replayed = session::replay(recording);
+        if (!replayed)
+            return report(replayed.error());
+        identical =
+            session::state_hash(grid, replayed->state.u, replayed->state.v) == recording.final_hash;
+    }
     const double replay_seconds = seconds_since(t_replay);
-    const bool identical =
-        session::state_hash(grid, replayed->state.u, replayed->state.v) == recording.final_hash;
 
     // The master ends the session; everyone disconnects (bounded).
     peers[0].session->shutdown();
@@ -581,21 +646,27 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global)
                       std::to_string(q.inverted_mesh + q.inverted_domain));
     row("coupling / fixed step", "exact lockstep / " + fmt("%.3f ms", 1e3 * dt) +
                                      " (stability bound " + fmt("%.3f ms)", 1e3 * stable));
-    row("simulated time / ticks / frames", fmt("%.2f s", opt.duration) + " / " +
+    row("simulated time / ticks / frames", fmt("%.2f s", reached) + " / " +
                                                std::to_string(peers[0].session->tick()) + " / " +
-                                               std::to_string(frames));
+                                               std::to_string(frames_run));
     row("session wall time", fmt("%.1f s", t_run) + " (" +
-                                 fmt("%.2f", opt.duration / std::max(t_run, 1e-9)) +
+                                 fmt("%.2f", reached / std::max(t_run, 1e-9)) +
                                  " x real time, all peers in one thread)");
     row("grab -> seen by the master",
         grab_seen_at >= 0.0 ? fmt("%.0f ms of session time", 1e3 * (grab_seen_at - grab_set_at))
                             : std::string("not seen"));
-    row("viewer joined at / shown from",
-        fmt("%.2f s", t_viewer) + " / " +
-            (viewer_ready_at >= 0.0 ? fmt("%.2f s", viewer_ready_at) : std::string("never")));
+    if (live)
+        row("viewer", "the window (pliant view), joined over 127.0.0.1");
+    else
+        row("viewer joined at / shown from",
+            fmt("%.2f s", t_viewer) + " / " +
+                (viewer_ready_at >= 0.0 ? fmt("%.2f s", viewer_ready_at) : std::string("never")));
     row("largest |u| shown", fmt("%.4f", max_u));
-    row("replay of session.prec", std::string(identical ? "bit-identical" : "DIFFERS") + " (" +
-                                      fmt("%.1f s", replay_seconds) + ", 1 thread)");
+    if (live)
+        row("replay of session.prec", "not checked with --view (pliant replay checks it)");
+    else
+        row("replay of session.prec", std::string(identical ? "bit-identical" : "DIFFERS") + " (" +
+                                          fmt("%.1f s", replay_seconds) + ", 1 thread)");
     row("frames", painter ? std::to_string(painted) + " PNG frames, animation: " + animation
                           : std::string("skipped"));
     row("total wall time", fmt("%.1f s", seconds_since(t_start)));
@@ -605,10 +676,12 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global)
     const std::array<const char*, 4> roles{"master", "participant", "participant", "viewer"};
     for (std::size_t k = 0; k < peers.size(); ++k)
     {
+        if (!peers[k].session)
+            continue;  // --view: the window's own peer is not one of these
         const session::SessionStats& s = stats[k];
-        const double seconds = k == 3 && viewer_ready_at >= 0.0
-                                   ? opt.duration - viewer_ready_at
-                                   : opt.duration;  // simulated seconds the peer took part
+        const double seconds =
+            std::max(k == 3 && viewer_ready_at >= 0.0 ? reached - viewer_ready_at : reached,
+                     1e-9);  // simulated seconds the peer took part
         table += "| " + peers[k].name + " | " + roles[k] + " | " + std::to_string(s.owned_nodes) +
                  " | " + std::to_string(s.steps) + " | " +
                  (s.steps > 0 ? fmt("%.3f ms", 1e3 * s.step_seconds / static_cast<double>(s.steps))
@@ -624,13 +697,59 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global)
     std::printf("%s", table.c_str());
     std::ofstream(opt.out / "summary.md") << table;
     std::printf(
-        "\nwrote %s (grid.pgrid, frame_*.png, %s, session.prec, timeline.csv, "
-        "remesh-report.json, summary.md)\n",
-        opt.out.string().c_str(), animation == "demo.gif" ? "demo.gif" : "no GIF");
+        "\nwrote %s (grid.pgrid, %s, session.prec, timeline.csv, remesh-report.json, "
+        "summary.md)\n",
+        opt.out.string().c_str(),
+        painted == 0              ? "no frames"
+        : animation == "demo.gif" ? "frame_*.png, demo.gif"
+                                  : "frame_*.png, no GIF");
     if (!identical)
         return report({core::ErrorCode::NotConverged,
                        "demo: replaying the recording did not reproduce the session's state"});
     return 0;
+}
+
+/// `pliant demo --view`: the session on a second thread, the viewer on this one.
+int run_demo_with_viewer(const DemoOptions& opt, const GlobalOptions& global)
+{
+#ifdef PLIANT_HAVE_VIEWER
+    LiveLink link;
+    std::future<std::uint16_t> port = link.master_port.get_future();
+    int demo_rc = 0;
+    std::thread session_thread(
+        [&]
+        {
+            demo_rc = run_demo(opt, global, &link);
+            link.announce(0);  // no-op when the session was announced
+        });
+    const std::uint16_t master = port.get();
+    int view_rc = 0;
+    if (master != 0)
+    {
+        spdlog::info(
+            "demo: the session runs; opening the viewer on 127.0.0.1:{} (close the "
+            "window to end it)",
+            master);
+        viewer::ViewerOptions v;
+        v.input = "127.0.0.1:" + std::to_string(master);
+        v.bundled_mesh = bundled_mesh();
+        v.screenshot = opt.screenshot;
+        v.exit_after = opt.exit_after;
+        v.name = "viewer";
+        v.owner_colors = true;
+        view_rc = viewer::run_viewer(v);
+    }
+    link.stop = true;
+    session_thread.join();
+    return demo_rc != 0 ? demo_rc : view_rc;
+#else
+    (void)opt;
+    (void)global;
+    spdlog::error(
+        "demo --view: pliant was built without the viewer (libglfw3-dev, libimgui-dev); install "
+        "them and reconfigure, or run the demo without --view");
+    return k_exit_failure;
+#endif
 }
 
 void add_demo_command(CLI::App& app, const GlobalOptions& global)
@@ -645,8 +764,13 @@ void add_demo_command(CLI::App& app, const GlobalOptions& global)
         "Output (in --out, default demo-out/): frame_NNNN.png, demo.gif (with ImageMagick or\n"
         "ffmpeg), summary.md, session.prec (`pliant replay`), grid.pgrid, timeline.csv,\n"
         "remesh-report.json.\n\n"
+        "With a display, --view opens the viewer (`pliant view`) on the running session instead\n"
+        "of rendering frames: the peers run in real time on a second thread, the two users'\n"
+        "grabs repeat every --duration seconds, and closing the window ends the session (the\n"
+        "summary and session.prec are still written; `pliant replay` checks the recording).\n\n"
         "Examples:\n"
         "  pliant demo                      # the bundled cow, level 6, 3 s at 12 fps\n"
+        "  pliant demo --view               # watch it live in a window\n"
         "  pliant demo --quick              # level 5, 2 s at 6 fps, 320x240 (the tests)\n"
         "  pliant demo --mesh my.obj --level 7 --out /tmp/run");
     cmd->add_option("--mesh", opt->mesh, "Closed genus-0 mesh (default: the bundled data/spot.obj)")
@@ -673,7 +797,22 @@ void add_demo_command(CLI::App& app, const GlobalOptions& global)
         ->capture_default_str();
     cmd->add_flag("--quick", opt->quick, "Level 5, 2 s, 6 fps, 320x240 (for tests)");
     cmd->add_flag("!--no-render", opt->render, "Skip the pictures (no OpenGL needed)");
-    cmd->callback(command_callback(global, [opt, &global]() { return run_demo(*opt, global); }));
+    cmd->add_flag("--view", opt->view,
+                  "Open the viewer on the running session (needs a display; no frames)");
+    cmd->add_option("--screenshot", opt->screenshot,
+                    "With --view: write a PNG of the viewer's last frame at exit");
+    cmd->add_option("--exit-after", opt->exit_after,
+                    "With --view: close the viewer this many seconds after the object shows")
+        ->check(CLI::PositiveNumber);
+    cmd->callback(command_callback(
+        global,
+        [opt, &global]()
+        {
+            if ((!opt->screenshot.empty() || opt->exit_after > 0.0) && !opt->view)
+                return report({core::ErrorCode::InvalidArgument,
+                               "demo: --screenshot and --exit-after go with --view"});
+            return opt->view ? run_demo_with_viewer(*opt, global) : run_demo(*opt, global, nullptr);
+        }));
 }
 
 const CommandRegistrar k_register{{"demo", 5, &add_demo_command}};

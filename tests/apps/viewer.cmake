@@ -34,6 +34,27 @@ if(TARGET pliant AND PLIANT_HAVE_VIEWER AND PLIANT_XVFB_RUN)
              COMMAND ${CMAKE_COMMAND} -DPNG=${_viewer_png} -DMIN_BYTES=8000
                      -P ${CMAKE_CURRENT_SOURCE_DIR}/viewer_check_png.cmake)
     set_tests_properties(cli_view_screenshot_png PROPERTIES FIXTURES_REQUIRED viewer_png)
+    # `pliant demo --view`: the demo's peers on a second thread in real time, the viewer joined
+    # to the master over 127.0.0.1 for 4 s after the object shows. The viewer must show the
+    # object (>= 5 % of the view) deformed by the scripted grabs it received (>= 0.5 % of the
+    # radius), and the demo must end and write its summary and recording after the window
+    # closes (the last line; PASS_REGULAR_EXPRESSION ignores the exit code, so it is matched).
+    set(_demo_view_png ${CMAKE_CURRENT_BINARY_DIR}/demo-view.png)
+    add_test(NAME cli_demo_view
+             COMMAND ${PLIANT_XVFB_RUN} -a -s "-screen 0 1280x800x24"
+                     $<TARGET_FILE:pliant> demo --quick --view
+                     --out ${CMAKE_CURRENT_BINARY_DIR}/demo-view
+                     --screenshot ${_demo_view_png} --exit-after 4)
+    set_tests_properties(cli_demo_view PROPERTIES
+        TIMEOUT 180
+        FIXTURES_SETUP demo_view_png
+        PASS_REGULAR_EXPRESSION
+            "largest \\|u\\| reached [0-9.e+-]+ m = ([1-9][0-9]*|0\\.[5-9][0-9]*)\\.?[0-9]* % of the object radius.*covers ([5-9]|[1-9][0-9])\\.[0-9] % of the 3D view.*wrote .*session\\.prec"
+        ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0;LIBGL_ALWAYS_SOFTWARE=1;OMP_NUM_THREADS=1")
+    add_test(NAME cli_demo_view_png
+             COMMAND ${CMAKE_COMMAND} -DPNG=${_demo_view_png} -DMIN_BYTES=8000
+                     -P ${CMAKE_CURRENT_SOURCE_DIR}/viewer_check_png.cmake)
+    set_tests_properties(cli_demo_view_png PROPERTIES FIXTURES_REQUIRED demo_view_png)
     # Each export re-imports as a closed genus-0 surface (`pliant info` exits 0) with the
     # simulation level's 4W^2 = 1024 faces (level 4).
     foreach(_export IN LISTS _viewer_exports)

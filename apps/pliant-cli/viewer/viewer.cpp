@@ -170,6 +170,8 @@ double seconds(std::chrono::steady_clock::duration d)
 Viewer::Viewer(const ViewerOptions& options) : options_(options)
 {
     draw_.background = {0.17F, 0.18F, 0.21F};
+    if (options.owner_colors)
+        color_ = render::ColorMode::Owner;
     draw_.color = color_;
     display_level_ = options.display_level;
 }

@@ -30,6 +30,7 @@ struct ViewerOptions
     std::uint16_t port = 0;            ///< UDP port for sessions (0: any when joining)
     bool vsync = true;
     bool hide_panels = false;
+    bool owner_colors = false;  ///< start in owner colours (default: displacement; C cycles)
 };
 
 /// Runs the viewer until the window closes or `exit_after`. \return the process exit code.
