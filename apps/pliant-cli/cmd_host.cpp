@@ -68,6 +68,8 @@ struct HostOptions
     std::string name = "master";
     std::string passphrase;
     std::string key_file;
+    bool compress = false;  ///< quantised-delta leaf states (docs/protocol.md §5.5)
+    double cap_mbit = 0.0;  ///< per-peer cap on leaf states and acks, Mbit/s (0: none)
 };
 
 int run_host(const HostOptions& opt)
@@ -119,6 +121,9 @@ int run_host(const HostOptions& opt)
     settings.coupling = opt.mode == "exact" ? session::Coupling::Exact : session::Coupling::Fast;
     settings.name = opt.name;
     settings.listen_port = bound->port;
+    if (opt.compress)
+        settings.stream_encoding = net::ValueEncoding::QuantisedDelta;
+    settings.bandwidth_cap_mbit_s = opt.cap_mbit;
     auto s = session::Session::host(*transport, *grid, rest, material, settings);
     if (!s)
         return report(s.error());
@@ -173,6 +178,11 @@ void add_host_command(CLI::App& app, const GlobalOptions& global)
         ->capture_default_str();
     cmd->add_option("--passphrase", opt->passphrase,
                     "Shared secret of the session (Argon2id); or set PLIANT_PASSPHRASE");
+    cmd->add_flag("--compress", opt->compress,
+                  "Stream quantised, delta-coded, zstd-packed leaf states (docs/session.md §5.1)");
+    cmd->add_option("--cap", opt->cap_mbit,
+                    "With --compress: leaf-state bytes per peer at most [Mbit/s] (0: no cap)")
+        ->check(CLI::NonNegativeNumber);
     cmd->add_option("--key-file", opt->key_file, "File whose bytes are the shared secret")
         ->check(CLI::ExistingFile)
         ->excludes("--passphrase");

@@ -62,6 +62,8 @@ struct JoinOptions
     std::string name = "peer";
     std::string passphrase;
     std::string key_file;
+    bool compress = false;  ///< quantised-delta leaf states (docs/protocol.md §5.5)
+    double cap_mbit = 0.0;  ///< per-peer cap on leaf states and acks, Mbit/s (0: none)
 };
 
 int run_join(const JoinOptions& opt)
@@ -89,6 +91,9 @@ int run_join(const JoinOptions& opt)
     session::SessionSettings settings;
     settings.name = opt.name;
     settings.listen_port = bound->port;
+    if (opt.compress)
+        settings.stream_encoding = net::ValueEncoding::QuantisedDelta;
+    settings.bandwidth_cap_mbit_s = opt.cap_mbit;
     auto s = session::Session::join(
         *transport, *master, opt.viewer ? net::Role::Viewer : net::Role::Participant, settings);
     if (!s)
@@ -135,6 +140,11 @@ void add_join_command(CLI::App& app, const GlobalOptions& global)
         ->capture_default_str();
     cmd->add_option("--passphrase", opt->passphrase,
                     "Shared secret of the session (Argon2id); or set PLIANT_PASSPHRASE");
+    cmd->add_flag("--compress", opt->compress,
+                  "Stream quantised, delta-coded, zstd-packed leaf states (docs/session.md §5.1)");
+    cmd->add_option("--cap", opt->cap_mbit,
+                    "With --compress: leaf-state bytes per peer at most [Mbit/s] (0: no cap)")
+        ->check(CLI::NonNegativeNumber);
     cmd->add_option("--key-file", opt->key_file, "File whose bytes are the shared secret")
         ->check(CLI::ExistingFile)
         ->excludes("--passphrase");

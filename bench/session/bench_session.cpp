@@ -158,6 +158,190 @@ sim::MembraneState reference(sim::MembraneModel& model, int peers, std::uint64_t
     return st;
 }
 
+/// Streaming cost of one encoding (docs/protocol.md §5.5, docs/results.md): two participants
+/// (master and one joiner) in `fast` coupling, each dragging a grab around continuously (a force
+/// whose direction turns once per second, re-sent every frame as a user drag would), streaming at
+/// 60 Hz, measured over `seconds` of virtual time after a 0.5 s warm-up.
+struct StreamResult
+{
+    double bytes_per_peer_s = 0.0;    // payload bytes out per peer per second (everything sent)
+    double packets_per_peer_s = 0.0;  // datagrams out per peer per second
+    double owned_nodes = 0.0;         // mean nodes owned per peer
+    double max_u = 0.0;               // largest |u| at the end, m
+    std::uint64_t leaf_states = 0, keys = 0, skips = 0, capped = 0, misses = 0;
+};
+
+StreamResult run_stream(int level, net::ValueEncoding encoding, double seconds, int u_exp,
+                        int v_exp, double drag_hz, double drag_n, double cap_mbit)
+{
+    net::SimulatedNetwork network;
+    std::vector<std::unique_ptr<net::Transport>> tr;
+    std::vector<std::unique_ptr<session::Session>> s;
+    const core::TetraGrid grid = core::TetraGrid::create(level).value();
+    session::SessionSettings set;
+    set.coupling = session::Coupling::Fast;
+    set.stream_encoding = encoding;
+    set.u_step_exponent = u_exp;
+    set.v_step_exponent = v_exp;
+    set.bandwidth_cap_mbit_s = cap_mbit;
+    tr.push_back(network.create_endpoint());
+    const net::Address master = tr.back()->open({}).value();
+    s.push_back(
+        session::Session::host(*tr.back(), grid, scenes::sphere_grid(grid, 1.0), material(), set)
+            .value());
+    tr.push_back(network.create_endpoint());
+    (void)tr.back()->open({}).value();
+    s.push_back(session::Session::join(*tr.back(), master, net::Role::Participant, set).value());
+    const auto faces = static_cast<std::uint32_t>(grid.face_count());
+    s[1]->set_points_of_interest({net::Target{net::TargetKind::Face, faces / 2, {0, 0, 0}, 0.0}});
+    const double dt = 0.0005;
+    double now = 0.0;
+    auto pump = [&]
+    {
+        for (auto& p : s)
+            p->poll();
+        for (auto& p : s)
+            p->advance(now);
+        network.advance(dt);
+        now += dt;
+    };
+    for (int it = 0; it < 40000; ++it)
+    {
+        const auto owners = s[0]->owners();
+        if (s[1]->ready() && std::find(owners.begin(), owners.end(), s[1]->id()) != owners.end())
+            break;
+        pump();
+    }
+    // Each participant drags a grab near its own seed: 0.5 N turning at 1 Hz.
+    const double poles[2] = {1.0, -1.0};
+    auto drag = [&](double t)
+    {
+        for (int k = 0; k < 2; ++k)
+        {
+            net::UserForce f;
+            f.target.kind = net::TargetKind::Position;
+            f.target.position = {0.0, 0.0, poles[k]};
+            f.target.radius = 0.3;
+            const double a = 2.0 * 3.141592653589793 * drag_hz * t + k;
+            f.force = {drag_n * std::cos(a), drag_n * std::sin(a), -0.6 * drag_n * poles[k]};
+            s[static_cast<std::size_t>(k)]->set_forces({f});
+        }
+    };
+    const int per_frame = static_cast<int>(std::lround(1.0 / 60.0 / dt));
+    auto run_for = [&](double span)
+    {
+        const int frames = static_cast<int>(std::lround(span * 60.0));
+        for (int f = 0; f < frames; ++f)
+        {
+            drag(now);
+            for (int k = 0; k < per_frame; ++k)
+                pump();
+        }
+    };
+    run_for(0.5);
+    std::vector<session::SessionStats> before;
+    for (const auto& p : s)
+        before.push_back(p->stats());
+    run_for(seconds);
+    StreamResult r;
+    for (std::size_t k = 0; k < s.size(); ++k)
+    {
+        const auto st = s[k]->stats();
+        r.bytes_per_peer_s += static_cast<double>(st.bytes_sent - before[k].bytes_sent);
+        r.packets_per_peer_s += static_cast<double>(st.packets_sent - before[k].packets_sent);
+        r.owned_nodes += static_cast<double>(st.owned_nodes);
+        r.leaf_states += st.leaf_states_sent - before[k].leaf_states_sent;
+        r.keys += st.key_states_sent - before[k].key_states_sent;
+        r.skips += st.quiescent_skips - before[k].quiescent_skips;
+        r.capped += st.capped_skips - before[k].capped_skips;
+        r.misses += st.baseline_misses;
+    }
+    const double n = static_cast<double>(s.size());
+    r.bytes_per_peer_s /= n * seconds;
+    r.packets_per_peer_s /= n * seconds;
+    r.owned_nodes /= n;
+    for (const core::NodeIndex node : grid.node_of_unique())
+    {
+        const core::GridCoord c = grid.coord(node);
+        r.max_u = std::max(r.max_u, std::fabs(s[0]->display_u().at(c.x, c.y)));
+    }
+    return r;
+}
+
+/// `pliant_bench_session --stream [level]`: raw f64 and f32 against quantised deltas.
+void stream_suite(bench::Report& report, int level)
+{
+    constexpr double seconds = 2.0;
+    constexpr double k_header_bytes = 38.0;  // UDP/IP + ENet per datagram (docs/results.md)
+    std::printf(
+        "# streaming, level %d, 2 participants dragging continuously, fast coupling, "
+        "60 Hz, %.0f s measured after 0.5 s\n",
+        level, seconds);
+    std::printf(
+        "drag | encoding | bits per node per frame, per node sent | Mbit/s out per peer "
+        "(+%g B headers) | "
+        "updates/s per leaf | LeafStates quiescent capped | max |u| m\n",
+        k_header_bytes);
+    struct Drag
+    {
+        const char* name;
+        double hz, newton;
+    };
+    struct Case
+    {
+        const char* name;
+        net::ValueEncoding encoding;
+        int u_exp, v_exp;
+        double cap;
+    };
+    const Drag drags[] = {{"strong", 1.0, 0.5}, {"moderate", 0.25, 0.2}};
+    const Case cases[] = {
+        {"f64", net::ValueEncoding::F64, -16, -12, 0.0},
+        {"f32", net::ValueEncoding::F32, -16, -12, 0.0},
+        {"q 2^-20 2^-16", net::ValueEncoding::QuantisedDelta, -20, -16, 0.0},
+        {"q 2^-16 2^-12", net::ValueEncoding::QuantisedDelta, -16, -12, 0.0},
+        {"q 2^-12 2^-8", net::ValueEncoding::QuantisedDelta, -12, -8, 0.0},
+        {"q 2^-16 2^-12 cap 1.8", net::ValueEncoding::QuantisedDelta, -16, -12, 1.8},
+    };
+    const double leaves = static_cast<double>(
+        2u << (2 * session::leaf_depth_for(core::TetraGrid::create(level).value(),
+                                           net::ValueEncoding::F64)));
+    for (const Drag& d : drags)
+        for (const Case& c : cases)
+        {
+            const StreamResult r =
+                run_stream(level, c.encoding, seconds, c.u_exp, c.v_exp, d.hz, d.newton, c.cap);
+            const double bits_node = 8.0 * r.bytes_per_peer_s / (60.0 * r.owned_nodes);
+            const double mbit = 8.0 * r.bytes_per_peer_s / 1e6;
+            const double mbit_h =
+                8.0 * (r.bytes_per_peer_s + k_header_bytes * r.packets_per_peer_s) / 1e6;
+            const double rate = static_cast<double>(r.leaf_states) / (leaves * seconds);
+            // Per node actually sent (LeafStates x mean nodes per leaf), everything out counted.
+            const double node_updates_per_peer_s =
+                static_cast<double>(r.leaf_states) / 2.0 / seconds * (2.0 * r.owned_nodes / leaves);
+            const double bits_sent_node = 8.0 * r.bytes_per_peer_s / node_updates_per_peer_s;
+            std::printf(
+                "%-8s | %-21s | %6.2f %6.2f | %6.2f (%6.2f) | %5.1f | %llu %llu %llu | "
+                "%.4f\n",
+                d.name, c.name, bits_node, bits_sent_node, mbit, mbit_h, rate,
+                static_cast<unsigned long long>(r.leaf_states),
+                static_cast<unsigned long long>(r.skips), static_cast<unsigned long long>(r.capped),
+                r.max_u);
+            const std::string name = std::string("stream ") + d.name + " " + c.name;
+            report.add(name, level, r.owned_nodes, "nodes", "bits_per_node_frame", bits_node,
+                       "bit");
+            report.add(name, level, r.owned_nodes, "nodes", "bits_per_node_sent", bits_sent_node,
+                       "bit");
+            report.add(name, level, r.owned_nodes, "nodes", "mbit_s_out_per_peer", mbit, "Mbit/s");
+            report.add(name, level, r.owned_nodes, "nodes", "mbit_s_out_per_peer_with_headers",
+                       mbit_h, "Mbit/s");
+            report.add(name, level, r.owned_nodes, "nodes", "updates_per_leaf_s", rate, "1/s");
+            if (r.misses != 0)
+                std::printf("  (baseline misses: %llu)\n",
+                            static_cast<unsigned long long>(r.misses));
+        }
+}
+
 }  // namespace
 
 namespace
@@ -195,8 +379,19 @@ int main(int argc, char** argv)
     if (!report.parse_args(argc, argv))
         return 2;
     std::vector<int> levels;
+    bool stream_only = false;
     for (int k = 1; k < argc; ++k)
-        levels.push_back(std::atoi(argv[k]));
+    {
+        if (std::string(argv[k]) == "--stream")
+            stream_only = true;
+        else
+            levels.push_back(std::atoi(argv[k]));
+    }
+    if (stream_only)
+    {
+        stream_suite(report, levels.empty() ? 6 : levels.front());
+        return report.write() ? 0 : 1;
+    }
     if (levels.empty())
         levels = report.quick() ? std::vector<int>{5, 6} : std::vector<int>{5, 6, 7};
     report.meta("network", "SimulatedNetwork, 5 ms one-way latency, all peers in one thread");

@@ -5,10 +5,12 @@
 // rules live in check_* and run on both sides (see codec.h).
 
 #include <pliant/net/codec.h>
+#include <pliant/net/quantised.h>
 
 #include "net/byte_io_internal.h"
 
 #include <algorithm>
+#include <array>
 #include <cfloat>
 #include <cmath>
 #include <type_traits>
@@ -35,9 +37,18 @@ std::size_t value_size(ValueEncoding e) noexcept
     return e == ValueEncoding::F32 ? 4 : 8;
 }
 
+/// f32 or f64 (Halo); LeafState also takes 3, quantised delta.
 bool valid_encoding(std::uint8_t e) noexcept
 {
     return e == 1 || e == 2;
+}
+bool valid_leaf_encoding(std::uint8_t e) noexcept
+{
+    return e >= 1 && e <= 3;
+}
+bool valid_exponent(int e) noexcept
+{
+    return e >= k_min_step_exponent && e <= k_max_step_exponent;
 }
 bool valid_role(std::uint8_t r) noexcept
 {
@@ -50,6 +61,8 @@ bool valid_reason(std::uint8_t r) noexcept
 
 std::size_t max_leaf_nodes(ValueEncoding e) noexcept
 {
+    if (e == ValueEncoding::QuantisedDelta)
+        return k_max_leaf_nodes_quantised;
     return e == ValueEncoding::F32 ? k_max_leaf_nodes_f32 : k_max_leaf_nodes_f64;
 }
 
@@ -248,12 +261,50 @@ Err check(const Leave& m) noexcept
     return valid_reason(static_cast<std::uint8_t>(m.reason)) ? Err{} : DecodeError::BadEnum;
 }
 
+Err check_quantised(const LeafState& m) noexcept
+{
+    const QuantisedDelta& q = m.quantised;
+    if (!m.u.empty() || !m.v.empty())
+        return DecodeError::BadCount;
+    if (q.du.empty() || q.du.size() != q.dv.size() || q.du.size() > k_max_leaf_nodes_quantised)
+        return DecodeError::BadCount;
+    if (q.packed.empty() || q.packed.size() > k_max_packed_residuals)
+        return DecodeError::BadCount;
+    if (std::size_t{m.node_offset} + q.du.size() > 0xFFFFu)
+        return DecodeError::BadRange;
+    if (!valid_exponent(q.u_exponent) || !valid_exponent(q.v_exponent))
+        return DecodeError::BadRange;
+    if (q.extrapolated && q.baseline == 0)
+        return DecodeError::BadRange;
+    return check_time(m.time);
+}
+
+/// Encoder side of encoding 3: `packed` must unpack to exactly `du` and `dv` (the decoder
+/// unpacks while reading, so it needs no second pass).
+Err check_packed(const LeafState& m) noexcept
+{
+    const QuantisedDelta& q = m.quantised;
+    std::array<std::int32_t, k_max_leaf_nodes_quantised> du{};
+    std::array<std::int32_t, k_max_leaf_nodes_quantised> dv{};
+    const std::size_t n = q.du.size();
+    if (auto err = unpack_residuals(q.packed, std::span(du.data(), n), std::span(dv.data(), n)))
+        return err;
+    if (!std::equal(q.du.begin(), q.du.end(), du.begin()) ||
+        !std::equal(q.dv.begin(), q.dv.end(), dv.begin()))
+        return DecodeError::BadCompression;
+    return {};
+}
+
 Err check(const LeafState& m) noexcept
 {
     if (auto err = check_leaf(m.leaf))
         return err;
-    if (!valid_encoding(static_cast<std::uint8_t>(m.encoding)))
+    if (!valid_leaf_encoding(static_cast<std::uint8_t>(m.encoding)))
         return DecodeError::BadEnum;
+    if (m.encoding == ValueEncoding::QuantisedDelta)
+        return check_quantised(m);
+    if (m.quantised != QuantisedDelta{})
+        return DecodeError::BadCount;
     if (m.u.empty() || m.u.size() != m.v.size() || m.u.size() > max_leaf_nodes(m.encoding))
         return DecodeError::BadCount;
     if (std::size_t{m.node_offset} + m.u.size() > 0xFFFFu)
@@ -387,6 +438,8 @@ std::size_t body_size(const Leave&) noexcept
 }
 std::size_t body_size(const LeafState& m) noexcept
 {
+    if (m.encoding == ValueEncoding::QuantisedDelta)
+        return k_leaf_state_quantised_fixed + m.quantised.packed.size();
     return k_leaf_state_fixed + (m.u.size() + m.v.size()) * value_size(m.encoding);
 }
 std::size_t body_size(const Halo& m) noexcept
@@ -554,8 +607,19 @@ void write_body(ByteWriter& w, const LeafState& m) noexcept
     w.u8(static_cast<std::uint8_t>(m.encoding));
     w.u8(0);
     w.u16(m.node_offset);
-    w.u16(static_cast<std::uint16_t>(m.u.size()));
+    w.u16(static_cast<std::uint16_t>(m.node_count()));
     w.f64(m.time);
+    if (m.encoding == ValueEncoding::QuantisedDelta)
+    {
+        const QuantisedDelta& q = m.quantised;
+        w.u32(q.baseline);
+        w.u8(static_cast<std::uint8_t>(q.u_exponent));
+        w.u8(static_cast<std::uint8_t>(q.v_exponent));
+        w.u16(static_cast<std::uint16_t>(q.packed.size() | (q.predicted ? 0x8000u : 0u) |
+                                         (q.extrapolated ? 0x4000u : 0u)));
+        w.bytes(q.packed.data(), q.packed.size());
+        return;
+    }
     write_values(w, m.u, m.encoding);
     write_values(w, m.v, m.encoding);
 }
@@ -851,11 +915,38 @@ Err read_body(ByteReader& r, LeafState& m) noexcept
     m.time = r.f64();
     if (r.short_read())
         return {};
-    if (!valid_encoding(encoding))
+    if (!valid_leaf_encoding(encoding))
         return DecodeError::BadEnum;
     m.encoding = static_cast<ValueEncoding>(encoding);
     if (n == 0 || n > max_leaf_nodes(m.encoding))
         return DecodeError::BadCount;
+    if (m.encoding == ValueEncoding::QuantisedDelta)
+    {
+        QuantisedDelta& q = m.quantised;
+        q.baseline = r.u32();
+        q.u_exponent = static_cast<std::int8_t>(r.u8());
+        q.v_exponent = static_cast<std::int8_t>(r.u8());
+        const std::uint16_t packed = r.u16();
+        if (r.short_read())
+            return {};
+        if ((packed & 0x3800u) != 0)
+            return DecodeError::BadReserved;
+        q.predicted = (packed & 0x8000u) != 0;
+        q.extrapolated = (packed & 0x4000u) != 0;
+        const std::size_t c = packed & 0x07FFu;
+        if (c == 0 || c > k_max_packed_residuals)
+            return DecodeError::BadCount;
+        if (c > r.remaining())
+        {
+            r.skip(c);
+            return {};
+        }
+        q.packed.resize(c);
+        r.bytes(q.packed.data(), c);
+        q.du.resize(n);
+        q.dv.resize(n);
+        return unpack_residuals(q.packed, q.du, q.dv);
+    }
     if (2 * std::size_t{n} * value_size(m.encoding) > r.remaining())
     {
         r.skip(r.remaining() + 1);
@@ -977,7 +1068,12 @@ std::optional<DecodeError> validate(const Message& message) noexcept
 {
     if (auto err = check_header(message.header, message.type()))
         return err;
-    return std::visit([](const auto& body) { return check(body); }, message.body);
+    if (auto err = std::visit([](const auto& body) { return check(body); }, message.body))
+        return err;
+    if (const auto* ls = std::get_if<LeafState>(&message.body);
+        ls != nullptr && ls->encoding == ValueEncoding::QuantisedDelta)
+        return check_packed(*ls);
+    return {};
 }
 
 std::size_t encoded_size(const Message& message) noexcept
@@ -999,7 +1095,7 @@ Expected<std::size_t, EncodeError> encode(const Message& message, std::span<std:
     w.u32(k_protocol_magic);
     w.u8(k_protocol_version);
     w.u8(static_cast<std::uint8_t>(message.type()));
-    w.u8(0);  // flags: reserved for issue 7
+    w.u8(0);  // flags: reserved
     w.u8(0);
     w.u32(message.header.session);
     w.u16(message.header.sender.value);

@@ -70,6 +70,7 @@ std::string_view to_string(DecodeError error) noexcept
     case DecodeError::NonFinite: return "non-finite";
     case DecodeError::BadName: return "bad-name";
     case DecodeError::Duplicate: return "duplicate";
+    case DecodeError::BadCompression: return "bad-compression";
     }
     return "unknown";
 }

@@ -3,6 +3,7 @@
 // The Session peer (include/pliant/session/session.h has the design; docs/session.md the story).
 #include <pliant/core/assert.h>
 #include <pliant/core/hash.h>
+#include <pliant/net/quantised.h>
 #include <pliant/session/recording.h>
 #include <pliant/session/session.h>
 
@@ -24,6 +25,10 @@ namespace
 constexpr std::uint32_t k_model_magic = 0x4D534C50;  // "PLSM"
 constexpr std::uint8_t k_model_version = 1;
 constexpr double k_leave_timeout_s = 5.0;
+/// Quantised streaming: an owner codes against a baseline only among its last 16 states sent of
+/// a leaf, and a receiver holds its last 16 received, so an acknowledged baseline the owner still
+/// has is one the receiver still holds (docs/protocol.md §5.5).
+constexpr std::size_t k_baseline_window = 16;
 
 // --- little-endian byte writer/reader for the blobs -------------------------------------------
 
@@ -221,6 +226,17 @@ struct RemotePeer
     bool departed = false;
 };
 
+/// A quantised leaf state an owner sent (per leaf) or a receiver holds (per leaf, with sender).
+struct QuantisedLeaf
+{
+    std::uint16_t sender = 0;
+    std::uint64_t tick = 0;
+    double time = 0.0;  ///< simulation time of the state, s (the LeafState's time)
+    int u_exponent = 0;
+    int v_exponent = 0;
+    std::vector<std::int32_t> qu, qv;
+};
+
 struct HaloBuffer
 {
     std::uint64_t tick = 0;
@@ -270,6 +286,23 @@ struct Session::Impl
     std::deque<HaloBuffer> halos;
     std::vector<std::uint64_t> leaf_tick;
     std::vector<double> leaf_time;
+
+    // Quantised streaming (docs/protocol.md §5.5).
+    std::vector<std::deque<QuantisedLeaf>> sent;  // per leaf: our last states sent, newest last
+    std::vector<std::deque<QuantisedLeaf>> held;  // per leaf: last states received, newest last
+    std::map<std::uint16_t, std::vector<std::uint64_t>> acked;  // peer -> per leaf: tick + 1
+    std::map<std::uint16_t, std::map<std::uint32_t, std::uint64_t>> pending_acks;  // to send
+    double next_ack = 0.0;
+    // Bandwidth cap (settings.bandwidth_cap_mbit_s): per peer, a byte budget and leaf priorities.
+    std::map<std::uint16_t, double> budget;
+    std::map<std::uint16_t, std::vector<double>> priority;
+    std::vector<core::Vec3> leaf_centre;  // rest positions, m
+    std::vector<double> leaf_radius;      // m
+    std::vector<char> near_interest;      // per leaf, refreshed each stream
+    std::vector<std::uint32_t> order;     // my leaves by priority
+    // Scratch of one leaf (no allocation per node or per leaf once sized).
+    std::vector<double> xu, xv, xp;
+    std::vector<std::int32_t> qu, qv, ru, rv, pu;
 
     // Cached sets for (prev, next) partition epochs.
     std::uint32_t cache_prev = 0, cache_next = 0;
@@ -359,6 +392,87 @@ struct Session::Impl
         s.display_v_ = core::Field<double>(g, 1);
         leaf_tick.assign(s.graph_->size(), 0);
         leaf_time.assign(s.graph_->size(), 0.0);
+        sent.assign(s.graph_->size(), {});
+        held.assign(s.graph_->size(), {});
+        std::size_t most = 0;
+        for (std::size_t l = 0; l < s.graph_->size(); ++l)
+            most = std::max(most, s.graph_->node_count(l));
+        for (auto* v : {&xu, &xv, &xp})
+            v->assign(most, 0.0);
+        for (auto* v : {&qu, &qv, &ru, &rv, &pu})
+            v->assign(most, 0);
+        leaf_centre.assign(s.graph_->size(), core::Vec3{});
+        leaf_radius.assign(s.graph_->size(), 0.0);
+        near_interest.assign(s.graph_->size(), 0);
+        const auto& P = s.model_->rest_positions();
+        for (std::size_t l = 0; l < s.graph_->size(); ++l)
+        {
+            core::Vec3 c{};
+            const auto nodes = s.graph_->nodes(l);
+            for (const core::NodeIndex n : nodes)
+            {
+                const core::GridCoord gc = g.coord(n);
+                c = c + core::Vec3{P[0].at(gc.x, gc.y), P[1].at(gc.x, gc.y), P[2].at(gc.x, gc.y)};
+            }
+            c = c * (1.0 / static_cast<double>(std::max<std::size_t>(nodes.size(), 1)));
+            double r = 0.0;
+            for (const core::NodeIndex n : nodes)
+            {
+                const core::GridCoord gc = g.coord(n);
+                const core::Vec3 p{P[0].at(gc.x, gc.y), P[1].at(gc.x, gc.y), P[2].at(gc.x, gc.y)};
+                r = std::max(r, norm(p - c));
+            }
+            leaf_centre[l] = c;
+            leaf_radius[l] = r;
+        }
+    }
+
+    /// Marks the leaves within a leaf diameter of a point of interest or of an applied force.
+    void refresh_interest()
+    {
+        std::vector<std::pair<core::Vec3, double>> spots;  // position, radius
+        const core::TetraGrid& g = s.model_->grid();
+        const auto& P = s.model_->rest_positions();
+        auto add = [&](const net::Target& t)
+        {
+            if (t.kind == net::TargetKind::Position)
+            {
+                spots.emplace_back(core::Vec3{t.position[0], t.position[1], t.position[2]},
+                                   t.radius);
+                return;
+            }
+            if (const auto n = seed_of({t}))
+            {
+                const core::GridCoord c = g.coord(*n);
+                spots.emplace_back(
+                    core::Vec3{P[0].at(c.x, c.y), P[1].at(c.x, c.y), P[2].at(c.x, c.y)}, t.radius);
+            }
+        };
+        for (const net::Target& t : my_points)
+            add(t);
+        if (const ForceEntry* e = active(my_forces, s.state_.tick))
+            for (const net::UserForce& f : e->forces)
+                add(f.target);
+        for (const auto& [id, p] : peers)
+        {
+            for (const net::Target& t : p.points)
+                add(t);
+            if (const ForceEntry* e = active(p.forces, s.state_.tick))
+                for (const net::UserForce& f : e->forces)
+                    add(f.target);
+        }
+        for (std::size_t l = 0; l < near_interest.size(); ++l)
+        {
+            near_interest[l] = 0;
+            for (const auto& [pos, radius] : spots)
+                if (norm(pos - leaf_centre[l]) <= radius + 2.0 * leaf_radius[l])
+                    near_interest[l] = 1;
+        }
+    }
+
+    [[nodiscard]] bool quantised_stream() const noexcept
+    {
+        return settings.stream_encoding == net::ValueEncoding::QuantisedDelta;
     }
 
     const PartitionEntry* partition_at(std::uint64_t tick) const
@@ -524,6 +638,7 @@ struct Session::Impl
         if (e == my_leaves_epoch)
             return;
         my_leaves_epoch = e;
+        const std::vector<std::uint32_t> before = std::move(my_leaves);
         my_leaves.clear();
         owned_regions.clear();
         if (p == nullptr)
@@ -533,6 +648,10 @@ struct Session::Impl
             {
                 my_leaves.push_back(l);
                 owned_regions.push_back(s.graph_->regions()[l]);
+                // A leaf (re)acquired starts from key states: no receiver holds a baseline of
+                // ours from this ownership.
+                if (!std::binary_search(before.begin(), before.end(), l))
+                    sent[l].clear();
             }
     }
 
@@ -823,22 +942,71 @@ struct Session::Impl
             counters.step_seconds += seconds_since(t0);
             counters.steps += rep.steps;
             next_frame += frame;
+            if (quantised_stream())
+                adopt_quantised();
             copy_own_to_display(p);
         }
     }
 
     // --- display and streaming -----------------------------------------------------------------
 
+    /// Quantises leaf `l` of the state into qu, qv (first n entries), and its dequantised values
+    /// into xu, xv. \return the node count, or 0 if a value does not fit the int32 range.
+    std::size_t quantise_leaf(std::uint32_t l)
+    {
+        const auto nodes = s.graph_->nodes(l);
+        const std::size_t n = nodes.size();
+        const core::TetraGrid& g = s.model_->grid();
+        for (std::size_t k = 0; k < n; ++k)
+        {
+            const core::GridCoord c = g.coord(nodes[k]);
+            xu[k] = s.state_.u.at(c.x, c.y);
+            xv[k] = s.state_.v.at(c.x, c.y);
+        }
+        const auto su = std::span(qu.data(), n);
+        const auto sv = std::span(qv.data(), n);
+        if (!net::quantise(std::span(xu.data(), n), settings.u_step_exponent, su) ||
+            !net::quantise(std::span(xv.data(), n), settings.v_step_exponent, sv))
+            return 0;
+        net::dequantise(su, settings.u_step_exponent, std::span(xu.data(), n));
+        net::dequantise(sv, settings.v_step_exponent, std::span(xv.data(), n));
+        return n;
+    }
+
+    /// Fast mode with quantised streaming: the owner's state on its leaves becomes what it
+    /// streams, so its neighbours' Dirichlet values are its own state (docs/protocol.md §5.5).
+    void adopt_quantised()
+    {
+        const core::TetraGrid& g = s.model_->grid();
+        for (const std::uint32_t l : my_leaves)
+        {
+            const std::size_t n = quantise_leaf(l);
+            const auto nodes = s.graph_->nodes(l);
+            for (std::size_t k = 0; k < n; ++k)
+            {
+                const core::GridCoord c = g.coord(nodes[k]);
+                s.state_.u.at(c.x, c.y) = xu[k];
+                s.state_.v.at(c.x, c.y) = xv[k];
+            }
+        }
+        s.model_->sync(s.state_.u);
+        s.model_->sync(s.state_.v);
+    }
+
     void copy_own_to_display(const PartitionEntry* p)
     {
         refresh_my_leaves(p);
+        const core::TetraGrid& g = s.model_->grid();
         for (const std::uint32_t l : my_leaves)
         {
-            for (const core::NodeIndex n : s.graph_->nodes(l))
+            const auto nodes = s.graph_->nodes(l);
+            // With quantised streaming every peer, this one included, shows the dequantised bits.
+            const std::size_t n = quantised_stream() ? quantise_leaf(l) : 0;
+            for (std::size_t k = 0; k < nodes.size(); ++k)
             {
-                const core::GridCoord c = s.model_->grid().coord(n);
-                s.display_u_.at(c.x, c.y) = s.state_.u.at(c.x, c.y);
-                s.display_v_.at(c.x, c.y) = s.state_.v.at(c.x, c.y);
+                const core::GridCoord c = g.coord(nodes[k]);
+                s.display_u_.at(c.x, c.y) = n != 0 ? xu[k] : s.state_.u.at(c.x, c.y);
+                s.display_v_.at(c.x, c.y) = n != 0 ? xv[k] : s.state_.v.at(c.x, c.y);
             }
             leaf_tick[l] = s.state_.tick;
             leaf_time[l] = s.state_.time;
@@ -857,6 +1025,191 @@ struct Session::Impl
         return t > exact_from ? partition_at(t - 1) : partition_at(t);
     }
 
+    /// The baseline's u moved on by its v to `time` (u + v dt, then quantised) into pu; the owner
+    /// and every receiver compute the same bits (the same doubles, no contraction). \return false
+    /// if a value leaves the int32 range (the owner then does not extrapolate).
+    bool extrapolate(const QuantisedLeaf& base, double time, std::size_t n)
+    {
+        const double su = net::quantum(base.u_exponent);
+        const double sv = net::quantum(base.v_exponent);
+        const double dt = time - base.time;
+        for (std::size_t i = 0; i < n; ++i)
+            xp[i] =
+                static_cast<double>(base.qu[i]) * su + static_cast<double>(base.qv[i]) * sv * dt;
+        return net::quantise(std::span(xp.data(), n), base.u_exponent, std::span(pu.data(), n));
+    }
+
+    /// The baseline `peer` acknowledged for leaf `l` that we still hold, or null.
+    const QuantisedLeaf* acked_baseline(std::uint16_t peer, std::uint32_t l) const
+    {
+        auto it = acked.find(peer);
+        if (it == acked.end() || it->second[l] == 0)
+            return nullptr;
+        const std::uint64_t tick = it->second[l] - 1;
+        for (const QuantisedLeaf& q : sent[l])
+            if (q.tick == tick && q.u_exponent == settings.u_step_exponent &&
+                q.v_exponent == settings.v_step_exponent)
+                return &q;
+        return nullptr;
+    }
+
+    /// Codes qu, qv (n nodes) against `base` (null: a key state) into `m`. \return false if the
+    /// packed residuals do not fit one datagram.
+    bool code_leaf(net::LeafState& m, std::size_t n, const QuantisedLeaf* base)
+    {
+        const auto cu = std::span<const std::int32_t>(qu.data(), n);
+        const auto cv = std::span<const std::int32_t>(qv.data(), n);
+        auto bu = base != nullptr ? std::span<const std::int32_t>(base->qu) : cu.first(0);
+        const auto bv = base != nullptr ? std::span<const std::int32_t>(base->qv) : cv.first(0);
+        net::QuantisedDelta& q = m.quantised;
+        q.baseline = base != nullptr ? static_cast<std::uint32_t>(s.state_.tick - base->tick) : 0;
+        // Temporal prediction of u from the baseline's u and v where it pays.
+        q.extrapolated = false;
+        if (base != nullptr && extrapolate(*base, s.state_.time, n))
+        {
+            std::int64_t plain = 0;
+            std::int64_t moved = 0;
+            for (std::size_t i = 0; i < n; ++i)
+            {
+                plain += std::llabs(std::int64_t{cu[i]} - base->qu[i]);
+                moved += std::llabs(std::int64_t{cu[i]} - pu[i]);
+            }
+            if (moved < plain)
+            {
+                q.extrapolated = true;
+                bu = std::span<const std::int32_t>(pu.data(), n);
+            }
+        }
+        q.u_exponent = static_cast<std::int8_t>(settings.u_step_exponent);
+        q.v_exponent = static_cast<std::int8_t>(settings.v_step_exponent);
+        q.predicted = net::prediction_pays(cu, bu, cv, bv);
+        if (!net::make_residuals(cu, bu, q.predicted, std::span(ru.data(), n)) ||
+            !net::make_residuals(cv, bv, q.predicted, std::span(rv.data(), n)))
+            return false;
+        q.du.assign(ru.begin(), ru.begin() + static_cast<std::ptrdiff_t>(n));
+        q.dv.assign(rv.begin(), rv.begin() + static_cast<std::ptrdiff_t>(n));
+        return net::pack_residuals(q.du, q.dv, net::k_max_packed_residuals, q.packed);
+    }
+
+    /// Quantised streaming of leaf `l` to every peer (docs/protocol.md §5.5). \return false if
+    /// the leaf's values do not quantise (the caller sends f64).
+    bool stream_quantised(const PartitionEntry* p, std::uint32_t l)
+    {
+        const std::size_t n = quantise_leaf(l);
+        if (n == 0)
+        {
+            sent[l].clear();
+            return false;
+        }
+        const core::LeafId id = s.graph_->leaves()[l];
+        const std::uint64_t tick = s.state_.tick;
+        bool any = false;
+        for (const auto& [pid, peer] : peers)
+        {
+            if (peer.departed || !peer.handle)
+                continue;
+            const QuantisedLeaf* base = acked_baseline(pid, l);
+            std::vector<double>* prio = capped() ? &priority[pid] : nullptr;
+            if (prio != nullptr)
+                prio->resize(s.graph_->size(), 0.0);
+            if (base != nullptr && base == &sent[l].back() &&
+                std::equal(base->qu.begin(), base->qu.end(), qu.begin()) &&
+                std::equal(base->qv.begin(), base->qv.end(), qv.begin()))
+            {
+                ++counters.quiescent_skips;  // the receiver shows exactly this already
+                if (prio != nullptr)
+                    (*prio)[l] = 0.0;
+                continue;
+            }
+            if (prio != nullptr && budget[pid] <= 0.0)
+            {
+                // Over this peer's budget: wait, more urgently near the action.
+                (*prio)[l] += 1.0 + (near_interest[l] != 0 ? settings.interest_boost : 0.0);
+                ++counters.capped_skips;
+                continue;
+            }
+            if (base != nullptr && base->tick >= tick)
+                base = nullptr;
+            net::LeafState m;
+            m.epoch = p->epoch;
+            m.leaf = net::WireLeafId{id.square, id.depth, id.ix, id.iy};
+            m.encoding = net::ValueEncoding::QuantisedDelta;
+            m.time = s.state_.time;
+            bool coded = code_leaf(m, n, base);
+            if (!coded && base != nullptr)
+            {
+                base = nullptr;
+                coded = code_leaf(m, n, nullptr);
+            }
+            if (!coded)
+            {
+                // Incompressible: the same dequantised bits as f64, outside the baseline chain.
+                m.encoding = net::ValueEncoding::F64;
+                m.quantised = {};
+                m.u.assign(xu.begin(), xu.begin() + static_cast<std::ptrdiff_t>(n));
+                m.v.assign(xv.begin(), xv.begin() + static_cast<std::ptrdiff_t>(n));
+            }
+            else
+            {
+                any = true;
+                if (base == nullptr)
+                    ++counters.key_states_sent;
+            }
+            ++counters.leaf_states_sent;
+            const net::Message msg = make(m, tick);
+            if (prio != nullptr)
+            {
+                budget[pid] -= static_cast<double>(net::encoded_size(msg));
+                (*prio)[l] = 0.0;
+            }
+            send_to(pid, msg);
+        }
+        if (any)
+        {
+            std::deque<QuantisedLeaf>& h = sent[l];
+            if (!h.empty() && h.back().tick == tick)
+                h.pop_back();
+            if (h.size() >= k_baseline_window)
+                h.pop_front();
+            h.push_back(QuantisedLeaf{
+                s.id_.value, tick, s.state_.time, settings.u_step_exponent,
+                settings.v_step_exponent,
+                std::vector<std::int32_t>(qu.begin(), qu.begin() + static_cast<std::ptrdiff_t>(n)),
+                std::vector<std::int32_t>(qv.begin(),
+                                          qv.begin() + static_cast<std::ptrdiff_t>(n))});
+        }
+        return true;
+    }
+
+    [[nodiscard]] bool capped() const noexcept
+    {
+        return quantised_stream() && settings.bandwidth_cap_mbit_s > 0.0;
+    }
+
+    /// Bandwidth cap: refills every peer's budget for one stream period and orders our leaves by
+    /// their total priority (highest first, then by index).
+    void plan_capped_stream()
+    {
+        refresh_interest();
+        const double per_period =
+            settings.bandwidth_cap_mbit_s * 1e6 / 8.0 / settings.stream_rate_hz;
+        for (const auto& [pid, peer] : peers)
+        {
+            if (peer.departed || !peer.handle)
+                continue;
+            double& b = budget[pid];
+            b = std::min(b + per_period, 2.0 * per_period);
+        }
+        order = my_leaves;
+        std::vector<double> total(s.graph_->size(), 0.0);
+        for (const auto& [pid, prio] : priority)
+            for (const std::uint32_t l : my_leaves)
+                if (l < prio.size())
+                    total[l] += prio[l];
+        std::stable_sort(order.begin(), order.end(),
+                         [&](std::uint32_t a, std::uint32_t b) { return total[a] > total[b]; });
+    }
+
     void stream()
     {
         const PartitionEntry* p = stream_partition();
@@ -864,8 +1217,12 @@ struct Session::Impl
             return;
         refresh_my_leaves(p);
         const core::TetraGrid& g = s.model_->grid();
-        for (const std::uint32_t l : my_leaves)
+        if (capped())
+            plan_capped_stream();
+        for (const std::uint32_t l : capped() ? order : my_leaves)
         {
+            if (quantised_stream() && stream_quantised(p, l))
+                continue;
             net::LeafState m;
             m.epoch = p->epoch;
             const core::LeafId id = s.graph_->leaves()[l];
@@ -878,6 +1235,11 @@ struct Session::Impl
                 m.u.push_back(s.state_.u.at(c.x, c.y));
                 m.v.push_back(s.state_.v.at(c.x, c.y));
             }
+            if (quantised_stream())
+                m.encoding = net::ValueEncoding::F64;
+            for (const auto& [pid, peer] : peers)
+                if (!peer.departed && peer.handle)
+                    ++counters.leaf_states_sent;
             send_all(make(m, s.state_.tick));
         }
     }
@@ -1220,7 +1582,125 @@ struct Session::Impl
         halos.insert(it, std::move(buf));
     }
 
-    void on_leaf_state(const net::Message& m, const net::LeafState& ls)
+    /// Quantised LeafState: rebuilds the owner's integers from the baseline it names into qu, qv.
+    /// \return false (counted) if the baseline is not held or the values are not acceptable.
+    bool rebuild_quantised(std::uint16_t from, std::uint64_t tick, double time, std::size_t l,
+                           const net::QuantisedDelta& q, std::size_t n)
+    {
+        if (q.du.size() != n)
+        {
+            ++counters.state_rejects;
+            return false;
+        }
+        const QuantisedLeaf* base = nullptr;
+        if (q.baseline != 0)
+        {
+            const std::uint64_t want = tick >= q.baseline ? tick - q.baseline : tick;
+            for (const QuantisedLeaf& h : held[l])
+                if (h.sender == from && h.tick == want && want != tick &&
+                    h.u_exponent == q.u_exponent && h.v_exponent == q.v_exponent)
+                    base = &h;
+            if (base == nullptr)
+            {
+                ++counters.baseline_misses;
+                return false;
+            }
+        }
+        if (q.extrapolated && (base == nullptr || !extrapolate(*base, time, n)))
+        {
+            ++counters.state_rejects;
+            return false;
+        }
+        const auto bu = base == nullptr  ? std::span<const std::int32_t>()
+                        : q.extrapolated ? std::span<const std::int32_t>(pu.data(), n)
+                                         : std::span<const std::int32_t>(base->qu);
+        const auto bv = base != nullptr ? std::span<const std::int32_t>(base->qv)
+                                        : std::span<const std::int32_t>();
+        if (!net::apply_residuals(q.du, bu, q.predicted, std::span(qu.data(), n)) ||
+            !net::apply_residuals(q.dv, bv, q.predicted, std::span(qv.data(), n)))
+        {
+            ++counters.state_rejects;
+            return false;
+        }
+        return true;
+    }
+
+    /// Keeps the state just rebuilt (qu, qv) as a baseline and schedules its Ack. A duplicate is
+    /// acknowledged again; an older state than one held from the same sender is ignored.
+    void hold_quantised(std::uint16_t from, std::uint64_t tick, double time, std::size_t l,
+                        const net::QuantisedDelta& q, std::size_t n)
+    {
+        std::deque<QuantisedLeaf>& h = held[l];
+        bool duplicate = false;
+        for (const QuantisedLeaf& e : h)
+        {
+            if (e.sender == from && e.tick > tick)
+                return;
+            duplicate = duplicate || (e.sender == from && e.tick == tick);
+        }
+        if (!duplicate)
+        {
+            if (h.size() >= k_baseline_window)
+                h.pop_front();
+            const auto end_u = qu.begin() + static_cast<std::ptrdiff_t>(n);
+            const auto end_v = qv.begin() + static_cast<std::ptrdiff_t>(n);
+            h.push_back(QuantisedLeaf{from, tick, time, q.u_exponent, q.v_exponent,
+                                      std::vector<std::int32_t>(qu.begin(), end_u),
+                                      std::vector<std::int32_t>(qv.begin(), end_v)});
+        }
+        std::uint64_t& pending = pending_acks[from][static_cast<std::uint32_t>(l)];
+        pending = std::max(pending, tick + 1);
+    }
+
+    void send_acks()
+    {
+        const LeafGraph& graph = *s.graph_;
+        for (auto& [to, leaves] : pending_acks)
+        {
+            net::Ack ack;
+            for (const auto& [l, tick_plus_one] : leaves)
+            {
+                const core::LeafId id = graph.leaves()[l];
+                ack.acks.push_back(net::LeafAck{net::WireLeafId{id.square, id.depth, id.ix, id.iy},
+                                                tick_plus_one - 1});
+                if (ack.acks.size() == net::k_max_acks)
+                {
+                    send_ack(to, ack);
+                    ack.acks.clear();
+                }
+            }
+            if (!ack.acks.empty())
+                send_ack(to, ack);
+        }
+        pending_acks.clear();
+    }
+
+    /// Acks count against the bandwidth cap towards that peer, like leaf states.
+    void send_ack(std::uint16_t to, const net::Ack& ack)
+    {
+        const net::Message m = make(ack, s.state_.tick);
+        if (capped())
+            budget[to] -= static_cast<double>(net::encoded_size(m));
+        send_to(to, m);
+    }
+
+    void on_ack(std::uint16_t from, const net::Ack& ack)
+    {
+        std::vector<std::uint64_t>& table = acked[from];
+        table.resize(s.graph_->size(), 0);
+        const std::size_t side = std::size_t{1} << s.graph_->depth();
+        for (const net::LeafAck& a : ack.acks)
+        {
+            if (a.leaf.depth != s.graph_->depth() || a.leaf.ix >= side || a.leaf.iy >= side)
+                continue;
+            const std::size_t l =
+                s.graph_->index_of(core::LeafId{a.leaf.square, a.leaf.depth, a.leaf.ix, a.leaf.iy});
+            if (a.tick != std::numeric_limits<std::uint64_t>::max())
+                table[l] = std::max(table[l], a.tick + 1);
+        }
+    }
+
+    void on_leaf_state(std::uint16_t from, const net::Message& m, const net::LeafState& ls)
     {
         if (ls.leaf.depth != s.graph_->depth())
             return;
@@ -1230,22 +1710,36 @@ struct Session::Impl
         const std::size_t l =
             s.graph_->index_of(core::LeafId{ls.leaf.square, ls.leaf.depth, ls.leaf.ix, ls.leaf.iy});
         const auto nodes = s.graph_->nodes(l);
-        if (ls.node_offset + ls.u.size() > nodes.size())
+        if (ls.node_offset + ls.node_count() > nodes.size())
             return;
         // Our own leaves come from our own state.
         if (std::find(my_leaves.begin(), my_leaves.end(), l) != my_leaves.end() &&
             stream_partition() != nullptr)
             return;
+        const bool quantised = ls.encoding == net::ValueEncoding::QuantisedDelta;
+        if (quantised)
+        {
+            // Whole leaves only: the baseline is a leaf's state.
+            const std::size_t n = ls.node_offset == 0 ? nodes.size() : 0;
+            if (!rebuild_quantised(from, m.header.tick, ls.time, l, ls.quantised, n))
+                return;
+            hold_quantised(from, m.header.tick, ls.time, l, ls.quantised, n);
+            net::dequantise(std::span(qu.data(), n), ls.quantised.u_exponent,
+                            std::span(xu.data(), n));
+            net::dequantise(std::span(qv.data(), n), ls.quantised.v_exponent,
+                            std::span(xv.data(), n));
+        }
         if (m.header.tick < leaf_tick[l])
             return;
         leaf_tick[l] = m.header.tick;
         leaf_time[l] = ls.time;
         const core::TetraGrid& g = s.model_->grid();
-        for (std::size_t k = 0; k < ls.u.size(); ++k)
+        const std::size_t count = ls.node_count();
+        for (std::size_t k = 0; k < count; ++k)
         {
             const core::GridCoord c = g.coord(nodes[ls.node_offset + k]);
-            s.display_u_.at(c.x, c.y) = ls.u[k];
-            s.display_v_.at(c.x, c.y) = ls.v[k];
+            s.display_u_.at(c.x, c.y) = quantised ? xu[k] : ls.u[k];
+            s.display_v_.at(c.x, c.y) = quantised ? xv[k] : ls.v[k];
         }
         display_dirty = true;
     }
@@ -1331,8 +1825,9 @@ struct Session::Impl
             }
             return;
         case net::MessageType::LeafState:
-            on_leaf_state(m, std::get<net::LeafState>(m.body));
+            on_leaf_state(from, m, std::get<net::LeafState>(m.body));
             return;
+        case net::MessageType::Ack: on_ack(from, std::get<net::Ack>(m.body)); return;
         case net::MessageType::Halo: on_halo(m, std::get<net::Halo>(m.body)); return;
         case net::MessageType::Heartbeat:
             if (!p.has_heartbeat || m.header.tick > p.heartbeat)
@@ -1407,6 +1902,12 @@ struct Session::Impl
             close_all(net::DisconnectReason::Quit);
         if (leaving && !lockstep && s.coupling_ == Coupling::Exact)
             finish_leave_soon();
+        if (!pending_acks.empty() && now >= next_ack && !s.left_)
+        {
+            send_acks();
+            next_ack =
+                std::max(next_ack + 1.0 / settings.ack_rate_hz, now - 1.0 / settings.ack_rate_hz);
+        }
         if (now >= next_stream && s.role_ != SessionRole::Viewer && !s.left_)
         {
             stream();
@@ -1427,6 +1928,11 @@ core::Result<std::unique_ptr<Session>> Session::host(net::Transport& transport,
                                                      const SessionSettings& settings)
 {
     if (!(settings.stream_rate_hz > 0.0) || !(settings.frame_rate_hz > 0.0) ||
+        !(settings.ack_rate_hz > 0.0) || settings.u_step_exponent < net::k_min_step_exponent ||
+        settings.u_step_exponent > net::k_max_step_exponent ||
+        settings.v_step_exponent < net::k_min_step_exponent ||
+        settings.v_step_exponent > net::k_max_step_exponent ||
+        !(settings.bandwidth_cap_mbit_s >= 0.0) || !(settings.interest_boost >= 0.0) ||
         settings.halo_rings < 3 || settings.name.empty() ||
         settings.name.size() > net::k_max_name_length)
         return core::fail(core::ErrorCode::InvalidArgument, "Session::host: bad settings");
@@ -1463,6 +1969,11 @@ core::Result<std::unique_ptr<Session>> Session::join(net::Transport& transport,
                                                      const SessionSettings& settings)
 {
     if (!(settings.stream_rate_hz > 0.0) || !(settings.frame_rate_hz > 0.0) ||
+        !(settings.ack_rate_hz > 0.0) || settings.u_step_exponent < net::k_min_step_exponent ||
+        settings.u_step_exponent > net::k_max_step_exponent ||
+        settings.v_step_exponent < net::k_min_step_exponent ||
+        settings.v_step_exponent > net::k_max_step_exponent ||
+        !(settings.bandwidth_cap_mbit_s >= 0.0) || !(settings.interest_boost >= 0.0) ||
         settings.halo_rings < 3 || settings.name.empty() ||
         settings.name.size() > net::k_max_name_length)
         return core::fail(core::ErrorCode::InvalidArgument, "Session::join: bad settings");

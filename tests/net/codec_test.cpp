@@ -115,7 +115,7 @@ TEST(Codec, PingMatchesBytesWrittenFromTheSpecification)
                          .tick = 0x100F0E0D0C0B0A09ULL},
               .body = Ping{.nonce = 0x14131211u, .time_us = 0x201F1E1D1C1B1A19ULL}};
     const auto expected = bytes_of({0x50, 0x4C, 0x4E, 0x54,  // "PLNT"
-                                    1,    14,   0,    0,     // version, type Ping, flags, reserved
+                                    2,    14,   0,    0,     // version, type Ping, flags, reserved
                                     0x01, 0x02, 0x03, 0x04,  // session
                                     0x05, 0x06, 0x07, 0x08,  // sender, sequence
                                     0x09, 0x0A, 0x0B, 0x0C, 0x0D, 0x0E, 0x0F, 0x10,  // tick
@@ -184,7 +184,9 @@ TEST(Codec, HeaderErrors)
     d[3] = std::byte{0x55};
     EXPECT_EQ(decode_error(d), DecodeError::BadMagic);
     d = ping;
-    d[4] = std::byte{2};
+    d[4] = std::byte{1};  // version 1 (before quantised leaf states)
+    EXPECT_EQ(decode_error(d), DecodeError::BadVersion);
+    d[4] = std::byte{3};
     EXPECT_EQ(decode_error(d), DecodeError::BadVersion);
     for (int type : {0, 17, 255})
     {
@@ -240,7 +242,7 @@ TEST(Codec, BodyErrorsEachHaveTheirCode)
     // LeafState (the first sample is f64 with 73 nodes).
     const auto leaf = encode_vec(first_of(MessageType::LeafState));
     d = leaf;
-    d[34] = std::byte{3};
+    d[34] = std::byte{4};  // 3 is the quantised delta
     EXPECT_EQ(decode_error(d), DecodeError::BadEnum);
     d = leaf;
     put_le(d, 38, 74, 2);

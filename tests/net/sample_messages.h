@@ -7,6 +7,7 @@
 // exact in f32 where the encoding is f32, so round trips compare equal.
 
 #include <pliant/net/message.h>
+#include <pliant/net/quantised.h>
 
 #include <cmath>
 #include <cstddef>
@@ -46,6 +47,31 @@ inline LeafState leaf_state(ValueEncoding encoding, std::size_t n)
     }
     if (encoding == ValueEncoding::F64 && n > 1)
         s.u[1] = 1.0 / 3.0;  // not exact in f32: f64 must keep every bit
+    return s;
+}
+
+/// A quantised-delta LeafState of n nodes (docs/protocol.md §5.5): smooth integers, residuals
+/// against nothing (key) or against a baseline `baseline` ticks back, packed with zstd.
+inline LeafState quantised_leaf_state(std::size_t n, std::uint32_t baseline, bool predicted)
+{
+    LeafState s;
+    s.epoch = 8;
+    s.leaf = WireLeafId{.square = 0, .depth = 3, .ix = 5, .iy = 2};
+    s.encoding = ValueEncoding::QuantisedDelta;
+    s.time = 1.25;
+    QuantisedDelta& q = s.quantised;
+    q.baseline = baseline;
+    q.u_exponent = -16;
+    q.v_exponent = -12;
+    q.predicted = predicted;
+    for (std::size_t i = 0; i < n; ++i)
+    {
+        const auto k = static_cast<std::int32_t>(i);
+        q.du.push_back(predicted ? 3 - (k % 5) : 1000 * k - 20000);
+        q.dv.push_back(predicted ? (k % 3) - 1 : -7 * k);
+    }
+    if (!pack_residuals(q.du, q.dv, k_max_packed_residuals, q.packed))
+        q.packed.clear();
     return s;
 }
 
@@ -143,6 +169,10 @@ inline std::vector<Message> all()
     add(Pong{.nonce = 0xA5A5A5A5u, .time_us = 123456789});
     add(Ack{.acks = {LeafAck{.leaf = WireLeafId{0, 3, 7, 7}, .tick = 99},
                      LeafAck{.leaf = WireLeafId{1, 0, 0, 0}, .tick = 0xFFFFFFFFFFFFULL}}});
+    // Appended after the version-1 samples so that the fuzz corpus's sample indices stay valid.
+    add(quantised_leaf_state(72, 0, true));
+    add(quantised_leaf_state(k_max_leaf_nodes_quantised, 6, false));
+    add(quantised_leaf_state(1, 1, false));
     return out;
 }
 

@@ -29,24 +29,25 @@ namespace pliant::net
 /// Why a datagram was rejected (docs/protocol.md §7).
 enum class DecodeError : std::uint8_t
 {
-    TooShort = 1,      ///< fewer than k_header_size bytes
-    TooLarge = 2,      ///< more than k_max_datagram_size bytes
-    BadMagic = 3,      ///< protocol id is not "PLNT"
-    BadVersion = 4,    ///< version is not k_protocol_version
-    UnknownType = 5,   ///< message type outside 1..16
-    BadFlags = 6,      ///< header flags not zero (reserved for issue 7)
-    BadSession = 7,    ///< session 0 in a message other than Hello or Reject
-    BadSender = 8,     ///< sender k_no_peer in a message other than Hello
-    BadLength = 9,     ///< body shorter or longer than its fields and counts imply
-    BadReserved = 10,  ///< a reserved field is not zero
-    BadEnum = 11,      ///< an enumeration outside its values
-    BadCount = 12,     ///< a count outside its range or a state payload over 1,200 bytes
-    BadRange = 13,     ///< an id, index, size or offset outside its range
-    NonFinite = 14,    ///< a NaN or infinite float
-    BadName = 15,      ///< a name of bad length or with a non-printable byte
-    Duplicate = 16,    ///< a peer listed twice
+    TooShort = 1,         ///< fewer than k_header_size bytes
+    TooLarge = 2,         ///< more than k_max_datagram_size bytes
+    BadMagic = 3,         ///< protocol id is not "PLNT"
+    BadVersion = 4,       ///< version is not k_protocol_version
+    UnknownType = 5,      ///< message type outside 1..16
+    BadFlags = 6,         ///< header flags not zero (reserved)
+    BadSession = 7,       ///< session 0 in a message other than Hello or Reject
+    BadSender = 8,        ///< sender k_no_peer in a message other than Hello
+    BadLength = 9,        ///< body shorter or longer than its fields and counts imply
+    BadReserved = 10,     ///< a reserved field is not zero
+    BadEnum = 11,         ///< an enumeration outside its values
+    BadCount = 12,        ///< a count outside its range or a state payload over 1,200 bytes
+    BadRange = 13,        ///< an id, index, size or offset outside its range
+    NonFinite = 14,       ///< a NaN or infinite float
+    BadName = 15,         ///< a name of bad length or with a non-printable byte
+    Duplicate = 16,       ///< a peer listed twice
+    BadCompression = 17,  ///< packed residuals that are not one bounded, exact zstd frame (§5.5)
 };
-inline constexpr std::uint8_t k_decode_error_count = 16;
+inline constexpr std::uint8_t k_decode_error_count = 17;
 
 /// Why a message could not be encoded.
 enum class EncodeError : std::uint8_t

@@ -27,7 +27,7 @@ namespace pliant::net
 {
 
 inline constexpr std::uint32_t k_protocol_magic = 0x544E4C50;  ///< bytes "PLNT"
-inline constexpr std::uint8_t k_protocol_version = 1;
+inline constexpr std::uint8_t k_protocol_version = 2;
 inline constexpr std::size_t k_header_size = 24;
 /// The largest body of a LeafState or Halo (one leaf per datagram, no IP fragmentation).
 inline constexpr std::size_t k_max_state_payload = 1200;
@@ -51,6 +51,14 @@ inline constexpr std::size_t k_leaf_state_fixed = 24;
 inline constexpr std::size_t k_max_leaf_nodes_f64 = (k_max_state_payload - k_leaf_state_fixed) / 16;
 inline constexpr std::size_t k_max_leaf_nodes_f32 = (k_max_state_payload - k_leaf_state_fixed) / 8;
 static_assert(k_max_leaf_nodes_f64 == 73 && k_max_leaf_nodes_f32 == 147);
+/// Fixed bytes of a quantised-delta LeafState body before the packed residuals (§6 LeafState).
+inline constexpr std::size_t k_leaf_state_quantised_fixed = 32;
+/// Nodes of one quantised-delta LeafState at most (the f32 limit, so an encoder can always fall
+/// back to f32 for the same leaf).
+inline constexpr std::size_t k_max_leaf_nodes_quantised = k_max_leaf_nodes_f32;
+/// The largest packed residual frame of one LeafState.
+inline constexpr std::size_t k_max_packed_residuals =
+    k_max_state_payload - k_leaf_state_quantised_fixed;
 
 /// Wire message types (docs/protocol.md §6); the order matches `Body`.
 enum class MessageType : std::uint8_t
@@ -79,6 +87,7 @@ enum class ValueEncoding : std::uint8_t
 {
     F32 = 1,
     F64 = 2,
+    QuantisedDelta = 3,  ///< LeafState only: integer residuals, zstd-packed (§5.5)
 };
 
 /// A quad-tree node (docs/protocol.md §5.2); the same fields as `core::LeafId`, kept separate so
@@ -212,16 +221,41 @@ struct Leave
     friend bool operator==(const Leave&, const Leave&) = default;
 };
 
-/// State of (part of) one leaf at the header's tick: `u` and `v` of the same length.
+/// The values of a quantised-delta LeafState (docs/protocol.md §5.5): residuals of the integers
+/// q = x / 2^exponent against a baseline the receiver holds (net/quantised.h computes them). The
+/// codec writes `packed` verbatim and checks on both sides that it unpacks to `du` and `dv`.
+struct QuantisedDelta
+{
+    std::uint32_t baseline = 0;  ///< header tick minus the baseline's tick; 0: a key state
+    std::int8_t u_exponent = 0;  ///< u step = 2^u_exponent, -40..0
+    std::int8_t v_exponent = 0;  ///< v step = 2^v_exponent, -40..0
+    bool predicted = false;      ///< residuals are differences from the previous node's
+    /// The session extrapolated the baseline of u before taking differences (docs/protocol.md
+    /// §5.5: u + v dt); only with a baseline. The codec only carries the flag.
+    bool extrapolated = false;
+    std::vector<std::int32_t> du;   ///< residual of u per node
+    std::vector<std::int32_t> dv;   ///< residual of v per node, as many as du
+    std::vector<std::byte> packed;  ///< the zstd frame (net::pack_residuals), 1..1,168 bytes
+    friend bool operator==(const QuantisedDelta&, const QuantisedDelta&) = default;
+};
+
+/// State of (part of) one leaf at the header's tick: `u` and `v` of the same length (encodings
+/// f32 and f64), or `quantised` (encoding 3, `u` and `v` empty).
 struct LeafState
 {
     std::uint32_t epoch = 0;
     WireLeafId leaf;
     ValueEncoding encoding = ValueEncoding::F64;
     std::uint16_t node_offset = 0;
-    double time = 0.0;      ///< s
-    std::vector<double> u;  ///< m; 1..73 (f64) or 1..147 (f32) values
-    std::vector<double> v;  ///< m/s; as many as u
+    double time = 0.0;         ///< s
+    std::vector<double> u;     ///< m; 1..73 (f64) or 1..147 (f32) values
+    std::vector<double> v;     ///< m/s; as many as u
+    QuantisedDelta quantised;  ///< encoding 3 only (default-constructed otherwise)
+    /// Nodes this message covers (u.size(), or quantised.du.size() with encoding 3).
+    [[nodiscard]] std::size_t node_count() const noexcept
+    {
+        return encoding == ValueEncoding::QuantisedDelta ? quantised.du.size() : u.size();
+    }
     friend bool operator==(const LeafState&, const LeafState&) = default;
 };
 

@@ -30,6 +30,15 @@
 ///   frame with the latest streamed state of all other nodes held as Dirichlet values.
 /// - Streaming: owners send their leaves' (u, v) to every peer at `stream_rate_hz`; every peer
 ///   (viewers included) displays the whole object from its own leaves and what it received.
+/// - Compressed streaming (`stream_encoding = QuantisedDelta`, docs/protocol.md §5.5): u and v are
+///   quantised to power-of-two steps; each receiver acknowledges the leaf states it holds (Ack,
+///   at `ack_rate_hz`), and the owner codes each leaf against the newest state that receiver
+///   acknowledged (a key state when there is none), with left-neighbour prediction where it pays,
+///   packed with zstd. A leaf unchanged since the receiver's baseline costs nothing. Every peer,
+///   the owner included, displays the same dequantised bits. In `fast` mode, where the streamed
+///   values are the neighbours' Dirichlet values, the owner also adopts them: its owned nodes are
+///   quantised after every frame. In `exact` mode the stream is display-only and the integrated
+///   state is untouched (halos stay f64), so lockstep and replay stay bit-exact.
 /// - Leaving: a participant sends Leave; the master re-partitions; in exact mode the leaver keeps
 ///   publishing until the tick where it owns nothing, and the others disconnect it once they are
 ///   past that tick (so no halo of its is lost). The master cannot leave (the session ends).
@@ -66,7 +75,23 @@ struct SessionSettings
 {
     Coupling coupling = Coupling::Exact;  ///< master's choice; joiners take the master's
     double stream_rate_hz = 60.0;         ///< LeafState rate per owned leaf, > 0
+    /// LeafState values: F64, F32, or QuantisedDelta (compressed, see the file comment).
     net::ValueEncoding stream_encoding = net::ValueEncoding::F64;
+    /// QuantisedDelta steps: u to 2^u_step_exponent m, v to 2^v_step_exponent m/s, each in
+    /// -40..0 (docs/protocol.md §5.5 explains the defaults: 2^-16 m = 15 um, 2^-12 m/s = 0.24
+    /// mm/s).
+    int u_step_exponent = -16;
+    int v_step_exponent = -12;
+    /// QuantisedDelta: how often a receiver acknowledges the leaf states it got, Hz, > 0.
+    double ack_rate_hz = 20.0;
+    /// QuantisedDelta: LeafState and Ack bytes per second sent to each peer at most, as Mbit/s
+    /// (0: no cap; datagram bytes without UDP/ENet headers). Leaves wait their turn by priority:
+    /// each stream period a leaf not sent gains 1, or 1 + interest_boost if it lies near a point of
+    /// interest or a force being applied, and the highest go first while the peer's budget lasts (a
+    /// token bucket of two periods). In fast coupling the cap delays the neighbours' Dirichlet
+    /// values and changes the motion (docs/session.md §5.1): meant for exact mode and viewers.
+    double bandwidth_cap_mbit_s = 0.0;
+    double interest_boost = 8.0;  ///< >= 0
     /// Exact mode: dilation of the integrated set, >= 3 (3 are exact for the sim's fused RKF45,
     /// tests/session/halo_rings_test.cpp; 6 also covers a scheme whose every stage reads the
     /// previous one, at ~10 % more work per peer at level 8 with 2 peers).
@@ -100,6 +125,14 @@ struct SessionStats
     double step_seconds = 0.0;        ///< wall time spent in steps, s
     std::size_t owned_nodes = 0;
     double halo_age_s = 0.0;  ///< oldest streamed leaf shown, relative to the own time, s
+    // Leaf-state streaming (sender side counts per receiver).
+    std::uint64_t leaf_states_sent = 0;  ///< LeafState datagrams sent
+    std::uint64_t key_states_sent = 0;   ///< of those, quantised without a baseline
+    std::uint64_t quiescent_skips = 0;   ///< (leaf, receiver) left out: unchanged since its ack
+    std::uint64_t capped_skips = 0;      ///< (leaf, receiver) postponed by the bandwidth cap
+    // Receiver side: quantised LeafStates dropped (never displayed, never acknowledged).
+    std::uint64_t baseline_misses = 0;  ///< the baseline named is not held (lost, late join)
+    std::uint64_t state_rejects = 0;    ///< wrong node count, or values leaving the int32 range
 };
 
 class Session

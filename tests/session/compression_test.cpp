@@ -1,0 +1,264 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+// Compressed leaf states (docs/protocol.md §5.5) in real sessions over a SimulatedNetwork: every
+// peer's view equals each owner's quantised state bit for bit (fast mode: the owner's integrated
+// state too, since it adopts what it sends), quiescent leaves send no LeafState, a late viewer
+// and lossy links get key states and converge, and exact mode stays equal to a single process
+// (the stream is display-only there). All loops are bounded by iteration counts.
+
+#include <pliant/net/quantised.h>
+
+#include <gtest/gtest.h>
+
+#include "session_harness.h"
+
+#include <bit>
+
+namespace pliant::session::test
+{
+namespace
+{
+
+constexpr int k_level = 5;
+constexpr std::uint64_t k_ticks = 400;
+
+SessionSettings compressed(Coupling c, const char* name)
+{
+    SessionSettings s;
+    s.coupling = c;
+    s.max_ticks = k_ticks;
+    s.name = name;
+    s.stream_encoding = net::ValueEncoding::QuantisedDelta;
+    return s;
+}
+
+bool same_bits(double a, double b)
+{
+    return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b);
+}
+
+bool on_grid(double x, int exponent)
+{
+    std::int32_t q = 0;
+    if (!net::quantise(std::span(&x, 1), exponent, std::span(&q, 1)))
+        return false;
+    double back = 0.0;
+    net::dequantise(std::span(&q, 1), exponent, std::span(&back, 1));
+    return same_bits(back, x);
+}
+
+/// Every peer shows, on every leaf, exactly the owner's quantised values; with `adopted` the
+/// owner's integrated state equals them too. \return the number of mismatching nodes.
+std::size_t view_mismatches(const Harness& h, bool adopted)
+{
+    const Session& master = *h.peers[0];
+    const auto owners = master.owners();
+    const LeafGraph& graph = *master.leaf_graph();
+    const core::TetraGrid& g = master.model()->grid();
+    const SessionSettings defaults;
+    std::size_t bad = 0;
+    for (std::size_t l = 0; l < graph.size(); ++l)
+    {
+        const Session* owner = nullptr;
+        for (const auto& p : h.peers)
+            if (p->id() == owners[l])
+                owner = p.get();
+        if (owner == nullptr)
+            return graph.size() * 1000;
+        for (const core::NodeIndex n : graph.nodes(l))
+        {
+            const core::GridCoord c = g.coord(n);
+            const double u = owner->display_u().at(c.x, c.y);
+            const double v = owner->display_v().at(c.x, c.y);
+            bool ok = on_grid(u, defaults.u_step_exponent) && on_grid(v, defaults.v_step_exponent);
+            if (adopted)
+                ok = ok && same_bits(owner->state().u.at(c.x, c.y), u) &&
+                     same_bits(owner->state().v.at(c.x, c.y), v);
+            for (const auto& p : h.peers)
+                ok = ok && same_bits(p->display_u().at(c.x, c.y), u) &&
+                     same_bits(p->display_v().at(c.x, c.y), v);
+            bad += ok ? 0 : 1;
+        }
+    }
+    return bad;
+}
+
+bool all_at(const Harness& h, std::uint64_t tick)
+{
+    for (const auto& p : h.peers)
+        if (p->role() != SessionRole::Viewer && p->tick() < tick)
+            return false;
+    return true;
+}
+
+/// Master and one participant, partitioned, pulling from tick ~50 on; pumps to k_ticks.
+void run_pulling(Harness& h, Coupling c)
+{
+    h.host(k_level, compressed(c, "master"));
+    Session& p = h.join(net::Role::Participant, compressed(c, "part"));
+    p.set_points_of_interest({net::Target{net::TargetKind::Face, 600, {0, 0, 0}, 0.0}});
+    ASSERT_TRUE(h.pump_until(
+        [&]
+        {
+            const auto owners = h.peers[0]->owners();
+            return p.ready() && std::find(owners.begin(), owners.end(), p.id()) != owners.end();
+        },
+        8000));
+    h.peers[0]->set_forces({point_push(0.0, 0.0, 1.0, 0.3, 0.4)}, 100);
+    p.set_forces({face_pull(700, 0.6)}, 150);
+    ASSERT_TRUE(h.pump_until([&] { return all_at(h, k_ticks); }, 60000, 0.0005));
+}
+
+std::uint64_t total(const Harness& h, std::uint64_t SessionStats::*field)
+{
+    std::uint64_t sum = 0;
+    for (const auto& p : h.peers)
+        sum += p->stats().*field;
+    return sum;
+}
+
+TEST(SessionCompression, FastModeViewsEqualTheOwnersQuantisedStateAndQuiescentLeavesAreFree)
+{
+    Harness h;
+    run_pulling(h, Coupling::Fast);
+    // The simulation is frozen at k_ticks; let the last states and their acks through.
+    for (int k = 0; k < 1000; ++k)
+        h.pump_once(0.0005);
+    EXPECT_EQ(view_mismatches(h, true), 0u);
+    const std::uint64_t sent = total(h, &SessionStats::leaf_states_sent);
+    const std::uint64_t keys = total(h, &SessionStats::key_states_sent);
+    EXPECT_GT(keys, 0u);
+    EXPECT_GT(sent, 2 * keys) << "most states are deltas against an acknowledged baseline";
+    EXPECT_EQ(total(h, &SessionStats::baseline_misses), 0u);
+    EXPECT_EQ(total(h, &SessionStats::state_rejects), 0u);
+    EXPECT_EQ(total(h, &SessionStats::bad_datagrams), 0u);
+    // Nothing changes any more: no LeafState at all, only skips.
+    const std::uint64_t skips = total(h, &SessionStats::quiescent_skips);
+    for (int k = 0; k < 600; ++k)
+        h.pump_once(0.0005);
+    EXPECT_EQ(total(h, &SessionStats::leaf_states_sent), sent);
+    EXPECT_GT(total(h, &SessionStats::quiescent_skips), skips);
+
+    // A late viewer has no baseline: it gets key states and then shows the same bits.
+    const std::uint64_t keys_before = total(h, &SessionStats::key_states_sent);
+    SessionSettings vs = compressed(Coupling::Fast, "viewer");
+    Session& viewer = h.join(net::Role::Viewer, vs);
+    ASSERT_TRUE(h.pump_until([&] { return viewer.ready(); }, 8000));
+    for (int k = 0; k < 1000; ++k)
+        h.pump_once(0.0005);
+    EXPECT_GE(total(h, &SessionStats::key_states_sent) - keys_before, viewer.leaf_graph()->size());
+    EXPECT_EQ(view_mismatches(h, true), 0u);
+    EXPECT_EQ(total(h, &SessionStats::baseline_misses), 0u);
+}
+
+TEST(SessionCompression, QuiescentObjectSendsNoLeafStateAfterItsKeyStates)
+{
+    Harness h;
+    h.host(k_level, compressed(Coupling::Fast, "master"));
+    Session& p = h.join(net::Role::Participant, compressed(Coupling::Fast, "part"));
+    p.set_points_of_interest({net::Target{net::TargetKind::Face, 600, {0, 0, 0}, 0.0}});
+    ASSERT_TRUE(h.pump_until([&] { return p.ready() && h.peers[0]->epoch() >= 1; }, 8000));
+    // No force: the object stays at rest. Give keys and acks time, then count.
+    for (int k = 0; k < 400; ++k)
+        h.pump_once(0.0005);
+    const std::uint64_t sent = total(h, &SessionStats::leaf_states_sent);
+    EXPECT_GT(sent, 0u);
+    EXPECT_LE(sent, 4 * p.leaf_graph()->size()) << "about one key state per leaf and receiver";
+    for (int k = 0; k < 400; ++k)
+        h.pump_once(0.0005);
+    EXPECT_EQ(total(h, &SessionStats::leaf_states_sent), sent);
+    EXPECT_GT(total(h, &SessionStats::quiescent_skips), 0u);
+    EXPECT_EQ(view_mismatches(h, true), 0u);
+}
+
+TEST(SessionCompression, LossyDuplicatingLinksStillConvergeToTheOwnersBits)
+{
+    net::SimulatedNetworkSettings ns;
+    ns.seed = 42;
+    ns.link.loss = 0.2;
+    ns.link.duplicate = 0.1;
+    ns.link.reorder = 0.1;
+    ns.link.jitter_s = 0.004;
+    Harness h(ns);
+    run_pulling(h, Coupling::Fast);
+    for (int k = 0; k < 3000; ++k)
+        h.pump_once(0.0005);
+    EXPECT_EQ(view_mismatches(h, true), 0u);
+    EXPECT_EQ(total(h, &SessionStats::state_rejects), 0u);
+    EXPECT_EQ(total(h, &SessionStats::bad_datagrams), 0u);
+}
+
+TEST(SessionCompression, BandwidthCapHoldsAndEveryLeafStillArrives)
+{
+    Harness h;
+    const double cap_mbit = 0.4;
+    SessionSettings ms = compressed(Coupling::Fast, "master");
+    SessionSettings ps = compressed(Coupling::Fast, "part");
+    ms.bandwidth_cap_mbit_s = ps.bandwidth_cap_mbit_s = cap_mbit;
+    ms.max_ticks = ps.max_ticks = 1500;  // still simulating while measuring
+    h.host(k_level, ms);
+    Session& p = h.join(net::Role::Participant, ps);
+    p.set_points_of_interest({net::Target{net::TargetKind::Face, 600, {0, 0, 0}, 0.0}});
+    ASSERT_TRUE(h.pump_until(
+        [&]
+        {
+            const auto owners = h.peers[0]->owners();
+            return p.ready() && std::find(owners.begin(), owners.end(), p.id()) != owners.end();
+        },
+        8000));
+    h.peers[0]->set_forces({point_push(0.0, 0.0, 1.0, 0.3, 0.4)});
+    p.set_forces({face_pull(700, 0.6)});
+    for (int k = 0; k < 400; ++k)
+        h.pump_once(0.0005);
+    std::vector<SessionStats> before;
+    for (const auto& peer : h.peers)
+        before.push_back(peer->stats());
+    const double window = 0.5;
+    for (int k = 0; k < 1000; ++k)
+        h.pump_once(0.0005);
+    for (std::size_t k = 0; k < h.peers.size(); ++k)
+    {
+        const SessionStats st = h.peers[k]->stats();
+        const double mbit =
+            8.0 * static_cast<double>(st.bytes_sent - before[k].bytes_sent) / window / 1e6;
+        std::printf("peer %zu: %.3f Mbit/s under a %.2f cap, %llu postponed\n", k, mbit, cap_mbit,
+                    static_cast<unsigned long long>(st.capped_skips - before[k].capped_skips));
+        // The cap covers leaf states and acks; the rest (Force, Heartbeat) is small. Slack: the
+        // bucket's second period and one datagram of overshoot.
+        EXPECT_LE(mbit, cap_mbit * 1.1 + 0.05);
+        EXPECT_GT(st.capped_skips, before[k].capped_skips) << "the cap binds in this scene";
+    }
+    EXPECT_LT(h.peers[0]->tick(), 1500u) << "measured while the object moved";
+    // Frozen, every leaf reaches every peer despite the cap (priorities grow while waiting).
+    ASSERT_TRUE(h.pump_until([&] { return all_at(h, 1500); }, 20000));
+    for (int k = 0; k < 4000; ++k)
+        h.pump_once(0.0005);
+    EXPECT_EQ(view_mismatches(h, true), 0u);
+}
+
+TEST(SessionCompression, ExactModeIntegratesUnquantisedAndShowsQuantised)
+{
+    Harness h;
+    run_pulling(h, Coupling::Exact);
+    for (int k = 0; k < 1000; ++k)
+        h.pump_once(0.0005);
+    EXPECT_EQ(view_mismatches(h, false), 0u);
+    // The integrated state is not quantised: the lockstep is the uncompressed one.
+    const std::vector<Scheduled> sched = {{0, 100, {point_push(0.0, 0.0, 1.0, 0.3, 0.4)}},
+                                          {1, 150, {face_pull(700, 0.6)}}};
+    const sim::MembraneState ref = reference_run(k_level, k_ticks, sched);
+    const core::TetraGrid& g = h.peers[0]->model()->grid();
+    for (const auto& peer : h.peers)
+    {
+        const auto owners = peer->owners();
+        const LeafGraph* lg = peer->leaf_graph();
+        const net::PeerId id = peer->id();
+        const Diff d = compare(g, peer->state().u, ref.u,
+                               [&](core::NodeIndex n) { return owners[lg->leaf_of(n)] == id; });
+        EXPECT_GT(d.max_ref, 1e-4);
+        EXPECT_LE(d.relative(), 1e-12);
+    }
+}
+
+}  // namespace
+}  // namespace pliant::session::test
