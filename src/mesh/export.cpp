@@ -31,11 +31,12 @@
 #include <assimp/material.h>
 #include <assimp/scene.h>
 
+#include "mesh/fp_hold_internal.h"
+
 #include <algorithm>
 #include <array>
 #include <bit>
 #include <cctype>
-#include <cfenv>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -116,23 +117,7 @@ std::vector<char> ply_bytes(const TriMesh& mesh)
     return out;
 }
 
-/// Holds floating-point traps off while Assimp runs (as import.cpp does): feholdexcept saves the
-/// environment and masks all exceptions; fesetenv restores it without raising what was set.
-class FpHold
-{
-public:
-    FpHold() { feholdexcept(&saved_); }
-    ~FpHold()
-    {
-        feclearexcept(FE_ALL_EXCEPT);
-        fesetenv(&saved_);
-    }
-    FpHold(const FpHold&) = delete;
-    FpHold& operator=(const FpHold&) = delete;
-
-private:
-    std::fenv_t saved_{};
-};
+using detail::FpHold;
 
 core::Result<void> write_file(const std::filesystem::path& path, const char* data, std::size_t size)
 {

@@ -28,12 +28,12 @@
 #include <assimp/scene.h>
 
 #include "mesh/format_scan_internal.h"
+#include "mesh/fp_hold_internal.h"
 
 #include <algorithm>
 #include <array>
 #include <bit>
 #include <cctype>
-#include <cfenv>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -56,23 +56,7 @@ namespace
 using core::ErrorCode;
 using core::fail;
 
-/// Holds floating-point traps off for a scope (feholdexcept saves the environment and masks all
-/// exceptions; fesetenv restores it without raising the flags set meanwhile).
-class FpHold
-{
-public:
-    FpHold() { feholdexcept(&saved_); }
-    ~FpHold()
-    {
-        feclearexcept(FE_ALL_EXCEPT);
-        fesetenv(&saved_);
-    }
-    FpHold(const FpHold&) = delete;
-    FpHold& operator=(const FpHold&) = delete;
-
-private:
-    std::fenv_t saved_{};
-};
+using detail::FpHold;
 
 std::string lower(std::string s)
 {
