@@ -28,10 +28,16 @@ SessionSettings settings_for(Coupling c, const char* name)
     return s;
 }
 
-net::SimulatedNetworkSettings quick_network()
+net::SimulatedNetworkSettings quick_network(bool lossy = false, std::uint64_t seed = 1)
 {
     net::SimulatedNetworkSettings n;
+    n.seed = seed;
     n.link.latency_s = 0.001;
+    if (lossy)
+    {
+        n.link.loss = 0.05;
+        n.link.duplicate = 0.01;
+    }
     n.connect_timeout_s = 0.2;  // a vanished peer's links time out after 0.2 s
     return n;
 }
@@ -43,6 +49,19 @@ std::vector<std::size_t> alive(const Harness& h)
         if (h.peers[k])
             out.push_back(k);
     return out;
+}
+
+// Index of the live participant with the lowest id, other than index `except`: the successor
+// every peer must choose when `except` is the lost master (ids follow the order in which the
+// master received the Hellos, which loss can change).
+std::size_t lowest_participant(const Harness& h, std::size_t except)
+{
+    std::size_t best = h.peers.size();
+    for (const std::size_t k : alive(h))
+        if (k != except && h.peers[k]->role() == SessionRole::Participant &&
+            (best == h.peers.size() || h.peers[k]->id() < h.peers[best]->id()))
+            best = k;
+    return best;
 }
 
 // Leaves owned by `id` in `owners`.
@@ -193,9 +212,9 @@ std::vector<std::size_t> lose(Harness& h, std::size_t victim, std::size_t master
     return orphans;
 }
 
-void run_failover(Coupling c)
+void run_failover(Coupling c, bool lossy = false, std::uint64_t seed = 1)
 {
-    Harness h(quick_network());
+    Harness h(quick_network(lossy, seed));
     h.host(k_level, settings_for(c, "master"));
     for (int k = 0; k < 3; ++k)
     {
@@ -237,20 +256,23 @@ void run_failover(Coupling c)
         EXPECT_EQ(adopted, lost3.size());
     }
 
-    // (b) The master vanishes: participant 1 (the lowest id left) takes over on every peer.
+    // (b) The master vanishes: the participant with the lowest id left takes over on every peer.
+    const std::size_t succ = lowest_participant(h, 0);
+    const std::size_t other = succ == 1 ? 2 : 1;
+    const net::PeerId succ_id = h.peers[succ]->id();
     const std::uint64_t viewer_bytes = h.peers[4]->stats().bytes_received;
-    const std::uint32_t epoch_before = h.peers[1]->epoch();
+    const std::uint32_t epoch_before = h.peers[succ]->epoch();
     const std::uint64_t adopted_before =
         h.peers[1]->stats().adopted_leaves + h.peers[2]->stats().adopted_leaves;
-    const auto lost0 = lose(h, 0, 1, c);
+    const auto lost0 = lose(h, 0, succ, c);
     for (const std::size_t k : alive(h))
-        EXPECT_EQ(h.peers[k]->master(), net::PeerId{1}) << "peer " << h.peers[k]->id().value;
-    EXPECT_EQ(h.peers[1]->role(), SessionRole::Master);
-    EXPECT_EQ(h.peers[1]->stats().promotions, 1U);
-    EXPECT_EQ(h.peers[2]->role(), SessionRole::Participant);
+        EXPECT_EQ(h.peers[k]->master(), succ_id) << "peer " << h.peers[k]->id().value;
+    EXPECT_EQ(h.peers[succ]->role(), SessionRole::Master);
+    EXPECT_EQ(h.peers[succ]->stats().promotions, 1U);
+    EXPECT_EQ(h.peers[other]->role(), SessionRole::Participant);
     EXPECT_EQ(h.peers[4]->role(), SessionRole::Viewer);
-    EXPECT_GE(h.peers[1]->epoch(), epoch_before + 16);  // above any epoch the lost master used
-    expect_fully_owned(h, 1);
+    EXPECT_GE(h.peers[succ]->epoch(), epoch_before + 16);  // above any epoch the lost master used
+    expect_fully_owned(h, succ);
     if (c == Coupling::Exact)
     {
         EXPECT_EQ(h.peers[1]->stats().adopted_leaves + h.peers[2]->stats().adopted_leaves -
@@ -259,7 +281,7 @@ void run_failover(Coupling c)
     }
 
     // The session goes on, and the viewer keeps receiving every leaf.
-    const std::uint64_t t1 = h.peers[1]->tick();
+    const std::uint64_t t1 = h.peers[succ]->tick();
     ASSERT_TRUE(h.pump_until(
         [&] { return h.peers[1]->tick() >= t1 + 200 && h.peers[2]->tick() >= t1 + 200; }, 8000));
     for (int k = 0; k < 100; ++k)
@@ -273,13 +295,13 @@ void run_failover(Coupling c)
         EXPECT_FALSE(h.peers[k]->left());
 
     // (c) The successor admits a joiner that knows its address.
-    Session& late = h.join(net::Role::Participant, settings_for(c, "late"), h.addresses[1]);
+    Session& late = h.join(net::Role::Participant, settings_for(c, "late"), h.addresses[succ]);
     late.set_points_of_interest({net::Target{net::TargetKind::Face, 2500, {0, 0, 0}, 0.0}});
     const std::size_t late_k = h.peers.size() - 1;
     ASSERT_TRUE(h.pump_until(
         [&]
         {
-            const auto owners = h.peers[1]->owners();
+            const auto owners = h.peers[succ]->owners();
             return late.ready() &&
                    std::find(owners.begin(), owners.end(), late.id()) != owners.end() &&
                    late.owners() == owners && h.peers[4]->owners() == owners &&
@@ -287,10 +309,10 @@ void run_failover(Coupling c)
         },
         8000));
     EXPECT_GT(late.id().value, 4);  // ids are never reused
-    EXPECT_EQ(late.master(), net::PeerId{1});
-    const std::uint64_t t2 = h.peers[1]->tick();
+    EXPECT_EQ(late.master(), succ_id);
+    const std::uint64_t t2 = h.peers[succ]->tick();
     ASSERT_TRUE(h.pump_until([&] { return h.peers[late_k]->tick() >= t2 + 50; }, 8000));
-    expect_fully_owned(h, 1);
+    expect_fully_owned(h, succ);
 }
 
 // The master leaves (hands over) instead of crashing: the same take-over without waiting for a
@@ -320,18 +342,20 @@ void run_master_leaves(Coupling c)
                    h.peers[0]->tick() >= 200 && h.peers[0]->owners() == h.peers[3]->owners();
         },
         20000));
-    lose(h, 0, 1, c, true);
+    const std::size_t succ = lowest_participant(h, 0);
+    const net::PeerId succ_id = h.peers[succ]->id();
+    lose(h, 0, succ, c, true);
     for (const std::size_t k : alive(h))
-        EXPECT_EQ(h.peers[k]->master(), net::PeerId{1});
-    EXPECT_EQ(h.peers[1]->role(), SessionRole::Master);
-    expect_fully_owned(h, 1);
-    const std::uint64_t t1 = h.peers[1]->tick();
+        EXPECT_EQ(h.peers[k]->master(), succ_id);
+    EXPECT_EQ(h.peers[succ]->role(), SessionRole::Master);
+    expect_fully_owned(h, succ);
+    const std::uint64_t t1 = h.peers[succ]->tick();
     ASSERT_TRUE(h.pump_until(
         [&] { return h.peers[1]->tick() >= t1 + 100 && h.peers[2]->tick() >= t1 + 100; }, 8000));
     for (int k = 0; k < 100; ++k)
         h.pump_once(0.0005);
     EXPECT_LT(h.peers[3]->stats().halo_age_s, 0.1);
-    expect_fully_owned(h, 1);
+    expect_fully_owned(h, succ);
 }
 
 TEST(SessionFailover, FastMasterLeavingHandsOver)
@@ -352,6 +376,26 @@ TEST(SessionFailover, FastParticipantThenMasterCrash)
 TEST(SessionFailover, ExactParticipantThenMasterCrashDoesNotStall)
 {
     run_failover(Coupling::Exact);
+}
+
+// The same with 5 % of datagrams lost and 1 % duplicated: Partition, PeerLeft and the rest of the
+// control traffic of a take-over are resent until they arrive.
+TEST(SessionFailover, FastParticipantThenMasterCrashUnderLoss)
+{
+    for (std::uint64_t seed = 1; seed <= 4; ++seed)
+    {
+        SCOPED_TRACE(seed);
+        run_failover(Coupling::Fast, true, seed);
+    }
+}
+
+TEST(SessionFailover, ExactParticipantThenMasterCrashUnderLoss)
+{
+    for (std::uint64_t seed = 1; seed <= 4; ++seed)
+    {
+        SCOPED_TRACE(seed);
+        run_failover(Coupling::Exact, true, seed);
+    }
 }
 
 }  // namespace
