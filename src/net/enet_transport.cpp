@@ -115,13 +115,9 @@ public:
     {
         if (host_ != nullptr)
         {
-            // A connection already being closed keeps its reason (a master that left says Quit,
-            // so the others promote a successor instead of ending: docs/session.md §6).
             for (auto& [h, c] : connections_)
-                enet_peer_disconnect_now(
-                    c.peer, static_cast<enet_uint32>(c.local_reason != DisconnectReason::None
-                                                         ? c.local_reason
-                                                         : DisconnectReason::Shutdown));
+                enet_peer_disconnect_now(c.peer,
+                                         static_cast<enet_uint32>(DisconnectReason::Shutdown));
             enet_host_flush(host_);
             enet_host_destroy(host_);
         }

@@ -358,6 +358,22 @@ void run_master_leaves(Coupling c)
     expect_fully_owned(h, succ);
 }
 
+// Only the master admits: a joiner that dials another peer (an old address, the wrong peer) is
+// refused at once instead of waiting for a Welcome that never comes.
+TEST(SessionFailover, JoiningThroughAPeerThatIsNotTheMasterIsRefused)
+{
+    Harness h(quick_network());
+    h.host(k_level, settings_for(Coupling::Fast, "master"));
+    Session& p = h.join(net::Role::Participant, settings_for(Coupling::Fast, "part"));
+    ASSERT_TRUE(h.pump_until([&] { return p.ready(); }, 4000));
+    Session& wrong =
+        h.join(net::Role::Participant, settings_for(Coupling::Fast, "wrong"), h.addresses[1]);
+    ASSERT_TRUE(h.pump_until([&] { return wrong.left(); }, 200));  // 0.1 s, far below a timeout
+    EXPECT_FALSE(wrong.ready());
+    EXPECT_FALSE(p.left());
+    EXPECT_EQ(h.peers[0]->peers().size(), 1U);
+}
+
 TEST(SessionFailover, FastMasterLeavingHandsOver)
 {
     run_master_leaves(Coupling::Fast);
