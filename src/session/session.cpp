@@ -1409,14 +1409,15 @@ struct Session::Impl
 
     /// The lowest id among the participants this peer knows to be alive and staying, itself
     /// included: the same on every peer once each has noticed the same departures.
-    std::optional<net::PeerId> successor() const
+    /// `without`: as if that peer were gone too.
+    std::optional<net::PeerId> successor(std::optional<net::PeerId> without = std::nullopt) const
     {
         std::optional<net::PeerId> best;
         if (s.role_ != SessionRole::Viewer && !leaving)
             best = s.id_;
         for (const auto& [id, p] : peers)
             if (!p.departed && !p.leaving && p.info.role == net::Role::Participant &&
-                (!best || id < best->value))
+                (!without || id != without->value) && (!best || id < best->value))
                 best = net::PeerId{id};
         return best;
     }
@@ -1981,8 +1982,21 @@ struct Session::Impl
             // hand-over, which we disconnect ourselves once past it.
             const auto& pl = std::get<net::PeerLeft>(m.body);
             auto it = peers.find(pl.peer.value);
-            if (net::PeerId{from} != master_id || it == peers.end() || pl.peer == s.id_ ||
-                it->second.departed)
+            if (it == peers.end() || pl.peer == s.id_ || it->second.departed)
+                return;
+            if (pl.peer == master_id && s.role_ != SessionRole::Master &&
+                successor(master_id) == net::PeerId{from})
+            {
+                // Our master's successor says it is gone: believe it now rather than wait for our
+                // own timeout (ENet's differ by peer, 5-30 s), so no leaf waits on a peer that
+                // still follows a dead master.
+                it->second.departed = true;
+                if (it->second.handle)
+                    transport.disconnect(*it->second.handle, net::DisconnectReason::TimedOut);
+                follow_master();
+                return;
+            }
+            if (net::PeerId{from} != master_id)
                 return;
             RemotePeer& gone = it->second;
             if (s.coupling_ == Coupling::Exact &&

@@ -374,6 +374,72 @@ TEST(SessionFailover, JoiningThroughAPeerThatIsNotTheMasterIsRefused)
     EXPECT_EQ(h.peers[0]->peers().size(), 1U);
 }
 
+// The others may notice a lost master much later than its successor (ENet's timeouts differ by
+// peer, 5-30 s): they believe the successor's PeerLeft instead of waiting. Here the successor
+// learns at once (the master's link to it closes first) and the others' links would only time
+// out after 5 s.
+void run_successor_tells_first(Coupling c)
+{
+    net::SimulatedNetworkSettings slow = quick_network();
+    slow.connect_timeout_s = 5.0;
+    Harness h(slow);
+    h.host(k_level, settings_for(c, "master"));
+    for (int k = 0; k < 2; ++k)
+    {
+        Session& p = h.join(net::Role::Participant, settings_for(c, "part"));
+        p.set_points_of_interest({net::Target{
+            net::TargetKind::Face, static_cast<std::uint32_t>(600 + 1300 * k), {0, 0, 0}, 0.0}});
+    }
+    h.join(net::Role::Viewer, settings_for(c, "viewer"));
+    ASSERT_TRUE(h.pump_until(
+        [&]
+        {
+            for (std::size_t k = 1; k < h.peers.size(); ++k)
+                if (!h.peers[k]->ready())
+                    return false;
+            auto owners = h.peers[0]->owners();
+            std::sort(owners.begin(), owners.end());
+            return std::unique(owners.begin(), owners.end()) - owners.begin() == 3 &&
+                   h.peers[0]->tick() >= 100 && h.peers[0]->owners() == h.peers[3]->owners();
+        },
+        20000));
+    const std::size_t succ = lowest_participant(h, 0);
+    const net::PeerId succ_id = h.peers[succ]->id();
+    for (const net::PeerHandle link : h.transports[0]->peers())
+        if (h.transports[0]->remote_address(link) == h.addresses[succ])
+            h.transports[0]->disconnect(link, net::DisconnectReason::TimedOut);
+    h.crash(0);
+    // 0.25 s of simulated time: far below the others' 5 s timeout.
+    ASSERT_TRUE(h.pump_until(
+        [&]
+        {
+            for (const std::size_t k : alive(h))
+            {
+                const auto owners = h.peers[k]->owners();
+                if (h.peers[k]->master() != succ_id || owners != h.peers[succ]->owners() ||
+                    std::find(owners.begin(), owners.end(), net::PeerId{0}) != owners.end())
+                    return false;
+            }
+            return true;
+        },
+        500));
+    expect_fully_owned(h, succ);
+    const std::uint64_t t1 = h.peers[succ]->tick();
+    ASSERT_TRUE(h.pump_until(
+        [&] { return h.peers[1]->tick() >= t1 + 100 && h.peers[2]->tick() >= t1 + 100; }, 2000));
+    EXPECT_LT(h.now, 5.0);
+}
+
+TEST(SessionFailover, FastOthersFollowTheSuccessorBeforeTheirOwnTimeout)
+{
+    run_successor_tells_first(Coupling::Fast);
+}
+
+TEST(SessionFailover, ExactOthersFollowTheSuccessorBeforeTheirOwnTimeout)
+{
+    run_successor_tells_first(Coupling::Exact);
+}
+
 TEST(SessionFailover, FastMasterLeavingHandsOver)
 {
     run_master_leaves(Coupling::Fast);
