@@ -1426,7 +1426,9 @@ struct Session::Impl
     /// departure, so a successor that was itself lost is replaced in turn.
     void follow_master()
     {
-        if (s.role_ == SessionRole::Master || s.left_ || leaving)
+        // A leaver follows too (its hand-over needs the successor's partition), but never
+        // becomes master itself (successor() leaves it out).
+        if (s.role_ == SessionRole::Master || s.left_)
             return;
         auto it = peers.find(master_id.value);
         if (it != peers.end() && !it->second.departed)

@@ -440,6 +440,51 @@ TEST(SessionFailover, ExactOthersFollowTheSuccessorBeforeTheirOwnTimeout)
     run_successor_tells_first(Coupling::Exact);
 }
 
+// Exact mode: a participant leaves and the master vanishes before it could re-partition; the
+// leaver follows the successor, hands its leaves over to it at a common tick and is let go.
+TEST(SessionFailover, ExactLeaverHandsOverToTheSuccessorOfALostMaster)
+{
+    Harness h(quick_network());
+    h.host(k_level, settings_for(Coupling::Exact, "master"));
+    for (int k = 0; k < 2; ++k)
+    {
+        Session& p = h.join(net::Role::Participant, settings_for(Coupling::Exact, "part"));
+        p.set_points_of_interest({net::Target{
+            net::TargetKind::Face, static_cast<std::uint32_t>(600 + 1300 * k), {0, 0, 0}, 0.0}});
+        p.set_forces({face_pull(static_cast<std::uint32_t>(610 + 1300 * k), 0.6)}, 0);
+    }
+    h.peers[0]->set_forces({point_push(0.0, 0.0, 1.0, 0.3, 0.4)}, 0);
+    ASSERT_TRUE(h.pump_until(
+        [&]
+        {
+            auto owners = h.peers[0]->owners();
+            std::sort(owners.begin(), owners.end());
+            return h.peers[1]->ready() && h.peers[2]->ready() &&
+                   std::unique(owners.begin(), owners.end()) - owners.begin() == 3 &&
+                   h.peers[0]->tick() >= 100;
+        },
+        20000));
+    const std::size_t stays = lowest_participant(h, 0);
+    const std::size_t goes = stays == 1 ? 2 : 1;
+    const std::uint64_t adopted_before = h.peers[stays]->stats().adopted_leaves;
+    const std::size_t master_leaves = leaves_of(h.peers[0]->owners(), net::PeerId{0}).size();
+    h.peers[goes]->leave();
+    h.crash(0);
+    // The leaver follows the successor: it takes its partition, so it publishes the hand-over
+    // (the halos of its leaves) at the successor's tick, then stops and is let go.
+    ASSERT_TRUE(h.pump_until([&] { return h.peers[goes]->left(); }, 4000));
+    EXPECT_EQ(h.peers[goes]->master(), h.peers[stays]->id());
+    EXPECT_EQ(h.peers[goes]->owners(), h.peers[stays]->owners());
+    EXPECT_EQ(h.peers[stays]->role(), SessionRole::Master);
+    const auto owners = h.peers[stays]->owners();
+    EXPECT_EQ(std::count(owners.begin(), owners.end(), h.peers[stays]->id()),
+              static_cast<std::ptrdiff_t>(owners.size()));
+    // Only the lost master's leaves start from a streamed state; the leaver's come with halos.
+    EXPECT_EQ(h.peers[stays]->stats().adopted_leaves - adopted_before, master_leaves);
+    const std::uint64_t t = h.peers[stays]->tick();
+    ASSERT_TRUE(h.pump_until([&] { return h.peers[stays]->tick() >= t + 50; }, 2000));
+}
+
 TEST(SessionFailover, FastMasterLeavingHandsOver)
 {
     run_master_leaves(Coupling::Fast);
