@@ -812,7 +812,15 @@ struct Session::Impl
         send_halos(t);
         net::Heartbeat hb;
         hb.epoch = partition_at(t) != nullptr ? partition_at(t)->epoch : 0;
-        for (const std::uint16_t id : barrier_set(t))
+        // To the members we know of, and to every ready participant: after a lost master, a peer
+        // may count as a member one of us does not know of yet (a Partition only some received),
+        // and must not wait for us forever (docs/session.md §6).
+        const std::vector<std::uint16_t> members = barrier_set(t);
+        std::set<std::uint16_t> to(members.begin(), members.end());
+        for (const auto& [id, p] : peers)
+            if (!p.departed && p.ready && p.info.role == net::Role::Participant)
+                to.insert(id);
+        for (const std::uint16_t id : to)
             send_to(id, make(hb, t), net::SendMode::Reliable);
         published = true;
     }
@@ -1434,6 +1442,11 @@ struct Session::Impl
         if (it != peers.end() && !it->second.departed)
             return;
         const auto next = successor();
+        if (leaving && !next)
+        {
+            close_all(net::DisconnectReason::Quit);  // our leave is done: nobody left to hand to
+            return;
+        }
         if (!s.model_ || !next)
         {
             // Nothing to continue with: joined without the model yet, or nobody left to simulate.
