@@ -29,6 +29,12 @@ constexpr double k_leave_timeout_s = 5.0;
 /// a leaf, and a receiver holds its last 16 received, so an acknowledged baseline the owner still
 /// has is one the receiver still holds (docs/protocol.md §5.5).
 constexpr std::size_t k_baseline_window = 16;
+/// Failover: a successor's first epoch is this far above the newest it knows, so a Partition the
+/// lost master sent to only some peers just before it went cannot share an epoch with the
+/// successor's (docs/session.md §6).
+constexpr std::uint32_t k_successor_epoch_gap = 16;
+/// Partitions kept aside per peer that is not (yet) our master (failover, docs/session.md §6).
+constexpr std::size_t k_max_foreign_partitions = 8;
 
 // --- little-endian byte writer/reader for the blobs -------------------------------------------
 
@@ -277,6 +283,14 @@ struct Session::Impl
     std::vector<ForceRecord> force_log;  // every force list seen, when recording
     std::vector<net::Target> my_points;
     bool points_dirty = false;
+    bool points_sent = false;  // participant: our points went out once (greetings repeat them)
+    // Failover (docs/session.md §6).
+    net::PeerInfo my_info;  // our entry in the Welcome, announced if we become master
+    bool my_info_known = false;
+    // Partitions from a peer we do not follow yet (it may be the successor of a master whose loss
+    // we have not noticed): applied, in order, if it becomes our master.
+    std::map<std::uint16_t, std::vector<std::pair<std::uint64_t, net::Partition>>>
+        foreign_partitions;
     bool repartition_pending = false;
     std::uint32_t next_epoch = 1;
     bool lockstep = false;    // exact: a member stepping in lockstep
@@ -798,7 +812,15 @@ struct Session::Impl
         send_halos(t);
         net::Heartbeat hb;
         hb.epoch = partition_at(t) != nullptr ? partition_at(t)->epoch : 0;
-        for (const std::uint16_t id : barrier_set(t))
+        // To the members we know of, and to every ready participant: after a lost master, a peer
+        // may count as a member one of us does not know of yet (a Partition only some received),
+        // and must not wait for us forever (docs/session.md §6).
+        const std::vector<std::uint16_t> members = barrier_set(t);
+        std::set<std::uint16_t> to(members.begin(), members.end());
+        for (const auto& [id, p] : peers)
+            if (!p.departed && p.ready && p.info.role == net::Role::Participant)
+                to.insert(id);
+        for (const std::uint16_t id : to)
             send_to(id, make(hb, t), net::SendMode::Reliable);
         published = true;
     }
@@ -881,6 +903,7 @@ struct Session::Impl
             }
             if (!barrier_ok(t) || !may_step(t))
                 return;
+            adopt_orphans(t);
             apply_halos(t);
             const PartitionEntry* prev = t > exact_from ? partition_at(t - 1) : partition_at(t);
             refresh_exact_sets(prev, partition_at(t));
@@ -896,6 +919,46 @@ struct Session::Impl
             published = false;
             copy_own_to_display(partition_at(t));
             disconnect_finished_leavers();
+        }
+    }
+
+    /// Exact mode, before stepping from t: leaves this peer owns from t that a lost peer owned
+    /// before and did not hand over (no Heartbeat(t), so no halos of t from it) start from their
+    /// last streamed state, the newest this peer received (docs/session.md §6).
+    void adopt_orphans(std::uint64_t t)
+    {
+        if (t <= exact_from)
+            return;
+        const PartitionEntry* prev = partition_at(t - 1);
+        const PartitionEntry* next = partition_at(t);
+        if (prev == nullptr || next == nullptr || prev == next)
+            return;
+        const core::TetraGrid& g = s.model_->grid();
+        bool any = false;
+        for (std::size_t l = 0; l < next->owners.size() && l < prev->owners.size(); ++l)
+        {
+            const net::PeerId was = prev->owners[l];
+            if (next->owners[l] != s.id_ || was == s.id_)
+                continue;
+            auto it = peers.find(was.value);
+            if (it != peers.end() &&
+                (!it->second.departed || (it->second.has_heartbeat && it->second.heartbeat >= t)))
+                continue;
+            for (const core::NodeIndex n : s.graph_->nodes(l))
+            {
+                const core::GridCoord c = g.coord(n);
+                s.state_.u.at(c.x, c.y) = s.display_u_.at(c.x, c.y);
+                s.state_.v.at(c.x, c.y) = s.display_v_.at(c.x, c.y);
+            }
+            ++counters.adopted_leaves;
+            any = true;
+        }
+        if (any)
+        {
+            s.model_->sync(s.state_.u);
+            s.model_->sync(s.state_.v);
+            spdlog::info("session: tick {}: took over leaves of a lost peer from their last state",
+                         t);
         }
     }
 
@@ -1330,11 +1393,14 @@ struct Session::Impl
         p.handle.reset();
         p.departed = true;
         spdlog::debug("session: peer {} disconnected ({})", id, net::to_string(reason));
-        if (net::PeerId{id} == master_id && s.role_ != SessionRole::Master)
-            close_all(net::DisconnectReason::Shutdown);
+        if (net::PeerId{id} == master_id && s.role_ != SessionRole::Master &&
+            reason == net::DisconnectReason::Shutdown)
+            close_all(net::DisconnectReason::Shutdown);  // the master ended the session
+        else
+            follow_master();
         if (leaving && handle_ids.empty())
             s.left_ = true;
-        if (s.role_ == SessionRole::Master)
+        if (s.role_ == SessionRole::Master && !s.left_)
         {
             repartition_pending = true;
             net::PeerLeft msg;
@@ -1345,6 +1411,114 @@ struct Session::Impl
             if (s.coupling_ == Coupling::Fast)
                 master_repartition(s.state_.tick);
         }
+    }
+
+    // --- failover (docs/session.md §6) ----------------------------------------------------------
+
+    /// The lowest id among the participants this peer knows to be alive and staying, itself
+    /// included: the same on every peer once each has noticed the same departures.
+    /// `without`: as if that peer were gone too.
+    std::optional<net::PeerId> successor(std::optional<net::PeerId> without = std::nullopt) const
+    {
+        std::optional<net::PeerId> best;
+        if (s.role_ != SessionRole::Viewer && !leaving)
+            best = s.id_;
+        for (const auto& [id, p] : peers)
+            if (!p.departed && !p.leaving && p.info.role == net::Role::Participant &&
+                (!without || id != without->value) && (!best || id < best->value))
+                best = net::PeerId{id};
+        return best;
+    }
+
+    /// If the master we follow is gone, follows its successor (or becomes it). Called on every
+    /// departure, so a successor that was itself lost is replaced in turn.
+    void follow_master()
+    {
+        // A leaver follows too (its hand-over needs the successor's partition), but never
+        // becomes master itself (successor() leaves it out).
+        if (s.role_ == SessionRole::Master || s.left_)
+            return;
+        auto it = peers.find(master_id.value);
+        if (it != peers.end() && !it->second.departed)
+            return;
+        const auto next = successor();
+        if (leaving && !next)
+        {
+            close_all(net::DisconnectReason::Quit);  // our leave is done: nobody left to hand to
+            return;
+        }
+        if (!s.model_ || !next)
+        {
+            // Nothing to continue with: joined without the model yet, or nobody left to simulate.
+            spdlog::warn("session: master {} lost and no successor; the session ends",
+                         master_id.value);
+            close_all(net::DisconnectReason::Quit);
+            return;
+        }
+        spdlog::info("session: master {} lost; peer {} takes over", master_id.value, next->value);
+        master_id = *next;
+        if (*next == s.id_)
+        {
+            promote();
+            return;
+        }
+        // Partitions it sent before we noticed the loss.
+        auto kept = foreign_partitions.find(next->value);
+        if (kept != foreign_partitions.end())
+        {
+            auto list = std::move(kept->second);
+            foreign_partitions.erase(kept);
+            for (const auto& [tick, p] : list)
+                apply_partition(tick, p);
+        }
+        foreign_partitions.clear();
+    }
+
+    /// This peer becomes master: it partitions from now on (epochs above any seen), admits
+    /// joiners (ids above any known) and reports departures. It records nothing: a recording
+    /// needs every input from the start.
+    void promote()
+    {
+        s.role_ = SessionRole::Master;
+        ++counters.promotions;
+        foreign_partitions.clear();
+        const PartitionEntry* cur = newest();
+        if (cur != nullptr)
+            next_epoch = std::max(next_epoch, cur->epoch + k_successor_epoch_gap);
+        std::uint16_t top = s.id_.value;
+        for (const auto& [id, p] : peers)
+            top = std::max(top, id);
+        next_peer_id = std::max<std::uint16_t>(next_peer_id, static_cast<std::uint16_t>(top + 1));
+        // Participants partitioned before are ready even if their points never reached us.
+        for (auto& [id, p] : peers)
+            if (member(cur, net::PeerId{id}) && p.info.role == net::Role::Participant)
+                p.ready = true;
+        points_dirty = false;
+        repartition_pending = true;
+        if (s.coupling_ == Coupling::Exact && !lockstep)
+        {
+            // Not partitioned yet: start the lockstep from what we show.
+            lockstep = true;
+            published = false;
+            state_exact = true;
+            exact_from = s.state_.tick;
+            const core::TetraGrid& g = s.model_->grid();
+            for (int y = 0; y < g.ny(); ++y)
+                for (int x = 0; x < g.nx(); ++x)
+                {
+                    s.state_.u.at(x, y) = s.display_u_.at(x, y);
+                    s.state_.v.at(x, y) = s.display_v_.at(x, y);
+                }
+        }
+        // Tell the others which departures we saw (they may not have noticed them yet).
+        for (const auto& [id, p] : peers)
+            if (p.departed && !p.leaving)
+            {
+                net::PeerLeft msg;
+                msg.peer = net::PeerId{id};
+                msg.reason = net::DisconnectReason::TimedOut;
+                send_all(make(msg, s.state_.tick));
+            }
     }
 
     void on_hello(net::PeerHandle h, const net::Message& m, const net::Hello& hello)
@@ -1376,8 +1550,16 @@ struct Session::Impl
                     send_to(oid, make(joined, s.state_.tick));
             return;
         }
+        if (m.header.sender == net::k_no_peer)
+        {
+            // Only the master admits: a joiner that dialled another peer (say, one that knew an
+            // old master's successor by the wrong address) is refused at once, not left waiting.
+            if (handle_ids.count(h) == 0)
+                transport.disconnect(h, net::DisconnectReason::Refused);
+            return;
+        }
         // A peer greeting us after its Welcome.
-        if (m.header.sender == net::k_no_peer || handle_ids.count(h) != 0)
+        if (handle_ids.count(h) != 0)
             return;
         bind(h, m.header.sender.value);
         RemotePeer& p = peers[m.header.sender.value];
@@ -1388,6 +1570,12 @@ struct Session::Impl
     /// Sends a newly known peer what it needs from us that it cannot have seen: our newest force.
     void greet_new_peer(std::uint16_t id)
     {
+        if (points_sent && s.role_ != SessionRole::Viewer && !leaving)
+        {
+            net::PointsOfInterest poi;
+            poi.points = my_points;
+            send_to(id, make(poi, s.state_.tick));
+        }
         for (const ForceEntry& e : my_forces)
         {
             net::Force f;
@@ -1413,11 +1601,14 @@ struct Session::Impl
         w.model_hash = core::hash_bytes(model);
         w.state_size = static_cast<std::uint32_t>(state.size());
         w.state_hash = core::hash_bytes(state);
-        net::PeerInfo me;
+        net::PeerInfo me = my_info_known ? my_info : net::PeerInfo{};
         me.id = s.id_;
         me.role = net::Role::Participant;
-        me.port = settings.listen_port != 0 ? settings.listen_port : 1;
-        me.name = settings.name;
+        if (!my_info_known)
+        {
+            me.port = settings.listen_port != 0 ? settings.listen_port : 1;
+            me.name = settings.name;
+        }
         w.peers.push_back(me);
         for (const auto& [oid, op] : peers)
             if (!op.departed && op.info_known && w.peers.size() < net::k_max_welcome_peers)
@@ -1465,7 +1656,11 @@ struct Session::Impl
         for (const net::PeerInfo& info : w.peers)
         {
             if (info.id == s.id_)
+            {
+                my_info = info;
+                my_info_known = true;
                 continue;
+            }
             RemotePeer& p = peers[info.id.value];
             p.info = info;
             p.info_known = true;
@@ -1543,19 +1738,35 @@ struct Session::Impl
         if (!points_dirty || !s.model_ || s.role_ != SessionRole::Participant || leaving)
             return;
         points_dirty = false;
+        points_sent = true;
         net::PointsOfInterest poi;
         poi.points = my_points;
-        send_to(master_id.value, make(poi, s.state_.tick));
+        // To every peer, so that whoever succeeds the master can partition at once.
+        send_all(make(poi, s.state_.tick));
     }
 
-    void on_partition(const net::Message& m, const net::Partition& p)
+    void on_partition(std::uint16_t from, const net::Message& m, const net::Partition& p)
+    {
+        if (net::PeerId{from} == master_id)
+        {
+            apply_partition(m.header.tick, p);
+            return;
+        }
+        // Maybe the successor of a master whose loss we have not noticed yet.
+        auto& kept = foreign_partitions[from];
+        if (kept.size() >= k_max_foreign_partitions)
+            kept.erase(kept.begin());
+        kept.emplace_back(m.header.tick, p);
+    }
+
+    void apply_partition(std::uint64_t tick, const net::Partition& p)
     {
         if (p.leaf_depth != s.graph_->depth() || p.owners.size() != s.graph_->size())
             return;
-        add_partition(m.header.tick, p.epoch, p.owners);
+        add_partition(tick, p.epoch, p.owners);
         if (s.coupling_ == Coupling::Exact && !lockstep && member(newest(), s.id_) &&
             s.role_ == SessionRole::Participant)
-            become_member(m.header.tick);
+            become_member(tick);
     }
 
     void on_halo(const net::Message& m, const net::Halo& h)
@@ -1781,26 +1992,53 @@ struct Session::Impl
         }
         case net::MessageType::PeerLeft:
         {
+            // The master dropped a peer. Follow it (so a peer that lost only the master's link
+            // cannot split the session), except for an exact-mode leaver finishing its
+            // hand-over, which we disconnect ourselves once past it.
             const auto& pl = std::get<net::PeerLeft>(m.body);
             auto it = peers.find(pl.peer.value);
-            if (it != peers.end() && s.coupling_ == Coupling::Fast)
+            if (it == peers.end() || pl.peer == s.id_ || it->second.departed)
+                return;
+            if (pl.peer == master_id && s.role_ != SessionRole::Master &&
+                successor(master_id) == net::PeerId{from})
+            {
+                // Our master's successor says it is gone: believe it now rather than wait for our
+                // own timeout (ENet's differ by peer, 5-30 s), so no leaf waits on a peer that
+                // still follows a dead master.
                 it->second.departed = true;
+                if (it->second.handle)
+                    transport.disconnect(*it->second.handle, net::DisconnectReason::TimedOut);
+                follow_master();
+                return;
+            }
+            if (net::PeerId{from} != master_id)
+                return;
+            RemotePeer& gone = it->second;
+            if (s.coupling_ == Coupling::Exact &&
+                (gone.leaving || pl.reason == net::DisconnectReason::Quit))
+                return;
+            gone.departed = true;
+            if (gone.handle)
+                transport.disconnect(*gone.handle, net::DisconnectReason::Kicked);
             return;
         }
         case net::MessageType::PointsOfInterest:
-            if (s.role_ == SessionRole::Master && p.info.role == net::Role::Participant &&
-                !p.leaving)
+            // Every peer keeps every participant's points: a successor partitions with them.
+            if (p.info.role == net::Role::Participant && !p.leaving)
             {
                 p.points = std::get<net::PointsOfInterest>(m.body).points;
                 p.ready = true;
-                repartition_pending = true;
-                if (s.coupling_ == Coupling::Fast)
-                    master_repartition(s.state_.tick);
+                if (s.role_ == SessionRole::Master)
+                {
+                    repartition_pending = true;
+                    if (s.coupling_ == Coupling::Fast)
+                        master_repartition(s.state_.tick);
+                }
             }
             return;
         case net::MessageType::Partition:
-            if (net::PeerId{from} == master_id)
-                on_partition(m, std::get<net::Partition>(m.body));
+            if (s.role_ != SessionRole::Master)
+                on_partition(from, m, std::get<net::Partition>(m.body));
             return;
         case net::MessageType::Force:
             p.forces.push_back(ForceEntry{m.header.tick, std::get<net::Force>(m.body).forces});
@@ -2018,8 +2256,18 @@ void Session::set_forces(std::vector<net::UserForce> forces, std::uint64_t from_
 
 void Session::leave()
 {
-    if (role_ == SessionRole::Master || impl_->leaving)
+    if (left_ || impl_->leaving)
         return;
+    if (role_ == SessionRole::Master)
+    {
+        // Hand over: our leaves' newest state goes out, then the others promote a successor that
+        // takes them over from it (docs/session.md §6). Disconnecting with Quit, not Shutdown,
+        // is what tells them the session goes on.
+        if (model_ != nullptr)
+            impl_->stream();
+        impl_->close_all(net::DisconnectReason::Quit);
+        return;
+    }
     impl_->leaving = true;
     impl_->leave_started = impl_->last_now;
     net::Leave msg;
@@ -2054,6 +2302,11 @@ Recording Session::recording() const
 void Session::shutdown()
 {
     impl_->close_all(net::DisconnectReason::Shutdown);
+}
+
+net::PeerId Session::master() const noexcept
+{
+    return impl_->master_id;
 }
 
 std::uint32_t Session::epoch() const noexcept

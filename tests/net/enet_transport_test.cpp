@@ -163,6 +163,27 @@ TEST(EnetTransport, TwoHostsConnectExchangeAndDisconnect)
     EXPECT_TRUE(h.ta->peers().empty());
 }
 
+// A connection closed and flushed keeps its reason when the transport is destroyed right after,
+// as a process that exits at once (a session master that leaves says Quit, and its peers then
+// promote a successor instead of ending the session as on Shutdown: docs/session.md §6).
+TEST(EnetTransport, DestroyingATransportKeepsTheReasonOfAClosedConnection)
+{
+    Hosts h;
+    if (!h.skip_reason.empty())
+        GTEST_SKIP() << h.skip_reason;
+    ASSERT_TRUE(h.connect());
+    h.ta->disconnect(h.a_to_b, DisconnectReason::Quit);
+    h.ta->flush();
+    h.ta.reset();
+    const auto end = Clock::now() + k_deadline;
+    while (Clock::now() < end && !Hosts::find(h.from_b, MessengerEvent::Kind::Disconnected))
+        while (auto ev = h.b.poll(1))
+            h.from_b.push_back(std::move(*ev));
+    const auto* ev = Hosts::find(h.from_b, MessengerEvent::Kind::Disconnected);
+    ASSERT_NE(ev, nullptr);
+    EXPECT_EQ(ev->reason, DisconnectReason::Quit);
+}
+
 TEST(EnetTransport, BadBytesAreDroppedCountedAndCutTheSenderOff)
 {
     Hosts h;

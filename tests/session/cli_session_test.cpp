@@ -89,4 +89,80 @@ TEST(SessionCli, HostAndTwoJoinsAsProcessesExchangeTraffic)
     EXPECT_EQ(column_sum(dir / "v.csv", "steps"), 0.0);  // a viewer simulates nothing
 }
 
+// Rows of a CSV as maps from column name to value.
+std::vector<std::vector<std::pair<std::string, double>>> rows(const std::filesystem::path& csv)
+{
+    std::ifstream in(csv);
+    std::string line;
+    std::vector<std::string> header;
+    std::vector<std::vector<std::pair<std::string, double>>> out;
+    if (!std::getline(in, line))
+        return out;
+    std::stringstream hs(line);
+    for (std::string cell; std::getline(hs, cell, ',');)
+        header.push_back(cell);
+    while (std::getline(in, line))
+    {
+        std::stringstream ls(line);
+        std::vector<std::pair<std::string, double>> row;
+        std::string cell;
+        for (std::size_t k = 0; k < header.size() && std::getline(ls, cell, ','); ++k)
+            row.emplace_back(header[k], std::atof(cell.c_str()));
+        out.push_back(std::move(row));
+    }
+    return out;
+}
+
+double value(const std::vector<std::pair<std::string, double>>& row, const std::string& name)
+{
+    for (const auto& [k, v] : row)
+        if (k == name)
+            return v;
+    return -1.0;
+}
+
+// Kill -9 a participant, then the master, mid-session (fast coupling, so that the others keep
+// running while ENet's timeout, at least 5 s, runs out): the remaining participant takes over as
+// master, owns every node and keeps stepping, and the viewer keeps receiving. Bounded by the
+// durations (about 20 s).
+TEST(SessionCli, KillingAParticipantThenTheMasterLeavesTheOthersRunning)
+{
+    const auto dir = pliant::test::scratch_dir("session_cli_kill");
+    const int port = 20000 + static_cast<int>((getpid() + 7919) % 20000);
+    const std::string exe = PLIANT_EXE;
+    const std::string d = dir.string();
+    const std::string p = std::to_string(port);
+    const std::string join = "'" + exe + "' join 127.0.0.1:" + p;
+    const std::string cmd =
+        "cd '" + d + "' && rm -f *.rc *.csv *.log; '" + exe +
+        "' host --level 4 --mode fast --port " + p +
+        " --duration 40 > host.log 2>&1 & HOST=$!; sleep 0.5; (" + join +
+        " --duration 18 --stats a.csv > a.log 2>&1; echo $? > a.rc) & sleep 0.5; " + join +
+        " --duration 40 > b.log 2>&1 & B=$!; sleep 0.3; (" + join +
+        " --viewer --duration 18 --stats v.csv > v.log 2>&1; echo $? > v.rc) & " +
+        "sleep 1.5; kill -9 $B; sleep 1.0; kill -9 $HOST; wait";
+    ASSERT_EQ(std::system(cmd.c_str()), 0);
+    const std::string host_log = read(dir / "host.log");
+    if (host_log.find("bind") != std::string::npos)
+        GTEST_SKIP() << "cannot bind UDP port " << port << " on this machine: " << host_log;
+    EXPECT_EQ(read(dir / "a.rc"), "0\n") << read(dir / "a.log");
+    EXPECT_EQ(read(dir / "v.rc"), "0\n") << read(dir / "v.log");
+    EXPECT_NE(read(dir / "a.log").find("peer 1 takes over"), std::string::npos)
+        << read(dir / "a.log");
+    EXPECT_NE(read(dir / "v.log").find("peer 1 takes over"), std::string::npos)
+        << read(dir / "v.log");
+    // Level 4: 2 * 16^2 + 2 canonical nodes, all owned by the one participant left.
+    const auto a = rows(dir / "a.csv");
+    const auto v = rows(dir / "v.csv");
+    ASSERT_GE(a.size(), 16U);
+    ASSERT_GE(v.size(), 16U);
+    for (std::size_t k = a.size() - 4; k < a.size() - 1; ++k)
+    {
+        EXPECT_EQ(value(a[k], "owned_nodes"), 514.0) << "row " << k;
+        EXPECT_GT(value(a[k], "steps"), 0.0) << "row " << k;
+    }
+    for (std::size_t k = v.size() - 4; k < v.size() - 1; ++k)
+        EXPECT_GT(value(v[k], "bytes_in"), 1000.0) << "row " << k;
+}
+
 }  // namespace

@@ -15,6 +15,7 @@
 #include <cmath>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <vector>
 
 namespace pliant::session::test
@@ -117,7 +118,8 @@ struct Harness
 
     net::SimulatedNetwork net;
     std::vector<std::unique_ptr<net::Transport>> transports;
-    std::vector<std::unique_ptr<Session>> peers;
+    std::vector<std::unique_ptr<Session>> peers;  ///< null once crashed
+    std::vector<net::Address> addresses;          ///< where each peer listens
     net::Address master_address;
     double now = 0.0;
 
@@ -125,6 +127,7 @@ struct Harness
     {
         transports.push_back(net.create_endpoint());
         master_address = transports.back()->open({}).value();
+        addresses.push_back(master_address);
         const core::TetraGrid grid = core::TetraGrid::create(level).value();
         peers.push_back(Session::host(*transports.back(), grid, scenes::sphere_grid(grid, 1.0),
                                       material(), settings)
@@ -132,20 +135,34 @@ struct Harness
         return *peers.back();
     }
 
-    Session& join(net::Role role, const SessionSettings& settings)
+    /// Joins through the peer listening at `via` (the master's address by default).
+    Session& join(net::Role role, const SessionSettings& settings,
+                  const std::optional<net::Address>& via = std::nullopt)
     {
         transports.push_back(net.create_endpoint());
-        (void)transports.back()->open({}).value();
-        peers.push_back(Session::join(*transports.back(), master_address, role, settings).value());
+        addresses.push_back(transports.back()->open({}).value());
+        peers.push_back(
+            Session::join(*transports.back(), via.value_or(master_address), role, settings)
+                .value());
         return *peers.back();
+    }
+
+    /// Peer k vanishes without a word, as a killed process: its session and endpoint are
+    /// destroyed, and the others' links to it time out.
+    void crash(std::size_t k)
+    {
+        peers[k].reset();
+        transports[k].reset();
     }
 
     void pump_once(double dt)
     {
         for (auto& p : peers)
-            p->poll();
+            if (p)
+                p->poll();
         for (auto& p : peers)
-            p->advance(now);
+            if (p)
+                p->advance(now);
         net.advance(dt);
         now += dt;
     }

@@ -62,7 +62,7 @@ struct RunSummary
 {
     double elapsed_s = 0.0;
     std::uint64_t final_tick = 0;
-    bool left = false;  ///< the peer left (script) or the master went away
+    bool left = false;  ///< the peer left (script), or the session ended (master shut it down)
     SessionStats stats;
 };
 

@@ -41,7 +41,15 @@
 ///   state is untouched (halos stay f64), so lockstep and replay stay bit-exact.
 /// - Leaving: a participant sends Leave; the master re-partitions; in exact mode the leaver keeps
 ///   publishing until the tick where it owns nothing, and the others disconnect it once they are
-///   past that tick (so no halo of its is lost). The master cannot leave (the session ends).
+///   past that tick (so no halo of its is lost).
+/// - Loss (crash, timeout): the master re-partitions without the lost participant; its leaves
+///   continue from the last state received for them (fast mode: the Dirichlet copy of the
+///   displayed state; exact mode: the displayed state is loaded at the hand-over tick). A lost
+///   master is replaced by the lowest remaining participant id, which every peer computes from the
+///   peer list it holds (Welcome, PeerJoined, greetings, departures): the successor becomes master
+///   (new epochs above any seen, joins, PeerLeft), the others accept its Partitions (kept aside if
+///   they arrive before the loss is noticed) over the connections they have. A master that shuts
+///   down (reason Shutdown) ends the session; one that calls leave() hands over the same way.
 
 #include <pliant/core/field.h>
 #include <pliant/core/result.h>
@@ -133,6 +141,9 @@ struct SessionStats
     // Receiver side: quantised LeafStates dropped (never displayed, never acknowledged).
     std::uint64_t baseline_misses = 0;  ///< the baseline named is not held (lost, late join)
     std::uint64_t state_rejects = 0;    ///< wrong node count, or values leaving the int32 range
+    /// Exact mode: leaves taken over from a lost peer, started from their last streamed state.
+    std::uint64_t adopted_leaves = 0;
+    std::uint64_t promotions = 0;  ///< times this peer became master after the master was lost
 };
 
 class Session
@@ -165,7 +176,9 @@ public:
     /// the earliest tick every peer can still honour if that is later (exact mode: the tick after
     /// the next one this peer publishes; fast mode: at once). Several calls queue in order.
     void set_forces(std::vector<net::UserForce> forces, std::uint64_t from_tick = 0);
-    /// Leaves the session (participants and viewers); `left()` becomes true when done.
+    /// Leaves the session; `left()` becomes true when done. Participants and viewers leave as
+    /// described in the file comment; the master streams its leaves once more and disconnects
+    /// (reason Quit), and the others promote a successor that takes its leaves over.
     void leave();
     /// Starts recording every force list of every peer (recording.h) for deterministic replay.
     /// \return InvalidArgument unless this is the master of an exact-mode session that has not
@@ -178,10 +191,13 @@ public:
 
     [[nodiscard]] SessionRole role() const noexcept { return role_; }
     [[nodiscard]] net::PeerId id() const noexcept { return id_; }
+    /// The peer this one follows as master (itself when master; changes on failover).
+    [[nodiscard]] net::PeerId master() const noexcept;
     [[nodiscard]] Coupling coupling() const noexcept { return coupling_; }
     /// The model arrived (or was given) and the peer displays the object.
     [[nodiscard]] bool ready() const noexcept { return model_ != nullptr; }
-    /// Left the session (after leave()), or the master went away.
+    /// Left the session (after leave()), or the session ended (the master shut it down, or it was
+    /// lost and no participant remains to take over).
     [[nodiscard]] bool left() const noexcept { return left_; }
     /// The tick of the integrated state (exact mode: the lockstep tick).
     [[nodiscard]] std::uint64_t tick() const noexcept { return state_.tick; }
