@@ -955,7 +955,7 @@ struct Session::Impl
     }
 
     /// The interface damping of one accepted step of `dt` from `t0` (fast_advance explains it):
-    /// v *= exp(-dt sum_e w_e age_e / m) on every owned node next to a Dirichlet node, where
+    /// v *= exp(-dt sum_e |w_e| |age_e| / m) on every owned node next to a Dirichlet node, where
     /// age_e = t0 + dt/2 - (time of the streamed state that gave the neighbour's value).
     void damp_border(double t0, double dt)
     {
@@ -968,7 +968,7 @@ struct Session::Impl
         {
             const int x = border_nodes[i].x;
             const int y = border_nodes[i].y;
-            double b = 0.0;  // sum of w_e age_e [N s/m]
+            double b = 0.0;  // sum of |w_e| age_e [N s/m], >= 0
             for (std::uint32_t e = border_begin[i]; e < border_begin[i + 1]; ++e)
             {
                 double w = 0.0;
@@ -981,7 +981,11 @@ struct Session::Impl
                 case 4: w = wd.at(x, y); break;
                 default: w = wd.at(x - 1, y - 1); break;
                 }
-                b += w * std::max(0.0, mid - leaf_time[border_leaf[e]]);
+                // |w|: a negative cotangent weight (an obtuse pair of angles) is a spring of
+                // negative stiffness, and its delay needs the same damper. |age|: the peers'
+                // clocks are not aligned, so a value can be ahead of ours; a lead is a phase
+                // shift too, and feeds the modes with omega |age| in (pi, 2 pi).
+                b += std::fabs(w) * std::fabs(mid - leaf_time[border_leaf[e]]);
             }
             s.state_.v.at(x, y) *= std::exp(-dt * b / m.mass().at(x, y));
         }
@@ -996,9 +1000,11 @@ struct Session::Impl
     // damping of at least K T/2, a delay tau adds K tau); grid-scale modes along a partition
     // border, which cannot carry the energy away, grew ~e^(4/s) until |u| ~ 1e11 m in the 2-peer
     // drag scene (docs/session.md §4.2). So each coupling edge gets the damper it needs to stay
-    // passive: after every accepted step the owned end's velocity decays by exp(-dt w age / m),
-    // age = how old the held value is at the middle of the step. Interior nodes and exact
-    // coupling are untouched; the price is that a smooth motion is slowed at the border nodes.
+    // passive: after every accepted step the owned end's velocity decays by
+    // exp(-dt |w| |age| / m), age = how old the held value is at the middle of the step (a delay
+    // of phase omega age injects at most w sin(omega age) / omega <= |w| |age| of negative
+    // damping). Interior nodes and exact coupling are untouched; the price is that a smooth
+    // motion is slowed at the border nodes.
     void fast_advance()
     {
         const PartitionEntry* p = newest();
