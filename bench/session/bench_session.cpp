@@ -6,6 +6,7 @@
 // each peer sends per simulated second, and the fast-vs-exact error of a scripted pull.
 //   pliant_bench_session [levels...] [--quick] [--json FILE] [--csv FILE]   (default: 5 6 7;
 //   quick: 5 6 without the 1 kHz-frame variant)
+//   pliant_bench_session --stream [level] [--seconds S]   (streaming cost of 2 dragging peers)
 // --json/--csv rows (bench/common/bench_report.h), sized by the number of peers (1..4): per
 // coupling ("exact", "fast", "fast 1 kHz") the step seconds per simulated second of the busiest
 // peer and the mean peer, their ratio to one process stepping every node, the payload bytes sent
@@ -268,10 +269,11 @@ StreamResult run_stream(int level, net::ValueEncoding encoding, double seconds, 
     return r;
 }
 
-/// `pliant_bench_session --stream [level]`: raw f64 and f32 against quantised deltas.
-void stream_suite(bench::Report& report, int level)
+/// `pliant_bench_session --stream [level] [--seconds S]`: raw f64 and f32 against quantised
+/// deltas, measured over S simulated seconds (default 2; docs/session.md §4.2 uses 12 to show
+/// that fast coupling stays bounded under continuous drags).
+void stream_suite(bench::Report& report, int level, double seconds)
 {
-    constexpr double seconds = 2.0;
     constexpr double k_header_bytes = 38.0;  // UDP/IP + ENet per datagram (docs/results.md)
     std::printf(
         "# streaming, level %d, 2 participants dragging continuously, fast coupling, "
@@ -380,16 +382,19 @@ int main(int argc, char** argv)
         return 2;
     std::vector<int> levels;
     bool stream_only = false;
+    double stream_seconds = 2.0;
     for (int k = 1; k < argc; ++k)
     {
         if (std::string(argv[k]) == "--stream")
             stream_only = true;
+        else if (std::string(argv[k]) == "--seconds" && k + 1 < argc)
+            stream_seconds = std::atof(argv[++k]);
         else
             levels.push_back(std::atoi(argv[k]));
     }
     if (stream_only)
     {
-        stream_suite(report, levels.empty() ? 6 : levels.front());
+        stream_suite(report, levels.empty() ? 6 : levels.front(), stream_seconds);
         return report.write() ? 0 : 1;
     }
     if (levels.empty())

@@ -324,7 +324,16 @@ struct Session::Impl
     std::map<std::uint16_t, std::vector<std::uint32_t>> halo_out;  // receiver -> nodes
     std::uint32_t fast_epoch = 0;
     std::vector<core::Region> owned_regions;  // fast: own leaves
-    std::vector<std::uint32_t> my_leaves;     // streamed leaves
+    // Fast: the coupling edges (owned node, Dirichlet neighbour) and their interface damping
+    // (fast_advance explains it). Per owned node with Dirichlet neighbours: its (x, y) and its
+    // edges [begin, next begin); per edge: the stencil direction (grid_neighbours order) and the
+    // leaf whose streamed state gives the neighbour's value. Rebuilt when the partition changes.
+    std::uint32_t border_epoch = std::numeric_limits<std::uint32_t>::max();
+    std::vector<core::GridCoord> border_nodes;
+    std::vector<std::uint32_t> border_begin;
+    std::vector<std::uint8_t> border_dir;
+    std::vector<std::uint32_t> border_leaf;
+    std::vector<std::uint32_t> my_leaves;  // streamed leaves
     std::uint32_t my_leaves_epoch = std::numeric_limits<std::uint32_t>::max();
 
     // Clock.
@@ -975,6 +984,90 @@ struct Session::Impl
 
     // --- fast mode -----------------------------------------------------------------------------
 
+    /// The coupling edges of the owned set `mine` (see border_nodes).
+    void refresh_border(const PartitionEntry* p, const std::vector<char>& mine)
+    {
+        const std::uint32_t e = p != nullptr ? p->epoch : 0;
+        if (e == border_epoch)
+            return;
+        border_epoch = e;
+        border_nodes.clear();
+        border_begin.clear();
+        border_dir.clear();
+        border_leaf.clear();
+        const core::TetraGrid& g = s.model_->grid();
+        for (const std::uint32_t l : my_leaves)
+            for (const core::NodeIndex n : s.graph_->nodes(l))
+            {
+                const core::GridCoord c = g.coord(n);
+                const auto nb = grid_neighbours(g, c.x, c.y);
+                const std::size_t first = border_dir.size();
+                for (std::size_t k = 0; k < nb.size(); ++k)
+                    if (mine[nb[k].value] == 0)
+                    {
+                        border_dir.push_back(static_cast<std::uint8_t>(k));
+                        border_leaf.push_back(s.graph_->leaf_of(nb[k]));
+                    }
+                if (border_dir.size() != first)
+                {
+                    border_nodes.push_back(c);
+                    border_begin.push_back(static_cast<std::uint32_t>(first));
+                }
+            }
+        border_begin.push_back(static_cast<std::uint32_t>(border_dir.size()));
+    }
+
+    /// The interface damping of one accepted step of `dt` from `t0` (fast_advance explains it):
+    /// v *= exp(-dt sum_e |w_e| |age_e| / m) on every owned node next to a Dirichlet node, where
+    /// age_e = t0 + dt/2 - (time of the streamed state that gave the neighbour's value).
+    void damp_border(double t0, double dt)
+    {
+        const sim::MembraneModel& m = *s.model_;
+        const core::Field<double>& wx = m.weight_x();
+        const core::Field<double>& wy = m.weight_y();
+        const core::Field<double>& wd = m.weight_d();
+        const double mid = t0 + 0.5 * dt;
+        for (std::size_t i = 0; i < border_nodes.size(); ++i)
+        {
+            const int x = border_nodes[i].x;
+            const int y = border_nodes[i].y;
+            double b = 0.0;  // sum of |w_e| age_e [N s/m], >= 0
+            for (std::uint32_t e = border_begin[i]; e < border_begin[i + 1]; ++e)
+            {
+                double w = 0.0;
+                switch (border_dir[e])  // grid_neighbours order: +x, -x, +y, -y, +d, -d
+                {
+                case 0: w = wx.at(x, y); break;
+                case 1: w = wx.at(x - 1, y); break;
+                case 2: w = wy.at(x, y); break;
+                case 3: w = wy.at(x, y - 1); break;
+                case 4: w = wd.at(x, y); break;
+                default: w = wd.at(x - 1, y - 1); break;
+                }
+                // |w|: a negative cotangent weight (an obtuse pair of angles) is a spring of
+                // negative stiffness, and its delay needs the same damper. |age|: the peers'
+                // clocks are not aligned, so a value can be ahead of ours; a lead is a phase
+                // shift too, and feeds the modes with omega |age| in (pi, 2 pi).
+                b += std::fabs(w) * std::fabs(mid - leaf_time[border_leaf[e]]);
+            }
+            s.state_.v.at(x, y) *= std::exp(-dt * b / m.mass().at(x, y));
+        }
+        m.sync(s.state_.v);
+    }
+
+    // Fast coupling holds every node not owned at its newest streamed value (u at the owner's
+    // time t_s) while the owned nodes step on: each coupling edge (weight w) is a spring whose
+    // far end is sampled, held over the frame and late by the network, i.e. a spring acting
+    // with a delay. A delayed spring feeds energy into the modes that move in antiphase across
+    // it (Colgate & Schenkel 1997, passivity of sampled-data systems: a held spring K needs a
+    // damping of at least K T/2, a delay tau adds K tau); grid-scale modes along a partition
+    // border, which cannot carry the energy away, grew ~e^(4/s) until |u| ~ 1e11 m in the 2-peer
+    // drag scene (docs/session.md §4.2). So each coupling edge gets the damper it needs to stay
+    // passive: after every accepted step the owned end's velocity decays by
+    // exp(-dt |w| |age| / m), age = how old the held value is at the middle of the step (a delay
+    // of phase omega age injects at most w sin(omega age) / omega <= |w| |age| of negative
+    // damping). Interior nodes and exact coupling are untouched; the price is that a smooth
+    // motion is slowed at the border nodes.
     void fast_advance()
     {
         const PartitionEntry* p = newest();
@@ -989,6 +1082,7 @@ struct Session::Impl
                 return;
             // Dirichlet values: the newest displayed state of every node not owned.
             std::vector<char> mine = owned_mask(p, s.id_);
+            refresh_border(p, mine);
             for (int y = 0; y < g.ny(); ++y)
                 for (int x = 0; x < g.nx(); ++x)
                     if (mine[g.canonical(g.index(x, y)).value] == 0)
@@ -1000,10 +1094,26 @@ struct Session::Impl
             sim::StepOptions opt;
             opt.owned = owned_regions;
             const auto t0 = std::chrono::steady_clock::now();
-            const auto rep = sim::advance_to(*s.model_, s.state_, *ws, target,
-                                             forces_at(s.state_.tick), opt, 100000);
+            // sim::advance_to's loop, with the interface damping after every accepted step.
+            sim::set_forces(*s.model_, *ws, forces_at(s.state_.tick));
+            const sim::MembraneSettings& ms = s.model_->settings();
+            const double slack = 1e-12 * std::max(1.0, std::fabs(target));
+            for (int k = 0; k < 100000; ++k)
+            {
+                const double remaining = target - s.state_.time;
+                if (ms.fixed_step ? remaining + slack < ms.fixed_dt : remaining <= slack)
+                    break;
+                opt.dt_limit = remaining;
+                const double start = s.state_.time;
+                const sim::StepReport r = sim::step_prepared(*s.model_, s.state_, *ws, opt);
+                if (sim::has_flag(r.status, sim::StepStatus::NonFinite))
+                    break;
+                ++counters.steps;
+                if (!ms.fixed_step && r.dt >= remaining)
+                    s.state_.time = target;  // land exactly, as sim::advance_to
+                damp_border(start, r.dt);
+            }
             counters.step_seconds += seconds_since(t0);
-            counters.steps += rep.steps;
             next_frame += frame;
             if (quantised_stream())
                 adopt_quantised();

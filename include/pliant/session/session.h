@@ -27,7 +27,11 @@
 ///   the dilated ring at the step start) comes from its owners every tick. One exchange per step
 ///   instead of one per stage (docs/session.md explains why).
 /// - `fast` coupling (the paper's): no lockstep; every peer advances its owned leaves once per
-///   frame with the latest streamed state of all other nodes held as Dirichlet values.
+///   frame with the latest streamed state of all other nodes held as Dirichlet values. A held,
+///   late neighbour value makes each border edge a delayed spring, which feeds the grid's fastest
+///   modes along partition borders until they diverge; so owned nodes next to held values get the
+///   damping that keeps such a spring passive (sum of |edge weight| x |value age|; docs/session.md
+///   §4.2).
 /// - Streaming: owners send their leaves' (u, v) to every peer at `stream_rate_hz`; every peer
 ///   (viewers included) displays the whole object from its own leaves and what it received.
 /// - Compressed streaming (`stream_encoding = QuantisedDelta`, docs/protocol.md §5.5): u and v are
