@@ -679,17 +679,22 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
         if (!peers[k].session)
             continue;  // --view: the window's own peer is not one of these
         const session::SessionStats& s = stats[k];
+        // Simulated seconds the peer took part; under one stream interval (a --view window that
+        // could not open) a rate means nothing.
         const double seconds =
-            std::max(k == 3 && viewer_ready_at >= 0.0 ? reached - viewer_ready_at : reached,
-                     1e-9);  // simulated seconds the peer took part
+            k == 3 && viewer_ready_at >= 0.0 ? reached - viewer_ready_at : reached;
+        auto rate = [&](std::uint64_t bytes)
+        {
+            return seconds * settings.stream_rate_hz >= 1.0
+                       ? fmt("%.0f kbit/s", 8e-3 * static_cast<double>(bytes) / seconds)
+                       : std::string("-");
+        };
         table += "| " + peers[k].name + " | " + roles[k] + " | " + std::to_string(s.owned_nodes) +
                  " | " + std::to_string(s.steps) + " | " +
                  (s.steps > 0 ? fmt("%.3f ms", 1e3 * s.step_seconds / static_cast<double>(s.steps))
                               : std::string("-")) +
-                 " | " + fmt("%.0f kbit/s", 8e-3 * static_cast<double>(s.bytes_sent) / seconds) +
-                 " | " +
-                 fmt("%.0f kbit/s", 8e-3 * static_cast<double>(s.bytes_received) / seconds) +
-                 " | " + fmt("%.1f ms", rtt_ms[k]) + " |\n";
+                 " | " + rate(s.bytes_sent) + " | " + rate(s.bytes_received) + " | " +
+                 fmt("%.1f ms", rtt_ms[k]) + " |\n";
     }
     table += "\nBandwidth is per second of session time (states stream at " +
              fmt("%.0f Hz", settings.stream_rate_hz) +
