@@ -214,11 +214,10 @@ public:
 
     RowStreamer(T* dst, const T* buf, int len) noexcept : dst_(dst), buf_(buf), len_(len)
     {
-        if constexpr (k_vector_bytes > 0)
-        {
-            const auto misalign = reinterpret_cast<std::uintptr_t>(dst) % k_vector_bytes;
-            head_ = misalign == 0 ? 0 : static_cast<int>((k_vector_bytes - misalign) / sizeof(T));
-        }
+        // Without streaming stores (k_vector_bytes == 0) every node is a plain copy: head 0.
+        constexpr std::uintptr_t k_align = k_vector_bytes > 0 ? k_vector_bytes : 1;
+        const auto misalign = reinterpret_cast<std::uintptr_t>(dst) % k_align;
+        head_ = misalign == 0 ? 0 : static_cast<int>((k_align - misalign) / sizeof(T));
         head_ = std::min(head_, len_);
         next_ = head_;
     }
