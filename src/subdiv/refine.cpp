@@ -5,24 +5,46 @@
 //
 // Layout: the coarse field is a padded row-major plane; fine row 2y interleaves even nodes
 // (copies of coarse row y) with horizontal-edge nodes, fine row 2y+1 interleaves vertical-edge
-// nodes (even x) with diagonal-edge nodes (odd x). One pass over the coarse rows writes each
-// fine row exactly once, left to right, so the output streams through memory once and the
-// four coarse rows a step reads stay in L1/L2. Each row is a separate function taking
-// __restrict pointers, so GCC vectorises it even when called from an OpenMP-outlined loop (the
-// outlining drops __restrict on captured variables; see TESTING-NOTES.md).
+// nodes (even x) with diagonal-edge nodes (odd x). One loop over coarse row y writes both fine
+// rows, left to right, so the output is written once and the four coarse rows a step reads stay
+// in L1/L2. The loop reads the eleven distinct taps of a coarse position once for all three
+// masks (offsets from the constexpr masks, so the compiler sees which taps coincide; GCC 12
+// still folds some repeats into the additions: 19 vector loads per 16 positions, against 25
+// for separate per-row loops). It takes __restrict pointers, so GCC vectorises it even when
+// called from an OpenMP-outlined region (the outlining drops __restrict on captured
+// variables; see TESTING-NOTES.md).
+//
+// Output planes larger than the last-level cache can hold beside their input (level 10) are
+// written through an L1-resident row buffer with streaming stores (RowStreamer): without them
+// every output line was first read from memory (write-allocate) and evicted the input, and a
+// 9 -> 10 step of three float planes (25 MB out, 32 MB L3) ran at half the per-node speed of
+// 8 -> 9. Smaller outputs are written directly and stay in cache for their next use.
 //
 // Invariant: every odd value is computed by `butterfly` with a fixed grouping of the sums and
 // no FMA contraction (-ffp-contract=off), so it depends only on the eight tap values, never on
-// the thread count, the instruction set's vector width or the position in the row.
+// the thread count, the instruction set's vector width, the store path or the position in the
+// row (tests/subdiv/refine_kernel_test.cpp pins it against the earlier per-row kernel).
 //
 // Alternatives rejected: one generic loop over (offset, weight) taps (the weights then become
 // loads, and 8 multiplies replace 3); three separate passes, one per direction, writing strided
 // output (three times the write traffic on the output's cache lines); computing only canonical
-// nodes and scattering to twins (branches in the row loop; twins are 0.1 % of the nodes).
+// nodes and scattering to twins (branches in the row loop; twins are 0.1 % of the nodes); one
+// loop per fine row with the plan's runtime offsets (the previous kernel: the compiler cannot
+// tell which taps coincide; about 20 % slower in cache); streaming a whole row after
+// computing it (the stores then do not overlap the arithmetic: 9 -> 10 took 1.6 ms, against 1.1
+// with chunks of 128 edges).
 #include <pliant/subdiv/refine.h>
+
+#include <omp.h>
 
 #include <algorithm>
 #include <cstddef>
+#include <cstdint>
+#include <type_traits>
+
+#if defined(__SSE2__)
+#include <immintrin.h>
+#endif
 
 namespace pliant::subdiv
 {
@@ -37,55 +59,193 @@ inline T butterfly(T a0, T a1, T b0, T b1, T c0, T c1, T c2, T c3) noexcept
     return (T(0.5) * (a0 + a1) + T(0.125) * (b0 + b1)) - T(0.0625) * ((c0 + c1) + (c2 + c3));
 }
 
-// Fine row 2y: even nodes copied from coarse row y, horizontal-edge nodes between them.
-// `in` points at coarse node (0, y), `out` at fine node (0, 2y); n = 2W edges per row.
+// The eleven distinct taps of coarse position x over all three masks (rows y-1 .. y+2), read
+// once into locals. Reading each mask's eight taps separately would be 24 reads per position;
+// GCC does not merge them all on its own (it folds repeated reads into the additions).
 template <typename T>
-void even_row(const T* __restrict in, T* __restrict out, const TapOffsets& h, int n) noexcept
+struct TapValues
 {
-    const T* a0 = in + h[0];
-    const T* a1 = in + h[1];
-    const T* b0 = in + h[2];
-    const T* b1 = in + h[3];
-    const T* c0 = in + h[4];
-    const T* c1 = in + h[5];
-    const T* c2 = in + h[6];
-    const T* c3 = in + h[7];
-    for (int x = 0; x < n; ++x)
+    T m1[3];  // row y-1, dx = -1 .. 1
+    T z0[3];  // row y,   dx = -1 .. 1
+    T p1[4];  // row y+1, dx = -1 .. 2
+    T p2;     // row y+2, dx = 1
+};
+
+template <int Dx, int Dy, typename T>
+inline T tap(const TapValues<T>& t) noexcept
+{
+    if constexpr (Dy == -1 && Dx >= -1 && Dx <= 1)
+        return t.m1[Dx + 1];
+    else if constexpr (Dy == 0 && Dx >= -1 && Dx <= 1)
+        return t.z0[Dx + 1];
+    else if constexpr (Dy == 1 && Dx >= -1 && Dx <= 2)
+        return t.p1[Dx + 1];
+    else
     {
-        out[2 * x] = in[x];
-        out[2 * x + 1] = butterfly(a0[x], a1[x], b0[x], b1[x], c0[x], c1[x], c2[x], c3[x]);
+        static_assert(Dy == 2 && Dx == 1, "a mask tap outside the eleven read by row_pair");
+        return t.p2;
     }
-    out[2 * n] = in[n];
 }
 
-// Fine row 2y+1: vertical-edge nodes (2x, 2y+1) and diagonal-edge nodes (2x+1, 2y+1).
-template <typename T>
-void odd_row(const T* __restrict in, T* __restrict out, const TapOffsets& v, const TapOffsets& d,
-             int n) noexcept
+// The butterfly of mask M from the tap values (offsets are compile-time constants from the
+// constexpr masks of butterfly_mask.h).
+template <const Mask& M, typename T>
+inline T apply(const TapValues<T>& t) noexcept
 {
-    const T* va0 = in + v[0];
-    const T* va1 = in + v[1];
-    const T* vb0 = in + v[2];
-    const T* vb1 = in + v[3];
-    const T* vc0 = in + v[4];
-    const T* vc1 = in + v[5];
-    const T* vc2 = in + v[6];
-    const T* vc3 = in + v[7];
-    const T* da0 = in + d[0];
-    const T* da1 = in + d[1];
-    const T* db0 = in + d[2];
-    const T* db1 = in + d[3];
-    const T* dc0 = in + d[4];
-    const T* dc1 = in + d[5];
-    const T* dc2 = in + d[6];
-    const T* dc3 = in + d[7];
-    for (int x = 0; x < n; ++x)
-    {
-        out[2 * x] = butterfly(va0[x], va1[x], vb0[x], vb1[x], vc0[x], vc1[x], vc2[x], vc3[x]);
-        out[2 * x + 1] = butterfly(da0[x], da1[x], db0[x], db1[x], dc0[x], dc1[x], dc2[x], dc3[x]);
-    }
-    out[2 * n] = butterfly(va0[n], va1[n], vb0[n], vb1[n], vc0[n], vc1[n], vc2[n], vc3[n]);
+    return butterfly(tap<M[0].dx, M[0].dy>(t), tap<M[1].dx, M[1].dy>(t), tap<M[2].dx, M[2].dy>(t),
+                     tap<M[3].dx, M[3].dy>(t), tap<M[4].dx, M[4].dy>(t), tap<M[5].dx, M[5].dy>(t),
+                     tap<M[6].dx, M[6].dy>(t), tap<M[7].dx, M[7].dy>(t));
 }
+
+template <typename T>
+inline TapValues<T> read_taps(const T* rm1, const T* r0, const T* r1, const T* r2, int x) noexcept
+{
+    return {{rm1[x - 1], rm1[x], rm1[x + 1]},
+            {r0[x - 1], r0[x], r0[x + 1]},
+            {r1[x - 1], r1[x], r1[x + 1], r1[x + 2]},
+            r2[x + 1]};
+}
+
+// The vertical edge at the row's end, x = n: its mask does not read (2, 1), which would lie
+// past the ghost column.
+template <typename T>
+inline T vertical_at_end(const T* rm1, const T* r0, const T* r1, const T* r2, int n) noexcept
+{
+    const TapValues<T> t{{rm1[n - 1], rm1[n], rm1[n + 1]},
+                         {r0[n - 1], r0[n], r0[n + 1]},
+                         {r1[n - 1], r1[n], r1[n + 1], T{}},
+                         r2[n + 1]};
+    return apply<k_vertical_mask>(t);
+}
+
+// Fine rows 2y and 2y+1 for the coarse edges x0 <= x < x1 of row y. `r0` points at coarse node
+// (0, y) (rm1, r1, r2 at rows y-1, y+1, y+2); `even` and `odd` at fine nodes (0, 2y) and
+// (0, 2y+1). Fine row 2y interleaves even nodes (copies) with horizontal-edge nodes, fine row
+// 2y+1 vertical-edge nodes (even x) with diagonal-edge nodes (odd x).
+template <typename T>
+void row_pair(const T* __restrict rm1, const T* __restrict r0, const T* __restrict r1,
+              const T* __restrict r2, T* __restrict even, T* __restrict odd, int x0,
+              int x1) noexcept
+{
+    for (int x = x0; x < x1; ++x)
+    {
+        const TapValues<T> t = read_taps(rm1, r0, r1, r2, x);
+        even[2 * x] = t.z0[1];
+        even[2 * x + 1] = apply<k_horizontal_mask>(t);
+        odd[2 * x] = apply<k_vertical_mask>(t);
+        odd[2 * x + 1] = apply<k_diagonal_mask>(t);
+    }
+}
+
+// Fine row 2y alone (the last coarse row, which has no row y+1 edges above it).
+template <typename T>
+void even_row(const T* __restrict rm1, const T* __restrict r0, const T* __restrict r1,
+              T* __restrict even, int x0, int x1) noexcept
+{
+    for (int x = x0; x < x1; ++x)
+    {
+        // Row y+2 does not exist here and the horizontal mask does not read it.
+        const TapValues<T> t{{rm1[x - 1], rm1[x], rm1[x + 1]},
+                             {r0[x - 1], r0[x], r0[x + 1]},
+                             {r1[x - 1], r1[x], r1[x + 1], r1[x + 2]},
+                             T{}};
+        even[2 * x] = t.z0[1];
+        even[2 * x + 1] = apply<k_horizontal_mask>(t);
+    }
+}
+
+#if defined(__AVX512F__)
+constexpr int k_vector_bytes = 64;
+#elif defined(__AVX__)
+constexpr int k_vector_bytes = 32;
+#elif defined(__SSE2__)
+constexpr int k_vector_bytes = 16;
+#else
+constexpr int k_vector_bytes = 0;  // no streaming stores: plain copies
+#endif
+
+// One non-temporal (streaming) store of a whole vector at `dst` (aligned) from `src`.
+inline void stream_vector(float* dst, const float* src) noexcept
+{
+#if defined(__AVX512F__)
+    _mm512_stream_ps(dst, _mm512_loadu_ps(src));
+#elif defined(__AVX__)
+    _mm256_stream_ps(dst, _mm256_loadu_ps(src));
+#elif defined(__SSE2__)
+    _mm_stream_ps(dst, _mm_loadu_ps(src));
+#else
+    *dst = *src;
+#endif
+}
+
+inline void stream_vector(double* dst, const double* src) noexcept
+{
+#if defined(__AVX512F__)
+    _mm512_stream_pd(dst, _mm512_loadu_pd(src));
+#elif defined(__AVX__)
+    _mm256_stream_pd(dst, _mm256_loadu_pd(src));
+#elif defined(__SSE2__)
+    _mm_stream_pd(dst, _mm_loadu_pd(src));
+#else
+    *dst = *src;
+#endif
+}
+
+// Orders this thread's streaming stores before whatever follows (the twin and ghost passes, the
+// end of the parallel region): they are weakly ordered.
+inline void stream_fence() noexcept
+{
+#if defined(__SSE2__)
+    _mm_sfence();
+#endif
+}
+
+// Streams one fine row to `dst` while it is being computed into an L1-resident buffer: after
+// each chunk the whole aligned vectors finished so far go out with streaming stores, so the
+// stores drain to memory while the next chunk computes, and the output is written once without
+// being read first (no read-for-ownership). The few nodes before the first aligned vector and
+// after the last one are copied plainly at the end. Only copies: the values are those of the
+// buffer, bit for bit.
+template <typename T>
+class RowStreamer
+{
+public:
+    static constexpr int k_lanes = k_vector_bytes > 0 ? k_vector_bytes / int{sizeof(T)} : 1;
+
+    RowStreamer(T* dst, const T* buf, int len) noexcept : dst_(dst), buf_(buf), len_(len)
+    {
+        // Without streaming stores (k_vector_bytes == 0) every node is a plain copy: head 0.
+        constexpr std::uintptr_t k_align = k_vector_bytes > 0 ? k_vector_bytes : 1;
+        const auto misalign = reinterpret_cast<std::uintptr_t>(dst) % k_align;
+        head_ = misalign == 0 ? 0 : static_cast<int>((k_align - misalign) / sizeof(T));
+        head_ = std::min(head_, len_);
+        next_ = head_;
+    }
+
+    // buf[0 .. done) is final: stream every whole vector inside it.
+    void advance(int done) noexcept
+    {
+        for (; next_ + k_lanes <= done; next_ += k_lanes)
+            stream_vector(dst_ + next_, buf_ + next_);
+    }
+
+    // The whole row is in the buffer: the rest, and the head, go out with plain stores.
+    void finish() noexcept
+    {
+        advance(len_);
+        for (int i = 0; i < head_; ++i)
+            dst_[i] = buf_[i];
+        for (int i = next_; i < len_; ++i)
+            dst_[i] = buf_[i];
+    }
+
+private:
+    T* dst_;
+    const T* buf_;
+    int len_;
+    int head_ = 0;
+    int next_ = 0;
+};
 
 template <typename T>
 struct RowJob
@@ -94,44 +254,127 @@ struct RowJob
     T* out = nullptr;
     std::ptrdiff_t in_stride = 0;
     std::ptrdiff_t out_stride = 0;
-    const TapOffsets* h = nullptr;
-    const TapOffsets* v = nullptr;
-    const TapOffsets* d = nullptr;
     int n = 0;     // edges per coarse row (2W)
     int rows = 0;  // coarse rows (W+1)
 };
 
-// Coarse row y produces fine rows 2y and 2y+1 (the last coarse row only the even one).
+// Coarse row y produces fine rows 2y and 2y+1 (the last coarse row only the even one), written
+// straight into the output.
 template <typename T>
 inline void do_row(const RowJob<T>& job, int y) noexcept
 {
-    const T* in = job.in + static_cast<std::ptrdiff_t>(y) * job.in_stride;
-    T* out = job.out + static_cast<std::ptrdiff_t>(2 * y) * job.out_stride;
-    even_row(in, out, *job.h, job.n);
+    const T* r0 = job.in + static_cast<std::ptrdiff_t>(y) * job.in_stride;
+    const T* rm1 = r0 - job.in_stride;
+    const T* r1 = r0 + job.in_stride;
+    T* even = job.out + static_cast<std::ptrdiff_t>(2 * y) * job.out_stride;
+    const int n = job.n;
     if (y + 1 < job.rows)
-        odd_row(in, out + job.out_stride, *job.v, *job.d, job.n);
+    {
+        const T* r2 = r1 + job.in_stride;
+        T* odd = even + job.out_stride;
+        row_pair(rm1, r0, r1, r2, even, odd, 0, n);
+        odd[2 * n] = vertical_at_end(rm1, r0, r1, r2, n);
+    }
+    else
+    {
+        even_row(rm1, r0, r1, even, 0, n);
+    }
+    even[2 * n] = r0[n];
+}
+
+// The longest fine row: level k_max_level has nx = 2 * 2^k_max_level + 1 nodes.
+constexpr int k_max_fine_row = 2 * (1 << core::k_max_level) + 1;
+
+// Coarse edges per chunk of a streamed row: 256 fine nodes per fine row, small enough that the
+// streaming stores of one chunk overlap the arithmetic of the next.
+constexpr int k_stream_chunk = 128;
+
+// As do_row, through a row buffer and streaming stores (RowStreamer).
+template <typename T>
+inline void do_row_streamed(const RowJob<T>& job, int y, T* __restrict buf_even,
+                            T* __restrict buf_odd) noexcept
+{
+    const T* r0 = job.in + static_cast<std::ptrdiff_t>(y) * job.in_stride;
+    const T* rm1 = r0 - job.in_stride;
+    const T* r1 = r0 + job.in_stride;
+    T* even = job.out + static_cast<std::ptrdiff_t>(2 * y) * job.out_stride;
+    const int n = job.n;
+    const int len = 2 * n + 1;
+    RowStreamer<T> se(even, buf_even, len);
+    if (y + 1 < job.rows)
+    {
+        const T* r2 = r1 + job.in_stride;
+        RowStreamer<T> so(even + job.out_stride, buf_odd, len);
+        for (int x0 = 0; x0 < n; x0 += k_stream_chunk)
+        {
+            const int x1 = std::min(n, x0 + k_stream_chunk);
+            row_pair(rm1, r0, r1, r2, buf_even, buf_odd, x0, x1);
+            se.advance(2 * x1);
+            so.advance(2 * x1);
+        }
+        buf_odd[2 * n] = vertical_at_end(rm1, r0, r1, r2, n);
+        so.finish();
+    }
+    else
+    {
+        for (int x0 = 0; x0 < n; x0 += k_stream_chunk)
+        {
+            const int x1 = std::min(n, x0 + k_stream_chunk);
+            even_row(rm1, r0, r1, buf_even, x0, x1);
+            se.advance(2 * x1);
+        }
+    }
+    buf_even[2 * n] = r0[n];
+    se.finish();
 }
 
 // Below this many fine nodes per thread, waking a second thread costs more than it saves (a
 // level-6 step takes ~50 us on one core); the result is the same either way.
 constexpr long k_min_nodes_per_thread = 1L << 16;
 
+// Output planes at least this large are written with streaming stores. Smaller ones (up to
+// level 9) stay in the last-level cache between a refinement and its use, which streaming
+// would throw away; a level-10 plane (8.4 MB in float) does not fit there beside its input and
+// the other two planes (bench/subdiv: 25 MB of output against a 32 MB L3).
+constexpr std::size_t k_stream_bytes = std::size_t{6} << 20;
+
+// Coarse rows y0 .. y1-1 on the calling thread.
+template <typename T>
+void rows_serial(const RowJob<T>& job, int y0, int y1, bool streamed) noexcept
+{
+    if (!streamed)
+    {
+        for (int y = y0; y < y1; ++y)
+            do_row(job, y);
+        return;
+    }
+    alignas(64) T buf_even[k_max_fine_row];
+    alignas(64) T buf_odd[k_max_fine_row];
+    for (int y = y0; y < y1; ++y)
+        do_row_streamed(job, y, buf_even, buf_odd);
+    stream_fence();
+}
+
 template <typename T>
 void run_rows(const RowJob<T>& job, int threads) noexcept
 {
     const long fine_nodes = 4L * job.rows * (job.n + 1);
+    const bool streamed = static_cast<std::size_t>(fine_nodes) * sizeof(T) >= k_stream_bytes;
     threads = static_cast<int>(std::min<long>(threads, fine_nodes / k_min_nodes_per_thread));
     if (threads <= 1)
     {
-        for (int y = 0; y < job.rows; ++y)
-            do_row(job, y);
+        rows_serial(job, 0, job.rows, streamed);
         return;
     }
-    // Static schedule: contiguous blocks of rows per thread, no reduction, so the output is the
-    // same for any thread count.
-#pragma omp parallel for schedule(static) num_threads(threads)
-    for (int y = 0; y < job.rows; ++y)
-        do_row(job, y);
+    // Static partition: a contiguous block of rows per thread, no reduction, so the output is
+    // the same for any thread count.
+#pragma omp parallel num_threads(threads)
+    {
+        const long t = omp_get_thread_num();
+        const long nt = omp_get_num_threads();
+        rows_serial(job, static_cast<int>(job.rows * t / nt),
+                    static_cast<int>(job.rows * (t + 1) / nt), streamed);
+    }
 }
 
 }  // namespace
@@ -153,11 +396,9 @@ void refine(const ConvolutionPlan& plan, const core::Field<T>& in, core::Field<T
     job.out = out.origin();
     job.in_stride = in.stride();
     job.out_stride = out.stride();
-    job.h = &plan.offsets(EdgeDirection::Horizontal, in.ghost());
-    job.v = &plan.offsets(EdgeDirection::Vertical, in.ghost());
-    job.d = &plan.offsets(EdgeDirection::Diagonal, in.ghost());
     job.n = 2 * plan.coarse_grid().w();
     job.rows = plan.coarse_grid().ny();
+    PLIANT_ASSERT(2 * job.n + 1 <= k_max_fine_row, "refine: fine row longer than the row buffer");
     run_rows(job, threads);
 
     core::sync_twins(plan.fine_grid(), out);

@@ -6,7 +6,9 @@
 /// `ConvolutionPlan`: everything one refinement step level n -> n+1 needs, computed once
 /// (STYLE.md §6, "define once, compile, evaluate"): the coarse and fine grids (for their ghost
 /// and twin tables) and, for every ghost width a coarse field may have, the flat offsets of the
-/// eight butterfly taps of each edge direction.
+/// eight butterfly taps of each edge direction. (`refine` itself takes the taps from the
+/// constexpr masks, so that its fused row loop reads shared taps once; the offsets serve
+/// per-node code and the tests, and are the same taps.)
 
 #include <pliant/core/result.h>
 #include <pliant/core/tetra_grid.h>
