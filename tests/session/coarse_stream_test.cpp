@@ -50,10 +50,15 @@ bool all_at(const Harness& h, std::uint64_t tick)
 
 /// Master (coarsening k_master) and a participant (k_part), partitioned, both pulling, and a
 /// viewer; pumps to k_ticks, then lets the frozen final states reach everybody.
-void run_pulling(Harness& h, int k_master, int k_part)
+void run_pulling(Harness& h, int k_master, int k_part,
+                 net::ValueEncoding encoding = net::ValueEncoding::F64)
 {
-    h.host(k_level, coarse(k_master, "master"));
-    Session& p = h.join(net::Role::Participant, coarse(k_part, "part"));
+    SessionSettings ms = coarse(k_master, "master");
+    SessionSettings ps = coarse(k_part, "part");
+    ms.stream_encoding = encoding;
+    ps.stream_encoding = encoding;
+    h.host(k_level, ms);
+    Session& p = h.join(net::Role::Participant, ps);
     p.set_points_of_interest({net::Target{net::TargetKind::Face, 600, {0, 0, 0}, 0.0}});
     h.join(net::Role::Viewer, coarse(0, "viewer"));
     ASSERT_TRUE(h.pump_until(
@@ -241,6 +246,18 @@ TEST(SessionCoarseStreamMixed, AFinerCoarseSenderKeepsItsLevelBesideACoarserOne)
                                     c.y % 2 == 0;
                          }),
               0u);
+}
+
+TEST(SessionCoarseStreamF32, RoundedCoarseNodesAreRefinedAsReceived)
+{
+    Harness h;
+    run_pulling(h, 1, 1, net::ValueEncoding::F32);
+    const core::TetraGrid& g = h.peers[0]->model()->grid();
+    core::Field<double> rounded = owners_field(h, false);
+    for (int y = 0; y < g.ny(); ++y)
+        for (int x = 0; x < g.nx(); ++x)
+            rounded.at(x, y) = static_cast<double>(static_cast<float>(rounded.at(x, y)));
+    EXPECT_EQ(mismatches(g, h.peers[2]->display_u(), coarse_then_refined(rounded, 1), {}), 0u);
 }
 
 /// Bytes a viewer receives from a master that owns everything, over `pumps` pumps of a frozen
