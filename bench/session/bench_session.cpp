@@ -7,6 +7,8 @@
 //   pliant_bench_session [levels...] [--quick] [--json FILE] [--csv FILE]   (default: 5 6 7;
 //   quick: 5 6 without the 1 kHz-frame variant)
 //   pliant_bench_session --stream [level] [--seconds S]   (streaming cost of 2 dragging peers)
+//   pliant_bench_session --coarse [levels...] [--seconds S]   (coarse streaming, k = 0, 1, 2;
+//   default levels 6 7)
 // --json/--csv rows (bench/common/bench_report.h), sized by the number of peers (1..4): per
 // coupling ("exact", "fast", "fast 1 kHz") the step seconds per simulated second of the busiest
 // peer and the mean peer, their ratio to one process stepping every node, the payload bytes sent
@@ -17,6 +19,8 @@
 #include <pliant/session/partition.h>
 #include <pliant/session/session.h>
 #include <pliant/sim/rkf45.h>
+#include <pliant/subdiv/convolution_plan.h>
+#include <pliant/subdiv/refine.h>
 
 #include "bench_report.h"
 #include "grid_shapes.h"
@@ -344,6 +348,193 @@ void stream_suite(bench::Report& report, int level, double seconds)
         }
 }
 
+/// Coarse streaming (docs/session.md §5.2): two participants in `exact` coupling dragging as in
+/// run_stream, streaming `k` levels coarser, and a viewer. Measured over `seconds` after 0.5 s:
+/// the leaf-state bytes the viewer receives per second (the whole object's stream into one peer,
+/// no halos: viewers get none), and at every frame the display error of the refined field,
+/// refine_levels(restrict^k(S)) - S over every node, with S the owners' current state (what a
+/// receiver shows once S has arrived: tests/session/coarse_stream_test.cpp checks it bit for
+/// bit), and the viewer's display against S (which adds the stream's latency).
+struct CoarseResult
+{
+    double bytes_in_per_s = 0.0;  // viewer, payload bytes
+    double packets_in_per_s = 0.0;
+    double refine_max = 0.0, refine_rms = 0.0;  // relative to max |u| and rms u of S
+    double view_max = 0.0, view_rms = 0.0;
+    double sim_per_clock = 0.0;  // simulated seconds per clock second (the lockstep's pace)
+};
+
+CoarseResult run_coarse(int level, int k, double seconds)
+{
+    // A LAN: 0.1 ms one way, so that the lockstep keeps up with the clock (with the default 5 ms
+    // each tick waits a round trip and the drag would move little in `seconds`).
+    net::SimulatedNetworkSettings lan;
+    lan.link.latency_s = 1e-4;
+    net::SimulatedNetwork network(lan);
+    std::vector<std::unique_ptr<net::Transport>> tr;
+    std::vector<std::unique_ptr<session::Session>> s;
+    const core::TetraGrid grid = core::TetraGrid::create(level).value();
+    session::SessionSettings set;
+    set.coupling = session::Coupling::Exact;
+    set.stream_coarsen = k;
+    tr.push_back(network.create_endpoint());
+    const net::Address master = tr.back()->open({}).value();
+    s.push_back(
+        session::Session::host(*tr.back(), grid, scenes::sphere_grid(grid, 1.0), material(), set)
+            .value());
+    for (const net::Role role : {net::Role::Participant, net::Role::Viewer})
+    {
+        tr.push_back(network.create_endpoint());
+        (void)tr.back()->open({}).value();
+        s.push_back(session::Session::join(*tr.back(), master, role, set).value());
+    }
+    const auto faces = static_cast<std::uint32_t>(grid.face_count());
+    s[1]->set_points_of_interest({net::Target{net::TargetKind::Face, faces / 2, {0, 0, 0}, 0.0}});
+    const double dt = 0.0005;
+    double now = 0.0;
+    auto pump = [&]
+    {
+        for (auto& p : s)
+            p->poll();
+        for (auto& p : s)
+            p->advance(now);
+        network.advance(dt);
+        now += dt;
+    };
+    for (int it = 0; it < 40000; ++it)
+    {
+        const auto owners = s[0]->owners();
+        if (s[1]->ready() && s[2]->ready() &&
+            std::find(owners.begin(), owners.end(), s[1]->id()) != owners.end())
+            break;
+        pump();
+    }
+    const double poles[2] = {1.0, -1.0};
+    auto drag = [&](double t)
+    {
+        for (int p = 0; p < 2; ++p)
+        {
+            net::UserForce f;
+            f.target.kind = net::TargetKind::Position;
+            f.target.position = {0.0, 0.0, poles[p]};
+            f.target.radius = 0.3;
+            const double a = 2.0 * 3.141592653589793 * t + p;
+            f.force = {0.5 * std::cos(a), 0.5 * std::sin(a), -0.3 * poles[p]};
+            s[static_cast<std::size_t>(p)]->set_forces({f});
+        }
+    };
+    const auto plans =
+        k > 0 ? subdiv::make_plans(level - k, k).value() : std::vector<subdiv::ConvolutionPlan>{};
+    core::Field<double> truth(grid);
+    CoarseResult r;
+    double frames_measured = 0.0;
+    auto measure = [&]
+    {
+        const auto owners = s[0]->owners();
+        const session::LeafGraph& graph = *s[0]->leaf_graph();
+        for (std::size_t l = 0; l < graph.size(); ++l)
+        {
+            const session::Session& o = owners[l] == s[0]->id() ? *s[0] : *s[1];
+            for (const core::NodeIndex n : graph.nodes(l))
+            {
+                const core::GridCoord c = grid.coord(n);
+                truth.at(c.x, c.y) = o.state().u.at(c.x, c.y);
+            }
+        }
+        core::sync_twins(grid, truth);
+        core::Field<double> shown = truth;
+        if (k > 0)
+        {
+            core::Field<double> c = subdiv::restrict(plans[static_cast<std::size_t>(k - 1)], truth);
+            for (int j = 2; j <= k; ++j)
+                c = subdiv::restrict(plans[static_cast<std::size_t>(k - j)], c);
+            shown = subdiv::refine_levels<double>(plans, c);
+        }
+        double max_u = 0.0, sum_u = 0.0, max_e = 0.0, sum_e = 0.0, max_v = 0.0, sum_v = 0.0;
+        for (const core::NodeIndex n : grid.node_of_unique())
+        {
+            const core::GridCoord c = grid.coord(n);
+            const double u = truth.at(c.x, c.y);
+            const double e = shown.at(c.x, c.y) - u;
+            const double w = s[2]->display_u().at(c.x, c.y) - u;
+            max_u = std::max(max_u, std::fabs(u));
+            max_e = std::max(max_e, std::fabs(e));
+            max_v = std::max(max_v, std::fabs(w));
+            sum_u += u * u;
+            sum_e += e * e;
+            sum_v += w * w;
+        }
+        if (max_u <= 0.0)
+            return;
+        r.refine_max = std::max(r.refine_max, max_e / max_u);
+        r.view_max = std::max(r.view_max, max_v / max_u);
+        r.refine_rms += std::sqrt(sum_e / sum_u);
+        r.view_rms += std::sqrt(sum_v / sum_u);
+        frames_measured += 1.0;
+    };
+    const int per_frame = static_cast<int>(std::lround(1.0 / 60.0 / dt));
+    auto run_for = [&](double span, bool measuring)
+    {
+        const int frames = static_cast<int>(std::lround(span * 60.0));
+        for (int f = 0; f < frames; ++f)
+        {
+            drag(now);
+            for (int i = 0; i < per_frame; ++i)
+                pump();
+            if (measuring)
+                measure();
+        }
+    };
+    run_for(0.5, false);
+    const session::SessionStats before = s[2]->stats();
+    const double t0 = s[0]->time();
+    run_for(seconds, true);
+    // The stream runs on the clock (60 Hz of `now`), so rates are per clock second.
+    r.sim_per_clock = (s[0]->time() - t0) / seconds;
+    const session::SessionStats after = s[2]->stats();
+    r.bytes_in_per_s = static_cast<double>(after.bytes_received - before.bytes_received) / seconds;
+    r.packets_in_per_s =
+        static_cast<double>(after.packets_received - before.packets_received) / seconds;
+    r.refine_rms /= std::max(frames_measured, 1.0);
+    r.view_rms /= std::max(frames_measured, 1.0);
+    return r;
+}
+
+/// `pliant_bench_session --coarse [levels...] [--seconds S]`: coarse streaming, k = 0, 1, 2.
+void coarse_suite(bench::Report& report, const std::vector<int>& levels, double seconds)
+{
+    std::printf(
+        "# coarse streaming: 2 participants dragging 0.5 N turning at 1 Hz, exact coupling, "
+        "and a viewer; 0.1 ms links; 60 Hz; %.1f s after 0.5 s\n",
+        seconds);
+    std::printf(
+        "level k | viewer in: MB/s, datagrams/s, x less than k=0 | "
+        "refined vs owner: max rel, rms rel | viewer shown vs owner now: max rel, rms rel | "
+        "sim s per s\n");
+    for (const int level : levels)
+    {
+        double full = 0.0;
+        for (int k = 0; k <= 2; ++k)
+        {
+            const CoarseResult r = run_coarse(level, k, seconds);
+            if (k == 0)
+                full = r.bytes_in_per_s;
+            std::printf("%d %d | %7.3f %7.0f %5.2f | %.2e %.2e | %.2e %.2e | %.2f\n", level, k,
+                        r.bytes_in_per_s / 1e6, r.packets_in_per_s, full / r.bytes_in_per_s,
+                        r.refine_max, r.refine_rms, r.view_max, r.view_rms, r.sim_per_clock);
+            const std::string name = "coarse stream k=" + std::to_string(k);
+            const double nodes =
+                static_cast<double>(core::TetraGrid::create(level).value().node_count());
+            report.add(name, level, nodes, "nodes", "viewer_bytes_in_per_s", r.bytes_in_per_s,
+                       "B/s");
+            report.add(name, level, nodes, "nodes", "refine_error_max_rel", r.refine_max, "1");
+            report.add(name, level, nodes, "nodes", "refine_error_rms_rel", r.refine_rms, "1");
+            report.add(name, level, nodes, "nodes", "view_error_max_rel", r.view_max, "1");
+            report.add(name, level, nodes, "nodes", "view_error_rms_rel", r.view_rms, "1");
+        }
+    }
+}
+
 }  // namespace
 
 namespace
@@ -382,15 +573,23 @@ int main(int argc, char** argv)
         return 2;
     std::vector<int> levels;
     bool stream_only = false;
+    bool coarse_only = false;
     double stream_seconds = 2.0;
     for (int k = 1; k < argc; ++k)
     {
         if (std::string(argv[k]) == "--stream")
             stream_only = true;
+        else if (std::string(argv[k]) == "--coarse")
+            coarse_only = true;
         else if (std::string(argv[k]) == "--seconds" && k + 1 < argc)
             stream_seconds = std::atof(argv[++k]);
         else
             levels.push_back(std::atoi(argv[k]));
+    }
+    if (coarse_only)
+    {
+        coarse_suite(report, levels.empty() ? std::vector<int>{6, 7} : levels, stream_seconds);
+        return report.write() ? 0 : 1;
     }
     if (stream_only)
     {

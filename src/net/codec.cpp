@@ -301,6 +301,9 @@ Err check(const LeafState& m) noexcept
         return err;
     if (!valid_leaf_encoding(static_cast<std::uint8_t>(m.encoding)))
         return DecodeError::BadEnum;
+    if (m.coarsen > k_max_leaf_coarsen ||
+        (m.coarsen != 0 && m.encoding == ValueEncoding::QuantisedDelta))
+        return DecodeError::BadRange;
     if (m.encoding == ValueEncoding::QuantisedDelta)
         return check_quantised(m);
     if (m.quantised != QuantisedDelta{})
@@ -605,7 +608,7 @@ void write_body(ByteWriter& w, const LeafState& m) noexcept
     w.u32(m.epoch);
     write_leaf(w, m.leaf);
     w.u8(static_cast<std::uint8_t>(m.encoding));
-    w.u8(0);
+    w.u8(m.coarsen);
     w.u16(m.node_offset);
     w.u16(static_cast<std::uint16_t>(m.node_count()));
     w.f64(m.time);
@@ -908,8 +911,7 @@ Err read_body(ByteReader& r, LeafState& m) noexcept
     m.epoch = r.u32();
     read_leaf(r, m.leaf);
     const std::uint8_t encoding = r.u8();
-    if (auto err = read_reserved(r, 1))
-        return err;
+    m.coarsen = r.u8();
     m.node_offset = r.u16();
     const std::uint16_t n = r.u16();
     m.time = r.f64();
@@ -918,6 +920,9 @@ Err read_body(ByteReader& r, LeafState& m) noexcept
     if (!valid_leaf_encoding(encoding))
         return DecodeError::BadEnum;
     m.encoding = static_cast<ValueEncoding>(encoding);
+    if (m.coarsen > k_max_leaf_coarsen ||
+        (m.coarsen != 0 && m.encoding == ValueEncoding::QuantisedDelta))
+        return DecodeError::BadRange;
     if (n == 0 || n > max_leaf_nodes(m.encoding))
         return DecodeError::BadCount;
     if (m.encoding == ValueEncoding::QuantisedDelta)

@@ -6,6 +6,8 @@
 #include <pliant/net/quantised.h>
 #include <pliant/session/recording.h>
 #include <pliant/session/session.h>
+#include <pliant/subdiv/convolution_plan.h>
+#include <pliant/subdiv/refine.h>
 
 #include <spdlog/spdlog.h>
 
@@ -122,6 +124,28 @@ bool decode_state(const core::TetraGrid& g, std::span<const std::byte> blob, cor
     return r.ok && r.pos == blob.size();
 }
 
+/// Coarse streaming: the largest k a grid allows with leaves of side `w >> depth`: level - k >= 1,
+/// k <= net::k_max_leaf_coarsen, and 2^(k+1) divides the side, so a leaf maps to whole coarse
+/// nodes and holds at least two rows of them. One row is not enough: a leaf of the bottom row
+/// whose only coarse row is y = 0 right of b (W, 0) would hold only twins of the left half
+/// (DESIGN §1), i.e. no canonical coarse node at all, and could not be sent. Leaves of side 8
+/// (levels >= 3) allow k <= 2.
+int max_coarsen_for(const core::TetraGrid& g, int depth)
+{
+    const int side = g.w() >> depth;
+    int k = 0;
+    while (k < net::k_max_leaf_coarsen && g.level() - (k + 1) >= 1 && side % (4 << k) == 0)
+        ++k;
+    return k;
+}
+
+/// The node of a leaf is sent with coarsening k (x and y multiples of 2^k).
+constexpr bool on_coarse_level(core::GridCoord c, int k) noexcept
+{
+    const int mask = (1 << k) - 1;
+    return (c.x & mask) == 0 && (c.y & mask) == 0;
+}
+
 double seconds_since(std::chrono::steady_clock::time_point t0)
 {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -200,6 +224,56 @@ sim::Force to_sim_force(const net::UserForce& f)
     out.vector = {f.force[0], f.force[1], f.force[2]};
     return out;
 }
+
+namespace
+{
+
+/// The grid-independent rules of coarse streaming (docs/session.md §5.2).
+core::Result<void> check_coarsen(const SessionSettings& settings, const char* who)
+{
+    const int k = settings.stream_coarsen;
+    if (k < 0 || k > net::k_max_leaf_coarsen)
+        return core::fail(core::ErrorCode::InvalidArgument,
+                          std::string(who) + ": stream_coarsen is " + std::to_string(k) +
+                              ", expected 0 (off) to " +
+                              std::to_string(int{net::k_max_leaf_coarsen}) + " levels");
+    if (k != 0 && settings.stream_encoding == net::ValueEncoding::QuantisedDelta)
+        return core::fail(core::ErrorCode::InvalidArgument,
+                          std::string(who) +
+                              ": coarse streaming (stream_coarsen) cannot be combined with the "
+                              "quantised-delta encoding (its baselines are whole leaves); use "
+                              "one or the other");
+    return {};
+}
+
+/// The rules that need the grid and the coupling (the host checks them at once, a joiner when
+/// the model arrives).
+core::Result<void> check_coarsen(const SessionSettings& settings, const core::TetraGrid& grid,
+                                 int depth, Coupling coupling, const char* who)
+{
+    const int k = settings.stream_coarsen;
+    if (k == 0)
+        return {};
+    if (coupling == Coupling::Fast)
+        return core::fail(core::ErrorCode::InvalidArgument,
+                          std::string(who) +
+                              ": coarse streaming (stream_coarsen) is refused in fast coupling, "
+                              "where the streamed values are the neighbours' Dirichlet values; "
+                              "use exact coupling or stream_coarsen 0");
+    const int most = max_coarsen_for(grid, depth);
+    if (k > most)
+        return core::fail(core::ErrorCode::InvalidArgument,
+                          std::string(who) + ": stream_coarsen " + std::to_string(k) +
+                              " is too coarse for level " + std::to_string(grid.level()) +
+                              " (at most " + std::to_string(most) +
+                              ": the coarse level must be >= 1 and a leaf side of " +
+                              std::to_string(grid.w() >> depth) +
+                              " cells a multiple of 2^(k+1), so that every leaf keeps canonical "
+                              "coarse nodes)");
+    return {};
+}
+
+}  // namespace
 
 // --- Impl ------------------------------------------------------------------------------------
 
@@ -334,6 +408,17 @@ struct Session::Impl
     std::vector<std::uint8_t> border_dir;
     std::vector<std::uint32_t> border_leaf;
     std::vector<std::uint32_t> my_leaves;  // streamed leaves
+    // Coarse streaming (docs/session.md §5.2). Per leaf: the coarsening of the values shown (0 for
+    // our own leaves and for leaves received at full resolution).
+    std::vector<std::uint8_t> leaf_coarsen;
+    std::vector<char> leaf_mine;  // scratch: our own leaves, per leaf
+    int max_coarsen = 0;          // the grid's limit (max_coarsen_for)
+    // Allocated on the first coarse state: plans from level n - max_coarsen up, the restricted
+    // display per coarsening j = 1..max_coarsen (level n - j, ghost 1; index j - 1) and the
+    // refined level-n field.
+    std::vector<subdiv::ConvolutionPlan> coarse_plans;
+    std::vector<core::Field<double>> coarse_u, coarse_v;
+    core::Field<double> refined_u, refined_v;
     std::uint32_t my_leaves_epoch = std::numeric_limits<std::uint32_t>::max();
 
     // Clock.
@@ -415,6 +500,9 @@ struct Session::Impl
         s.display_v_ = core::Field<double>(g, 1);
         leaf_tick.assign(s.graph_->size(), 0);
         leaf_time.assign(s.graph_->size(), 0.0);
+        leaf_coarsen.assign(s.graph_->size(), 0);
+        leaf_mine.assign(s.graph_->size(), 0);
+        max_coarsen = max_coarsen_for(g, s.graph_->depth());
         sent.assign(s.graph_->size(), {});
         held.assign(s.graph_->size(), {});
         std::size_t most = 0;
@@ -1183,9 +1271,110 @@ struct Session::Impl
             }
             leaf_tick[l] = s.state_.tick;
             leaf_time[l] = s.state_.time;
+            leaf_coarsen[l] = 0;
         }
         s.model_->sync(s.display_u_);
         s.model_->sync(s.display_v_);
+    }
+
+    /// Coarse streaming, receiver side (docs/session.md §5.2): the leaves shown from coarse
+    /// states get the butterfly refinement of the display restricted to the coarsest level
+    /// received. With K the largest coarsening among the leaves not ours: restrict the display
+    /// (twins synced) K levels, then refine level by level; after each refinement to level n - j
+    /// (j >= 1), leaves received with a coarsening <= j overwrite their nodes of that level with
+    /// what they received, so a finer stream is never made coarser by a coarser neighbour. Our
+    /// own leaves only contribute their nodes at level n - K (as if streamed at K too), so what
+    /// a participant shows of the others equals what a viewer shows. Finally the leaves received
+    /// coarse take the refined values (their received nodes are unchanged: butterfly
+    /// interpolates, and restrict/refine copy bits).
+    void refine_display()
+    {
+        if (std::all_of(leaf_coarsen.begin(), leaf_coarsen.end(),
+                        [](std::uint8_t k) { return k == 0; }))
+            return;
+        // Our leaves as stream() sees them (read only: my_leaves is stream()'s to update).
+        const PartitionEntry* p = stream_partition();
+        std::fill(leaf_mine.begin(), leaf_mine.end(), 0);
+        if (p != nullptr)
+            for (std::size_t l = 0; l < p->owners.size() && l < leaf_mine.size(); ++l)
+                leaf_mine[l] = p->owners[l] == s.id_ ? 1 : 0;
+        int top = 0;
+        for (std::size_t l = 0; l < leaf_coarsen.size(); ++l)
+            if (leaf_mine[l] == 0)
+                top = std::max(top, static_cast<int>(leaf_coarsen[l]));
+        if (top == 0)
+            return;
+        const core::TetraGrid& g = s.model_->grid();
+        const int n = g.level();
+        if (coarse_plans.empty())
+        {
+            coarse_plans = subdiv::make_plans(n - max_coarsen, max_coarsen).value();
+            for (int j = 1; j <= max_coarsen; ++j)
+            {
+                const core::TetraGrid& cg = plan(j).coarse_grid();
+                coarse_u.emplace_back(cg, 1);
+                coarse_v.emplace_back(cg, 1);
+            }
+            refined_u = core::Field<double>(g, 1);
+            refined_v = core::Field<double>(g, 1);
+        }
+        refine_plane(top, s.display_u_, coarse_u, refined_u);
+        refine_plane(top, s.display_v_, coarse_v, refined_v);
+        for (std::size_t l = 0; l < leaf_coarsen.size(); ++l)
+        {
+            if (leaf_mine[l] != 0 || leaf_coarsen[l] == 0)
+                continue;
+            for (const core::NodeIndex node : s.graph_->nodes(l))
+            {
+                const core::GridCoord c = g.coord(node);
+                s.display_u_.at(c.x, c.y) = refined_u.at(c.x, c.y);
+                s.display_v_.at(c.x, c.y) = refined_v.at(c.x, c.y);
+            }
+        }
+        s.model_->sync(s.display_u_);
+        s.model_->sync(s.display_v_);
+    }
+
+    /// The plan refining level n - j to n - j + 1.
+    const subdiv::ConvolutionPlan& plan(int j) const
+    {
+        return coarse_plans[static_cast<std::size_t>(max_coarsen - j)];
+    }
+
+    void refine_plane(int top, const core::Field<double>& display,
+                      std::vector<core::Field<double>>& coarse, core::Field<double>& refined)
+    {
+        subdiv::restrict(plan(1), display, coarse[0]);
+        for (int j = 2; j <= top; ++j)
+            subdiv::restrict(plan(j), coarse[static_cast<std::size_t>(j - 2)],
+                             coarse[static_cast<std::size_t>(j - 1)]);
+        for (int j = top; j >= 1; --j)
+        {
+            core::Field<double>& out = j == 1 ? refined : coarse[static_cast<std::size_t>(j - 2)];
+            subdiv::refine(plan(j), coarse[static_cast<std::size_t>(j - 1)], out);
+            const int at = j - 1;  // out is level n - at
+            if (at == 0)
+                break;
+            bool changed = false;
+            for (std::size_t l = 0; l < leaf_coarsen.size(); ++l)
+            {
+                if (leaf_mine[l] != 0 || leaf_coarsen[l] == 0 || leaf_coarsen[l] > at)
+                    continue;
+                for (const core::NodeIndex node : s.graph_->nodes(l))
+                {
+                    const core::GridCoord c = s.model_->grid().coord(node);
+                    if (on_coarse_level(c, at))
+                        out.at(c.x >> at, c.y >> at) = display.at(c.x, c.y);
+                }
+                changed = true;
+            }
+            if (changed)
+            {
+                // out is the coarse level of plan(at), the input of the next refinement.
+                core::sync_twins(plan(at).coarse_grid(), out);
+                core::fill_ghosts(plan(at).coarse_grid(), out);
+            }
+        }
     }
 
     const PartitionEntry* stream_partition() const
@@ -1401,10 +1590,14 @@ struct Session::Impl
             const core::LeafId id = s.graph_->leaves()[l];
             m.leaf = net::WireLeafId{id.square, id.depth, id.ix, id.iy};
             m.encoding = settings.stream_encoding;
+            m.coarsen = static_cast<std::uint8_t>(settings.stream_coarsen);
             m.time = s.state_.time;
+            // Coarse streaming: the leaf's canonical nodes on level n - k, row-major.
             for (const core::NodeIndex n : s.graph_->nodes(l))
             {
                 const core::GridCoord c = g.coord(n);
+                if (!on_coarse_level(c, settings.stream_coarsen))
+                    continue;
                 m.u.push_back(s.state_.u.at(c.x, c.y));
                 m.v.push_back(s.state_.v.at(c.x, c.y));
             }
@@ -1811,6 +2004,17 @@ struct Session::Impl
         s.coupling_ = decoded->second;
         install_model(std::move(decoded->first));
         const core::TetraGrid& g = s.model_->grid();
+        if (s.role_ != SessionRole::Viewer)
+            if (auto r =
+                    check_coarsen(settings, g, s.graph_->depth(), s.coupling_, "Session::join");
+                !r)
+            {
+                // Known only now (the master chose the level and the coupling): leave at once.
+                spdlog::error("session: {}", r.error().message);
+                refusal = r.error().message;
+                close_all(net::DisconnectReason::Quit);
+                return;
+            }
         if (!state_blob.empty() && decode_state(g, state_blob, s.display_u_, s.display_v_))
         {
             s.model_->sync(s.display_u_);
@@ -2033,6 +2237,22 @@ struct Session::Impl
         const auto nodes = s.graph_->nodes(l);
         if (ls.node_offset + ls.node_count() > nodes.size())
             return;
+        const core::TetraGrid& g = s.model_->grid();
+        const int kc = ls.coarsen;
+        if (kc != 0)
+        {
+            // Coarse: whole leaves on level n - k only, and never in fast coupling (the values
+            // would be Dirichlet values there, docs/session.md §5.2).
+            std::size_t expect = 0;
+            for (const core::NodeIndex node : nodes)
+                expect += on_coarse_level(g.coord(node), kc) ? 1 : 0;
+            if (kc > max_coarsen || s.coupling_ == Coupling::Fast || ls.node_offset != 0 ||
+                ls.node_count() != expect)
+            {
+                ++counters.state_rejects;
+                return;
+            }
+        }
         // Our own leaves come from our own state.
         if (std::find(my_leaves.begin(), my_leaves.end(), l) != my_leaves.end() &&
             stream_partition() != nullptr)
@@ -2054,7 +2274,23 @@ struct Session::Impl
             return;
         leaf_tick[l] = m.header.tick;
         leaf_time[l] = ls.time;
-        const core::TetraGrid& g = s.model_->grid();
+        leaf_coarsen[l] = static_cast<std::uint8_t>(kc);
+        if (kc != 0)
+        {
+            // The received nodes go to their places on the grid; refine_display fills the rest.
+            std::size_t k = 0;
+            for (const core::NodeIndex node : nodes)
+            {
+                const core::GridCoord c = g.coord(node);
+                if (!on_coarse_level(c, kc))
+                    continue;
+                s.display_u_.at(c.x, c.y) = ls.u[k];
+                s.display_v_.at(c.x, c.y) = ls.v[k];
+                ++k;
+            }
+            display_dirty = true;
+            return;
+        }
         const std::size_t count = ls.node_count();
         for (std::size_t k = 0; k < count; ++k)
         {
@@ -2065,6 +2301,7 @@ struct Session::Impl
         display_dirty = true;
     }
     bool display_dirty = false;
+    std::string refusal;  // why this joiner left on its own (settings refused by the session)
 
     void handle(net::PeerHandle h, const net::Message& m)
     {
@@ -2214,6 +2451,7 @@ struct Session::Impl
         {
             s.model_->sync(s.display_u_);
             s.model_->sync(s.display_v_);
+            refine_display();
             display_dirty = false;
         }
         for (const net::PeerHandle h : transport.peers())
@@ -2284,6 +2522,8 @@ core::Result<std::unique_ptr<Session>> Session::host(net::Transport& transport,
         settings.halo_rings < 3 || settings.name.empty() ||
         settings.name.size() > net::k_max_name_length)
         return core::fail(core::ErrorCode::InvalidArgument, "Session::host: bad settings");
+    if (auto r = check_coarsen(settings, "Session::host"); !r)
+        return core::fail(r.error().code, r.error().message);
     sim::MembraneSettings m = material;
     m.threads = settings.threads;
     if (settings.coupling == Coupling::Exact)
@@ -2306,6 +2546,10 @@ core::Result<std::unique_ptr<Session>> Session::host(net::Transport& transport,
     im.master_id = s->id_;
     im.welcomed = true;
     im.install_model(std::move(model).value());
+    if (auto r = check_coarsen(settings, s->model_->grid(), s->graph_->depth(), settings.coupling,
+                               "Session::host");
+        !r)
+        return core::fail(r.error().code, r.error().message);
     im.add_partition(0, im.next_epoch++, im.compute_partition());
     im.lockstep = settings.coupling == Coupling::Exact;
     im.copy_own_to_display(im.newest());
@@ -2325,6 +2569,8 @@ core::Result<std::unique_ptr<Session>> Session::join(net::Transport& transport,
         settings.halo_rings < 3 || settings.name.empty() ||
         settings.name.size() > net::k_max_name_length)
         return core::fail(core::ErrorCode::InvalidArgument, "Session::join: bad settings");
+    if (auto r = check_coarsen(settings, "Session::join"); !r)
+        return core::fail(r.error().code, r.error().message);
     std::unique_ptr<Session> s(new Session());
     s->impl_ = std::make_unique<Impl>(*s, transport, settings);
     s->role_ = role == net::Role::Viewer ? SessionRole::Viewer : SessionRole::Participant;
@@ -2333,6 +2579,11 @@ core::Result<std::unique_ptr<Session>> Session::join(net::Transport& transport,
         return core::fail(h.error().code, h.error().message);
     s->impl_->master_handle = *h;
     return s;
+}
+
+std::string Session::refusal() const
+{
+    return impl_->refusal;
 }
 
 void Session::poll()

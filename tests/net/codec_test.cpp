@@ -115,7 +115,7 @@ TEST(Codec, PingMatchesBytesWrittenFromTheSpecification)
                          .tick = 0x100F0E0D0C0B0A09ULL},
               .body = Ping{.nonce = 0x14131211u, .time_us = 0x201F1E1D1C1B1A19ULL}};
     const auto expected = bytes_of({0x50, 0x4C, 0x4E, 0x54,  // "PLNT"
-                                    2,    14,   0,    0,     // version, type Ping, flags, reserved
+                                    3,    14,   0,    0,     // version, type Ping, flags, reserved
                                     0x01, 0x02, 0x03, 0x04,  // session
                                     0x05, 0x06, 0x07, 0x08,  // sender, sequence
                                     0x09, 0x0A, 0x0B, 0x0C, 0x0D, 0x0E, 0x0F, 0x10,  // tick
@@ -145,6 +145,21 @@ TEST(Codec, LeafStateMatchesBytesWrittenFromTheSpecification)
     EXPECT_EQ(body,
               bytes_of({0x04, 0x03, 0x02, 0x01, 1, 3,    5,    0, 7, 0,    1,    0, 2, 0, 1,   0, 0,
                         0,    0,    0,    0,    0, 0xF0, 0x3F, 0, 0, 0x80, 0x3F, 0, 0, 0, 0xC0}));
+    // Version 3: byte 11 is the coarsening (docs/protocol.md LeafState).
+    s.coarsen = 2;
+    const auto dc = encode_vec(Message{samples::header(), s});
+    EXPECT_EQ(dc[24 + 11], std::byte{2});
+    auto back = decode(dc);
+    ASSERT_TRUE(back.has_value());
+    EXPECT_EQ(std::get<LeafState>(back->body).coarsen, 2);
+    // Coarse states are f32/f64 only: a quantised one with coarsen != 0 is refused both ways.
+    Message q{samples::header(), samples::quantised_leaf_state(16, 0, false)};
+    std::get<LeafState>(q.body).coarsen = 1;
+    EXPECT_EQ(validate(q), DecodeError::BadRange);
+    std::get<LeafState>(q.body).coarsen = 0;
+    auto dq = encode_vec(q);
+    dq[24 + 11] = std::byte{1};
+    EXPECT_EQ(decode_error(dq), DecodeError::BadRange);
 }
 
 TEST(Codec, EveryTruncationIsRejected)
@@ -186,7 +201,9 @@ TEST(Codec, HeaderErrors)
     d = ping;
     d[4] = std::byte{1};  // version 1 (before quantised leaf states)
     EXPECT_EQ(decode_error(d), DecodeError::BadVersion);
-    d[4] = std::byte{3};
+    d[4] = std::byte{2};  // version 2 (before coarse leaf states)
+    EXPECT_EQ(decode_error(d), DecodeError::BadVersion);
+    d[4] = std::byte{4};
     EXPECT_EQ(decode_error(d), DecodeError::BadVersion);
     for (int type : {0, 17, 255})
     {
@@ -247,6 +264,11 @@ TEST(Codec, BodyErrorsEachHaveTheirCode)
     d = leaf;
     put_le(d, 38, 74, 2);
     EXPECT_EQ(decode_error(d), DecodeError::BadCount);
+    d = leaf;
+    d[35] = std::byte{3};  // coarsen 3 is the largest
+    EXPECT_TRUE(decode(d).has_value());
+    d[35] = std::byte{4};
+    EXPECT_EQ(decode_error(d), DecodeError::BadRange);
     d = leaf;
     d[30] = std::byte{16};  // ix 16 at depth 4
     EXPECT_EQ(decode_error(d), DecodeError::BadRange);

@@ -173,6 +173,12 @@ inline std::vector<Message> all()
     add(quantised_leaf_state(72, 0, true));
     add(quantised_leaf_state(k_max_leaf_nodes_quantised, 6, false));
     add(quantised_leaf_state(1, 1, false));
+    // Version 3: a leaf streamed one level down (docs/protocol.md LeafState `coarsen`).
+    {
+        LeafState coarse = leaf_state(ValueEncoding::F64, 16);  // a leaf streamed one level down
+        coarse.coarsen = 1;
+        add(coarse);
+    }
     return out;
 }
 

@@ -166,3 +166,40 @@ TEST(SessionCli, KillingAParticipantThenTheMasterLeavesTheOthersRunning)
 }
 
 }  // namespace
+
+namespace
+{
+
+// --stream-coarsen (docs/session.md §5.2): an exact-mode host streaming one level down feeds a
+// viewer; a participant asking for it in a fast session exits non-zero with the reason. Bounded
+// by the durations (about 3 s each).
+TEST(SessionCli, StreamCoarsenFeedsAViewerAndIsRefusedInFastMode)
+{
+    const auto dir = pliant::test::scratch_dir("session_cli_coarse");
+    const int port = 20000 + static_cast<int>((getpid() + 4001) % 19990);
+    const std::string exe = PLIANT_EXE;
+    const std::string d = dir.string();
+    const std::string p = std::to_string(port);
+    const std::string q = std::to_string(port + 1);
+    const std::string cmd =
+        "cd '" + d + "' && rm -f *.rc *.csv; " + "('" + exe + "' host --level 4 --port " + p +
+        " --duration 2.5 --stream-coarsen 1 > host.log 2>&1; echo $? > host.rc) & sleep 0.3; " +
+        "('" + exe + "' join 127.0.0.1:" + p +
+        " --viewer --duration 2 --stats v.csv > v.log 2>&1; echo $? > v.rc) & " + "('" + exe +
+        "' host --level 4 --mode fast --port " + q +
+        " --duration 2.5 > fast.log 2>&1; echo $? > fast.rc) & sleep 0.3; " + "('" + exe +
+        "' join 127.0.0.1:" + q +
+        " --stream-coarsen 1 --duration 2 > refused.log 2>&1; echo $? > refused.rc) & wait";
+    ASSERT_EQ(std::system(cmd.c_str()), 0);
+    const std::string host_log = read(dir / "host.log");
+    if (host_log.find("bind") != std::string::npos && read(dir / "host.rc") != "0\n")
+        GTEST_SKIP() << "cannot bind UDP port " << port << " on this machine: " << host_log;
+    EXPECT_EQ(read(dir / "host.rc"), "0\n") << host_log;
+    EXPECT_EQ(read(dir / "v.rc"), "0\n") << read(dir / "v.log");
+    EXPECT_GT(column_sum(dir / "v.csv", "bytes_in"), 1000.0);
+    EXPECT_NE(read(dir / "refused.rc"), "0\n");
+    EXPECT_NE(read(dir / "refused.log").find("refused in fast coupling"), std::string::npos)
+        << read(dir / "refused.log");
+}
+
+}  // namespace

@@ -27,7 +27,7 @@ namespace pliant::net
 {
 
 inline constexpr std::uint32_t k_protocol_magic = 0x544E4C50;  ///< bytes "PLNT"
-inline constexpr std::uint8_t k_protocol_version = 2;
+inline constexpr std::uint8_t k_protocol_version = 3;
 inline constexpr std::size_t k_header_size = 24;
 /// The largest body of a LeafState or Halo (one leaf per datagram, no IP fragmentation).
 inline constexpr std::size_t k_max_state_payload = 1200;
@@ -45,6 +45,8 @@ inline constexpr int k_max_grid_level = 10;
 inline constexpr std::uint32_t k_max_face_index = 4u << 20;       ///< 4 * 4^10 faces at level 10
 inline constexpr std::uint32_t k_max_grid_nodes = 2049u * 1025u;  ///< nodes at level 10
 inline constexpr std::uint8_t k_max_halo_stage = 6;
+/// Largest LeafState `coarsen` (levels below the grid's; docs/protocol.md §6 LeafState).
+inline constexpr std::uint8_t k_max_leaf_coarsen = 3;
 /// Fixed bytes of a LeafState body before the values.
 inline constexpr std::size_t k_leaf_state_fixed = 24;
 /// Nodes (u and v each) that fit one LeafState: 73 with f64, 147 with f32.
@@ -246,6 +248,10 @@ struct LeafState
     std::uint32_t epoch = 0;
     WireLeafId leaf;
     ValueEncoding encoding = ValueEncoding::F64;
+    /// The values are of the leaf's nodes at the level `coarsen` below the grid's (0..3; 0 with
+    /// encoding 3): the session's coarse streaming (docs/session.md §5.2). The codec checks the
+    /// range only.
+    std::uint8_t coarsen = 0;
     std::uint16_t node_offset = 0;
     double time = 0.0;         ///< s
     std::vector<double> u;     ///< m; 1..73 (f64) or 1..147 (f32) values

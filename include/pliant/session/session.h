@@ -43,6 +43,10 @@
 ///   values are the neighbours' Dirichlet values, the owner also adopts them: its owned nodes are
 ///   quantised after every frame. In `exact` mode the stream is display-only and the integrated
 ///   state is untouched (halos stay f64), so lockstep and replay stay bit-exact.
+/// - Coarse streaming (`stream_coarsen = k`): an owner sends each leaf's nodes at level n - k
+///   only; a receiver restricts what it shows to level n - k, refines it back k levels with
+///   butterfly subdivision (`subdiv::refine`) and shows the refined values on the leaves it got
+///   coarse. Display only (exact mode); refused with fast coupling and with QuantisedDelta.
 /// - Leaving: a participant sends Leave; the master re-partitions; in exact mode the leaver keeps
 ///   publishing until the tick where it owns nothing, and the others disconnect it once they are
 ///   past that tick (so no halo of its is lost).
@@ -104,6 +108,15 @@ struct SessionSettings
     /// values and changes the motion (docs/session.md §5.1): meant for exact mode and viewers.
     double bandwidth_cap_mbit_s = 0.0;
     double interest_boost = 8.0;  ///< >= 0
+    /// Coarse streaming (docs/session.md §5.2): 0 sends every node of a leaf (the default);
+    /// k in 1..3 sends only the leaf's nodes at the level k below the grid's (x and y multiples
+    /// of 2^k, about 4^-k of the bytes), which receivers refine back with butterfly subdivision
+    /// for display. Needs level - k >= 1 and 2^(k+1) dividing the leaf side (8 cells at levels
+    /// >= 3, so k <= 2 there).
+    /// Display only: exact-mode halos stay f64 at full resolution. Refused with fast coupling
+    /// (the streamed values are the neighbours' Dirichlet values there) and with QuantisedDelta
+    /// (its baselines are whole leaves). A per-sender choice; every peer refines what it gets.
+    int stream_coarsen = 0;
     /// Exact mode: dilation of the integrated set, >= 3 (3 are exact for the sim's fused RKF45,
     /// tests/session/halo_rings_test.cpp; 6 also covers a scheme whose every stage reads the
     /// previous one, at ~10 % more work per peer at level 8 with 2 peers).
@@ -221,6 +234,10 @@ public:
     /// Ids of the other peers this one knows (connected or not yet).
     [[nodiscard]] std::vector<net::PeerId> peers() const;
     [[nodiscard]] SessionStats stats() const;
+    /// Why this peer left on its own when the session refused its settings (empty otherwise):
+    /// a joiner learns the level and coupling only from the model (e.g. stream_coarsen in a fast
+    /// session, docs/session.md §5.2).
+    [[nodiscard]] std::string refusal() const;
 
     struct Impl;
 
