@@ -15,6 +15,7 @@
 #include "../../scenes/grid_shapes.h"
 #include "cli_common.h"
 #include "commands.h"
+#include "stream_options.h"
 
 #include <cstdio>
 #include <cstdlib>
@@ -68,9 +69,7 @@ struct HostOptions
     std::string name = "master";
     std::string passphrase;
     std::string key_file;
-    bool compress = false;   ///< quantised-delta leaf states (docs/protocol.md §5.5)
-    double cap_mbit = 0.0;   ///< per-peer cap on leaf states and acks, Mbit/s (0: none)
-    int stream_coarsen = 0;  ///< leaf states this many levels coarser (docs/session.md §5.2)
+    StreamOptions stream;  ///< --compress, --cap, --stream-coarsen
 };
 
 int run_host(const HostOptions& opt)
@@ -122,10 +121,7 @@ int run_host(const HostOptions& opt)
     settings.coupling = opt.mode == "exact" ? session::Coupling::Exact : session::Coupling::Fast;
     settings.name = opt.name;
     settings.listen_port = bound->port;
-    if (opt.compress)
-        settings.stream_encoding = net::ValueEncoding::QuantisedDelta;
-    settings.bandwidth_cap_mbit_s = opt.cap_mbit;
-    settings.stream_coarsen = opt.stream_coarsen;
+    apply_stream_options(opt.stream, settings);
     auto s = session::Session::host(*transport, *grid, rest, material, settings);
     if (!s)
         return report(s.error());
@@ -180,18 +176,7 @@ void add_host_command(CLI::App& app, const GlobalOptions& global)
         ->capture_default_str();
     cmd->add_option("--passphrase", opt->passphrase,
                     "Shared secret of the session (Argon2id); or set PLIANT_PASSPHRASE");
-    cmd->add_flag("--compress", opt->compress,
-                  "Stream quantised, delta-coded, zstd-packed leaf states (docs/session.md §5.1)");
-    cmd->add_option("--cap", opt->cap_mbit,
-                    "With --compress: leaf-state bytes per peer at most [Mbit/s] (0: no cap)")
-        ->check(CLI::NonNegativeNumber);
-    cmd->add_option("--stream-coarsen", opt->stream_coarsen,
-                    "Stream leaf states K levels coarser (every 2^K-th node, ~4^-K of the bytes;\n"
-                    "0: off); receivers refine them by butterfly subdivision for display. Exact\n"
-                    "mode only (refused with --mode fast and with --compress); K <= 2 at levels\n"
-                    ">= 3, K <= 1 at level 2 (docs/session.md §5.2)")
-        ->check(CLI::Range(0, 2))
-        ->capture_default_str();
+    add_stream_options(cmd, opt->stream);
     cmd->add_option("--key-file", opt->key_file, "File whose bytes are the shared secret")
         ->check(CLI::ExistingFile)
         ->excludes("--passphrase");

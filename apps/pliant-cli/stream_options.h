@@ -1,0 +1,46 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+#pragma once
+
+// The state-stream options `pliant host` and `pliant join` share (--compress, --cap,
+// --stream-coarsen; docs/session.md §5.1, §5.2): declared once, applied to SessionSettings once.
+
+#include <pliant/session/session.h>
+
+#include <CLI/CLI.hpp>
+
+namespace pliant::cli
+{
+
+struct StreamOptions
+{
+    bool compress = false;   ///< quantised-delta leaf states (docs/protocol.md §5.5)
+    double cap_mbit = 0.0;   ///< per-peer cap on leaf states and acks, Mbit/s (0: none)
+    int stream_coarsen = 0;  ///< leaf states this many levels coarser (docs/session.md §5.2)
+};
+
+inline void add_stream_options(CLI::App* cmd, StreamOptions& opt)
+{
+    cmd->add_flag("--compress", opt.compress,
+                  "Stream quantised, delta-coded, zstd-packed leaf states (docs/session.md §5.1)");
+    cmd->add_option("--cap", opt.cap_mbit,
+                    "With --compress: leaf-state bytes per peer at most [Mbit/s] (0: no cap)")
+        ->check(CLI::NonNegativeNumber);
+    cmd->add_option("--stream-coarsen", opt.stream_coarsen,
+                    "Stream leaf states K levels coarser (every 2^K-th node, ~4^-K of the bytes;\n"
+                    "0: off); receivers refine them by butterfly subdivision for display. Exact\n"
+                    "mode only (refused with --mode fast and with --compress); K <= 2 at levels\n"
+                    ">= 3, K <= 1 at level 2 (docs/session.md §5.2)")
+        ->check(CLI::Range(0, 2))
+        ->capture_default_str();
+}
+
+inline void apply_stream_options(const StreamOptions& opt, session::SessionSettings& settings)
+{
+    if (opt.compress)
+        settings.stream_encoding = net::ValueEncoding::QuantisedDelta;
+    settings.bandwidth_cap_mbit_s = opt.cap_mbit;
+    settings.stream_coarsen = opt.stream_coarsen;
+}
+
+}  // namespace pliant::cli
