@@ -215,7 +215,7 @@ public:
     {
         const sim::MembraneModel& model = *peer.model();
         const core::TetraGrid& grid = model.grid();
-        model.positions(peer.display_u(), positions_);
+        model.positions(peer.view_u(), positions_);
         core::Vec3Field<double> shown = positions_;
         if (levels > 0)
         {
@@ -476,7 +476,7 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
     const double t_viewer = 0.4 * opt.duration;
     std::array<bool, 2> grabbing{false, false};
     double grab_set_at = -1.0, grab_seen_at = -1.0, viewer_ready_at = -1.0;
-    const double probe_base = peers[0].session->display_u().at(grabs[0].node.x, grabs[0].node.y);
+    const double probe_base = peers[0].session->view_u().at(grabs[0].node.x, grabs[0].node.y);
     std::ofstream energy_csv(opt.out / "timeline.csv");
     energy_csv << "time,ticks,owner_nodes_master,owner_nodes_A,owner_nodes_B,max_u\n";
     double max_u = 0.0;
@@ -530,7 +530,7 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
                                    " s (a heavily loaded machine? try --quick)"});
             if (viewer_ready_at < 0.0 && peers[3].session && peers[3].session->ready())
                 viewer_ready_at = now;
-            const double seen = peers[0].session->display_u().at(grabs[0].node.x, grabs[0].node.y);
+            const double seen = peers[0].session->view_u().at(grabs[0].node.x, grabs[0].node.y);
             if (grab_set_at >= 0.0 && grab_seen_at < 0.0 && seen != probe_base)
                 grab_seen_at = now;
             reached = now;
@@ -540,7 +540,7 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
         ++frames_run;
         const bool from_viewer = peers[3].session && peers[3].session->ready();
         const session::Session& shown = *peers[from_viewer ? 3 : 0].session;
-        const core::Field<double>& u = shown.display_u();
+        const core::Field<double>& u = shown.view_u();
         for (int y = 0; y < grid.ny(); ++y)
             for (int x = 0; x < grid.nx(); ++x)
                 max_u = std::max(max_u, std::abs(u.at(x, y)));

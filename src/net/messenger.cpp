@@ -46,8 +46,11 @@ core::Result<void> Messenger::send_encoded(PeerHandle peer, MessageType type, st
 {
     const bool reliable = mode == SendMode::Reliable || default_channel(type) == Channel::Control;
     const Channel channel = reliable ? Channel::Control : Channel::State;
+    const Delivery delivery = reliable                        ? Delivery::Reliable
+                              : mode == SendMode::Unsequenced ? Delivery::Unsequenced
+                                                              : Delivery::Unreliable;
     return transport_.send(peer, channel, std::span<const std::byte>(buffer_.data(), size),
-                           reliable ? Delivery::Reliable : Delivery::Unreliable);
+                           delivery);
 }
 
 core::Result<void> Messenger::send(PeerHandle peer, const Message& message, SendMode mode) noexcept

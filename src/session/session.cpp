@@ -12,6 +12,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <chrono>
 #include <cmath>
@@ -31,6 +32,16 @@ constexpr double k_leave_timeout_s = 5.0;
 /// a leaf, and a receiver holds its last 16 received, so an acknowledged baseline the owner still
 /// has is one the receiver still holds (docs/protocol.md §5.5).
 constexpr std::size_t k_baseline_window = 16;
+/// Smooth display: states kept per leaf for interpolation (docs/session.md §5.3).
+constexpr int k_view_history = 4;
+/// Smooth display: the playout time lags the newest state by k_view_periods stream periods
+/// beyond the smallest lead seen; that lead recovers at k_view_leak (s per s) after a late state;
+/// the playout clock slews towards its target at up to k_view_slew of real time and jumps beyond
+/// k_view_snap_s, but never backwards.
+constexpr double k_view_periods = 2.0;
+constexpr double k_view_leak = 0.05;
+constexpr double k_view_slew = 0.5;
+constexpr double k_view_snap_s = 0.25;
 /// Failover: a successor's first epoch is this far above the newest it knows, so a Partition the
 /// lost master sent to only some peers just before it went cannot share an epoch with the
 /// successor's (docs/session.md §6).
@@ -229,6 +240,18 @@ namespace
 {
 
 /// The grid-independent rules of coarse streaming (docs/session.md §5.2).
+bool valid(const SessionSettings& s)
+{
+    return s.stream_rate_hz > 0.0 && s.frame_rate_hz > 0.0 && s.ack_rate_hz > 0.0 &&
+           s.u_step_exponent >= net::k_min_step_exponent &&
+           s.u_step_exponent <= net::k_max_step_exponent &&
+           s.v_step_exponent >= net::k_min_step_exponent &&
+           s.v_step_exponent <= net::k_max_step_exponent && s.bandwidth_cap_mbit_s >= 0.0 &&
+           s.interest_boost >= 0.0 && s.max_halo_age_s >= 0.0 && std::isfinite(s.max_halo_age_s) &&
+           s.quiescent_refresh_s >= 0.0 && std::isfinite(s.quiescent_refresh_s) &&
+           s.halo_rings >= 3 && !s.name.empty() && s.name.size() <= net::k_max_name_length;
+}
+
 core::Result<void> check_coarsen(const SessionSettings& settings, const char* who)
 {
     const int k = settings.stream_coarsen;
@@ -372,8 +395,39 @@ struct Session::Impl
     bool state_exact = true;  // exact: joiner before its first halos
     std::uint64_t exact_from = 0;
     std::deque<HaloBuffer> halos;
+    // Per leaf: the state shown (display): partition epoch, tick and owner's time of the newest
+    // state (received states older than it are ignored, docs/protocol.md §2), and its sender.
+    std::vector<std::uint32_t> leaf_epoch;
     std::vector<std::uint64_t> leaf_tick;
     std::vector<double> leaf_time;
+    std::vector<std::uint16_t> leaf_sender;
+    std::vector<double> leaf_sent_time;  // our leaves: simulated time last streamed
+
+    // Smooth display (docs/session.md §5.3): per leaf not ours, the last states received (as
+    // displayed, coarse leaves refined), oldest first; per sender, a playout clock.
+    struct ViewHistory
+    {
+        std::uint16_t sender = 0;
+        int count = 0;  // states held, <= k_view_history
+        std::array<double, k_view_history> time{};
+        std::vector<double> u, v;  // k_view_history x nodes, state k at [k n, (k + 1) n)
+    };
+    struct Playout
+    {
+        double newest = 0.0;  // newest owner time received from this sender, s
+        bool fresh = false;   // newest grew since the last update_view
+        double lead = 0.0;    // leaky minimum of newest - now when newest grew, s
+        double offset = 0.0;  // playout time = now + offset, slewed towards lead - margin
+        double render = 0.0;  // the playout time of the last update_view (never decreases)
+        double last_now = 0.0;
+        bool set = false;
+    };
+    std::vector<ViewHistory> history;
+    std::vector<std::uint32_t> updated;  // leaves whose shown state changed in this poll
+    std::vector<char> updated_flag;
+    std::map<std::uint16_t, Playout> playout;
+    core::Field<double> view_u, view_v;
+    std::vector<double> view_time;
 
     // Quantised streaming (docs/protocol.md §5.5).
     std::vector<std::deque<QuantisedLeaf>> sent;  // per leaf: our last states sent, newest last
@@ -397,6 +451,8 @@ struct Session::Impl
     std::vector<core::Region> integrate_runs;                      // exact: dilated own set
     std::map<std::uint16_t, std::vector<std::uint32_t>> halo_out;  // receiver -> nodes
     std::uint32_t fast_epoch = 0;
+    std::vector<char> fast_mine;  // fast: owned_mask of fast_mine_epoch
+    std::uint32_t fast_mine_epoch = std::numeric_limits<std::uint32_t>::max();
     std::vector<core::Region> owned_regions;  // fast: own leaves
     // Fast: the coupling edges (owned node, Dirichlet neighbour) and their interface damping
     // (fast_advance explains it). Per owned node with Dirichlet neighbours: its (x, y) and its
@@ -498,8 +554,16 @@ struct Session::Impl
         s.state_ = sim::MembraneState::at_rest(g);
         s.display_u_ = core::Field<double>(g, 1);
         s.display_v_ = core::Field<double>(g, 1);
+        leaf_epoch.assign(s.graph_->size(), 0);
         leaf_tick.assign(s.graph_->size(), 0);
         leaf_time.assign(s.graph_->size(), 0.0);
+        leaf_sender.assign(s.graph_->size(), 0);
+        leaf_sent_time.assign(s.graph_->size(), -std::numeric_limits<double>::infinity());
+        history.assign(s.graph_->size(), {});
+        updated_flag.assign(s.graph_->size(), 0);
+        view_u = core::Field<double>(g, 1);
+        view_v = core::Field<double>(g, 1);
+        view_time.assign(s.graph_->size(), 0.0);
         leaf_coarsen.assign(s.graph_->size(), 0);
         leaf_mine.assign(s.graph_->size(), 0);
         max_coarsen = max_coarsen_for(g, s.graph_->depth());
@@ -1169,8 +1233,25 @@ struct Session::Impl
             if (settings.max_ticks != 0 && s.state_.tick >= settings.max_ticks)
                 return;
             // Dirichlet values: the newest displayed state of every node not owned.
-            std::vector<char> mine = owned_mask(p, s.id_);
+            if (fast_mine_epoch != (p != nullptr ? p->epoch : 0))
+            {
+                fast_mine = owned_mask(p, s.id_);
+                fast_mine_epoch = p != nullptr ? p->epoch : 0;
+            }
+            const std::vector<char>& mine = fast_mine;
             refresh_border(p, mine);
+            // Bounded staleness: hold the clock while a neighbour's state is too old.
+            const double frame_end = next_frame + clock_offset;
+            double oldest = 0.0;
+            for (const std::uint32_t l : border_leaf)
+                oldest = std::max(oldest, frame_end - leaf_time[l]);
+            if (settings.max_halo_age_s > 0.0 && oldest > settings.max_halo_age_s)
+            {
+                ++counters.stalled_frames;
+                break;
+            }
+            counters.border_age_s = oldest;
+            counters.max_border_age_s = std::max(counters.max_border_age_s, oldest);
             for (int y = 0; y < g.ny(); ++y)
                 for (int x = 0; x < g.nx(); ++x)
                     if (mine[g.canonical(g.index(x, y)).value] == 0)
@@ -1269,9 +1350,12 @@ struct Session::Impl
                 s.display_u_.at(c.x, c.y) = n != 0 ? xu[k] : s.state_.u.at(c.x, c.y);
                 s.display_v_.at(c.x, c.y) = n != 0 ? xv[k] : s.state_.v.at(c.x, c.y);
             }
+            leaf_epoch[l] = p != nullptr ? p->epoch : 0;
             leaf_tick[l] = s.state_.tick;
             leaf_time[l] = s.state_.time;
+            leaf_sender[l] = s.id_.value;
             leaf_coarsen[l] = 0;
+            history[l].count = 0;
         }
         s.model_->sync(s.display_u_);
         s.model_->sync(s.display_v_);
@@ -1466,6 +1550,9 @@ struct Session::Impl
         const core::LeafId id = s.graph_->leaves()[l];
         const std::uint64_t tick = s.state_.tick;
         bool any = false;
+        // A quiescent leaf is re-sent now and then, so receivers can tell it from a lost one.
+        const bool refresh = settings.quiescent_refresh_s > 0.0 &&
+                             s.state_.time - leaf_sent_time[l] >= settings.quiescent_refresh_s;
         for (const auto& [pid, peer] : peers)
         {
             if (peer.departed || !peer.handle)
@@ -1474,7 +1561,7 @@ struct Session::Impl
             std::vector<double>* prio = capped() ? &priority[pid] : nullptr;
             if (prio != nullptr)
                 prio->resize(s.graph_->size(), 0.0);
-            if (base != nullptr && base == &sent[l].back() &&
+            if (base != nullptr && base == &sent[l].back() && !refresh &&
                 std::equal(base->qu.begin(), base->qu.end(), qu.begin()) &&
                 std::equal(base->qv.begin(), base->qv.end(), qv.begin()))
             {
@@ -1524,7 +1611,8 @@ struct Session::Impl
                 budget[pid] -= static_cast<double>(net::encoded_size(msg));
                 (*prio)[l] = 0.0;
             }
-            send_to(pid, msg);
+            send_to(pid, msg, net::SendMode::Unsequenced);
+            leaf_sent_time[l] = s.state_.time;
         }
         if (any)
         {
@@ -1606,7 +1694,8 @@ struct Session::Impl
             for (const auto& [pid, peer] : peers)
                 if (!peer.departed && peer.handle)
                     ++counters.leaf_states_sent;
-            send_all(make(m, s.state_.tick));
+            send_all(make(m, s.state_.tick), net::SendMode::Unsequenced);
+            leaf_sent_time[l] = s.state_.time;
         }
     }
 
@@ -2028,7 +2117,14 @@ struct Session::Impl
         }
         s.state_.time = welcome.time;
         s.state_.tick = welcome_tick;  // fast mode: ticks line up with the master's
+        std::fill(leaf_time.begin(), leaf_time.end(), welcome.time);
+        std::fill(leaf_tick.begin(), leaf_tick.end(), welcome_tick);
         clock_offset = welcome.time - last_now;
+        // Fast mode: the welcome's time is half a round trip old by now; running that much
+        // behind the master would age every state we send it by as much (docs/session.md §4.3).
+        if (s.coupling_ == Coupling::Fast && master_handle)
+            if (const auto st = transport.stats(*master_handle))
+                clock_offset += std::clamp(0.5 * st->rtt_s, 0.0, 0.25);
         clock_set = true;
         next_stream = last_now;
         next_frame = last_now;
@@ -2270,11 +2366,23 @@ struct Session::Impl
             net::dequantise(std::span(qv.data(), n), ls.quantised.v_exponent,
                             std::span(xv.data(), n));
         }
-        if (m.header.tick < leaf_tick[l])
+        // Unsequenced: per leaf, the newest by (epoch, tick) wins; ticks are per sender in
+        // fast mode, and a leaf changes sender only with the epoch.
+        if (ls.epoch < leaf_epoch[l] || (ls.epoch == leaf_epoch[l] && m.header.tick < leaf_tick[l]))
+        {
+            ++counters.stale_states;
             return;
+        }
+        leaf_epoch[l] = ls.epoch;
         leaf_tick[l] = m.header.tick;
         leaf_time[l] = ls.time;
+        leaf_sender[l] = from;
         leaf_coarsen[l] = static_cast<std::uint8_t>(kc);
+        if (updated_flag[l] == 0)
+        {
+            updated_flag[l] = 1;
+            updated.push_back(static_cast<std::uint32_t>(l));
+        }
         if (kc != 0)
         {
             // The received nodes go to their places on the grid; refine_display fills the rest.
@@ -2454,9 +2562,152 @@ struct Session::Impl
             refine_display();
             display_dirty = false;
         }
+        record_history();
         for (const net::PeerHandle h : transport.peers())
             if (auto st = transport.stats(h))
                 last_stats[h] = *st;
+    }
+
+    // --- smooth display (docs/session.md §5.3) -------------------------------------------------
+
+    /// Keeps the shown state of every leaf updated by this poll (not ours) for interpolation,
+    /// and the newest time received per sender.
+    void record_history()
+    {
+        if (!s.model_ || !settings.interpolate_view)
+        {
+            for (const std::uint32_t l : updated)
+                updated_flag[l] = 0;
+            updated.clear();
+            return;
+        }
+        const core::TetraGrid& g = s.model_->grid();
+        for (const std::uint32_t l : updated)
+        {
+            updated_flag[l] = 0;
+            const auto nodes = s.graph_->nodes(l);
+            const std::size_t n = nodes.size();
+            ViewHistory& h = history[l];
+            if (h.sender == leaf_sender[l] && h.count > 0 && leaf_time[l] == h.time[h.count - 1])
+                continue;  // the same state again (a duplicate, or re-sent unchanged)
+            if (h.sender != leaf_sender[l] || (h.count > 0 && leaf_time[l] < h.time[h.count - 1]))
+                h.count = 0;  // another sender's clock: start over
+            h.sender = leaf_sender[l];
+            if (h.u.size() != k_view_history * n)
+            {
+                h.u.assign(k_view_history * n, 0.0);
+                h.v.assign(k_view_history * n, 0.0);
+            }
+            if (h.count == k_view_history)
+            {
+                // Drop the oldest.
+                std::copy(h.u.begin() + static_cast<std::ptrdiff_t>(n), h.u.end(), h.u.begin());
+                std::copy(h.v.begin() + static_cast<std::ptrdiff_t>(n), h.v.end(), h.v.begin());
+                std::copy(h.time.begin() + 1, h.time.end(), h.time.begin());
+                --h.count;
+            }
+            const auto k = static_cast<std::size_t>(h.count);
+            for (std::size_t i = 0; i < n; ++i)
+            {
+                const core::GridCoord c = g.coord(nodes[i]);
+                h.u[k * n + i] = s.display_u_.at(c.x, c.y);
+                h.v[k * n + i] = s.display_v_.at(c.x, c.y);
+            }
+            h.time[k] = leaf_time[l];
+            ++h.count;
+            Playout& pl = playout[h.sender];
+            if (!pl.set || leaf_time[l] > pl.newest)
+            {
+                pl.newest = leaf_time[l];
+                pl.fresh = true;
+            }
+        }
+        updated.clear();
+    }
+
+    /// The view: the display, with every leaf not ours interpolated linearly in time between
+    /// the two states received around its sender's playout time (held at the newest or oldest
+    /// outside them). A sender's playout time is now + offset, the offset slewed towards the
+    /// smallest lead of its newest state over now (sampled when it grows, recovering at
+    /// k_view_leak) minus k_view_periods stream periods, so that a state is usually there on
+    /// both sides even when one is late or lost; it never goes backwards (a sender slower than
+    /// real time, such as a lockstep, is then shown at its newest states). Linear, not cubic
+    /// Hermite with the received v: the grid's fastest modes have |v| / |u| up to ~150/s, and v
+    /// times a stream period would overshoot by more than |u|.
+    void update_view(double now)
+    {
+        if (!settings.interpolate_view)
+        {
+            view_u = s.display_u_;
+            view_v = s.display_v_;
+            std::copy(leaf_time.begin(), leaf_time.end(), view_time.begin());
+            return;
+        }
+        double delay = 0.0;
+        const double margin = k_view_periods / settings.stream_rate_hz;
+        for (auto& [sender, pl] : playout)
+        {
+            if (!pl.set && !pl.fresh)
+                continue;
+            const double dt = pl.set ? std::max(0.0, now - pl.last_now) : 0.0;
+            pl.last_now = now;
+            if (!pl.set)
+            {
+                pl.lead = pl.newest - now;
+                pl.offset = pl.lead - margin;
+                pl.render = now + pl.offset;
+                pl.set = true;
+            }
+            pl.lead += k_view_leak * dt;
+            if (pl.fresh)
+                pl.lead = std::min(pl.lead, pl.newest - now);
+            pl.fresh = false;
+            const double target = pl.lead - margin;
+            const double step = k_view_slew * dt;
+            if (std::fabs(target - pl.offset) > k_view_snap_s)
+                pl.offset = target;
+            else
+                pl.offset += std::clamp(target - pl.offset, -step, step);
+            pl.render = std::max(pl.render, now + pl.offset);
+            delay = std::max(delay, pl.newest - pl.render);
+        }
+        counters.view_delay_s = delay;
+        view_u = s.display_u_;
+        view_v = s.display_v_;
+        const core::TetraGrid& g = s.model_->grid();
+        for (std::size_t l = 0; l < s.graph_->size(); ++l)
+        {
+            const ViewHistory& h = history[l];
+            view_time[l] = leaf_time[l];
+            if (h.count == 0 || leaf_sender[l] == s.id_.value || h.sender != leaf_sender[l])
+                continue;
+            const double t = playout[h.sender].render;
+            int a = 0;  // states a and b = a + 1 bracket t, or a = b at either end
+            int b = 0;
+            double w = 0.0;
+            if (t >= h.time[h.count - 1])
+                a = b = h.count - 1;
+            else if (t > h.time[0])
+            {
+                while (h.time[b] <= t)
+                    ++b;
+                a = b - 1;
+                w = (t - h.time[a]) / (h.time[b] - h.time[a]);
+            }
+            view_time[l] = (1.0 - w) * h.time[a] + w * h.time[b];
+            const auto nodes = s.graph_->nodes(l);
+            const std::size_t n = nodes.size();
+            const auto ia = static_cast<std::size_t>(a) * n;
+            const auto ib = static_cast<std::size_t>(b) * n;
+            for (std::size_t i = 0; i < n; ++i)
+            {
+                const core::GridCoord c = g.coord(nodes[i]);
+                view_u.at(c.x, c.y) = h.u[ia + i] + w * (h.u[ib + i] - h.u[ia + i]);
+                view_v.at(c.x, c.y) = h.v[ia + i] + w * (h.v[ib + i] - h.v[ia + i]);
+            }
+        }
+        s.model_->sync(view_u);
+        s.model_->sync(view_v);
     }
 
     void advance(double now)
@@ -2500,6 +2751,8 @@ struct Session::Impl
             next_stream = std::max(next_stream + 1.0 / settings.stream_rate_hz,
                                    now - 1.0 / settings.stream_rate_hz);
         }
+        if (s.model_ && !s.left_)
+            update_view(now);
         transport.flush();
     }
 };
@@ -2513,14 +2766,7 @@ core::Result<std::unique_ptr<Session>> Session::host(net::Transport& transport,
                                                      const sim::MembraneSettings& material,
                                                      const SessionSettings& settings)
 {
-    if (!(settings.stream_rate_hz > 0.0) || !(settings.frame_rate_hz > 0.0) ||
-        !(settings.ack_rate_hz > 0.0) || settings.u_step_exponent < net::k_min_step_exponent ||
-        settings.u_step_exponent > net::k_max_step_exponent ||
-        settings.v_step_exponent < net::k_min_step_exponent ||
-        settings.v_step_exponent > net::k_max_step_exponent ||
-        !(settings.bandwidth_cap_mbit_s >= 0.0) || !(settings.interest_boost >= 0.0) ||
-        settings.halo_rings < 3 || settings.name.empty() ||
-        settings.name.size() > net::k_max_name_length)
+    if (!valid(settings))
         return core::fail(core::ErrorCode::InvalidArgument, "Session::host: bad settings");
     if (auto r = check_coarsen(settings, "Session::host"); !r)
         return core::fail(r.error().code, r.error().message);
@@ -2560,14 +2806,7 @@ core::Result<std::unique_ptr<Session>> Session::join(net::Transport& transport,
                                                      const net::Address& master, net::Role role,
                                                      const SessionSettings& settings)
 {
-    if (!(settings.stream_rate_hz > 0.0) || !(settings.frame_rate_hz > 0.0) ||
-        !(settings.ack_rate_hz > 0.0) || settings.u_step_exponent < net::k_min_step_exponent ||
-        settings.u_step_exponent > net::k_max_step_exponent ||
-        settings.v_step_exponent < net::k_min_step_exponent ||
-        settings.v_step_exponent > net::k_max_step_exponent ||
-        !(settings.bandwidth_cap_mbit_s >= 0.0) || !(settings.interest_boost >= 0.0) ||
-        settings.halo_rings < 3 || settings.name.empty() ||
-        settings.name.size() > net::k_max_name_length)
+    if (!valid(settings))
         return core::fail(core::ErrorCode::InvalidArgument, "Session::join: bad settings");
     if (auto r = check_coarsen(settings, "Session::join"); !r)
         return core::fail(r.error().code, r.error().message);
@@ -2663,6 +2902,21 @@ Recording Session::recording() const
 void Session::shutdown()
 {
     impl_->close_all(net::DisconnectReason::Shutdown);
+}
+
+const core::Field<double>& Session::view_u() const noexcept
+{
+    return impl_->view_u;
+}
+
+const core::Field<double>& Session::view_v() const noexcept
+{
+    return impl_->view_v;
+}
+
+std::span<const double> Session::view_time() const noexcept
+{
+    return impl_->view_time;
 }
 
 net::PeerId Session::master() const noexcept

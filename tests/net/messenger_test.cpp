@@ -11,6 +11,8 @@
 
 #include "net/sample_messages.h"
 
+#include <algorithm>
+
 namespace pliant::net
 {
 namespace
@@ -238,6 +240,63 @@ TEST(Messenger, BroadcastReachesEveryPeer)
                            : 0;
     }
     EXPECT_EQ(got, 3);
+}
+
+// Leaf states are sent unsequenced (docs/protocol.md §2): with jitter, a burst of state datagrams
+// arrives out of order; the default (ENet's sequenced unreliable delivery) drops every one older
+// than one already delivered, Unsequenced delivers them all and leaves the ordering to the
+// receiver.
+TEST(Messenger, UnsequencedStateSurvivesReorderingThatSequencedDeliveryDrops)
+{
+    auto run = [](SendMode mode)
+    {
+        SimulatedNetworkSettings set;
+        set.seed = 7;
+        set.link.latency_s = 0.005;
+        set.link.jitter_s = 0.020;  // a 60-datagram burst spreads over 20 ms: mostly reordered
+        SimulatedNetwork net(set);
+        auto ta = net.create_endpoint();
+        auto tb = net.create_endpoint();
+        Messenger a{*ta};
+        Messenger b{*tb};
+        EXPECT_TRUE(ta->open({}));
+        const PeerHandle to_b = ta->connect(tb->open({}).value()).value();
+        bool up = false;
+        for (int i = 0; i < 1000 && !up; ++i)
+        {
+            net.advance(0.001);
+            while (auto ev = a.poll())
+                up = up || ev->kind == MessengerEvent::Kind::Connected;
+            while (b.poll())
+            {
+            }
+        }
+        EXPECT_TRUE(up);
+        std::vector<std::uint64_t> ticks;
+        for (std::uint64_t t = 1; t <= 60; ++t)
+        {
+            Message m{samples::header(), samples::leaf_state(ValueEncoding::F64, 8)};
+            m.header.tick = t;
+            EXPECT_TRUE(a.send(to_b, m, mode));
+        }
+        for (int i = 0; i < 100; ++i)
+        {
+            net.advance(0.001);
+            while (auto ev = b.poll())
+                if (ev->kind == MessengerEvent::Kind::Received)
+                {
+                    EXPECT_EQ(ev->channel, Channel::State);
+                    ticks.push_back(ev->message.header.tick);
+                }
+        }
+        return ticks;
+    };
+    const auto sequenced = run(SendMode::Default);
+    const auto unsequenced = run(SendMode::Unsequenced);
+    EXPECT_TRUE(std::is_sorted(sequenced.begin(), sequenced.end()));
+    EXPECT_LT(sequenced.size(), 30u) << "sequenced delivery drops the late ones";
+    ASSERT_EQ(unsequenced.size(), 60u) << "every datagram arrives, none lost on this link";
+    EXPECT_FALSE(std::is_sorted(unsequenced.begin(), unsequenced.end())) << "and out of order";
 }
 
 }  // namespace

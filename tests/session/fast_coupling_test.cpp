@@ -18,22 +18,6 @@ namespace pliant::session::test
 namespace
 {
 
-constexpr double k_pi = 3.141592653589793;
-
-// Participant k's drag at time t [s]: 0.5 N turning at 1 Hz, on the nodes within 0.3 m of its
-// point (the bench's "strong" drag, bench_session --stream).
-net::UserForce drag(int k, double t)
-{
-    static constexpr double points[3][3] = {{0.0, 0.0, 1.0}, {0.0, 0.0, -1.0}, {1.0, 0.0, 0.0}};
-    net::UserForce f;
-    f.target.kind = net::TargetKind::Position;
-    f.target.position = {points[k][0], points[k][1], points[k][2]};
-    f.target.radius = 0.3;
-    const double a = 2.0 * k_pi * t + k;
-    f.force = {0.5 * std::cos(a), 0.5 * std::sin(a), -0.3 * (points[k][2] + points[k][0])};
-    return f;
-}
-
 // One frame's force lists, from the master's simulated time `time` on.
 struct Frame
 {
@@ -112,7 +96,7 @@ Outcome run_drags(int level, int participants, double seconds, bool quantised = 
         fr.time = h.peers[0]->time();
         for (int k = 0; k < participants; ++k)
         {
-            const net::UserForce u = drag(k, h.now);
+            const net::UserForce u = turning_drag(k, h.now);
             h.peers[static_cast<std::size_t>(k)]->set_forces({u});
             fr.forces.push_back(to_sim_force(u));
         }

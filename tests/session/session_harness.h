@@ -61,6 +61,21 @@ inline net::UserForce point_push(double x, double y, double z, double r, double 
     return u;
 }
 
+/// Participant k's continuous drag at time t [s] (k = 0..2): 0.5 N turning at 1 Hz on the nodes
+/// within 0.3 m of its point (bench_session --stream's "strong" drag).
+inline net::UserForce turning_drag(int k, double t)
+{
+    constexpr double pi = 3.141592653589793;
+    static constexpr double points[3][3] = {{0.0, 0.0, 1.0}, {0.0, 0.0, -1.0}, {1.0, 0.0, 0.0}};
+    net::UserForce f;
+    f.target.kind = net::TargetKind::Position;
+    f.target.position = {points[k][0], points[k][1], points[k][2]};
+    f.target.radius = 0.3;
+    const double a = 2.0 * pi * t + k;
+    f.force = {0.5 * std::cos(a), 0.5 * std::sin(a), -0.3 * (points[k][2] + points[k][0])};
+    return f;
+}
+
 /// The obvious single-process run: forces of tick t are each sender's newest list with
 /// from <= t, concatenated by increasing sender id.
 inline sim::MembraneState reference_run(int level, std::uint64_t ticks,

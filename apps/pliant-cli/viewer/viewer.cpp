@@ -514,7 +514,7 @@ void Viewer::update_surface()
         gpu_surface_valid_ = false;
         return;
     }
-    const core::Field<double>& u = session_ ? session_->display_u() : local_->state().u;
+    const core::Field<double>& u = session_ ? session_->view_u() : local_->state().u;
     const int level = m->grid().level();
     if (display_level_ < level)
         display_level_ = std::min(level + 1, std::max(level, 8));  // a joined session's model

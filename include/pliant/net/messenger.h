@@ -110,6 +110,10 @@ enum class SendMode : std::uint8_t
 {
     Default,   ///< the type's channel: control reliable on 0, state unreliable on 1
     Reliable,  ///< state types too, reliably on channel 0 (exact coupling mode)
+    /// State types on channel 1 without ENet's sequencing: lost, duplicated or reordered as the
+    /// network does, so that a late datagram of one leaf does not drop a newer one of another
+    /// (the receiver orders states per leaf by tick). Control types stay reliable.
+    Unsequenced,
 };
 
 class Messenger

@@ -32,8 +32,13 @@
 ///   modes along partition borders until they diverge; so owned nodes next to held values get the
 ///   damping that keeps such a spring passive (sum of |edge weight| x |value age|; docs/session.md
 ///   §4.2).
-/// - Streaming: owners send their leaves' (u, v) to every peer at `stream_rate_hz`; every peer
-///   (viewers included) displays the whole object from its own leaves and what it received.
+/// - Streaming: owners send their leaves' (u, v) to every peer at `stream_rate_hz`, unsequenced;
+///   every peer (viewers included) displays the whole object from its own leaves and the newest
+///   state received per leaf (by partition epoch, then tick), and draws `view_u/v`: the same with
+///   the others' leaves interpolated in time at a per-sender playout clock (docs/session.md §5.3).
+/// - Loss and latency (§4.3): fast coupling bounds halo staleness (`max_halo_age_s`: a frame whose
+///   Dirichlet values are older waits), quiescent compressed leaves are refreshed so rest is not
+///   mistaken for silence, and a joiner's clock starts half a round trip after the welcome's.
 /// - Compressed streaming (`stream_encoding = QuantisedDelta`, docs/protocol.md §5.5): u and v are
 ///   quantised to power-of-two steps; each receiver acknowledges the leaf states it holds (Ack,
 ///   at `ack_rate_hz`), and the owner codes each leaf against the newest state that receiver
@@ -74,6 +79,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -121,7 +127,22 @@ struct SessionSettings
     /// tests/session/halo_rings_test.cpp; 6 also covers a scheme whose every stage reads the
     /// previous one, at ~10 % more work per peer at level 8 with 2 peers).
     int halo_rings = 6;
-    double frame_rate_hz = 60.0;    ///< fast mode: restricted advances per second, > 0
+    double frame_rate_hz = 60.0;  ///< fast mode: restricted advances per second, > 0
+    /// Fast mode: the bound on halo staleness, s (0: none). A frame steps only if every streamed
+    /// state that holds a Dirichlet value next to an owned node is at most this old at the
+    /// frame's end; otherwise the peer holds its clock (SessionStats::stalled_frames) and catches
+    /// up, frame by frame, once fresher states arrive (docs/session.md §4.3).
+    double max_halo_age_s = 0.5;
+    /// A leaf whose state has not changed since the receiver acknowledged it (QuantisedDelta's
+    /// quiescent leaves) is still re-sent, as an all-zero delta of a few bytes, when this long
+    /// (s, simulated) has passed since it was last sent, so that receivers can tell a leaf at
+    /// rest from a lost one and the halo age stays bounded (0: never, quiescent leaves cost
+    /// nothing).
+    double quiescent_refresh_s = 0.25;
+    /// Smooth display (view_u/view_v): the leaves this peer does not compute are shown
+    /// interpolated between the states received, at a playout time per sender delayed just
+    /// enough to have a state on each side (docs/session.md §5.3). false: view = display.
+    bool interpolate_view = true;
     std::string name = "peer";      ///< 1..32 printable ASCII
     std::uint16_t listen_port = 0;  ///< announced in Hello; 0: the port the master sees
     std::uint32_t session_id = 0;   ///< master only; 0 picks a fixed non-zero id
@@ -161,6 +182,16 @@ struct SessionStats
     /// Exact mode: leaves taken over from a lost peer, started from their last streamed state.
     std::uint64_t adopted_leaves = 0;
     std::uint64_t promotions = 0;  ///< times this peer became master after the master was lost
+    // Loss and latency (docs/session.md §4.3, §5.3).
+    /// Fast mode: age of the oldest Dirichlet value next to an owned node at the last frame
+    /// stepped, and the largest such age of any frame stepped, s (<= max_halo_age_s when set).
+    double border_age_s = 0.0;
+    double max_border_age_s = 0.0;
+    std::uint64_t stalled_frames = 0;  ///< fast mode: frames held back by max_halo_age_s
+    /// Smooth display: how far the playout time lags the newest state received, s (the largest
+    /// over senders; 0 when nothing is interpolated).
+    double view_delay_s = 0.0;
+    std::uint64_t stale_states = 0;  ///< LeafStates older than the one shown (reordered, late)
 };
 
 class Session
@@ -231,6 +262,15 @@ public:
     /// (ghost ring 1, twins synced).
     [[nodiscard]] const core::Field<double>& display_u() const noexcept { return display_u_; }
     [[nodiscard]] const core::Field<double>& display_v() const noexcept { return display_v_; }
+    /// What to draw: display_u/v with the leaves this peer does not compute interpolated in
+    /// time between the states received (SessionSettings::interpolate_view; equal to the display
+    /// when off). Updated by advance(). The display holds the newest values, which fast coupling
+    /// uses as Dirichlet values; the view lags them by view_delay_s and moves smoothly.
+    [[nodiscard]] const core::Field<double>& view_u() const noexcept;
+    [[nodiscard]] const core::Field<double>& view_v() const noexcept;
+    /// Per leaf (LeafGraph order): the owner's simulation time of the state shown in the view,
+    /// s (own leaves: this peer's time; leaves never received: 0).
+    [[nodiscard]] std::span<const double> view_time() const noexcept;
     /// Ids of the other peers this one knows (connected or not yet).
     [[nodiscard]] std::vector<net::PeerId> peers() const;
     [[nodiscard]] SessionStats stats() const;

@@ -1,0 +1,314 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+// Sessions under loss and latency (issue 7, docs/session.md §4.3 and §5.3): three participants
+// and a viewer over simulated links with 5 % loss, 100 ms one-way delay, 20 ms of jitter,
+// duplication and reordering, for 10 s of simulated time. Fast coupling keeps going with its
+// halo staleness bounded; every peer's view of the leaves it does not compute stays within the
+// documented error of the owners' current states; the view moves more smoothly than the newest
+// states as they arrive. Exact coupling keeps its lockstep and stays equal to a single process.
+// Loops are bounded by counts; the clock is virtual.
+
+#include <gtest/gtest.h>
+
+#include "session_harness.h"
+
+#include <cstdio>
+#include <deque>
+
+namespace pliant::session::test
+{
+namespace
+{
+
+net::SimulatedNetworkSettings internet()
+{
+    net::SimulatedNetworkSettings ns;
+    ns.seed = 2026;
+    ns.link.latency_s = 0.100;
+    ns.link.jitter_s = 0.020;
+    ns.link.loss = 0.05;
+    ns.link.duplicate = 0.01;
+    ns.link.reorder = 0.02;
+    ns.link.reorder_delay_s = 0.020;
+    return ns;
+}
+
+const Session* owner_of(const Harness& h, net::PeerId id)
+{
+    for (const auto& p : h.peers)
+        if (p && p->id() == id)
+            return p.get();
+    return nullptr;
+}
+
+// The sum over frames of |second difference| of one node's value: how jerky it moves.
+struct Jerk
+{
+    std::deque<double> last;
+    double sum = 0.0;
+    void add(double x)
+    {
+        last.push_back(x);
+        if (last.size() > 3)
+            last.pop_front();
+        if (last.size() == 3)
+            sum += std::fabs(last[2] - 2.0 * last[1] + last[0]);
+    }
+};
+
+TEST(SessionLoss, FastSessionUnderLossAndLatencyStaysBoundedAndViewsStayWithinTheError)
+{
+    constexpr int level = 5;
+    constexpr double seconds = 10.0;
+    Harness h(internet());
+    SessionSettings set;
+    set.coupling = Coupling::Fast;
+    set.name = "master";
+    h.host(level, set);
+    const core::TetraGrid grid = core::TetraGrid::create(level).value();
+    const auto faces = static_cast<std::uint32_t>(grid.face_count());
+    for (int k = 1; k < 3; ++k)
+    {
+        set.name = "part";
+        Session& p = h.join(net::Role::Participant, set);
+        p.set_points_of_interest({net::Target{
+            net::TargetKind::Face, static_cast<std::uint32_t>(k) * faces / 2U, {0, 0, 0}, 0.0}});
+    }
+    set.name = "viewer";
+    Session& viewer = h.join(net::Role::Viewer, set);
+    ASSERT_TRUE(h.pump_until(
+        [&]
+        {
+            const auto owners = h.peers[0]->owners();
+            if (!viewer.ready())
+                return false;
+            for (std::size_t k = 1; k < 3; ++k)
+                if (!h.peers[k]->ready() ||
+                    std::find(owners.begin(), owners.end(), h.peers[k]->id()) == owners.end())
+                    return false;
+            return true;
+        },
+        40000))
+        << "joining over 100 ms links takes a few round trips";
+    // Let the first streamed states reach everybody before checking.
+    for (int k = 0; k < 1000; ++k)
+        h.pump_once(0.0005);
+
+    // The single process of the same drags, for the size of the motion.
+    auto model =
+        sim::MembraneModel::create(grid, scenes::sphere_grid(grid, 1.0), material()).value();
+    sim::MembraneState ref = sim::MembraneState::at_rest(grid);
+    sim::Rkf45Workspace ws(model, 1);
+    double max_ref = 0.0;
+
+    const int total = static_cast<int>(seconds * 60.0);
+    std::deque<double> recent_v;  // per frame: max |v| over every owner's owned nodes
+    double worst = 0.0;           // max over checks of |view - owner| / allowed
+    double worst_rel = 0.0;       // max |view - owner| / max |u| (what a user sees)
+    double worst_display_rel = 0.0;
+    double max_u = 0.0;
+    double max_view_age = 0.0;
+    std::size_t checks = 0;
+    Jerk view_jerk;
+    Jerk display_jerk;
+    const auto owners0 = h.peers[0]->owners();
+    const LeafGraph& graph = *h.peers[0]->leaf_graph();
+    // A node of the master's share, watched on the viewer.
+    core::GridCoord watched{};
+    for (std::size_t l = 0; l < graph.size(); ++l)
+        if (owners0[l] == h.peers[0]->id())
+            watched = grid.coord(graph.nodes(l)[graph.nodes(l).size() / 2]);
+    for (int f = 0; f < total; ++f)
+    {
+        std::vector<sim::Force> forces;
+        for (int k = 0; k < 3; ++k)
+        {
+            const net::UserForce u = turning_drag(k, h.now);
+            h.peers[static_cast<std::size_t>(k)]->set_forces({u});
+            forces.push_back(to_sim_force(u));
+        }
+        for (int k = 0; k < 17; ++k)
+            (void)sim::step(model, ref, ws, forces);
+        for (const core::NodeIndex n : grid.node_of_unique())
+        {
+            const core::GridCoord c = grid.coord(n);
+            max_ref = std::max(max_ref, std::fabs(ref.u.at(c.x, c.y)));
+        }
+        for (int k = 0; k < 33; ++k)
+            h.pump_once(0.0005);
+
+        const auto owners = h.peers[0]->owners();
+        double vmax = 0.0;
+        double umax = 0.0;
+        for (const core::NodeIndex n : grid.node_of_unique())
+        {
+            const core::GridCoord c = grid.coord(n);
+            const Session* o = owner_of(h, owners[graph.leaf_of(n)]);
+            ASSERT_NE(o, nullptr) << "every node is owned by a live participant";
+            vmax = std::max(vmax, std::fabs(o->state().v.at(c.x, c.y)));
+            umax = std::max(umax, std::fabs(o->state().u.at(c.x, c.y)));
+        }
+        ASSERT_TRUE(std::isfinite(umax));
+        max_u = std::max(max_u, umax);
+        recent_v.push_back(vmax);
+        if (recent_v.size() > 60)  // the last second
+            recent_v.pop_front();
+        view_jerk.add(viewer.view_u().at(watched.x, watched.y));
+        display_jerk.add(viewer.display_u().at(watched.x, watched.y));
+        if (f < 60 || f % 10 != 0)
+            continue;
+        // The view of a leaf is a convex combination of the owner's states at two times <= the
+        // owner's time t, at view_time; so |view - u_owner(t)| <= V (t - view_time), V the
+        // largest |v| since then (here over the last second, and t - view_time <= 1 s).
+        const double V = *std::max_element(recent_v.begin(), recent_v.end());
+        for (std::size_t k = 0; k < h.peers.size(); ++k)
+        {
+            const Session& p = *h.peers[k];
+            for (const core::NodeIndex n : grid.node_of_unique())
+            {
+                const std::size_t l = graph.leaf_of(n);
+                if (owners[l] == p.id())
+                    continue;
+                const Session* o = owner_of(h, owners[l]);
+                const core::GridCoord c = grid.coord(n);
+                const double age = o->time() - p.view_time()[l];
+                ASSERT_LE(age, 1.0) << "peer " << k << " leaf " << l;
+                max_view_age = std::max(max_view_age, age);
+                const double err = std::fabs(p.view_u().at(c.x, c.y) - o->state().u.at(c.x, c.y));
+                const double allowed = V * std::max(age, 0.0) + 1e-9;
+                worst = std::max(worst, err / allowed);
+                worst_rel = std::max(worst_rel, err / umax);
+                worst_display_rel = std::max(
+                    worst_display_rel,
+                    std::fabs(p.display_u().at(c.x, c.y) - o->state().u.at(c.x, c.y)) / umax);
+                ++checks;
+            }
+        }
+    }
+    SessionStats sum;
+    for (const auto& p : h.peers)
+    {
+        const SessionStats st = p->stats();
+        sum.stalled_frames += st.stalled_frames;
+        sum.stale_states += st.stale_states;
+        sum.max_border_age_s = std::max(sum.max_border_age_s, st.max_border_age_s);
+        std::printf("peer %u: max border age %.3f s, time %.3f s\n", p->id().value,
+                    st.max_border_age_s, p->time());
+        sum.view_delay_s = std::max(sum.view_delay_s, st.view_delay_s);
+        sum.bad_datagrams += st.bad_datagrams;
+    }
+    const net::SimulatedTotals nt = h.net.totals();
+    std::printf(
+        "loss %llu, duplicated %llu, reordered %llu of %llu transmissions; stale leaf "
+        "states %llu; max border age %.3f s; stalled frames %llu; view delay %.3f s, "
+        "oldest view %.3f s; view - owner: worst %.3f of the bound, %.3e of max |u| "
+        "(newest display %.3e); max |u| %.4f m (single process %.4f m); jerk of a "
+        "viewed node: view %.3e, display %.3e\n",
+        static_cast<unsigned long long>(nt.lost), static_cast<unsigned long long>(nt.duplicated),
+        static_cast<unsigned long long>(nt.reordered),
+        static_cast<unsigned long long>(nt.transmissions),
+        static_cast<unsigned long long>(sum.stale_states), sum.max_border_age_s,
+        static_cast<unsigned long long>(sum.stalled_frames), sum.view_delay_s, max_view_age, worst,
+        worst_rel, worst_display_rel, max_u, max_ref, view_jerk.sum, display_jerk.sum);
+    EXPECT_GT(checks, 0u);
+    EXPECT_GT(nt.lost, 0u);
+    EXPECT_GT(nt.duplicated, 0u);
+    EXPECT_GT(nt.reordered, 0u);
+    EXPECT_GT(sum.stale_states, 0u) << "late duplicates and reordered states were ignored";
+    EXPECT_EQ(sum.bad_datagrams, 0u);
+    EXPECT_LE(worst, 1.0) << "a view is never further from the owner than V x its age";
+    EXPECT_LE(sum.max_border_age_s, set.max_halo_age_s) << "staleness bounded";
+    EXPECT_LE(sum.stalled_frames, static_cast<std::uint64_t>(total / 20))
+        << "the bound holds without stopping the session";
+    for (std::size_t k = 0; k < 3; ++k)
+        EXPECT_GT(h.peers[k]->time(), h.peers[0]->time() - 0.5) << "every participant kept up";
+    EXPECT_GT(max_ref, 0.01);
+    EXPECT_LE(max_u, 1.5 * max_ref) << "no divergence at the borders";
+    EXPECT_LT(view_jerk.sum, display_jerk.sum) << "the interpolated view moves more smoothly";
+}
+
+TEST(SessionLoss, ExactLockstepUnderLossAndLatencyStaysEqualToASingleProcess)
+{
+    // The lockstep's halos and heartbeats are reliable: loss costs retransmissions and latency
+    // costs ticks per second (one tick per one-way delay at best), never exactness.
+    constexpr int level = 4;
+    constexpr std::uint64_t ticks = 40;
+    Harness h(internet());
+    SessionSettings set;
+    set.max_ticks = ticks;
+    set.name = "master";
+    h.host(level, set);
+    for (int k = 1; k < 3; ++k)
+    {
+        set.name = "part";
+        Session& p = h.join(net::Role::Participant, set);
+        p.set_points_of_interest({net::Target{
+            net::TargetKind::Face, static_cast<std::uint32_t>(100 * k), {0, 0, 0}, 0.0}});
+    }
+    set.name = "viewer";
+    Session& viewer = h.join(net::Role::Viewer, set);
+    const std::vector<Scheduled> sched{{0, 5, {point_push(0.0, 0.0, 1.0, 0.4, 0.5)}},
+                                       {1, 10, {face_pull(100, 0.7)}},
+                                       {2, 20, {face_pull(200, -0.4)}}};
+    // The clock stands still until everybody is partitioned (a master alone would step on).
+    auto partitioned = [&]
+    {
+        const auto owners = h.peers[0]->owners();
+        for (std::size_t k = 1; k < 3; ++k)
+            if (std::find(owners.begin(), owners.end(), h.peers[k]->id()) == owners.end())
+                return false;
+        return viewer.ready();
+    };
+    for (int k = 0; k < 40000 && !partitioned(); ++k)
+    {
+        for (auto& p : h.peers)
+            p->poll();
+        for (auto& p : h.peers)
+            p->advance(0.0);
+        h.net.advance(0.0005);
+    }
+    ASSERT_TRUE(partitioned());
+    for (const Scheduled& s : sched)
+        h.peers[s.sender]->set_forces(s.forces, s.from);
+    const double start = static_cast<double>(h.net.now_us()) * 1e-6;
+    double clock = 0.0;
+    for (int k = 0; k < 200000 && (h.peers[0]->tick() < ticks || h.peers[1]->tick() < ticks ||
+                                   h.peers[2]->tick() < ticks);
+         ++k)
+    {
+        for (auto& p : h.peers)
+            p->poll();
+        for (auto& p : h.peers)
+            p->advance(clock);
+        h.net.advance(0.0005);
+        clock += 0.0005;
+    }
+    for (std::size_t k = 0; k < 3; ++k)
+        ASSERT_EQ(h.peers[k]->tick(), ticks) << "the lockstep went on";
+    h.now = clock;
+    // The viewer shows the final states once the last streams arrive.
+    for (int k = 0; k < 2000; ++k)
+        h.pump_once(0.0005);
+    const sim::MembraneState ref = reference_run(level, ticks, sched);
+    const core::TetraGrid grid = core::TetraGrid::create(level).value();
+    const auto owners = h.peers[0]->owners();
+    const LeafGraph& graph = *h.peers[0]->leaf_graph();
+    for (std::size_t k = 0; k < 3; ++k)
+    {
+        const Session& p = *h.peers[k];
+        const Diff d =
+            compare(grid, p.state().u, ref.u,
+                    [&](core::NodeIndex n) { return owners[graph.leaf_of(n)] == p.id(); });
+        EXPECT_LE(d.relative(), 1e-12) << "peer " << k;
+    }
+    const Diff dv = compare(grid, viewer.view_u(), ref.u, {});
+    EXPECT_LE(dv.relative(), 1e-12) << "the viewer's view settles on the final state";
+    std::printf(
+        "exact, 3 participants + viewer over 100 ms / 5 %% loss links: %llu ticks in "
+        "%.1f s, %llu retransmissions\n",
+        static_cast<unsigned long long>(ticks), static_cast<double>(h.net.now_us()) * 1e-6 - start,
+        static_cast<unsigned long long>(h.net.totals().retransmitted));
+}
+
+}  // namespace
+}  // namespace pliant::session::test
