@@ -98,4 +98,23 @@ void ProgressBar::update(std::string_view phase, double fraction) noexcept
     }
 }
 
+namespace
+{
+volatile std::sig_atomic_t g_interrupted = 0;
+
+extern "C" void on_interrupt(int signal_number)
+{
+    g_interrupted = 1;
+    std::signal(signal_number, SIG_DFL);  // a second Ctrl-C ends the process at once
+}
+}  // namespace
+
+const volatile std::sig_atomic_t* install_interrupt_flag()
+{
+    g_interrupted = 0;
+    std::signal(SIGINT, on_interrupt);
+    std::signal(SIGTERM, on_interrupt);
+    return &g_interrupted;
+}
+
 }  // namespace pliant::cli

@@ -11,6 +11,7 @@
 #include <CLI/CLI.hpp>
 
 #include <chrono>
+#include <csignal>
 #include <filesystem>
 #include <string>
 
@@ -32,6 +33,11 @@ inline constexpr int k_exit_failure = 3;
 /// Sets spdlog's level from the global options (warn by default, debug with --verbose, error
 /// with --quiet). Messages go to stderr; results go to stdout.
 void configure_logging(const GlobalOptions& options);
+
+/// Makes SIGINT (Ctrl-C) and SIGTERM set the returned flag instead of killing the process, so a
+/// long-running command (host, join) can wind down cleanly: a participant hands its leaves over,
+/// the master ends the session for everyone. A second signal kills as usual.
+const volatile std::sig_atomic_t* install_interrupt_flag();
 
 /// Logs an error and returns its exit code.
 int report(const core::Error& error);

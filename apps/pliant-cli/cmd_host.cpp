@@ -128,6 +128,7 @@ int run_host(const HostOptions& opt)
     spdlog::info("hosting level {} ({} mode) on port {}", grid->level(), opt.mode, bound->port);
     std::printf("hosting on port %u\n", static_cast<unsigned>(bound->port));
     std::fflush(stdout);
+    run.stop = install_interrupt_flag();  // Ctrl-C: leave or end cleanly
     auto summary = session::run_peer(**s, run);
     if (!summary)
         return report(summary.error());
@@ -153,7 +154,8 @@ void add_host_command(CLI::App& app, const GlobalOptions& global)
         "  pliant host spot.pgrid --port 9000 --mode fast --script grab.txt\n"
         "  pliant host --key-file session.key     # head -c 32 /dev/urandom > session.key\n"
         "--passphrase / --key-file / PLIANT_PASSPHRASE: every datagram authenticated and\n"
-        "encrypted; peers without the same secret are refused (docs/operations.md).");
+        "encrypted; peers without the same secret are refused (docs/operations.md).\n"
+        "Ctrl-C (or SIGTERM) ends the session cleanly for every peer before --duration.");
     cmd->add_option("GRID", opt->grid,
                     "Rest geometry (.pgrid from `pliant remesh`); omitted: a sphere of --level");
     cmd->add_option("-l,--level", opt->level, "Sphere level when GRID is omitted")

@@ -96,6 +96,7 @@ int run_join(const JoinOptions& opt)
         *transport, *master, opt.viewer ? net::Role::Viewer : net::Role::Participant, settings);
     if (!s)
         return report(s.error());
+    run.stop = install_interrupt_flag();  // Ctrl-C: leave or end cleanly
     auto summary = session::run_peer(**s, run);
     if (!summary)
         return report(summary.error());
@@ -128,7 +129,8 @@ void add_join_command(CLI::App& app, const GlobalOptions& global)
         "  pliant join 192.168.1.20:7777 --viewer --duration 30\n"
         "  PLIANT_PASSPHRASE='long shared secret' pliant join 203.0.113.5:7777\n"
         "Use the master's --passphrase/--key-file (or PLIANT_PASSPHRASE): without one the\n"
-        "session is unencrypted; with a different one the master refuses the connection.");
+        "session is unencrypted; with a different one the master refuses the connection.\n"
+        "Ctrl-C (or SIGTERM) leaves cleanly: a participant hands its leaves over first.");
     cmd->add_option("MASTER", opt->master, "The master's address HOST:PORT")->required();
     cmd->add_flag("--viewer", opt->viewer, "Only watch (simulate nothing)");
     cmd->add_option("-p,--port", opt->port, "UDP port to listen on for other peers (0: any)")

@@ -3,7 +3,8 @@
 #pragma once
 
 // The state-stream options `pliant host` and `pliant join` share (--compress, --cap,
-// --stream-coarsen; docs/session.md §5.1, §5.2): declared once, applied to SessionSettings once.
+// --stream-coarsen, --max-halo-age; docs/session.md §4.3, §5.1, §5.2): declared once, applied to
+// SessionSettings once.
 
 #include <pliant/session/session.h>
 
@@ -17,6 +18,7 @@ struct StreamOptions
     bool compress = false;   ///< quantised-delta leaf states (docs/protocol.md §5.5)
     double cap_mbit = 0.0;   ///< per-peer cap on leaf states and acks, Mbit/s (0: none)
     int stream_coarsen = 0;  ///< leaf states this many levels coarser (docs/session.md §5.2)
+    double max_halo_age_s = session::SessionSettings{}.max_halo_age_s;  ///< fast mode, §4.3
 };
 
 inline void add_stream_options(CLI::App* cmd, StreamOptions& opt)
@@ -33,6 +35,12 @@ inline void add_stream_options(CLI::App* cmd, StreamOptions& opt)
                     ">= 3, K <= 1 at level 2 (docs/session.md §5.2)")
         ->check(CLI::Range(0, 2))
         ->capture_default_str();
+    cmd->add_option("--max-halo-age", opt.max_halo_age_s,
+                    "Fast mode: the oldest a neighbour's streamed state may be when this peer\n"
+                    "steps [s]; older, the peer waits for fresher states (0: no bound;\n"
+                    "docs/session.md §4.3)")
+        ->check(CLI::Range(0.0, 60.0))
+        ->capture_default_str();
 }
 
 inline void apply_stream_options(const StreamOptions& opt, session::SessionSettings& settings)
@@ -41,6 +49,7 @@ inline void apply_stream_options(const StreamOptions& opt, session::SessionSetti
         settings.stream_encoding = net::ValueEncoding::QuantisedDelta;
     settings.bandwidth_cap_mbit_s = opt.cap_mbit;
     settings.stream_coarsen = opt.stream_coarsen;
+    settings.max_halo_age_s = opt.max_halo_age_s;
 }
 
 }  // namespace pliant::cli

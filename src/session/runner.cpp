@@ -180,6 +180,13 @@ core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
         const double now = elapsed();
         if (now >= options.duration_s || session.left())
             break;
+        if (options.stop != nullptr && *options.stop != 0)
+        {
+            spdlog::info("interrupted: {}", session.role() == SessionRole::Master
+                                                ? "ending the session"
+                                                : "leaving the session");
+            break;
+        }
         session.poll();
         bool forces_changed = false;
         while (next_event < options.script.size() && options.script[next_event].time <= now &&

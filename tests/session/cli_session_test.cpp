@@ -7,6 +7,7 @@
 
 #include "support/test_paths.h"
 
+#include <chrono>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
@@ -163,6 +164,42 @@ TEST(SessionCli, KillingAParticipantThenTheMasterLeavesTheOthersRunning)
     }
     for (std::size_t k = v.size() - 4; k < v.size() - 1; ++k)
         EXPECT_GT(value(v[k], "bytes_in"), 1000.0) << "row " << k;
+}
+
+// Ctrl-C (SIGINT) or SIGTERM ends `pliant join` and `pliant host` cleanly long before their
+// --duration: the participant leaves (its summary is printed, exit 0), then the master ends the
+// session, and a viewer still connected sees the end and exits 0 too. Bounded: the durations
+// are 30 s, the whole run takes about 4 s, and `timeout` kills anything left after 20 s.
+TEST(SessionCli, InterruptLeavesAndEndsTheSessionCleanly)
+{
+    const auto dir = pliant::test::scratch_dir("session_cli_interrupt");
+    const int port = 20000 + static_cast<int>((getpid() + 3001) % 19990);
+    const std::string exe = PLIANT_EXE;
+    const std::string d = dir.string();
+    const std::string p = std::to_string(port);
+    const std::string cmd =
+        "cd '" + d + "' && rm -f *.rc *.csv *.log; timeout -s KILL 20 '" + exe +
+        "' host --level 4 --port " + p + " --duration 30 > host.log 2>&1 & HOST=$!; sleep 0.3; " +
+        "timeout -s KILL 20 '" + exe + "' join 127.0.0.1:" + p +
+        " --duration 30 --stats a.csv > a.log 2>&1 & A=$!; " + "(timeout -s KILL 20 '" + exe +
+        "' join 127.0.0.1:" + p +
+        " --viewer --duration 30 > v.log 2>&1; echo $? > v.rc) & sleep 1.5; kill -INT $A; " +
+        "wait $A; echo $? > a.rc; sleep 0.5; kill -TERM $HOST; wait $HOST; echo $? > host.rc; " +
+        "wait";
+    const auto t0 = std::chrono::steady_clock::now();
+    ASSERT_EQ(std::system(cmd.c_str()), 0);
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const std::string host_log = read(dir / "host.log");
+    if (host_log.find("bind") != std::string::npos && read(dir / "host.rc") != "0\n")
+        GTEST_SKIP() << "cannot bind UDP port " << port << " on this machine: " << host_log;
+    EXPECT_EQ(read(dir / "a.rc"), "0\n") << read(dir / "a.log");
+    EXPECT_EQ(read(dir / "host.rc"), "0\n") << host_log;
+    EXPECT_EQ(read(dir / "v.rc"), "0\n") << read(dir / "v.log");
+    EXPECT_NE(read(dir / "a.log").find("join (id"), std::string::npos) << read(dir / "a.log");
+    EXPECT_NE(host_log.find("host: "), std::string::npos) << host_log;
+    EXPECT_LT(seconds, 15.0) << "the interrupts ended the peers, not their --duration";
+    EXPECT_GE(rows(dir / "a.csv").size(), 1U) << "the stats file got its final row";
 }
 
 }  // namespace

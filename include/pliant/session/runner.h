@@ -23,6 +23,7 @@
 #include <pliant/net/message.h>
 #include <pliant/session/session.h>
 
+#include <csignal>
 #include <filesystem>
 #include <string_view>
 #include <vector>
@@ -56,6 +57,9 @@ struct RunOptions
     std::vector<ScriptEvent> script;
     std::filesystem::path stats_csv;  ///< empty: none
     double idle_sleep_s = 0.0002;     ///< sleep per loop iteration (keeps a core free)
+    /// When set and non-zero (a signal handler's flag: Ctrl-C), the loop ends early and winds
+    /// down as at the end of the duration.
+    const volatile std::sig_atomic_t* stop = nullptr;
 };
 
 struct RunSummary
