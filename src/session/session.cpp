@@ -848,7 +848,10 @@ struct Session::Impl
         std::vector<std::pair<std::uint16_t, const ForceEntry*>> entries;
         entries.emplace_back(s.id_.value, active(my_forces, tick));
         for (const auto& [id, p] : peers)
-            entries.emplace_back(id, active(p.forces, tick));
+            // A departed peer's grab ends with it in fast coupling. Exact coupling keeps applying
+            // its last list, as its replay does (docs/session.md §6, limits).
+            if (!p.departed || s.coupling_ == Coupling::Exact)
+                entries.emplace_back(id, active(p.forces, tick));
         std::sort(entries.begin(), entries.end(),
                   [](const auto& a, const auto& b) { return a.first < b.first; });
         std::vector<sim::Force> out;
@@ -1069,6 +1072,7 @@ struct Session::Impl
             const PartitionEntry* prev = t > exact_from ? partition_at(t - 1) : partition_at(t);
             refresh_exact_sets(prev, partition_at(t));
             const auto forces = forces_at(t);
+            counters.active_forces = forces.size();
             sim::StepOptions opt;
             opt.owned = integrate_runs;
             const auto t0 = std::chrono::steady_clock::now();
@@ -1264,7 +1268,9 @@ struct Session::Impl
             opt.owned = owned_regions;
             const auto t0 = std::chrono::steady_clock::now();
             // sim::advance_to's loop, with the interface damping after every accepted step.
-            sim::set_forces(*s.model_, *ws, forces_at(s.state_.tick));
+            const auto forces = forces_at(s.state_.tick);
+            counters.active_forces = forces.size();
+            sim::set_forces(*s.model_, *ws, forces);
             const sim::MembraneSettings& ms = s.model_->settings();
             const double slack = 1e-12 * std::max(1.0, std::fabs(target));
             for (int k = 0; k < 100000; ++k)

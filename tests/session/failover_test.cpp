@@ -245,9 +245,15 @@ void run_failover(Coupling c, bool lossy = false, std::uint64_t seed = 1)
     for (const std::size_t k : alive(h))
         EXPECT_EQ(h.peers[k]->master(), net::PeerId{0});
 
-    // (a) Participant 3 vanishes: the master re-partitions, the run goes on.
+    for (const std::size_t k : {0U, 1U, 2U, 3U})
+        EXPECT_EQ(h.peers[k]->stats().active_forces, 3U) << "three grabs act everywhere";
+
+    // (a) Participant 3 vanishes: the master re-partitions, the run goes on. In fast coupling
+    // its grab ends with it; exact coupling keeps it, as its replay would.
     const auto lost3 = lose(h, 3, 0, c);
     expect_fully_owned(h, 0);
+    for (const std::size_t k : {0U, 1U, 2U})
+        EXPECT_EQ(h.peers[k]->stats().active_forces, c == Coupling::Fast ? 2U : 3U) << "peer " << k;
     if (c == Coupling::Exact)
     {
         std::uint64_t adopted = 0;
@@ -292,7 +298,10 @@ void run_failover(Coupling c, bool lossy = false, std::uint64_t seed = 1)
     // Every leaf shown was updated recently (the old master's leaves by their new owners).
     EXPECT_LT(viewer.stats().halo_age_s, 0.1);
     for (const std::size_t k : {1U, 2U})
+    {
         EXPECT_FALSE(h.peers[k]->left());
+        EXPECT_EQ(h.peers[k]->stats().active_forces, c == Coupling::Fast ? 1U : 3U) << "peer " << k;
+    }
 
     // (c) The successor admits a joiner that knows its address.
     Session& late = h.join(net::Role::Participant, settings_for(c, "late"), h.addresses[succ]);

@@ -192,6 +192,9 @@ struct SessionStats
     /// over senders; 0 when nothing is interpolated).
     double view_delay_s = 0.0;
     std::uint64_t stale_states = 0;  ///< LeafStates older than the one shown (reordered, late)
+    /// User forces acting in this peer's last step (every peer's grabs; fast coupling drops a
+    /// departed peer's, exact coupling keeps them, docs/session.md §6).
+    std::size_t active_forces = 0;
 };
 
 class Session
