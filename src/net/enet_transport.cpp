@@ -222,6 +222,8 @@ public:
             c.connected = true;
             enet_peer_timeout(ev.peer, settings_.timeout_limit, settings_.timeout_min_ms,
                               settings_.timeout_max_ms);
+            if (!settings_.throttle_unreliable)  // the throttle starts at its scale: keep it
+                enet_peer_throttle_configure(ev.peer, ENET_PEER_PACKET_THROTTLE_INTERVAL, 0, 0);
             TransportEvent out;
             out.kind = TransportEvent::Kind::Connected;
             out.peer = handle;

@@ -136,8 +136,8 @@ core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
             return core::fail(core::ErrorCode::IoError,
                               "cannot write stats file " + options.stats_csv.string());
         csv << "time_s,bytes_in,bytes_out,packets_in,packets_out,drops,steps,step_ms,"
-               "owned_nodes,halo_age_s,tick,peers,border_age_s,stalled_frames,view_delay_s,"
-               "stale_states\n";
+               "owned_nodes,halo_age_s,tick,peers,border_age_s,stalled_s,view_delay_s,"
+               "stale_states,stale_frames\n";
     }
     using clock = std::chrono::steady_clock;
     const auto t0 = clock::now();
@@ -168,8 +168,9 @@ core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
                 << s.packets_sent - last.packets_sent << ',' << s.bad_datagrams - last.bad_datagrams
                 << ',' << s.steps - last.steps << ',' << step_ms << ',' << s.owned_nodes << ','
                 << s.halo_age_s << ',' << session.tick() << ',' << session.peers().size() << ','
-                << s.border_age_s << ',' << s.stalled_frames - last.stalled_frames << ','
-                << s.view_delay_s << ',' << s.stale_states - last.stale_states << '\n';
+                << s.border_age_s << ',' << s.stalled_s - last.stalled_s << ',' << s.view_delay_s
+                << ',' << s.stale_states - last.stale_states << ','
+                << s.stale_frames - last.stale_frames << '\n';
             csv.flush();
         }
         last = s;

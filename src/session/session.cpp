@@ -248,8 +248,9 @@ bool valid(const SessionSettings& s)
            s.v_step_exponent >= net::k_min_step_exponent &&
            s.v_step_exponent <= net::k_max_step_exponent && s.bandwidth_cap_mbit_s >= 0.0 &&
            s.interest_boost >= 0.0 && s.max_halo_age_s >= 0.0 && std::isfinite(s.max_halo_age_s) &&
-           s.quiescent_refresh_s >= 0.0 && std::isfinite(s.quiescent_refresh_s) &&
-           s.halo_rings >= 3 && !s.name.empty() && s.name.size() <= net::k_max_name_length;
+           s.max_stall_s >= 0.0 && std::isfinite(s.max_stall_s) && s.quiescent_refresh_s >= 0.0 &&
+           std::isfinite(s.quiescent_refresh_s) && s.halo_rings >= 3 && !s.name.empty() &&
+           s.name.size() <= net::k_max_name_length;
 }
 
 core::Result<void> check_coarsen(const SessionSettings& settings, const char* who)
@@ -452,6 +453,7 @@ struct Session::Impl
     std::map<std::uint16_t, std::vector<std::uint32_t>> halo_out;  // receiver -> nodes
     std::uint32_t fast_epoch = 0;
     std::vector<char> fast_mine;  // fast: owned_mask of fast_mine_epoch
+    double stall_since = -1.0;    // fast: our clock when the current hold began (-1: none)
     std::uint32_t fast_mine_epoch = std::numeric_limits<std::uint32_t>::max();
     std::vector<core::Region> owned_regions;  // fast: own leaves
     // Fast: the coupling edges (owned node, Dirichlet neighbour) and their interface damping
@@ -1239,7 +1241,20 @@ struct Session::Impl
             // Dirichlet values: the newest displayed state of every node not owned.
             if (fast_mine_epoch != (p != nullptr ? p->epoch : 0))
             {
-                fast_mine = owned_mask(p, s.id_);
+                std::vector<char> now_mine = owned_mask(p, s.id_);
+                // Leaves we gain continue from the newest state streamed for them (what we
+                // displayed), not from whatever our integrated state held there.
+                for (int y = 0; y < g.ny(); ++y)
+                    for (int x = 0; x < g.nx(); ++x)
+                    {
+                        const std::size_t c = g.canonical(g.index(x, y)).value;
+                        if (now_mine[c] != 0 && (fast_mine.empty() || fast_mine[c] == 0))
+                        {
+                            s.state_.u.at(x, y) = s.display_u_.at(x, y);
+                            s.state_.v.at(x, y) = s.display_v_.at(x, y);
+                        }
+                    }
+                fast_mine = std::move(now_mine);
                 fast_mine_epoch = p != nullptr ? p->epoch : 0;
             }
             const std::vector<char>& mine = fast_mine;
@@ -1251,8 +1266,18 @@ struct Session::Impl
                 oldest = std::max(oldest, frame_end - leaf_time[l]);
             if (settings.max_halo_age_s > 0.0 && oldest > settings.max_halo_age_s)
             {
-                ++counters.stalled_frames;
-                break;
+                if (stall_since < 0.0)
+                    stall_since = last_now;
+                if (last_now - stall_since < settings.max_stall_s)
+                    break;  // hold the clock: fresher states are on their way
+                // A silent neighbour (gone, until the transport says so): step on with its last
+                // values rather than freeze; the interface damping grows with their age.
+                ++counters.stale_frames;
+            }
+            if (stall_since >= 0.0)
+            {
+                counters.stalled_s += last_now - stall_since;
+                stall_since = -1.0;
             }
             counters.border_age_s = oldest;
             counters.max_border_age_s = std::max(counters.max_border_age_s, oldest);
@@ -2044,6 +2069,7 @@ struct Session::Impl
         welcomed = true;
         welcome = w;
         welcome_tick = m.header.tick;
+        welcome_now = last_now;
         s.id_ = w.your_id;
         master_id = w.master_id;
         session_id = m.header.session;
@@ -2126,11 +2152,21 @@ struct Session::Impl
         std::fill(leaf_time.begin(), leaf_time.end(), welcome.time);
         std::fill(leaf_tick.begin(), leaf_tick.end(), welcome_tick);
         clock_offset = welcome.time - last_now;
-        // Fast mode: the welcome's time is half a round trip old by now; running that much
-        // behind the master would age every state we send it by as much (docs/session.md §4.3).
-        if (s.coupling_ == Coupling::Fast && master_handle)
-            if (const auto st = transport.stats(*master_handle))
-                clock_offset += std::clamp(0.5 * st->rtt_s, 0.0, 0.25);
+        if (s.coupling_ == Coupling::Fast)
+        {
+            // Fast mode runs on the master's clock: the welcome's time was the master's half a
+            // round trip before the Welcome arrived, and the blobs took a while since (seconds
+            // over a lossy link); starting from welcome.time now would leave this peer that far
+            // behind for the whole session, and age every state it sends (docs/session.md §4.3).
+            // The state is not stepped over the gap: the leaves we get start from the newest
+            // states streamed to us (fast_advance), the rest is held anyway.
+            double half_rtt = 0.0;
+            if (master_handle)
+                if (const auto st = transport.stats(*master_handle))
+                    half_rtt = std::clamp(0.5 * st->rtt_s, 0.0, 0.25);
+            clock_offset = welcome.time + half_rtt - welcome_now;
+            s.state_.time = last_now + clock_offset;
+        }
         clock_set = true;
         next_stream = last_now;
         next_frame = last_now;
@@ -2148,6 +2184,7 @@ struct Session::Impl
     }
 
     std::vector<std::pair<net::PeerHandle, net::Message>> early;  // before the model
+    double welcome_now = 0.0;  // our clock when the Welcome arrived
 
     void send_points()
     {
@@ -2665,8 +2702,12 @@ struct Session::Impl
                 pl.set = true;
             }
             pl.lead += k_view_leak * dt;
+            // A lead far above the one held is no jitter: the sender's clock jumped (it caught
+            // up after a hold, or is another peer's now); follow at once.
             if (pl.fresh)
-                pl.lead = std::min(pl.lead, pl.newest - now);
+                pl.lead = pl.newest - now > pl.lead + k_view_snap_s
+                              ? pl.newest - now
+                              : std::min(pl.lead, pl.newest - now);
             pl.fresh = false;
             const double target = pl.lead - margin;
             const double step = k_view_slew * dt;

@@ -55,7 +55,7 @@ Outcome run_drags(int level, int participants, double seconds, bool quantised = 
         set.name = "part";
         Session& p = h.join(net::Role::Participant, set);
         p.set_points_of_interest({net::Target{
-            net::TargetKind::Face, static_cast<std::uint32_t>(k) * faces / 2U, {0, 0, 0}, 0.0}});
+            net::TargetKind::Face, static_cast<std::uint32_t>(k) * faces / 3U, {0, 0, 0}, 0.0}});
     }
     EXPECT_TRUE(h.pump_until(
         [&]

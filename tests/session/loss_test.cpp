@@ -72,7 +72,7 @@ TEST(SessionLoss, FastSessionUnderLossAndLatencyStaysBoundedAndViewsStayWithinTh
         set.name = "part";
         Session& p = h.join(net::Role::Participant, set);
         p.set_points_of_interest({net::Target{
-            net::TargetKind::Face, static_cast<std::uint32_t>(k) * faces / 2U, {0, 0, 0}, 0.0}});
+            net::TargetKind::Face, static_cast<std::uint32_t>(k) * faces / 3U, {0, 0, 0}, 0.0}});
     }
     set.name = "viewer";
     Session& viewer = h.join(net::Role::Viewer, set);
@@ -189,7 +189,8 @@ TEST(SessionLoss, FastSessionUnderLossAndLatencyStaysBoundedAndViewsStayWithinTh
     for (const auto& p : h.peers)
     {
         const SessionStats st = p->stats();
-        sum.stalled_frames += st.stalled_frames;
+        sum.stalled_s += st.stalled_s;
+        sum.stale_frames += st.stale_frames;
         sum.stale_states += st.stale_states;
         sum.max_border_age_s = std::max(sum.max_border_age_s, st.max_border_age_s);
         std::printf("peer %u: max border age %.3f s, time %.3f s\n", p->id().value,
@@ -200,16 +201,16 @@ TEST(SessionLoss, FastSessionUnderLossAndLatencyStaysBoundedAndViewsStayWithinTh
     const net::SimulatedTotals nt = h.net.totals();
     std::printf(
         "loss %llu, duplicated %llu, reordered %llu of %llu transmissions; stale leaf "
-        "states %llu; max border age %.3f s; stalled frames %llu; view delay %.3f s, "
+        "states %llu; max border age %.3f s; clock held %.3f s; view delay %.3f s, "
         "oldest view %.3f s; view - owner: worst %.3f of the bound, %.3e of max |u| "
         "(newest display %.3e); max |u| %.4f m (single process %.4f m); jerk of a "
         "viewed node: view %.3e, display %.3e\n",
         static_cast<unsigned long long>(nt.lost), static_cast<unsigned long long>(nt.duplicated),
         static_cast<unsigned long long>(nt.reordered),
         static_cast<unsigned long long>(nt.transmissions),
-        static_cast<unsigned long long>(sum.stale_states), sum.max_border_age_s,
-        static_cast<unsigned long long>(sum.stalled_frames), sum.view_delay_s, max_view_age, worst,
-        worst_rel, worst_display_rel, max_u, max_ref, view_jerk.sum, display_jerk.sum);
+        static_cast<unsigned long long>(sum.stale_states), sum.max_border_age_s, sum.stalled_s,
+        sum.view_delay_s, max_view_age, worst, worst_rel, worst_display_rel, max_u, max_ref,
+        view_jerk.sum, display_jerk.sum);
     EXPECT_GT(checks, 0u);
     EXPECT_GT(nt.lost, 0u);
     EXPECT_GT(nt.duplicated, 0u);
@@ -218,8 +219,8 @@ TEST(SessionLoss, FastSessionUnderLossAndLatencyStaysBoundedAndViewsStayWithinTh
     EXPECT_EQ(sum.bad_datagrams, 0u);
     EXPECT_LE(worst, 1.0) << "a view is never further from the owner than V x its age";
     EXPECT_LE(sum.max_border_age_s, set.max_halo_age_s) << "staleness bounded";
-    EXPECT_LE(sum.stalled_frames, static_cast<std::uint64_t>(total / 20))
-        << "the bound holds without stopping the session";
+    EXPECT_EQ(sum.stale_frames, 0u) << "no neighbour fell silent";
+    EXPECT_LE(sum.stalled_s, 0.5) << "the bound holds without stopping the session";
     for (std::size_t k = 0; k < 3; ++k)
         EXPECT_GT(h.peers[k]->time(), h.peers[0]->time() - 0.5) << "every participant kept up";
     EXPECT_GT(max_ref, 0.01);

@@ -52,6 +52,12 @@ struct EnetSettings
     double connect_burst_total = 40.0;
     /// An incoming connection still unacknowledged after this is reset silently, ms.
     std::uint32_t half_open_timeout_ms = 1200;
+    /// ENet's packet throttle drops unreliable (and unsequenced) packets at the sender, at random,
+    /// whenever a round trip is slower than its recent mean: on a jittery link it thins the
+    /// state stream even when the link has room. Off by default (the throttle stays at "send
+    /// everything"): the session streams newest-wins states and has its own per-peer cap
+    /// (SessionSettings::bandwidth_cap_mbit_s). true: ENet's defaults.
+    bool throttle_unreliable = false;
 };
 
 /// Counters of the connection-attempt filter since open().

@@ -130,9 +130,15 @@ struct SessionSettings
     double frame_rate_hz = 60.0;  ///< fast mode: restricted advances per second, > 0
     /// Fast mode: the bound on halo staleness, s (0: none). A frame steps only if every streamed
     /// state that holds a Dirichlet value next to an owned node is at most this old at the
-    /// frame's end; otherwise the peer holds its clock (SessionStats::stalled_frames) and catches
-    /// up, frame by frame, once fresher states arrive (docs/session.md §4.3).
+    /// frame's end; otherwise the peer holds its clock (up to max_stall_s) and catches
+    /// up, frame by frame, once fresher states arrive (docs/session.md §4.3;
+    /// SessionStats::stalled_s).
     double max_halo_age_s = 0.5;
+    /// Fast mode: the longest a peer holds its clock for fresher states, s (wall time, as the
+    /// caller's clock). Past it, a neighbour is taken as silent (crashed or cut off, until the
+    /// transport reports it lost, 5-30 s with ENet) and the peer steps on with its last values
+    /// (SessionStats::stale_frames) instead of freezing.
+    double max_stall_s = 1.0;
     /// A leaf whose state has not changed since the receiver acknowledged it (QuantisedDelta's
     /// quiescent leaves) is still re-sent, as an all-zero delta of a few bytes, when this long
     /// (s, simulated) has passed since it was last sent, so that receivers can tell a leaf at
@@ -187,7 +193,8 @@ struct SessionStats
     /// stepped, and the largest such age of any frame stepped, s (<= max_halo_age_s when set).
     double border_age_s = 0.0;
     double max_border_age_s = 0.0;
-    std::uint64_t stalled_frames = 0;  ///< fast mode: frames held back by max_halo_age_s
+    double stalled_s = 0.0;          ///< fast mode: time the clock was held by max_halo_age_s, s
+    std::uint64_t stale_frames = 0;  ///< fast mode: frames stepped past the bound (max_stall_s)
     /// Smooth display: how far the playout time lags the newest state received, s (the largest
     /// over senders; 0 when nothing is interpolated).
     double view_delay_s = 0.0;
