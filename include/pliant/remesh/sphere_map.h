@@ -52,7 +52,7 @@ struct SphereMapSettings
     /// Coarse to fine: optimisation sweeps over all present vertices each time their number
     /// has grown by `level_growth`.
     int sweeps_per_level = 2;
-    double level_growth = 1.5;
+    double level_growth = 1.3;
     /// Stretch-optimisation sweeps on the full mesh at the end (stops early when the energy
     /// improves by less than `tolerance`, relative).
     int final_sweeps = 5;
