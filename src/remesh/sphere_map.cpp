@@ -253,12 +253,59 @@ public:
             area3d = target;
         }
         area3d *= scale2_;
-        const double e = detail::stretch_term(qq[0], qq[1], qq[2], la * scale2_, lb * scale2_,
-                                              lc * scale2_, area3d);
+        la *= scale2_;
+        lb *= scale2_;
+        lc *= scale2_;
+        if (!split_)
+            return chord_energy(qq[0], qq[1], qq[2], la, lb, lc, area3d);
+        if (!(orient(qq[0], qq[1], qq[2]) > 0.0))
+            return k_inf;
+        // Split at the point of the longest arc nearest to the opposite vertex (Praun & Hoppe's
+        // remedy for the "accordion" effect): a spherical sliver whose vertices lie near one
+        // great circle keeps a chord triangle of fair area, so the chord stretch alone does not
+        // see it; its two halves are slivers in the chord sense too.
+        const std::array<double, 3> l2{la, lb, lc};  // squared surface edge opposite vertex k
+        const std::array<double, 3> e2{core::dot(qq[1] - qq[2], qq[1] - qq[2]),
+                                       core::dot(qq[2] - qq[0], qq[2] - qq[0]),
+                                       core::dot(qq[0] - qq[1], qq[0] - qq[1])};
+        const std::size_t i = e2[0] > e2[1] ? (e2[0] > e2[2] ? 0 : 2) : (e2[1] > e2[2] ? 1 : 2);
+        const std::size_t j = (i + 1) % 3, k = (i + 2) % 3;
+        const Vec3 n = core::cross(qq[j], qq[k]);
+        const double nn = core::dot(n, n);
+        if (!(nn > 0.0))
+            return k_inf;
+        const Vec3 foot = qq[i] - n * (core::dot(n, qq[i]) / nn);
+        const double fn = core::dot(foot, foot);
+        if (!(fn > 0.0))
+            return k_inf;
+        const Vec3 d = foot * (1.0 / std::sqrt(fn));
+        // d = alpha q_j + beta q_k; the chord point w q_j + (1 - w) q_k lies on d's ray
+        const double alpha = core::dot(core::cross(d, qq[k]), n);
+        const double beta = core::dot(core::cross(qq[j], d), n);
+        if (!(alpha > 0.0) || !(beta > 0.0))
+            return chord_energy(qq[0], qq[1], qq[2], la, lb, lc, area3d);
+        const double w = alpha / (alpha + beta);
+        // surface point P = w p_j + (1 - w) p_k; |P - p_i|^2 by Stewart's theorem
+        const double lpi = std::max(0.0, w * l2[k] + (1.0 - w) * l2[j] - w * (1.0 - w) * l2[i]);
+        // halves (d, q_i, q_j) ~ (P, p_i, p_j), area (1 - w) A, and (d, q_k, q_i) ~ (P, p_k,
+        // p_i), area w A
+        const double ea = chord_energy(d, qq[i], qq[j], l2[k], (1.0 - w) * (1.0 - w) * l2[i], lpi,
+                                       (1.0 - w) * area3d);
+        if (!(ea < k_inf))
+            return k_inf;
+        return ea + chord_energy(d, qq[k], qq[i], l2[j], lpi, w * w * l2[i], w * area3d);
+    }
+
+    /// Energy of one chord triangle against a surface triangle given by its squared edge
+    /// lengths (opposite each vertex) and area, all already scaled.
+    [[nodiscard]] double chord_energy(const Vec3& q0, const Vec3& q1, const Vec3& q2, double l0,
+                                      double l1, double l2, double area3d) const noexcept
+    {
+        const double e = detail::stretch_term(q0, q1, q2, l0, l1, l2, area3d);
         if (!(e < k_inf) || !(area3d > 0.0))
             return e;
         // symmetric term: ||J^-1||^2 = ||J||^2 / det(J)^2 with det(J) = A3d / A_param
-        const double ap = 0.5 * core::norm(core::cross(qq[1] - qq[0], qq[2] - qq[0]));
+        const double ap = 0.5 * core::norm(core::cross(q1 - q0, q2 - q0));
         const double r = ap / area3d;
         // peak term ("anti-cruft", after Praun & Hoppe): the face's squared stretch s^2 =
         // e / A3d to the third power, so a small region of extreme undersampling costs more
@@ -399,6 +446,8 @@ private:
     double peak_weight_ = 0.0;
 
 public:
+    /// Measure each face as two chord triangles split at its longest arc (see face_energy).
+    bool split_ = true;
     /// Surface area each present vertex stands for (its own third of its input faces plus
     /// that of every vertex collapsed into it); empty = use the faces' own geometry.
     std::vector<double> represented_;
@@ -476,6 +525,7 @@ core::Result<std::vector<Vec3>> coarse_to_fine(const mesh::TriMesh& m, const Sph
     present.reserve(nv);
 
     StretchOptimizer opt(m.positions, faces, vf, q);
+    opt.split_ = s.split_stretch;
     const double area = surface_area(m);
     opt.set_metric(area, s.coarse_inverse_weight, s.peak_weight);
     if (s.represented_area)
@@ -694,6 +744,7 @@ core::Result<SphereMap> map_to_sphere(const mesh::TriMesh& mesh, const SphereMap
                 for (const std::uint32_t v : faces[f])
                     adj[v].push_back(f);
             StretchOptimizer opt(mesh.positions, faces, adj, out.points);
+            opt.split_ = settings.split_stretch;
             opt.set_metric(surface_area(mesh), settings.inverse_weight, settings.peak_weight);
             std::vector<std::uint32_t> order(mesh.positions.size());
             for (std::uint32_t i = 0; i < order.size(); ++i)

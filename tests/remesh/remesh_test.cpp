@@ -388,14 +388,12 @@ TEST_P(RealMesh, FoldFreeClosedGenusZeroAndPsnrRisesWithLevel)
     }
 }
 
-// fox and cactus are below the bounds (66.8 and 71.65 dB) today; their entries hold the
-// level-7 floor measured now (docs/remesh.md) so that a regression still fails
 INSTANTIATE_TEST_SUITE_P(Meshes, RealMesh,
                          ::testing::Values(MeshCase{"spot_triangulated.obj", 71.45, 8},
                                            MeshCase{"cube_minus_sphere.obj", 73.1, 8},
                                            MeshCase{"blub_triangulated.obj", 71.95, 7},
-                                           MeshCase{"cactus.off", 58.0, 7},
-                                           MeshCase{"fox.ply", 58.0, 8}),
+                                           MeshCase{"cactus.off", 71.65, 7},
+                                           MeshCase{"fox.ply", 66.8, 8}),
                          [](const auto& param_info)
                          {
                              std::string n = param_info.param.file;

@@ -13,7 +13,8 @@
 /// - coarse to fine (Praun & Hoppe 2003): half-edge collapses down to a tetrahedron, the
 ///   tetrahedron on the sphere, then the vertices re-inserted in reverse order, each inside the
 ///   spherical kernel of its one-ring, with vertex moves that never leave the kernel. The moves
-///   minimise the L2 stretch plus an inverse-stretch (symmetric Dirichlet) term, with coarse
+///   minimise the L2 stretch plus an inverse-stretch (symmetric Dirichlet) term and a peak
+///   term, each face measured on two chord triangles split at its longest arc, with coarse
 ///   faces standing for the surface area their vertices absorbed (docs/remesh.md §1.2).
 ///   Fold-free by construction (every move is checked).
 /// A result is returned only when every spherical triangle is positively oriented.
@@ -51,7 +52,7 @@ struct SphereMapSettings
     /// Coarse to fine: optimisation sweeps over all present vertices each time their number
     /// has grown by `level_growth`.
     int sweeps_per_level = 2;
-    double level_growth = 1.5;
+    double level_growth = 1.3;
     /// Stretch-optimisation sweeps on the full mesh at the end (stops early when the energy
     /// improves by less than `tolerance`, relative).
     int final_sweeps = 5;
@@ -66,8 +67,12 @@ struct SphereMapSettings
     /// before their vertices come back.
     bool represented_area = true;
     /// Weight of the peak term (per-face stretch^6): penalises small regions of extreme
-    /// undersampling that the area-weighted L2 stretch barely sees.
-    double peak_weight = 0.0;
+    /// undersampling that the area-weighted L2 stretch barely sees. Needs `split_stretch`
+    /// (without it the optimiser pays for the peaks with spherical slivers).
+    double peak_weight = 0.3;
+    /// Measure each face's stretch on two chord triangles split at its longest arc (Praun &
+    /// Hoppe's remedy for spherical slivers, which a single chord triangle does not see).
+    bool split_stretch = true;
     double tolerance = 1e-3;
 };
 
