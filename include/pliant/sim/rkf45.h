@@ -134,9 +134,24 @@ public:
     core::Field<double> accel;            ///< force accelerations [m/s^2]
     std::vector<double> row_buffers;      ///< per thread: 3 rows of stage displacements
     std::size_t row_buffer_len = 0;       ///< doubles per thread
-    std::vector<double> leaf_error;       ///< per leaf error norm
-    std::vector<double> leaf_probe;       ///< per leaf NaN probe
-    std::vector<std::int64_t> touched;    ///< accel offsets written by the last force set
+    std::vector<double> leaf_error;       ///< per leaf (or pipeline band) error norm
+    std::vector<double> leaf_probe;       ///< per leaf (or pipeline band) NaN probe
+    // The fused row pipeline of full steps (docs/physics.md §8): per thread, ring rows of
+    // kv_1..kv_5 and the rolling stage-displacement rows; the model's twin and ghost copies
+    // regrouped by the row they read, as column pairs (dst, src) with x + 1 (0 = ghost column
+    // x = -1): copies within row y are row_copies[row_copy_start[y] .. row_copy_start[y + 1]),
+    // the ghost row y = -1 reads row 1 (below_copies), the ghost row y = ny reads row ny - 2
+    // (above_copies).
+    std::vector<double> pipeline_buffers;
+    std::size_t pipeline_buffer_len = 0;  ///< doubles per thread
+    std::size_t pipeline_row_len = 0;     ///< doubles per buffered row (nx + 2, rounded up)
+    std::vector<core::GhostCopy> row_copies;
+    std::vector<std::size_t> row_copy_start;
+    std::vector<core::GhostCopy> below_copies;
+    std::vector<core::GhostCopy> above_copies;
+    bool pipeline_ok = false;  ///< the copies fit the pipeline (always, for TetraGrid's gluing)
+    bool use_pipeline = true;  ///< false: full steps run stage by stage too (tests, benchmarks)
+    std::vector<std::int64_t> touched;  ///< accel offsets written by the last force set
     int max_threads = 1;
 
 private:

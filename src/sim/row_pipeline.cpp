@@ -1,0 +1,294 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+//
+// The fused row pipeline of a full RKF45 trial step (docs/physics.md §8).
+//
+// Design
+// - Since u' = v, stage S applies K only to U_S = u + h c_S v + h^2 sum (A^2)_Sm kv_m, and
+//   (A^2)_{S,S-1} = 0: stage S at row y needs kv_{S-1} at row y only and kv_0..kv_{S-2} at rows
+//   y - 1 .. y + 1. A wavefront therefore runs all six stages in one sweep over the rows: at
+//   sweep position j, stages 0 and 1 compute row j, stages 2 and 3 row j - 1, stages 4 and 5
+//   row j - 2. Every slope row is read within three sweep positions of being written, so kv_1..kv_5
+//   live in ring buffers of four rows per thread (cache resident) instead of five grid planes:
+//   a step reads u, v, the three weights, 1/m and the force plane once and writes u_new and
+//   v_new once (11 doubles per node with the write-allocate, instead of 64).
+// - Twins and ghosts: the gluing keeps every twin and ghost column in its own row, and the ghost
+//   rows y = -1 and y = ny read rows 1 and ny - 2 only (TetraGrid::fold), so the model's copy
+//   table is applied row by row right after a slope row is written: before any later stage
+//   reads it. plan_pipeline checks these rules on the actual table and leaves the pipeline off
+//   otherwise (the stage-by-stage pass then runs).
+// - Threads: the rows are split into one band per thread. A band recomputes the slope rows its
+//   stages need next to it (kv_1, kv_2 two rows beyond each end, kv_3, kv_4 one row), so bands
+//   need no barrier; the extra work is 6 row-stages per band end (under 1 % at level 8 on two
+//   threads). Every node runs the same row kernels (rkf45_internal.h) with the same inputs
+//   whichever band or thread computes it, so results are bit-identical for any thread count and
+//   to the stage-by-stage pass of restricted steps.
+//
+// Alternatives rejected: square leaf tiles with a shrinking halo (the first plan): they need a
+// ghost ring of 3 on every model and state plane and redundant halo work on four sides (13 % at
+// 64 x 64), where full-width rows need neither; keeping the kv planes and only reordering the
+// loops: at level 10 the five planes (84 MB) still stream to memory.
+
+#include <omp.h>
+
+#include "sim/rkf45_internal.h"
+
+#include <algorithm>
+
+namespace pliant::sim::detail
+{
+namespace
+{
+
+constexpr int k_ring = 4;  // rows of kv_m in flight: written at j, last read at j + 3
+// Buffered rows per thread: kv_1..kv_5 rings, their ghost rows below and above, and three
+// rolling U rows for each of the six stages.
+constexpr int k_kv_ghost_row = 5 * k_ring;
+constexpr int k_U_row = k_kv_ghost_row + 2 * 5;
+constexpr int k_rows_per_thread = k_U_row + 3 * 6;
+
+// One thread's rows; row pointers point at grid x = 0 (x = -1 .. nx are valid).
+struct BandBuffers
+{
+    double* base;
+    std::size_t len;
+    int ny;
+
+    [[nodiscard]] double* kv_row(int m, int y) const noexcept
+    {
+        std::size_t r = 0;
+        if (y < 0)
+            r = static_cast<std::size_t>(k_kv_ghost_row + m);
+        else if (y >= ny)
+            r = static_cast<std::size_t>(k_kv_ghost_row + 5 + m);
+        else
+            r = static_cast<std::size_t>(m * k_ring + (y & (k_ring - 1)));
+        return base + r * len + 1;
+    }
+    [[nodiscard]] double* U_row(int stage, int y) const noexcept
+    {
+        const int slot = (y + 3) % 3;  // y >= -1
+        return base + static_cast<std::size_t>(k_U_row + 3 * stage + slot) * len + 1;
+    }
+};
+
+// The planes of one trial (ghost-ring-1 origins, one stride).
+struct Inputs
+{
+    const double* u;
+    const double* v;
+    const double* wx;
+    const double* wy;
+    const double* wd;
+    const double* inv_m;
+    const double* acc;
+    double* u_out;
+    double* v_out;
+    std::ptrdiff_t s;
+    int nx;
+    int ny;
+    const Rkf45Workspace* ws;
+
+    [[nodiscard]] const double* row(const double* plane, int y) const noexcept
+    {
+        return plane + static_cast<std::ptrdiff_t>(y) * s;
+    }
+};
+
+// Applies the model's twin and ghost copies that read slope row y of kv_m.
+void copy_row(const Inputs& in, const BandBuffers& b, int m, int y) noexcept
+{
+    const Rkf45Workspace& ws = *in.ws;
+    double* row = b.kv_row(m, y) - 1;  // indexed by x + 1, as the copies
+    const auto ys = static_cast<std::size_t>(y);
+    for (std::size_t i = ws.row_copy_start[ys]; i < ws.row_copy_start[ys + 1]; ++i)
+        row[ws.row_copies[i].dst] = row[ws.row_copies[i].src];
+    if (y == 1)
+    {
+        double* dst = b.kv_row(m, -1) - 1;
+        for (const core::GhostCopy& cp : ws.below_copies)
+            dst[cp.dst] = row[cp.src];
+    }
+    if (y == in.ny - 2)
+    {
+        double* dst = b.kv_row(m, in.ny) - 1;
+        for (const core::GhostCopy& cp : ws.above_copies)
+            dst[cp.dst] = row[cp.src];
+    }
+}
+
+// Stage S at row y (the band's first row of this stage is `first`): the next U_S row, the row
+// kernel, then the copies of the new slope row. Returns the row's error norm (S == 5).
+template <int S>
+double stage(const Inputs& in, const Coeffs& c, const StageConstants& k, const BandBuffers& b,
+             int y, int first, double& probe) noexcept
+{
+    const auto fill = [&](int yy)
+    {
+        const double* kv[5] = {};
+        for (int m = 0; m + 1 < S; ++m)
+            kv[m] = b.kv_row(m, yy);
+        fill_row<S>(c, in.row(in.u, yy), in.row(in.v, yy), kv, b.U_row(S, yy), 0, in.nx);
+    };
+    if (y == first)
+    {
+        fill(y - 1);
+        fill(y);
+    }
+    fill(y + 1);
+    StageRow r{};
+    r.u = in.row(in.u, y);
+    r.v = in.row(in.v, y);
+    for (int m = 0; m < S; ++m)
+        r.kv[m] = b.kv_row(m, y);
+    r.wx = in.row(in.wx, y);
+    r.wy = in.row(in.wy, y);
+    r.wd = in.row(in.wd, y);
+    r.wy_below = in.row(in.wy, y - 1);
+    r.wd_below = in.row(in.wd, y - 1);
+    r.inv_m = in.row(in.inv_m, y);
+    r.acc = in.row(in.acc, y);
+    r.U_below = b.U_row(S, y - 1);
+    r.U = b.U_row(S, y);
+    r.U_above = b.U_row(S, y + 1);
+    r.y = y;
+    if constexpr (S < 5)
+    {
+        r.kv_out = b.kv_row(S, y);
+        (void)stage_row<S>(k, c, r, 0, in.nx, probe);
+        copy_row(in, b, S, y);
+        return 0.0;
+    }
+    else
+    {
+        r.u_out = in.u_out + static_cast<std::ptrdiff_t>(y) * in.s;
+        r.v_out = in.v_out + static_cast<std::ptrdiff_t>(y) * in.s;
+        return stage_row<S>(k, c, r, 0, in.nx, probe);
+    }
+}
+
+// Rows [y0, y1) of the new state: the wavefront, with the slope rows beyond the band that its
+// stages read recomputed here.
+void run_band(const Inputs& in, const Coeffs& c, const StageConstants& k, const BandBuffers& b,
+              int y0, int y1, double& err, double& probe) noexcept
+{
+    const int lo01 = std::max(0, y0 - 2);
+    const int hi01 = std::min(in.ny, y1 + 2);
+    const int lo23 = std::max(0, y0 - 1);
+    const int hi23 = std::min(in.ny, y1 + 1);
+    for (int j = lo01; j <= y1 + 1; ++j)
+    {
+        if (j < hi01)
+        {
+            stage<0>(in, c, k, b, j, lo01, probe);
+            stage<1>(in, c, k, b, j, lo01, probe);
+        }
+        if (const int y = j - 1; y >= lo23 && y < hi23)
+        {
+            stage<2>(in, c, k, b, y, lo23, probe);
+            stage<3>(in, c, k, b, y, lo23, probe);
+        }
+        if (const int y = j - 2; y >= y0 && y < y1)
+        {
+            stage<4>(in, c, k, b, y, y0, probe);
+            err = std::max(err, stage<5>(in, c, k, b, y, y0, probe));
+        }
+    }
+}
+
+}  // namespace
+
+void plan_pipeline(const MembraneModel& model, Rkf45Workspace& ws)
+{
+    const core::TetraGrid& g = model.grid();
+    const int nx = g.nx();
+    const int ny = g.ny();
+    const std::ptrdiff_t stride = nx + 2;
+    ws.pipeline_row_len = (static_cast<std::size_t>(nx) + 2 + 7) / 8 * 8;
+    ws.pipeline_buffer_len = static_cast<std::size_t>(k_rows_per_thread) * ws.pipeline_row_len;
+    ws.pipeline_buffers.assign(ws.pipeline_buffer_len * static_cast<std::size_t>(ws.max_threads),
+                               0.0);
+    std::vector<std::vector<core::GhostCopy>> per_row(static_cast<std::size_t>(ny));
+    ws.below_copies.clear();
+    ws.above_copies.clear();
+    // Each position of the ghost ring must be written exactly once.
+    std::vector<int> written(static_cast<std::size_t>(stride * (ny + 2)), 0);
+    bool ok = ny >= 3;
+    for (const core::GhostCopy& cp : model.sync_table())
+    {
+        const auto dy = static_cast<int>(cp.dst / stride) - 1;
+        const auto dx = static_cast<int>(cp.dst % stride) - 1;
+        const auto sy = static_cast<int>(cp.src / stride) - 1;
+        const auto sx = static_cast<int>(cp.src % stride) - 1;
+        const core::GhostCopy cols{dx + 1, sx + 1};
+        ++written[static_cast<std::size_t>(cp.dst)];
+        if (sx < 0 || sx >= nx || sy < 0 || sy >= ny)
+            ok = false;
+        else if (dy == sy)
+            per_row[static_cast<std::size_t>(sy)].push_back(cols);
+        else if (dy == -1 && sy == 1)
+            ws.below_copies.push_back(cols);
+        else if (dy == ny && sy == ny - 2)
+            ws.above_copies.push_back(cols);
+        else
+            ok = false;
+    }
+    for (int y = -1; y <= ny; ++y)
+        for (int x = -1; x <= nx; ++x)
+            if ((y < 0 || y >= ny || x < 0 || x >= nx) &&
+                written[static_cast<std::size_t>((y + 1) * stride + x + 1)] != 1)
+                ok = false;
+    ws.row_copies.clear();
+    ws.row_copy_start.assign(1, 0);
+    for (const auto& copies : per_row)
+    {
+        ws.row_copies.insert(ws.row_copies.end(), copies.begin(), copies.end());
+        ws.row_copy_start.push_back(ws.row_copies.size());
+    }
+    ws.pipeline_ok = ok;
+}
+
+std::size_t pipeline_trial(const MembraneModel& model, const MembraneState& state,
+                           Rkf45Workspace& ws, const Coeffs& c, const StageConstants& k,
+                           int threads)
+{
+    const core::TetraGrid& g = model.grid();
+    Inputs in{};
+    in.u = state.u.origin();
+    in.v = state.v.origin();
+    in.wx = model.weight_x().origin();
+    in.wy = model.weight_y().origin();
+    in.wd = model.weight_d().origin();
+    in.inv_m = model.inverse_mass().origin();
+    in.acc = ws.accel.origin();
+    in.u_out = ws.u_out.origin();
+    in.v_out = ws.v_out.origin();
+    in.s = state.u.stride();
+    in.nx = g.nx();
+    in.ny = g.ny();
+    in.ws = &ws;
+    const int bands = std::clamp(threads, 1, in.ny);
+#pragma omp parallel num_threads(threads)
+    {
+        // Denormals flushed on every thread (see FlushDenormals): the same mode everywhere.
+        const FlushDenormals flush;
+#pragma omp for schedule(static)
+        for (int band = 0; band < bands; ++band)
+        {
+            const BandBuffers b{
+                ws.pipeline_buffers.data() +
+                    static_cast<std::size_t>(omp_get_thread_num()) * ws.pipeline_buffer_len,
+                ws.pipeline_row_len, in.ny};
+            const int y0 = in.ny * band / bands;
+            const int y1 = in.ny * (band + 1) / bands;
+            double err = 0.0;
+            double probe = 0.0;
+            run_band(in, c, k, b, y0, y1, err, probe);
+            ws.leaf_error[static_cast<std::size_t>(band)] = err;
+            ws.leaf_probe[static_cast<std::size_t>(band)] = probe;
+        }
+    }
+    return static_cast<std::size_t>(bands);
+}
+
+}  // namespace pliant::sim::detail
