@@ -34,6 +34,7 @@
 #include "sim/rkf45_internal.h"
 
 #include <algorithm>
+#include <cstdint>
 
 namespace pliant::sim::detail
 {
@@ -47,7 +48,12 @@ constexpr int k_kv_ghost_row = 5 * k_ring;
 constexpr int k_U_row = k_kv_ghost_row + 2 * 5;
 constexpr int k_rows_per_thread = k_U_row + 3 * 6;
 
-// One thread's rows; row pointers point at grid x = 0 (x = -1 .. nx are valid).
+// Rows start k_pad doubles before grid x = 0, so that x = 0 of every buffered row is 64-byte
+// aligned (one cache line: AVX-512 loads of x .. x + 7 then touch one line, not two).
+constexpr std::size_t k_pad = 8;
+
+// One thread's rows (64-byte aligned); row pointers point at grid x = 0 (x = -1 .. nx are
+// valid).
 struct BandBuffers
 {
     double* base;
@@ -63,12 +69,12 @@ struct BandBuffers
             r = static_cast<std::size_t>(k_kv_ghost_row + 5 + m);
         else
             r = static_cast<std::size_t>(m * k_ring + (y & (k_ring - 1)));
-        return base + r * len + 1;
+        return base + r * len + k_pad;
     }
     [[nodiscard]] double* U_row(int stage, int y) const noexcept
     {
         const int slot = (y + 3) % 3;  // y >= -1
-        return base + static_cast<std::size_t>(k_U_row + 3 * stage + slot) * len + 1;
+        return base + static_cast<std::size_t>(k_U_row + 3 * stage + slot) * len + k_pad;
     }
 };
 
@@ -196,6 +202,14 @@ void run_band(const Inputs& in, const Coeffs& c, const StageConstants& k, const 
     }
 }
 
+// The first 64-byte boundary in the pipeline buffers (they hold 8 spare doubles for it).
+double* aligned_rows(Rkf45Workspace& ws) noexcept
+{
+    double* p = ws.pipeline_buffers.data();
+    const auto misalign = reinterpret_cast<std::uintptr_t>(p) % 64U;
+    return misalign == 0 ? p : p + (64U - misalign) / sizeof(double);
+}
+
 }  // namespace
 
 void plan_pipeline(const MembraneModel& model, Rkf45Workspace& ws)
@@ -204,10 +218,11 @@ void plan_pipeline(const MembraneModel& model, Rkf45Workspace& ws)
     const int nx = g.nx();
     const int ny = g.ny();
     const std::ptrdiff_t stride = nx + 2;
-    ws.pipeline_row_len = (static_cast<std::size_t>(nx) + 2 + 7) / 8 * 8;
+    ws.pipeline_row_len = (k_pad + static_cast<std::size_t>(nx) + 1 + 7) / 8 * 8;
     ws.pipeline_buffer_len = static_cast<std::size_t>(k_rows_per_thread) * ws.pipeline_row_len;
-    ws.pipeline_buffers.assign(ws.pipeline_buffer_len * static_cast<std::size_t>(ws.max_threads),
-                               0.0);
+    // + 8: room to align the first row to 64 bytes (aligned_rows).
+    ws.pipeline_buffers.assign(
+        ws.pipeline_buffer_len * static_cast<std::size_t>(ws.max_threads) + 8, 0.0);
     std::vector<std::vector<core::GhostCopy>> per_row(static_cast<std::size_t>(ny));
     ws.below_copies.clear();
     ws.above_copies.clear();
@@ -268,6 +283,7 @@ std::size_t pipeline_trial(const MembraneModel& model, const MembraneState& stat
     in.ny = g.ny();
     in.ws = &ws;
     const int bands = std::clamp(threads, 1, in.ny);
+    double* const rows = aligned_rows(ws);
 #pragma omp parallel num_threads(threads)
     {
         // Denormals flushed on every thread (see FlushDenormals): the same mode everywhere.
@@ -276,8 +292,7 @@ std::size_t pipeline_trial(const MembraneModel& model, const MembraneState& stat
         for (int band = 0; band < bands; ++band)
         {
             const BandBuffers b{
-                ws.pipeline_buffers.data() +
-                    static_cast<std::size_t>(omp_get_thread_num()) * ws.pipeline_buffer_len,
+                rows + static_cast<std::size_t>(omp_get_thread_num()) * ws.pipeline_buffer_len,
                 ws.pipeline_row_len, in.ny};
             const int y0 = in.ny * band / bands;
             const int y1 = in.ny * (band + 1) / bands;

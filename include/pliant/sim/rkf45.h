@@ -144,7 +144,7 @@ public:
     // (above_copies).
     std::vector<double> pipeline_buffers;
     std::size_t pipeline_buffer_len = 0;  ///< doubles per thread
-    std::size_t pipeline_row_len = 0;     ///< doubles per buffered row (nx + 2, rounded up)
+    std::size_t pipeline_row_len = 0;     ///< doubles per buffered row (8 + nx + 1, rounded up)
     std::vector<core::GhostCopy> row_copies;
     std::vector<std::size_t> row_copy_start;
     std::vector<core::GhostCopy> below_copies;
