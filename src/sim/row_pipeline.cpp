@@ -8,10 +8,12 @@
 //   (A^2)_{S,S-1} = 0: stage S at row y needs kv_{S-1} at row y only and kv_0..kv_{S-2} at rows
 //   y - 1 .. y + 1. A wavefront therefore runs all six stages in one sweep over the rows: at
 //   sweep position j, stages 0 and 1 compute row j, stages 2 and 3 row j - 1, stages 4 and 5
-//   row j - 2. Every slope row is read within three sweep positions of being written, so kv_1..kv_5
-//   live in ring buffers of four rows per thread (cache resident) instead of five grid planes:
-//   a step reads u, v, the three weights, 1/m and the force plane once and writes u_new and
-//   v_new once (11 doubles per node with the write-allocate, instead of 64).
+//   row j - 2. Each pair runs in one loop over the row (stage P + 1 reads kv_P at its own node
+//   only), sharing the loads of v, the weights, 1/m and the forces. Every slope row is read within
+//   three sweep positions of being written, so kv_1..kv_4 live in ring buffers of four rows per
+//   thread (cache resident; kv_5 and kv_6 never leave the loop) instead of five grid planes: a
+//   step reads u, v, the three weights, 1/m and the force plane once and writes u_new and v_new
+//   once (11 doubles per node with the write-allocate, instead of 64).
 // - Twins and ghosts: the gluing keeps every twin and ghost column in its own row, and the ghost
 //   rows y = -1 and y = ny read rows 1 and ny - 2 only (TetraGrid::fold), so the model's copy
 //   table is applied row by row right after a slope row is written: before any later stage
@@ -20,9 +22,9 @@
 // - Threads: the rows are split into one band per thread. A band recomputes the slope rows its
 //   stages need next to it (kv_1, kv_2 two rows beyond each end, kv_3, kv_4 one row), so bands
 //   need no barrier; the extra work is 6 row-stages per band end (under 1 % at level 8 on two
-//   threads). Every node runs the same row kernels (rkf45_internal.h) with the same inputs
-//   whichever band or thread computes it, so results are bit-identical for any thread count and
-//   to the stage-by-stage pass of restricted steps.
+//   threads). Every node gets the same operations with the same inputs whichever band or thread
+//   computes it, so results are bit-identical for any thread count and to the stage-by-stage
+//   pass of restricted steps.
 //
 // Alternatives rejected: square leaf tiles with a shrinking halo (the first plan): they need a
 // ghost ring of 3 on every model and state plane and redundant halo work on four sides (13 % at
@@ -34,7 +36,10 @@
 #include "sim/rkf45_internal.h"
 
 #include <algorithm>
+#include <bit>
+#include <cmath>
 #include <cstdint>
+#include <limits>
 
 namespace pliant::sim::detail
 {
@@ -42,10 +47,11 @@ namespace
 {
 
 constexpr int k_ring = 4;  // rows of kv_m in flight: written at j, last read at j + 3
-// Buffered rows per thread: kv_1..kv_5 rings, their ghost rows below and above, and three
+// Buffered rows per thread: kv_1..kv_4 rings, their ghost rows below and above, and three
 // rolling U rows for each of the six stages.
-constexpr int k_kv_ghost_row = 5 * k_ring;
-constexpr int k_U_row = k_kv_ghost_row + 2 * 5;
+constexpr int k_stored = 4;  // kv_1..kv_4 (kv_5 and kv_6 stay inside the last pair's loop)
+constexpr int k_kv_ghost_row = k_stored * k_ring;
+constexpr int k_U_row = k_kv_ghost_row + 2 * k_stored;
 constexpr int k_rows_per_thread = k_U_row + 3 * 6;
 
 // Rows start k_pad doubles before grid x = 0, so that x = 0 of every buffered row is 64-byte
@@ -66,7 +72,7 @@ struct BandBuffers
         if (y < 0)
             r = static_cast<std::size_t>(k_kv_ghost_row + m);
         else if (y >= ny)
-            r = static_cast<std::size_t>(k_kv_ghost_row + 5 + m);
+            r = static_cast<std::size_t>(k_kv_ghost_row + k_stored + m);
         else
             r = static_cast<std::size_t>(m * k_ring + (y & (k_ring - 1)));
         return base + r * len + k_pad;
@@ -123,54 +129,172 @@ void copy_row(const Inputs& in, const BandBuffers& b, int m, int y) noexcept
     }
 }
 
-// Stage S at row y (the band's first row of this stage is `first`): the next U_S row, the row
-// kernel, then the copies of the new slope row. Returns the row's error norm (S == 5).
-template <int S>
-double stage(const Inputs& in, const Coeffs& c, const StageConstants& k, const BandBuffers& b,
-             int y, int first, double& probe) noexcept
+// U_P and U_{P+1} of row yy, x in [-1, nx], in one loop over u and v (and kv_0..kv_3 as each
+// needs), with the operations of fill_row<P> and fill_row<P + 1>.
+template <int P>
+void fill_pair(const Inputs& in, const Coeffs& c, const BandBuffers& b, int yy) noexcept
 {
-    const auto fill = [&](int yy)
+    constexpr int A = P;
+    constexpr int B = P + 1;
+    const double* __restrict u = in.row(in.u, yy);
+    const double* __restrict v = in.row(in.v, yy);
+    const double* __restrict k0 = B > 2 ? b.kv_row(0, yy) : nullptr;
+    const double* __restrict k1 = B > 2 ? b.kv_row(1, yy) : nullptr;
+    const double* __restrict k2 = B > 4 ? b.kv_row(2, yy) : nullptr;
+    const double* __restrict k3 = B > 4 ? b.kv_row(3, yy) : nullptr;
+    double* __restrict da = b.U_row(A, yy);
+    double* __restrict db = b.U_row(B, yy);
+    const double cua = c.cu[A];
+    const double cub = c.cu[B];
+#pragma GCC ivdep
+    for (int x = -1; x <= in.nx; ++x)
     {
-        const double* kv[5] = {};
-        for (int m = 0; m + 1 < S; ++m)
-            kv[m] = b.kv_row(m, yy);
-        fill_row<S>(c, in.row(in.u, yy), in.row(in.v, yy), kv, b.U_row(S, yy), 0, in.nx);
-    };
+        double ua = u[x] + cua * v[x];
+        if constexpr (A > 1)
+            ua = ua + c.ck[A][0] * k0[x];
+        if constexpr (A > 2)
+            ua = ua + c.ck[A][1] * k1[x];
+        if constexpr (A > 3)
+            ua = ua + c.ck[A][2] * k2[x];
+        double ub = u[x] + cub * v[x];
+        if constexpr (B > 1)
+            ub = ub + c.ck[B][0] * k0[x];
+        if constexpr (B > 2)
+            ub = ub + c.ck[B][1] * k1[x];
+        if constexpr (B > 3)
+            ub = ub + c.ck[B][2] * k2[x];
+        if constexpr (B > 4)
+            ub = ub + c.ck[B][3] * k3[x];
+        da[x] = ua;
+        db[x] = ub;
+    }
+}
+
+// Stages P and P + 1 of row y in one loop, with the operations of stage_row<P> and
+// stage_row<P + 1> (checked bit for bit by tests/sim/pipeline_test.cpp). Stage P + 1 reads
+// kv_P only at its own node: the value just computed, which for a canonical node is what the
+// stage pass reads from the kv_P plane (twins and ghosts are overwritten by copy_row before any
+// other node reads them). P < 4 writes kv_P and kv_{P+1}; P == 4 finishes the step (u_new,
+// v_new: kv_4 and kv_5 are never stored) and returns the row's error norm (see update_row in
+// rkf45_internal.h for the reductions).
+template <int P>
+double pair_row(const Inputs& in, const Coeffs& c, const StageConstants& k, const BandBuffers& b,
+                int y, double& probe) noexcept
+{
+    constexpr int A = P;
+    constexpr int B = P + 1;
+    const double* __restrict v = in.row(in.v, y);
+    const double* __restrict k0 = A > 0 ? b.kv_row(0, y) : nullptr;
+    const double* __restrict k1 = A > 1 ? b.kv_row(1, y) : nullptr;
+    const double* __restrict k2 = A > 2 ? b.kv_row(2, y) : nullptr;
+    const double* __restrict k3 = A > 3 ? b.kv_row(3, y) : nullptr;
+    const double* __restrict wx = in.row(in.wx, y);
+    const double* __restrict wy = in.row(in.wy, y);
+    const double* __restrict wd = in.row(in.wd, y);
+    const double* __restrict wyb = in.row(in.wy, y - 1);
+    const double* __restrict wdb = in.row(in.wd, y - 1);
+    const double* __restrict inv_m = in.row(in.inv_m, y);
+    const double* __restrict acc = in.row(in.acc, y);
+    const double* __restrict ap = b.U_row(A, y - 1);
+    const double* __restrict ac = b.U_row(A, y);
+    const double* __restrict an = b.U_row(A, y + 1);
+    const double* __restrict bp = b.U_row(B, y - 1);
+    const double* __restrict bc = b.U_row(B, y);
+    const double* __restrict bn = b.U_row(B, y + 1);
+    [[maybe_unused]] double* __restrict out_a = P < 4 ? b.kv_row(A, y) : nullptr;
+    [[maybe_unused]] double* __restrict out_b = P < 4 ? b.kv_row(B, y) : nullptr;
+    [[maybe_unused]] const double* __restrict u = in.row(in.u, y);
+    [[maybe_unused]] double* __restrict u_out = in.u_out + static_cast<std::ptrdiff_t>(y) * in.s;
+    [[maybe_unused]] double* __restrict v_out = in.v_out + static_cast<std::ptrdiff_t>(y) * in.s;
+    std::int64_t err_bits = 0;
+    std::int64_t bad = 0;
+    const int x_canon = (y == 0 || y == k.w) ? k.w + 1 : 2 * k.w;
+    const int nx = in.nx;
+#pragma GCC ivdep
+    for (int x = 0; x < nx; ++x)
+    {
+        double kk[5] = {};
+        if constexpr (A > 0)
+            kk[0] = k0[x];
+        if constexpr (A > 1)
+            kk[1] = k1[x];
+        if constexpr (A > 2)
+            kk[2] = k2[x];
+        if constexpr (A > 3)
+            kk[3] = k3[x];
+        double vel = v[x];
+        for (int m = 0; m < A; ++m)
+            vel = vel + c.cv[A][m] * kk[m];
+        const double uc = ac[x];
+        const double ku = stencil(uc, ac[x + 1], ac[x - 1], an[x], ap[x], an[x + 1], ap[x - 1],
+                                  wx[x], wx[x - 1], wy[x], wyb[x], wd[x], wdb[x - 1]);
+        const double sa = ((-k.beta * vel - k.k_f * uc) - inv_m[x] * ku) + acc[x];
+        kk[A] = sa;
+        double vel_b = v[x];
+        for (int m = 0; m < B; ++m)
+            vel_b = vel_b + c.cv[B][m] * kk[m];
+        const double ucb = bc[x];
+        const double kub = stencil(ucb, bc[x + 1], bc[x - 1], bn[x], bp[x], bn[x + 1], bp[x - 1],
+                                   wx[x], wx[x - 1], wy[x], wyb[x], wd[x], wdb[x - 1]);
+        const double sb = ((-k.beta * vel_b - k.k_f * ucb) - inv_m[x] * kub) + acc[x];
+        if constexpr (P < 4)
+        {
+            out_a[x] = sa;
+            out_b[x] = sb;
+        }
+        else
+        {
+            const double u0 = u[x];
+            const double v0 = v[x];
+            double un = u0 + c.h * v0;
+            double vn = v0;
+            double eu = 0.0;
+            double ev = 0.0;
+            for (int m = 0; m < 5; ++m)
+            {
+                un = un + c.ub[m] * kk[m];
+                vn = vn + c.vb[m] * kk[m];
+                eu = eu + c.ue[m] * kk[m];
+                ev = ev + c.ve[m] * kk[m];
+            }
+            vn = vn + c.vb[5] * sb;
+            ev = ev + c.ve[5] * sb;
+            u_out[x] = un;
+            v_out[x] = vn;
+            const double su =
+                std::fabs(eu) / (k.atol + k.rtol * std::max(std::fabs(u0), std::fabs(un)));
+            const double sv =
+                std::fabs(ev) / (k.atol + k.rtol * std::max(std::fabs(v0), std::fabs(vn)));
+            const double e = x < x_canon ? std::max(su, sv) : 0.0;
+            err_bits = std::max(err_bits, std::bit_cast<std::int64_t>(e > 0.0 ? e : 0.0));
+            const double nan_probe = (un - un) + (vn - vn);
+            bad |= nan_probe != 0.0 ? 1 : 0;
+        }
+    }
+    if (bad != 0)
+        probe = std::numeric_limits<double>::quiet_NaN();
+    return std::bit_cast<double>(err_bits);
+}
+
+// Stages P and P + 1 at row y (the band's first row of this pair is `first`): the next U rows,
+// the pair kernel, then the copies of the new slope rows. Returns the row's error norm (P = 4).
+template <int P>
+double stage_pair(const Inputs& in, const Coeffs& c, const StageConstants& k, const BandBuffers& b,
+                  int y, int first, double& probe) noexcept
+{
     if (y == first)
     {
-        fill(y - 1);
-        fill(y);
+        fill_pair<P>(in, c, b, y - 1);
+        fill_pair<P>(in, c, b, y);
     }
-    fill(y + 1);
-    StageRow r{};
-    r.u = in.row(in.u, y);
-    r.v = in.row(in.v, y);
-    for (int m = 0; m < S; ++m)
-        r.kv[m] = b.kv_row(m, y);
-    r.wx = in.row(in.wx, y);
-    r.wy = in.row(in.wy, y);
-    r.wd = in.row(in.wd, y);
-    r.wy_below = in.row(in.wy, y - 1);
-    r.wd_below = in.row(in.wd, y - 1);
-    r.inv_m = in.row(in.inv_m, y);
-    r.acc = in.row(in.acc, y);
-    r.U_below = b.U_row(S, y - 1);
-    r.U = b.U_row(S, y);
-    r.U_above = b.U_row(S, y + 1);
-    r.y = y;
-    if constexpr (S < 5)
+    fill_pair<P>(in, c, b, y + 1);
+    const double err = pair_row<P>(in, c, k, b, y, probe);
+    if constexpr (P < 4)
     {
-        r.kv_out = b.kv_row(S, y);
-        (void)stage_row<S>(k, c, r, 0, in.nx, probe);
-        copy_row(in, b, S, y);
-        return 0.0;
+        copy_row(in, b, P, y);
+        copy_row(in, b, P + 1, y);
     }
-    else
-    {
-        r.u_out = in.u_out + static_cast<std::ptrdiff_t>(y) * in.s;
-        r.v_out = in.v_out + static_cast<std::ptrdiff_t>(y) * in.s;
-        return stage_row<S>(k, c, r, 0, in.nx, probe);
-    }
+    return err;
 }
 
 // Rows [y0, y1) of the new state: the wavefront, with the slope rows beyond the band that its
@@ -185,20 +309,11 @@ void run_band(const Inputs& in, const Coeffs& c, const StageConstants& k, const 
     for (int j = lo01; j <= y1 + 1; ++j)
     {
         if (j < hi01)
-        {
-            stage<0>(in, c, k, b, j, lo01, probe);
-            stage<1>(in, c, k, b, j, lo01, probe);
-        }
+            (void)stage_pair<0>(in, c, k, b, j, lo01, probe);
         if (const int y = j - 1; y >= lo23 && y < hi23)
-        {
-            stage<2>(in, c, k, b, y, lo23, probe);
-            stage<3>(in, c, k, b, y, lo23, probe);
-        }
+            (void)stage_pair<2>(in, c, k, b, y, lo23, probe);
         if (const int y = j - 2; y >= y0 && y < y1)
-        {
-            stage<4>(in, c, k, b, y, y0, probe);
-            err = std::max(err, stage<5>(in, c, k, b, y, y0, probe));
-        }
+            err = std::max(err, stage_pair<4>(in, c, k, b, y, y0, probe));
     }
 }
 

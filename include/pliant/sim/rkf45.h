@@ -137,7 +137,7 @@ public:
     std::vector<double> leaf_error;       ///< per leaf (or pipeline band) error norm
     std::vector<double> leaf_probe;       ///< per leaf (or pipeline band) NaN probe
     // The fused row pipeline of full steps (docs/physics.md §8): per thread, ring rows of
-    // kv_1..kv_5 and the rolling stage-displacement rows; the model's twin and ghost copies
+    // kv_1..kv_4 and the rolling stage-displacement rows; the model's twin and ghost copies
     // regrouped by the row they read, as column pairs (dst, src) with x + 1 (0 = ghost column
     // x = -1): copies within row y are row_copies[row_copy_start[y] .. row_copy_start[y + 1]),
     // the ghost row y = -1 reads row 1 (below_copies), the ghost row y = ny reads row ny - 2
