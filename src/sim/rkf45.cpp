@@ -78,7 +78,7 @@ struct Planes
 };
 
 // One stage over one region (the restricted step's pass): U_S three rows at a time into
-// `buffer` (3 rows of nx + 2), then the row kernel. S < 5 writes kv_S; S == 5 also finishes the
+// `buffer` (3 rows of nx + 3), then the row kernel. S < 5 writes kv_S; S == 5 also finishes the
 // step (u_out, v_out) and gives the error norm over the region's canonical nodes and a NaN probe.
 template <int S>
 void stage_region(const detail::StageConstants& k, const Planes& p, const Coeffs& c,
