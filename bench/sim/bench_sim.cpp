@@ -90,10 +90,11 @@ sim::MembraneSettings bench_material()
     return s;
 }
 
-// Doubles moved per node per step by the integrator (see docs/physics.md): stages 1-5 read u,
-// v, kv_1..kv_{s-1}, three weights, 1/m and the force plane and write kv_s; stage 6 reads u, v,
-// kv_1..kv_5 and the five model planes and writes u, v: 5 * 7 + 15 + 14 = 64 doubles.
-constexpr double k_doubles_per_node_step = 64.0;
+// Doubles moved to and from memory per node per step by the integrator's fused row pipeline
+// (docs/physics.md §8): it reads u, v, three weights, 1/m and the force plane once and writes
+// u_new and v_new once (plus their write-allocate reads); the slopes stay in per-thread ring
+// rows: 7 + 2 + 2 = 11 doubles. (The stage-by-stage pass it replaced moved 64.)
+constexpr double k_doubles_per_node_step = 11.0;
 
 }  // namespace
 

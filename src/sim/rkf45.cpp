@@ -4,11 +4,7 @@
 
 #include <omp.h>
 
-#if defined(__SSE__)
-#include <xmmintrin.h>
-#endif
-
-#include "sim/stencil_internal.h"
+#include "sim/rkf45_internal.h"
 
 #include <algorithm>
 #include <array>
@@ -22,27 +18,8 @@ namespace
 {
 
 using core::Field;
-
-// Fehlberg's 4(5) tableau (Hairer, Norsett & Wanner, Solving ODEs I, Table II.5.1).
-struct Tableau
-{
-    double c[6];
-    double a[6][6];
-    double b5[6];
-    double b4[6];
-};
-
-constexpr Tableau k_fehlberg = {
-    {0.0, 1.0 / 4.0, 3.0 / 8.0, 12.0 / 13.0, 1.0, 1.0 / 2.0},
-    {{0, 0, 0, 0, 0, 0},
-     {1.0 / 4.0, 0, 0, 0, 0, 0},
-     {3.0 / 32.0, 9.0 / 32.0, 0, 0, 0, 0},
-     {1932.0 / 2197.0, -7200.0 / 2197.0, 7296.0 / 2197.0, 0, 0, 0},
-     {439.0 / 216.0, -8.0, 3680.0 / 513.0, -845.0 / 4104.0, 0, 0},
-     {-8.0 / 27.0, 2.0, -3544.0 / 2565.0, 1859.0 / 4104.0, -11.0 / 40.0, 0}},
-    {16.0 / 135.0, 0.0, 6656.0 / 12825.0, 28561.0 / 56430.0, -9.0 / 50.0, 2.0 / 55.0},
-    {25.0 / 216.0, 0.0, 1408.0 / 2565.0, 2197.0 / 4104.0, -1.0 / 5.0, 0.0},
-};
+using detail::Coeffs;
+using detail::k_fehlberg;
 
 // Products of the tableau that turn the second-order system into velocity slopes only:
 // U_s = u + h c_s v + h^2 sum_m (A^2)_sm kv_m, u_new = u + h v + h^2 sum_m (b A)_m kv_m.
@@ -54,7 +31,7 @@ struct Derived
     double e[6];      // b5 - b4
 };
 
-constexpr Derived derive(const Tableau& t)
+constexpr Derived derive(const detail::Tableau& t)
 {
     Derived d{};
     for (int s = 0; s < 6; ++s)
@@ -83,47 +60,13 @@ constexpr Derived derive(const Tableau& t)
 
 constexpr Derived k_derived = derive(k_fehlberg);
 
-// Step-size dependent coefficients, computed once per trial (the same on every thread).
-struct Coeffs
-{
-    double cu[6];     // h c_s
-    double ck[6][6];  // h^2 (A^2)_sm
-    double cv[6][6];  // h a_sj
-    double ub[6];     // h^2 (b5 A)_m
-    double vb[6];     // h b5_m
-    double ue[6];     // h^2 ((b5 - b4) A)_m
-    double ve[6];     // h (b5 - b4)_m
-    double h = 0.0;
-};
-
-Coeffs make_coeffs(double h)
-{
-    Coeffs c{};
-    const double h2 = h * h;
-    c.h = h;
-    for (int s = 0; s < 6; ++s)
-    {
-        c.cu[s] = h * k_fehlberg.c[s];
-        for (int m = 0; m < 6; ++m)
-        {
-            c.ck[s][m] = h2 * k_derived.aa[s][m];
-            c.cv[s][m] = h * k_fehlberg.a[s][m];
-        }
-        c.ub[s] = h2 * k_derived.ba[s];
-        c.vb[s] = h * k_fehlberg.b5[s];
-        c.ue[s] = h2 * k_derived.ea[s];
-        c.ve[s] = h * k_derived.e[s];
-    }
-    return c;
-}
-
-// Everything a stage pass reads and writes (origins of ghost-ring-1 planes, one stride).
+// Everything the stage-by-stage pass reads and writes (origins of ghost-ring-1 planes, one
+// stride).
 struct Planes
 {
     const double* u;
     const double* v;  // v_src
-    const double* kv[5];
-    double* kv_out[5];
+    double* kv[5];
     const double* wx;
     const double* wy;
     const double* wd;
@@ -132,108 +75,59 @@ struct Planes
     double* u_out;
     double* v_out;
     std::ptrdiff_t s;
-    double beta;
-    double k_f;
-    double rtol;
-    double atol;
-    int w;  // W, for the canonical-node rule of the error norm
 };
 
-// Stage displacements U_S of row yy for x in [x0 - 1, x1] into dst[0 .. x1 - x0 + 1].
+// One stage over one region (the restricted step's pass): U_S three rows at a time into
+// `buffer` (3 rows of nx + 3), then the row kernel. S < 5 writes kv_S; S == 5 also finishes the
+// step (u_out, v_out) and gives the error norm over the region's canonical nodes and a NaN probe.
 template <int S>
-void fill_row(const Planes& p, const Coeffs& c, double* __restrict dst, int yy, int x0, int x1)
+void stage_region(const detail::StageConstants& k, const Planes& p, const Coeffs& c,
+                  const core::Region& r, double* buffer, std::size_t row_len, double& err_out,
+                  double& probe_out)
 {
-    const double* __restrict u = p.u;
-    const double* __restrict v = p.v;
-    const std::ptrdiff_t base = static_cast<std::ptrdiff_t>(yy) * p.s;
-    const double cu = c.cu[S];
-    // The planes never overlap: no loop-carried dependence (lets GCC vectorise without a
-    // runtime alias check per plane pair, which it would give up on).
-#pragma GCC ivdep
-    for (int x = x0 - 1; x <= x1; ++x)
+    const std::ptrdiff_t s = p.s;
+    const auto row = [s](const double* plane, int y)
+    { return plane + static_cast<std::ptrdiff_t>(y) * s; };
+    const auto fill = [&](int y, double* dst)
     {
-        const std::ptrdiff_t o = base + x;
-        double value = u[o] + cu * v[o];
-        for (int m = 0; m + 1 < S; ++m)  // (A^2)_{S, S-1} = 0
-            value = value + c.ck[S][m] * p.kv[m][o];
-        dst[x - x0 + 1] = value;
-    }
-}
-
-// One stage over one region. S < 5 writes kv_S; S == 5 also finishes the step (u_out, v_out)
-// and returns the error norm over the region's canonical nodes and a NaN probe.
-template <int S>
-void stage_region(const Planes& p, const Coeffs& c, const core::Region& r, double* buffer,
-                  double& err_out, double& probe_out)
-{
-    const int len = r.x1 - r.x0 + 2;
-    double* rows[3] = {buffer, buffer + len, buffer + 2 * len};
-    fill_row<S>(p, c, rows[0], r.y0 - 1, r.x0, r.x1);
-    fill_row<S>(p, c, rows[1], r.y0, r.x0, r.x1);
+        const double* kv[5] = {};
+        for (int m = 0; m < 5; ++m)
+            kv[m] = row(p.kv[m], y);
+        detail::fill_row<S>(c, row(p.u, y), row(p.v, y), kv, dst, r.x0, r.x1);
+    };
+    // Row buffers indexed by grid x (x = -1 .. nx).
+    double* rows[3] = {buffer + 1, buffer + 1 + row_len, buffer + 1 + 2 * row_len};
+    fill(r.y0 - 1, rows[0]);
+    fill(r.y0, rows[1]);
     double err = 0.0;
     double probe = 0.0;
-    const std::ptrdiff_t s = p.s;
     for (int y = r.y0; y < r.y1; ++y)
     {
-        fill_row<S>(p, c, rows[2], y + 1, r.x0, r.x1);
-        const double* __restrict bp = rows[0];
-        const double* __restrict bc = rows[1];
-        const double* __restrict bn = rows[2];
-        const double* __restrict v = p.v;
-        const double* __restrict wx = p.wx;
-        const double* __restrict wy = p.wy;
-        const double* __restrict wd = p.wd;
-        const double* __restrict inv_m = p.inv_m;
-        const double* __restrict acc = p.acc;
-        const std::ptrdiff_t base = static_cast<std::ptrdiff_t>(y) * s;
-        // Canonical nodes of this row: x < 2W, and x <= W on the folded rows y = 0 and y = W.
-        const int x_canon = (y == 0 || y == p.w) ? p.w + 1 : 2 * p.w;
-#pragma GCC ivdep
-        for (int x = r.x0; x < r.x1; ++x)
+        fill(y + 1, rows[2]);
+        detail::StageRow sr{};
+        sr.u = row(p.u, y);
+        sr.v = row(p.v, y);
+        for (int m = 0; m < 5; ++m)
+            sr.kv[m] = row(p.kv[m], y);
+        sr.wx = row(p.wx, y);
+        sr.wy = row(p.wy, y);
+        sr.wd = row(p.wd, y);
+        sr.wy_below = row(p.wy, y - 1);
+        sr.wd_below = row(p.wd, y - 1);
+        sr.inv_m = row(p.inv_m, y);
+        sr.acc = row(p.acc, y);
+        sr.U_below = rows[0];
+        sr.U = rows[1];
+        sr.U_above = rows[2];
+        if constexpr (S < 5)
+            sr.kv_out = p.kv[S] + static_cast<std::ptrdiff_t>(y) * s;
+        else
         {
-            const std::ptrdiff_t i = base + x;
-            const int j = x - r.x0 + 1;
-            double vel = v[i];
-            for (int m = 0; m < S; ++m)
-                vel = vel + c.cv[S][m] * p.kv[m][i];
-            const double uc = bc[j];
-            const double ku =
-                detail::stencil(uc, bc[j + 1], bc[j - 1], bn[j], bp[j], bn[j + 1], bp[j - 1], wx[i],
-                                wx[i - 1], wy[i], wy[i - s], wd[i], wd[i - s - 1]);
-            const double a = ((-p.beta * vel - p.k_f * uc) - inv_m[i] * ku) + acc[i];
-            if constexpr (S < 5)
-            {
-                p.kv_out[S][i] = a;
-            }
-            else
-            {
-                const double u0 = p.u[i];
-                const double v0 = v[i];
-                double un = u0 + c.h * v0;
-                double vn = v0;
-                double eu = 0.0;
-                double ev = 0.0;
-                for (int m = 0; m < 5; ++m)
-                {
-                    const double k = p.kv[m][i];
-                    un = un + c.ub[m] * k;
-                    vn = vn + c.vb[m] * k;
-                    eu = eu + c.ue[m] * k;
-                    ev = ev + c.ve[m] * k;
-                }
-                vn = vn + c.vb[5] * a;
-                ev = ev + c.ve[5] * a;
-                p.u_out[i] = un;
-                p.v_out[i] = vn;
-                const double su =
-                    std::fabs(eu) / (p.atol + p.rtol * std::max(std::fabs(u0), std::fabs(un)));
-                const double sv =
-                    std::fabs(ev) / (p.atol + p.rtol * std::max(std::fabs(v0), std::fabs(vn)));
-                const double e = x < x_canon ? std::max(su, sv) : 0.0;
-                err = std::max(err, e);
-                probe += (un - un) + (vn - vn);  // NaN iff something is not finite
-            }
+            sr.u_out = p.u_out + static_cast<std::ptrdiff_t>(y) * s;
+            sr.v_out = p.v_out + static_cast<std::ptrdiff_t>(y) * s;
         }
+        sr.y = y;
+        err = std::max(err, detail::stage_row<S>(k, c, sr, r.x0, r.x1, probe));
         double* t = rows[0];
         rows[0] = rows[1];
         rows[1] = rows[2];
@@ -243,29 +137,22 @@ void stage_region(const Planes& p, const Coeffs& c, const core::Region& r, doubl
     probe_out = probe;
 }
 
-// Sets FTZ and DAZ for the current thread for its lifetime (x86 SSE; elsewhere a no-op).
-class FlushDenormals
+template <int S>
+void run_stage(const detail::StageConstants& k, const Planes& p, const Coeffs& c,
+               std::span<const core::Region> regions, Rkf45Workspace& ws)
 {
-public:
-#if defined(__SSE__)
-    FlushDenormals() : saved_(_mm_getcsr())
+    const auto n = static_cast<std::ptrdiff_t>(regions.size());
+    const std::size_t row_len = ws.row_buffer_len / 3;
+#pragma omp for schedule(static)
+    for (std::ptrdiff_t k_ = 0; k_ < n; ++k_)
     {
-        _mm_setcsr(saved_ | 0x8040U);
+        double* buffer = ws.row_buffers.data() +
+                         static_cast<std::size_t>(omp_get_thread_num()) * ws.row_buffer_len;
+        const auto kk = static_cast<std::size_t>(k_);
+        stage_region<S>(k, p, c, regions[kk], buffer, row_len, ws.leaf_error[kk],
+                        ws.leaf_probe[kk]);
     }
-    ~FlushDenormals()
-    {
-        _mm_setcsr(saved_);
-    }
-
-private:
-    unsigned saved_;
-#else
-    FlushDenormals() = default;
-#endif
-public:
-    FlushDenormals(const FlushDenormals&) = delete;
-    FlushDenormals& operator=(const FlushDenormals&) = delete;
-};
+}
 
 struct TrialResult
 {
@@ -273,35 +160,17 @@ struct TrialResult
     bool finite = true;
 };
 
-template <int S>
-void run_stage(const Planes& p, const Coeffs& c, std::span<const core::Region> regions,
-               Rkf45Workspace& ws)
+// One trial step of size h from (state.u, state.v or its masked copy) into ws.u_out / v_out,
+// stage by stage over `regions` (a barrier and a twin/ghost copy between stages).
+void stage_trial(const MembraneModel& model, const MembraneState& state, Rkf45Workspace& ws,
+                 std::span<const core::Region> regions, const Coeffs& c,
+                 const detail::StageConstants& k, int threads, bool restricted)
 {
-    const auto n = static_cast<std::ptrdiff_t>(regions.size());
-#pragma omp for schedule(static)
-    for (std::ptrdiff_t k = 0; k < n; ++k)
-    {
-        double* buffer = ws.row_buffers.data() +
-                         static_cast<std::size_t>(omp_get_thread_num()) * ws.row_buffer_len;
-        const auto kk = static_cast<std::size_t>(k);
-        stage_region<S>(p, c, regions[kk], buffer, ws.leaf_error[kk], ws.leaf_probe[kk]);
-    }
-}
-
-// One trial step of size h from (state.u, state.v or its masked copy) into ws.u_out / v_out.
-TrialResult trial(const MembraneModel& model, const MembraneState& state, Rkf45Workspace& ws,
-                  std::span<const core::Region> regions, double h, int threads, bool restricted)
-{
-    const MembraneSettings& set = model.settings();
-    const Coeffs c = make_coeffs(h);
     Planes p{};
     p.u = state.u.origin();
     p.v = restricted ? ws.v_src.origin() : state.v.origin();
     for (std::size_t m = 0; m < 5; ++m)
-    {
         p.kv[m] = ws.kv[m].origin();
-        p.kv_out[m] = ws.kv[m].origin();
-    }
     p.wx = model.weight_x().origin();
     p.wy = model.weight_y().origin();
     p.wd = model.weight_d().origin();
@@ -310,41 +179,49 @@ TrialResult trial(const MembraneModel& model, const MembraneState& state, Rkf45W
     p.u_out = ws.u_out.origin();
     p.v_out = ws.v_out.origin();
     p.s = state.u.stride();
-    p.beta = set.beta;
-    p.k_f = set.k_f;
-    p.rtol = set.rtol;
-    p.atol = set.atol;
-    p.w = model.grid().w();
 
 #pragma omp parallel num_threads(threads)
     {
-        // Flush denormals to zero on every thread of the pass: the far tails of a wave decay
-        // into denormal numbers, which cost ~100x per operation on x86 (measured: 400+ ns per
-        // node-step instead of tens). Every thread runs in the same mode, so results stay
-        // bit-identical for any thread count.
-        const FlushDenormals flush;
-        run_stage<0>(p, c, regions, ws);
+        // Every thread of the pass flushes denormals (see FlushDenormals); all run in the same
+        // mode, so results stay bit-identical for any thread count.
+        const detail::FlushDenormals flush;
+        run_stage<0>(k, p, c, regions, ws);
 #pragma omp single
         model.sync(ws.kv[0]);
-        run_stage<1>(p, c, regions, ws);
+        run_stage<1>(k, p, c, regions, ws);
 #pragma omp single
         model.sync(ws.kv[1]);
-        run_stage<2>(p, c, regions, ws);
+        run_stage<2>(k, p, c, regions, ws);
 #pragma omp single
         model.sync(ws.kv[2]);
-        run_stage<3>(p, c, regions, ws);
+        run_stage<3>(k, p, c, regions, ws);
 #pragma omp single
         model.sync(ws.kv[3]);
-        run_stage<4>(p, c, regions, ws);
+        run_stage<4>(k, p, c, regions, ws);
 #pragma omp single
         model.sync(ws.kv[4]);
-        run_stage<5>(p, c, regions, ws);
+        run_stage<5>(k, p, c, regions, ws);
     }
+}
+
+// One trial step: the fused row pipeline for full steps (when the grid's copies fit it), the
+// stage-by-stage pass for restricted ones. Both run the same row kernels.
+TrialResult trial(const MembraneModel& model, const MembraneState& state, Rkf45Workspace& ws,
+                  std::span<const core::Region> regions, double h, int threads, bool restricted)
+{
+    const MembraneSettings& set = model.settings();
+    const Coeffs c = detail::make_coeffs(h);
+    const detail::StageConstants k{set.beta, set.k_f, set.rtol, set.atol, model.grid().w()};
+    std::size_t parts = regions.size();
+    if (!restricted && ws.pipeline_ok && ws.use_pipeline)
+        parts = detail::pipeline_trial(model, state, ws, c, k, threads);
+    else
+        stage_trial(model, state, ws, regions, c, k, threads, restricted);
     TrialResult t;
-    for (std::size_t k = 0; k < regions.size(); ++k)
+    for (std::size_t i = 0; i < parts; ++i)
     {
-        t.error = std::max(t.error, ws.leaf_error[k]);
-        if (std::isnan(ws.leaf_probe[k]))
+        t.error = std::max(t.error, ws.leaf_error[i]);
+        if (std::isnan(ws.leaf_probe[i]))
             t.finite = false;
     }
     return t;
@@ -445,6 +322,27 @@ void add_point_force(const MembraneModel& model, Rkf45Workspace& ws, const Force
 
 }  // namespace
 
+detail::Coeffs detail::make_coeffs(double h)
+{
+    Coeffs c{};
+    const double h2 = h * h;
+    c.h = h;
+    for (int s = 0; s < 6; ++s)
+    {
+        c.cu[s] = h * k_fehlberg.c[s];
+        for (int m = 0; m < 6; ++m)
+        {
+            c.ck[s][m] = h2 * k_derived.aa[s][m];
+            c.cv[s][m] = h * k_fehlberg.a[s][m];
+        }
+        c.ub[s] = h2 * k_derived.ba[s];
+        c.vb[s] = h * k_fehlberg.b5[s];
+        c.ue[s] = h2 * k_derived.ea[s];
+        c.ve[s] = h * k_derived.e[s];
+    }
+    return c;
+}
+
 Rkf45Workspace::Rkf45Workspace(const MembraneModel& model, int threads)
 {
     const core::TetraGrid& g = model.grid();
@@ -457,8 +355,11 @@ Rkf45Workspace::Rkf45Workspace(const MembraneModel& model, int threads)
     accel = Field<double>(g, 1);
     row_buffer_len = 3 * static_cast<std::size_t>(g.nx() + 3);
     row_buffers.assign(row_buffer_len * static_cast<std::size_t>(max_threads), 0.0);
-    leaf_error.assign(model.leaf_regions().size(), 0.0);
-    leaf_probe.assign(model.leaf_regions().size(), 0.0);
+    const std::size_t parts =
+        std::max(model.leaf_regions().size(), static_cast<std::size_t>(max_threads));
+    leaf_error.assign(parts, 0.0);
+    leaf_probe.assign(parts, 0.0);
+    detail::plan_pipeline(model, *this);
     touched.reserve(4096);
     next_dt_ = model.settings().dt_initial;
 }

@@ -9,17 +9,23 @@
 /// - The ODE is u' = v, v' = a(u, v) = -beta v - k_f u - M^-1 K u + M^-1 f. Only the six velocity
 ///   slopes kv_s are stored: the displacement slopes are the stage velocities
 ///   V_s = v + h sum_j a_sj kv_j, so the stage displacements are
-///   U_s = u + h c_s v + h^2 sum_m (A^2)_sm kv_m. A stage pass computes U_s for three rows at a
-///   time into a small per-thread buffer and applies the stencil to it, so K is never applied to
-///   a stored stage plane ("fused" stages). The sixth stage is fused with the final update and
-///   the error estimate, so kv_6 is never stored.
+///   U_s = u + h c_s v + h^2 sum_m (A^2)_sm kv_m. U_s is computed a row at a time into a small
+///   per-thread buffer and the stencil reads it there, so K is never applied to a stored stage
+///   plane ("fused" stages). The sixth stage is fused with the final update and the error
+///   estimate, so kv_6 is never stored.
+/// - Full steps run as a row pipeline (src/sim/row_pipeline.cpp, docs/physics.md §8): all six
+///   stages in one sweep over the rows, the slopes in per-thread ring rows, one band of rows per
+///   thread and no barrier inside a step; only u, v and the model are read from memory.
+///   Restricted steps run stage by stage over their regions (kv planes, a barrier and a
+///   twin/ghost copy after each stage). Every node gets the same operations in the same order
+///   either way.
 /// - The propagated solution is the 5th-order one (local extrapolation); the embedded 4th-order
 ///   solution only gives the error estimate, in the max norm over canonical nodes,
 ///   |e_i| / (atol + rtol max(|y_i|, |y_new_i|)) for u and v. Max is order-independent, so the
 ///   error (and hence every accept/reject decision) is identical for any thread count.
-/// - Work is split over the model's quad-tree leaves (OpenMP, static schedule); every node's
-///   arithmetic is the same whichever thread runs it, so results are bit-identical for any
-///   thread count. After each stage the twins and the ghost ring are copied from canonical nodes.
+/// - Every node's arithmetic is the same whichever thread or band runs it, so results are
+///   bit-identical for any thread count. Twins and the ghost ring are copied from canonical
+///   nodes after each slope row (pipeline) or stage (stage pass).
 /// - Restricted steps: only the canonical nodes inside `owned` regions are integrated; all
 ///   others are Dirichlet values held fixed at their step-start u during the step (their v and
 ///   slopes are taken as zero) and are left untouched. Restricting to all leaves gives the full
@@ -134,9 +140,24 @@ public:
     core::Field<double> accel;            ///< force accelerations [m/s^2]
     std::vector<double> row_buffers;      ///< per thread: 3 rows of stage displacements
     std::size_t row_buffer_len = 0;       ///< doubles per thread
-    std::vector<double> leaf_error;       ///< per leaf error norm
-    std::vector<double> leaf_probe;       ///< per leaf NaN probe
-    std::vector<std::int64_t> touched;    ///< accel offsets written by the last force set
+    std::vector<double> leaf_error;       ///< per leaf (or pipeline band) error norm
+    std::vector<double> leaf_probe;       ///< per leaf (or pipeline band) NaN probe
+    // The fused row pipeline of full steps (docs/physics.md §8): per thread, ring rows of
+    // kv_1..kv_4 and the rolling stage-displacement rows; the model's twin and ghost copies
+    // regrouped by the row they read, as column pairs (dst, src) with x + 1 (0 = ghost column
+    // x = -1): copies within row y are row_copies[row_copy_start[y] .. row_copy_start[y + 1]),
+    // the ghost row y = -1 reads row 1 (below_copies), the ghost row y = ny reads row ny - 2
+    // (above_copies).
+    std::vector<double> pipeline_buffers;
+    std::size_t pipeline_buffer_len = 0;  ///< doubles per thread
+    std::size_t pipeline_row_len = 0;     ///< doubles per buffered row (8 + nx + 1, rounded up)
+    std::vector<core::GhostCopy> row_copies;
+    std::vector<std::size_t> row_copy_start;
+    std::vector<core::GhostCopy> below_copies;
+    std::vector<core::GhostCopy> above_copies;
+    bool pipeline_ok = false;  ///< the copies fit the pipeline (always, for TetraGrid's gluing)
+    bool use_pipeline = true;  ///< false: full steps run stage by stage too (tests, benchmarks)
+    std::vector<std::int64_t> touched;  ///< accel offsets written by the last force set
     int max_threads = 1;
 
 private:

@@ -1,0 +1,424 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+//
+// The fused row pipeline of a full RKF45 trial step (docs/physics.md §8).
+//
+// Design
+// - Since u' = v, stage S applies K only to U_S = u + h c_S v + h^2 sum (A^2)_Sm kv_m, and
+//   (A^2)_{S,S-1} = 0: stage S at row y needs kv_{S-1} at row y only and kv_0..kv_{S-2} at rows
+//   y - 1 .. y + 1. A wavefront therefore runs all six stages in one sweep over the rows: at
+//   sweep position j, stages 0 and 1 compute row j, stages 2 and 3 row j - 1, stages 4 and 5
+//   row j - 2. Each pair runs in one loop over the row (stage P + 1 reads kv_P at its own node
+//   only), sharing the loads of v, the weights, 1/m and the forces. Every slope row is read within
+//   three sweep positions of being written, so kv_1..kv_4 live in ring buffers of four rows per
+//   thread (cache resident; kv_5 and kv_6 never leave the loop) instead of five grid planes: a
+//   step reads u, v, the three weights, 1/m and the force plane once and writes u_new and v_new
+//   once (11 doubles per node with the write-allocate, instead of 64).
+// - Twins and ghosts: the gluing keeps every twin and ghost column in its own row, and the ghost
+//   rows y = -1 and y = ny read rows 1 and ny - 2 only (TetraGrid::fold), so the model's copy
+//   table is applied row by row right after a slope row is written: before any later stage
+//   reads it. plan_pipeline checks these rules on the actual table and leaves the pipeline off
+//   otherwise (the stage-by-stage pass then runs).
+// - Threads: the rows are split into one band per thread. A band recomputes the slope rows its
+//   stages need next to it (kv_1, kv_2 two rows beyond each end, kv_3, kv_4 one row), so bands
+//   need no barrier; the extra work is 6 row-stages per band end (under 1 % at level 8 on two
+//   threads). Every node gets the same operations with the same inputs whichever band or thread
+//   computes it, so results are bit-identical for any thread count and to the stage-by-stage
+//   pass of restricted steps.
+//
+// Alternatives rejected: square leaf tiles with a shrinking halo (the first plan): they need a
+// ghost ring of 3 on every model and state plane and redundant halo work on four sides (13 % at
+// 64 x 64), where full-width rows need neither; keeping the kv planes and only reordering the
+// loops: at level 10 the five planes (84 MB) still stream to memory.
+
+#include <omp.h>
+
+#include "sim/rkf45_internal.h"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+namespace pliant::sim::detail
+{
+namespace
+{
+
+constexpr int k_ring = 4;  // rows of kv_m in flight: written at j, last read at j + 3
+// Buffered rows per thread: kv_1..kv_4 rings, their ghost rows below and above, and three
+// rolling U rows for each of the six stages.
+constexpr int k_stored = 4;  // kv_1..kv_4 (kv_5 and kv_6 stay inside the last pair's loop)
+constexpr int k_kv_ghost_row = k_stored * k_ring;
+constexpr int k_U_row = k_kv_ghost_row + 2 * k_stored;
+constexpr int k_rows_per_thread = k_U_row + 3 * 6;
+
+// Rows start k_pad doubles before grid x = 0, so that x = 0 of every buffered row is 64-byte
+// aligned (one cache line: AVX-512 loads of x .. x + 7 then touch one line, not two).
+constexpr std::size_t k_pad = 8;
+
+// One thread's rows (64-byte aligned); row pointers point at grid x = 0 (x = -1 .. nx are
+// valid).
+struct BandBuffers
+{
+    double* base;
+    std::size_t len;
+    int ny;
+
+    [[nodiscard]] double* kv_row(int m, int y) const noexcept
+    {
+        std::size_t r = 0;
+        if (y < 0)
+            r = static_cast<std::size_t>(k_kv_ghost_row + m);
+        else if (y >= ny)
+            r = static_cast<std::size_t>(k_kv_ghost_row + k_stored + m);
+        else
+            r = static_cast<std::size_t>(m * k_ring + (y & (k_ring - 1)));
+        return base + r * len + k_pad;
+    }
+    [[nodiscard]] double* U_row(int stage, int y) const noexcept
+    {
+        const int slot = (y + 3) % 3;  // y >= -1
+        return base + static_cast<std::size_t>(k_U_row + 3 * stage + slot) * len + k_pad;
+    }
+};
+
+// The planes of one trial (ghost-ring-1 origins, one stride).
+struct Inputs
+{
+    const double* u;
+    const double* v;
+    const double* wx;
+    const double* wy;
+    const double* wd;
+    const double* inv_m;
+    const double* acc;
+    double* u_out;
+    double* v_out;
+    std::ptrdiff_t s;
+    int nx;
+    int ny;
+    const Rkf45Workspace* ws;
+
+    [[nodiscard]] const double* row(const double* plane, int y) const noexcept
+    {
+        return plane + static_cast<std::ptrdiff_t>(y) * s;
+    }
+};
+
+// Applies the model's twin and ghost copies that read slope row y of kv_m.
+void copy_row(const Inputs& in, const BandBuffers& b, int m, int y) noexcept
+{
+    const Rkf45Workspace& ws = *in.ws;
+    double* row = b.kv_row(m, y) - 1;  // indexed by x + 1, as the copies
+    const auto ys = static_cast<std::size_t>(y);
+    for (std::size_t i = ws.row_copy_start[ys]; i < ws.row_copy_start[ys + 1]; ++i)
+        row[ws.row_copies[i].dst] = row[ws.row_copies[i].src];
+    if (y == 1)
+    {
+        double* dst = b.kv_row(m, -1) - 1;
+        for (const core::GhostCopy& cp : ws.below_copies)
+            dst[cp.dst] = row[cp.src];
+    }
+    if (y == in.ny - 2)
+    {
+        double* dst = b.kv_row(m, in.ny) - 1;
+        for (const core::GhostCopy& cp : ws.above_copies)
+            dst[cp.dst] = row[cp.src];
+    }
+}
+
+// U_P and U_{P+1} of row yy, x in [-1, nx], in one loop over u and v (and kv_0..kv_3 as each
+// needs), with the operations of fill_row<P> and fill_row<P + 1>.
+template <int P>
+void fill_pair(const Inputs& in, const Coeffs& c, const BandBuffers& b, int yy) noexcept
+{
+    constexpr int A = P;
+    constexpr int B = P + 1;
+    const double* __restrict u = in.row(in.u, yy);
+    const double* __restrict v = in.row(in.v, yy);
+    const double* __restrict k0 = B > 2 ? b.kv_row(0, yy) : nullptr;
+    const double* __restrict k1 = B > 2 ? b.kv_row(1, yy) : nullptr;
+    const double* __restrict k2 = B > 4 ? b.kv_row(2, yy) : nullptr;
+    const double* __restrict k3 = B > 4 ? b.kv_row(3, yy) : nullptr;
+    double* __restrict da = b.U_row(A, yy);
+    double* __restrict db = b.U_row(B, yy);
+    const double cua = c.cu[A];
+    const double cub = c.cu[B];
+#pragma GCC ivdep
+    for (int x = -1; x <= in.nx; ++x)
+    {
+        double ua = u[x] + cua * v[x];
+        if constexpr (A > 1)
+            ua = ua + c.ck[A][0] * k0[x];
+        if constexpr (A > 2)
+            ua = ua + c.ck[A][1] * k1[x];
+        if constexpr (A > 3)
+            ua = ua + c.ck[A][2] * k2[x];
+        double ub = u[x] + cub * v[x];
+        if constexpr (B > 1)
+            ub = ub + c.ck[B][0] * k0[x];
+        if constexpr (B > 2)
+            ub = ub + c.ck[B][1] * k1[x];
+        if constexpr (B > 3)
+            ub = ub + c.ck[B][2] * k2[x];
+        if constexpr (B > 4)
+            ub = ub + c.ck[B][3] * k3[x];
+        da[x] = ua;
+        db[x] = ub;
+    }
+}
+
+// Stages P and P + 1 of row y in one loop, with the operations of stage_row<P> and
+// stage_row<P + 1> (checked bit for bit by tests/sim/pipeline_test.cpp). Stage P + 1 reads
+// kv_P only at its own node: the value just computed, which for a canonical node is what the
+// stage pass reads from the kv_P plane (twins and ghosts are overwritten by copy_row before any
+// other node reads them). P < 4 writes kv_P and kv_{P+1}; P == 4 finishes the step (u_new,
+// v_new: kv_4 and kv_5 are never stored) and returns the row's error norm (see update_row in
+// rkf45_internal.h for the reductions).
+template <int P>
+double pair_row(const Inputs& in, const Coeffs& c, const StageConstants& k, const BandBuffers& b,
+                int y, double& probe) noexcept
+{
+    constexpr int A = P;
+    constexpr int B = P + 1;
+    const double* __restrict v = in.row(in.v, y);
+    const double* __restrict k0 = A > 0 ? b.kv_row(0, y) : nullptr;
+    const double* __restrict k1 = A > 1 ? b.kv_row(1, y) : nullptr;
+    const double* __restrict k2 = A > 2 ? b.kv_row(2, y) : nullptr;
+    const double* __restrict k3 = A > 3 ? b.kv_row(3, y) : nullptr;
+    const double* __restrict wx = in.row(in.wx, y);
+    const double* __restrict wy = in.row(in.wy, y);
+    const double* __restrict wd = in.row(in.wd, y);
+    const double* __restrict wyb = in.row(in.wy, y - 1);
+    const double* __restrict wdb = in.row(in.wd, y - 1);
+    const double* __restrict inv_m = in.row(in.inv_m, y);
+    const double* __restrict acc = in.row(in.acc, y);
+    const double* __restrict ap = b.U_row(A, y - 1);
+    const double* __restrict ac = b.U_row(A, y);
+    const double* __restrict an = b.U_row(A, y + 1);
+    const double* __restrict bp = b.U_row(B, y - 1);
+    const double* __restrict bc = b.U_row(B, y);
+    const double* __restrict bn = b.U_row(B, y + 1);
+    [[maybe_unused]] double* __restrict out_a = P < 4 ? b.kv_row(A, y) : nullptr;
+    [[maybe_unused]] double* __restrict out_b = P < 4 ? b.kv_row(B, y) : nullptr;
+    [[maybe_unused]] const double* __restrict u = in.row(in.u, y);
+    [[maybe_unused]] double* __restrict u_out = in.u_out + static_cast<std::ptrdiff_t>(y) * in.s;
+    [[maybe_unused]] double* __restrict v_out = in.v_out + static_cast<std::ptrdiff_t>(y) * in.s;
+    std::int64_t err_bits = 0;
+    std::int64_t bad = 0;
+    const int x_canon = (y == 0 || y == k.w) ? k.w + 1 : 2 * k.w;
+    const int nx = in.nx;
+#pragma GCC ivdep
+    for (int x = 0; x < nx; ++x)
+    {
+        double kk[5] = {};
+        if constexpr (A > 0)
+            kk[0] = k0[x];
+        if constexpr (A > 1)
+            kk[1] = k1[x];
+        if constexpr (A > 2)
+            kk[2] = k2[x];
+        if constexpr (A > 3)
+            kk[3] = k3[x];
+        double vel = v[x];
+        for (int m = 0; m < A; ++m)
+            vel = vel + c.cv[A][m] * kk[m];
+        const double uc = ac[x];
+        const double ku = stencil(uc, ac[x + 1], ac[x - 1], an[x], ap[x], an[x + 1], ap[x - 1],
+                                  wx[x], wx[x - 1], wy[x], wyb[x], wd[x], wdb[x - 1]);
+        const double sa = ((-k.beta * vel - k.k_f * uc) - inv_m[x] * ku) + acc[x];
+        kk[A] = sa;
+        double vel_b = v[x];
+        for (int m = 0; m < B; ++m)
+            vel_b = vel_b + c.cv[B][m] * kk[m];
+        const double ucb = bc[x];
+        const double kub = stencil(ucb, bc[x + 1], bc[x - 1], bn[x], bp[x], bn[x + 1], bp[x - 1],
+                                   wx[x], wx[x - 1], wy[x], wyb[x], wd[x], wdb[x - 1]);
+        const double sb = ((-k.beta * vel_b - k.k_f * ucb) - inv_m[x] * kub) + acc[x];
+        if constexpr (P < 4)
+        {
+            out_a[x] = sa;
+            out_b[x] = sb;
+        }
+        else
+        {
+            const double u0 = u[x];
+            const double v0 = v[x];
+            double un = u0 + c.h * v0;
+            double vn = v0;
+            double eu = 0.0;
+            double ev = 0.0;
+            for (int m = 0; m < 5; ++m)
+            {
+                un = un + c.ub[m] * kk[m];
+                vn = vn + c.vb[m] * kk[m];
+                eu = eu + c.ue[m] * kk[m];
+                ev = ev + c.ve[m] * kk[m];
+            }
+            vn = vn + c.vb[5] * sb;
+            ev = ev + c.ve[5] * sb;
+            u_out[x] = un;
+            v_out[x] = vn;
+            const double su =
+                std::fabs(eu) / (k.atol + k.rtol * std::max(std::fabs(u0), std::fabs(un)));
+            const double sv =
+                std::fabs(ev) / (k.atol + k.rtol * std::max(std::fabs(v0), std::fabs(vn)));
+            const double e = x < x_canon ? std::max(su, sv) : 0.0;
+            err_bits = std::max(err_bits, std::bit_cast<std::int64_t>(e > 0.0 ? e : 0.0));
+            const double nan_probe = (un - un) + (vn - vn);
+            bad |= nan_probe != 0.0 ? 1 : 0;
+        }
+    }
+    if (bad != 0)
+        probe = std::numeric_limits<double>::quiet_NaN();
+    return std::bit_cast<double>(err_bits);
+}
+
+// Stages P and P + 1 at row y (the band's first row of this pair is `first`): the next U rows,
+// the pair kernel, then the copies of the new slope rows. Returns the row's error norm (P = 4).
+template <int P>
+double stage_pair(const Inputs& in, const Coeffs& c, const StageConstants& k, const BandBuffers& b,
+                  int y, int first, double& probe) noexcept
+{
+    if (y == first)
+    {
+        fill_pair<P>(in, c, b, y - 1);
+        fill_pair<P>(in, c, b, y);
+    }
+    fill_pair<P>(in, c, b, y + 1);
+    const double err = pair_row<P>(in, c, k, b, y, probe);
+    if constexpr (P < 4)
+    {
+        copy_row(in, b, P, y);
+        copy_row(in, b, P + 1, y);
+    }
+    return err;
+}
+
+// Rows [y0, y1) of the new state: the wavefront, with the slope rows beyond the band that its
+// stages read recomputed here.
+void run_band(const Inputs& in, const Coeffs& c, const StageConstants& k, const BandBuffers& b,
+              int y0, int y1, double& err, double& probe) noexcept
+{
+    const int lo01 = std::max(0, y0 - 2);
+    const int hi01 = std::min(in.ny, y1 + 2);
+    const int lo23 = std::max(0, y0 - 1);
+    const int hi23 = std::min(in.ny, y1 + 1);
+    for (int j = lo01; j <= y1 + 1; ++j)
+    {
+        if (j < hi01)
+            (void)stage_pair<0>(in, c, k, b, j, lo01, probe);
+        if (const int y = j - 1; y >= lo23 && y < hi23)
+            (void)stage_pair<2>(in, c, k, b, y, lo23, probe);
+        if (const int y = j - 2; y >= y0 && y < y1)
+            err = std::max(err, stage_pair<4>(in, c, k, b, y, y0, probe));
+    }
+}
+
+// The first 64-byte boundary in the pipeline buffers (they hold 8 spare doubles for it).
+double* aligned_rows(Rkf45Workspace& ws) noexcept
+{
+    double* p = ws.pipeline_buffers.data();
+    const auto misalign = reinterpret_cast<std::uintptr_t>(p) % 64U;
+    return misalign == 0 ? p : p + (64U - misalign) / sizeof(double);
+}
+
+}  // namespace
+
+void plan_pipeline(const MembraneModel& model, Rkf45Workspace& ws)
+{
+    const core::TetraGrid& g = model.grid();
+    const int nx = g.nx();
+    const int ny = g.ny();
+    const std::ptrdiff_t stride = nx + 2;
+    ws.pipeline_row_len = (k_pad + static_cast<std::size_t>(nx) + 1 + 7) / 8 * 8;
+    ws.pipeline_buffer_len = static_cast<std::size_t>(k_rows_per_thread) * ws.pipeline_row_len;
+    // + 8: room to align the first row to 64 bytes (aligned_rows).
+    ws.pipeline_buffers.assign(
+        ws.pipeline_buffer_len * static_cast<std::size_t>(ws.max_threads) + 8, 0.0);
+    std::vector<std::vector<core::GhostCopy>> per_row(static_cast<std::size_t>(ny));
+    ws.below_copies.clear();
+    ws.above_copies.clear();
+    // Each position of the ghost ring must be written exactly once.
+    std::vector<int> written(static_cast<std::size_t>(stride * (ny + 2)), 0);
+    bool ok = ny >= 3;
+    for (const core::GhostCopy& cp : model.sync_table())
+    {
+        const auto dy = static_cast<int>(cp.dst / stride) - 1;
+        const auto dx = static_cast<int>(cp.dst % stride) - 1;
+        const auto sy = static_cast<int>(cp.src / stride) - 1;
+        const auto sx = static_cast<int>(cp.src % stride) - 1;
+        const core::GhostCopy cols{dx + 1, sx + 1};
+        ++written[static_cast<std::size_t>(cp.dst)];
+        if (sx < 0 || sx >= nx || sy < 0 || sy >= ny)
+            ok = false;
+        else if (dy == sy)
+            per_row[static_cast<std::size_t>(sy)].push_back(cols);
+        else if (dy == -1 && sy == 1)
+            ws.below_copies.push_back(cols);
+        else if (dy == ny && sy == ny - 2)
+            ws.above_copies.push_back(cols);
+        else
+            ok = false;
+    }
+    for (int y = -1; y <= ny; ++y)
+        for (int x = -1; x <= nx; ++x)
+            if ((y < 0 || y >= ny || x < 0 || x >= nx) &&
+                written[static_cast<std::size_t>((y + 1) * stride + x + 1)] != 1)
+                ok = false;
+    ws.row_copies.clear();
+    ws.row_copy_start.assign(1, 0);
+    for (const auto& copies : per_row)
+    {
+        ws.row_copies.insert(ws.row_copies.end(), copies.begin(), copies.end());
+        ws.row_copy_start.push_back(ws.row_copies.size());
+    }
+    ws.pipeline_ok = ok;
+}
+
+std::size_t pipeline_trial(const MembraneModel& model, const MembraneState& state,
+                           Rkf45Workspace& ws, const Coeffs& c, const StageConstants& k,
+                           int threads)
+{
+    const core::TetraGrid& g = model.grid();
+    Inputs in{};
+    in.u = state.u.origin();
+    in.v = state.v.origin();
+    in.wx = model.weight_x().origin();
+    in.wy = model.weight_y().origin();
+    in.wd = model.weight_d().origin();
+    in.inv_m = model.inverse_mass().origin();
+    in.acc = ws.accel.origin();
+    in.u_out = ws.u_out.origin();
+    in.v_out = ws.v_out.origin();
+    in.s = state.u.stride();
+    in.nx = g.nx();
+    in.ny = g.ny();
+    in.ws = &ws;
+    const int bands = std::clamp(threads, 1, in.ny);
+    double* const rows = aligned_rows(ws);
+#pragma omp parallel num_threads(threads)
+    {
+        // Denormals flushed on every thread (see FlushDenormals): the same mode everywhere.
+        const FlushDenormals flush;
+#pragma omp for schedule(static)
+        for (int band = 0; band < bands; ++band)
+        {
+            const BandBuffers b{
+                rows + static_cast<std::size_t>(omp_get_thread_num()) * ws.pipeline_buffer_len,
+                ws.pipeline_row_len, in.ny};
+            const int y0 = in.ny * band / bands;
+            const int y1 = in.ny * (band + 1) / bands;
+            double err = 0.0;
+            double probe = 0.0;
+            run_band(in, c, k, b, y0, y1, err, probe);
+            ws.leaf_error[static_cast<std::size_t>(band)] = err;
+            ws.leaf_probe[static_cast<std::size_t>(band)] = probe;
+        }
+    }
+    return static_cast<std::size_t>(bands);
+}
+
+}  // namespace pliant::sim::detail

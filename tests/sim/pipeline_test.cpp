@@ -1,0 +1,311 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+// The fused row pipeline of full steps (src/sim/row_pipeline.cpp) against (1) the stage-by-stage
+// pass, bit for bit, and (2) a slow straightforward RKF45 step written here from the classic
+// tableau: full stage planes U_s, V_s, kv_s, K applied with apply_stiffness, Dirichlet nodes
+// outside the owned regions, the error norm over canonical nodes found by TetraGrid.
+
+#include <pliant/sim/rkf45.h>
+
+#include <gtest/gtest.h>
+
+#include "sim_test_util.h"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+namespace pliant::sim
+{
+namespace
+{
+
+MembraneSettings settings(int threads, bool fixed, int leaf_depth = -1)
+{
+    MembraneSettings s;
+    s.beta = 0.4;
+    s.k_f = 0.7;
+    s.rtol = 1e-5;
+    s.threads = threads;
+    s.fixed_step = fixed;
+    s.fixed_dt = 0.002;
+    s.leaf_depth = leaf_depth;
+    return s;
+}
+
+// A state with structure everywhere, corners and seams included.
+MembraneState initial_state(const MembraneModel& m)
+{
+    MembraneState s = MembraneState::at_rest(m.grid());
+    test::set_field(m, s.u,
+                    [](const core::Vec3& p) { return 0.01 * p.x * p.z + 0.003 * p.y - 0.002; });
+    test::set_field(m, s.v, [](const core::Vec3& p) { return 0.02 * p.y * p.y - 0.01 * p.z; });
+    return s;
+}
+
+// A point force near the tetrahedron corner (0, 0), one on face 0 (at that corner), and a
+// point force on the seam x = 0 / x = 2W.
+std::vector<Force> forces_for(const MembraneModel& m)
+{
+    const core::TetraGrid& g = m.grid();
+    const core::Vec3 corner = test::rest(m, g.index(0, 0));
+    const core::Vec3 seam = test::rest(m, g.index(0, g.w() / 2));
+    return {{-1, corner, 0.5, {0.1, 0.3, 0.2}},
+            {0, {}, 0.0, {1.0, 0.0, 0.5}},
+            {-1, seam, 0.3, {-0.2, 0.1, 0.4}}};
+}
+
+// Owned regions of a "peer": a few leaves and single-row runs through the corners and the
+// seam, as sessions pass them.
+std::vector<core::Region> some_regions(const MembraneModel& m)
+{
+    const core::TetraGrid& g = m.grid();
+    const int w = g.w();
+    std::vector<core::Region> r;
+    const auto leaves = m.leaf_regions();
+    for (std::size_t k = 0; k < leaves.size(); k += 3)
+        r.push_back(leaves[k]);
+    r.push_back({0, 0, w / 2 + 1, 1});          // bottom row from corner a
+    r.push_back({w - 1, w, w + 1, w + 1});      // around corner c on the top row
+    r.push_back({2 * w - 1, 1, 2 * w + 1, 2});  // the seam x = 2W
+    return r;
+}
+
+std::vector<MembraneState> run(MembraneModel m, bool pipeline, std::span<const core::Region> owned,
+                               int steps, std::vector<StepReport>& reports)
+{
+    MembraneState s = initial_state(m);
+    Rkf45Workspace ws(m, std::max(1, m.settings().threads));
+    EXPECT_TRUE(ws.pipeline_ok);
+    ws.use_pipeline = pipeline;
+    const std::vector<Force> f = forces_for(m);
+    StepOptions opt;
+    opt.owned = owned;
+    std::vector<MembraneState> states;
+    for (int k = 0; k < steps; ++k)
+    {
+        reports.push_back(step(
+            m, s, ws, k < steps / 2 ? std::span<const Force>(f) : std::span<const Force>(), opt));
+        states.push_back(s);
+    }
+    return states;
+}
+
+TEST(Pipeline, PlannedForEveryLevel)
+{
+    for (int level = 1; level <= 10; ++level)
+    {
+        MembraneModel m = test::sphere_model(level, settings(1, true));
+        const Rkf45Workspace ws(m, 3);
+        EXPECT_TRUE(ws.pipeline_ok) << "level " << level;
+        EXPECT_EQ(ws.below_copies.size(), static_cast<std::size_t>(m.grid().nx() + 2));
+        EXPECT_EQ(ws.above_copies.size(), static_cast<std::size_t>(m.grid().nx() + 2));
+    }
+}
+
+// The pipeline (any number of bands) and the stage-by-stage pass give the same bits, step by
+// step, in adaptive (with rejections) and fixed mode; so do restricted steps over all leaves.
+TEST(Pipeline, EqualsStageByStagePassBitForBit)
+{
+    for (int level = 1; level <= 6; ++level)
+        for (const bool fixed : {false, true})
+        {
+            std::vector<StepReport> ref_reports;
+            const std::vector<MembraneState> ref =
+                run(test::sphere_model(level, settings(1, fixed)), false, {}, 24, ref_reports);
+            for (const int threads : {1, 2, 3})
+            {
+                std::vector<StepReport> reports;
+                const std::vector<MembraneState> got =
+                    run(test::sphere_model(level, settings(threads, fixed)), true, {}, 24, reports);
+                for (std::size_t k = 0; k < ref.size(); ++k)
+                {
+                    ASSERT_EQ(got[k].hash(), ref[k].hash())
+                        << "level " << level << (fixed ? " fixed" : " adaptive") << ", " << threads
+                        << " threads, step " << k;
+                    ASSERT_EQ(got[k].u, ref[k].u);
+                    ASSERT_EQ(got[k].v, ref[k].v);
+                    ASSERT_EQ(reports[k].dt, ref_reports[k].dt);
+                    ASSERT_EQ(reports[k].error, ref_reports[k].error);
+                    ASSERT_EQ(reports[k].rejections, ref_reports[k].rejections);
+                }
+            }
+            // Restricted to every leaf: the stage pass again, equal to the pipeline.
+            MembraneModel m = test::sphere_model(level, settings(2, fixed));
+            const std::vector<core::Region> all(m.leaf_regions().begin(), m.leaf_regions().end());
+            std::vector<StepReport> reports;
+            const std::vector<MembraneState> got = run(std::move(m), true, all, 24, reports);
+            for (std::size_t k = 0; k < ref.size(); ++k)
+                ASSERT_EQ(got[k].hash(), ref[k].hash()) << "level " << level << " restricted";
+        }
+}
+
+// The slow reference: one RKF45 step of size h with the classic tableau on full planes.
+struct ReferenceStep
+{
+    core::Field<double> u, v;
+    double error = 0.0;
+};
+
+ReferenceStep reference_step(const MembraneModel& m, const MembraneState& s0,
+                             const core::Field<double>& accel, double h,
+                             std::span<const core::Region> owned)
+{
+    static constexpr double c[6] = {0.0, 1.0 / 4.0, 3.0 / 8.0, 12.0 / 13.0, 1.0, 1.0 / 2.0};
+    static constexpr double a[6][5] = {
+        {0, 0, 0, 0, 0},
+        {1.0 / 4.0, 0, 0, 0, 0},
+        {3.0 / 32.0, 9.0 / 32.0, 0, 0, 0},
+        {1932.0 / 2197.0, -7200.0 / 2197.0, 7296.0 / 2197.0, 0, 0},
+        {439.0 / 216.0, -8.0, 3680.0 / 513.0, -845.0 / 4104.0, 0},
+        {-8.0 / 27.0, 2.0, -3544.0 / 2565.0, 1859.0 / 4104.0, -11.0 / 40.0}};
+    static constexpr double b5[6] = {16.0 / 135.0,      0.0,         6656.0 / 12825.0,
+                                     28561.0 / 56430.0, -9.0 / 50.0, 2.0 / 55.0};
+    static constexpr double b4[6] = {25.0 / 216.0,    0.0,        1408.0 / 2565.0,
+                                     2197.0 / 4104.0, -1.0 / 5.0, 0.0};
+    (void)c;
+    const core::TetraGrid& g = m.grid();
+    const MembraneSettings& set = m.settings();
+    // A node moves iff its canonical node lies in an owned region (all nodes when none).
+    const auto moves = [&](int x, int y)
+    {
+        if (owned.empty())
+            return true;
+        const core::GridCoord cc = g.coord(g.canonical(g.index(x, y)));
+        for (const core::Region& r : owned)
+            if (r.contains(cc.x, cc.y))
+                return true;
+        return false;
+    };
+    std::vector<core::Field<double>> U(6, core::Field<double>(g, 1)),
+        V(6, core::Field<double>(g, 1)), kv(6, core::Field<double>(g, 1));
+    core::Field<double> Ku(g, 1);
+    for (int s = 0; s < 6; ++s)
+    {
+        for (int y = 0; y < g.ny(); ++y)
+            for (int x = 0; x < g.nx(); ++x)
+            {
+                if (!moves(x, y))
+                {
+                    U[s].at(x, y) = s0.u.at(x, y);
+                    V[s].at(x, y) = 0.0;
+                    continue;
+                }
+                double du = 0.0;
+                double dv = 0.0;
+                for (int j = 0; j < s; ++j)
+                {
+                    du += a[s][j] * V[j].at(x, y);
+                    dv += a[s][j] * kv[j].at(x, y);
+                }
+                U[s].at(x, y) = s0.u.at(x, y) + h * du;
+                V[s].at(x, y) = s0.v.at(x, y) + h * dv;
+            }
+        m.sync(U[s]);
+        m.sync(V[s]);
+        apply_stiffness(m, U[s], Ku);
+        for (int y = 0; y < g.ny(); ++y)
+            for (int x = 0; x < g.nx(); ++x)
+                kv[s].at(x, y) = moves(x, y)
+                                     ? -set.beta * V[s].at(x, y) - set.k_f * U[s].at(x, y) -
+                                           m.inverse_mass().at(x, y) * Ku.at(x, y) + accel.at(x, y)
+                                     : 0.0;
+        m.sync(kv[s]);
+    }
+    ReferenceStep out{s0.u, s0.v, 0.0};
+    for (int y = 0; y < g.ny(); ++y)
+        for (int x = 0; x < g.nx(); ++x)
+        {
+            if (!moves(x, y))
+                continue;
+            double du = 0.0, dv = 0.0, eu = 0.0, ev = 0.0;
+            for (int j = 0; j < 6; ++j)
+            {
+                du += b5[j] * V[j].at(x, y);
+                dv += b5[j] * kv[j].at(x, y);
+                eu += (b5[j] - b4[j]) * V[j].at(x, y);
+                ev += (b5[j] - b4[j]) * kv[j].at(x, y);
+            }
+            const double u0 = s0.u.at(x, y);
+            const double v0 = s0.v.at(x, y);
+            const double un = u0 + h * du;
+            const double vn = v0 + h * dv;
+            out.u.at(x, y) = un;
+            out.v.at(x, y) = vn;
+            if (g.is_canonical(g.index(x, y)))
+                out.error =
+                    std::max({out.error,
+                              std::fabs(h * eu) /
+                                  (set.atol + set.rtol * std::max(std::fabs(u0), std::fabs(un))),
+                              std::fabs(h * ev) /
+                                  (set.atol + set.rtol * std::max(std::fabs(v0), std::fabs(vn)))});
+        }
+    m.sync(out.u);
+    m.sync(out.v);
+    return out;
+}
+
+double max_abs(const core::Field<double>& f)
+{
+    double worst = 0.0;
+    for (const double x : f.padded())
+        worst = std::max(worst, std::fabs(x));
+    return worst;
+}
+
+// Largest difference over the whole padded plane (ghost ring and twins included).
+double max_diff(const core::Field<double>& a, const core::Field<double>& b)
+{
+    double worst = 0.0;
+    for (std::size_t i = 0; i < a.padded().size(); ++i)
+        worst = std::max(worst, std::fabs(a.padded()[i] - b.padded()[i]));
+    return worst;
+}
+
+TEST(Pipeline, MatchesStraightforwardStep)
+{
+    for (int level = 1; level <= 5; ++level)
+        for (const bool restricted : {false, true})
+            for (const int threads : {1, 2})
+            {
+                MembraneModel m = test::sphere_model(level, settings(threads, true, 1));
+                const std::vector<core::Region> owned =
+                    restricted ? some_regions(m) : std::vector<core::Region>{};
+                MembraneState s = initial_state(m);
+                Rkf45Workspace ws(m, threads);
+                const std::vector<Force> f = forces_for(m);
+                // Reach a state with every slope non-zero, then compare one step.
+                for (int k = 0; k < 3; ++k)
+                    (void)step(m, s, ws, f);
+                const MembraneState before = s;
+                set_forces(m, ws, f);
+                const double h = m.settings().fixed_dt;
+                const ReferenceStep ref = reference_step(m, before, ws.accel, h, owned);
+                StepOptions opt;
+                opt.owned = owned;
+                const StepReport r = step_prepared(m, s, ws, opt);
+                const std::string where = "level " + std::to_string(level) +
+                                          (restricted ? " restricted" : " full") + ", " +
+                                          std::to_string(threads) + " threads";
+                // Same arithmetic in another order: agreement to rounding.
+                EXPECT_LE(max_diff(s.u, ref.u), 1e-13 * max_abs(ref.u)) << where;
+                EXPECT_LE(max_diff(s.v, ref.v), 1e-13 * max_abs(ref.v)) << where;
+                // The estimate is a small difference (tiny at level 1, where it nears the
+                // rounding of u and v scaled by 1/atol): relative plus absolute tolerance.
+                EXPECT_NEAR(r.error, ref.error, 1e-6 * ref.error + 1e-10) << where;
+                EXPECT_GT(ref.error, 0.0);
+                // The nodes that do not move keep their bits.
+                if (restricted)
+                    for (int y = 0; y < m.grid().ny(); ++y)
+                        for (int x = 0; x < m.grid().nx(); ++x)
+                            if (ref.u.at(x, y) == before.u.at(x, y) &&
+                                ref.v.at(x, y) == before.v.at(x, y))
+                            {
+                                ASSERT_EQ(s.u.at(x, y), before.u.at(x, y)) << where;
+                                ASSERT_EQ(s.v.at(x, y), before.v.at(x, y)) << where;
+                            }
+            }
+}
+
+}  // namespace
+}  // namespace pliant::sim
