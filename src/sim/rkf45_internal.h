@@ -131,6 +131,42 @@ inline void fill_row(const Coeffs& c, const double* __restrict u, const double* 
     }
 }
 
+// The fused last stage at one node: u_new, v_new from u0, v0, the slopes kk[0..4] and the sixth
+// slope `a`, and the node's error (canonical nodes only) folded into err_bits, its non-finite
+// result into `bad`. The error norm is a max over non-negative doubles, kept as the max of their
+// bit patterns (IEEE order equals integer order for them) and the NaN probe as an integer flag:
+// integer reductions vectorise, floating-point ones would not without reassociation
+// (-ffast-math). NaN errors count as 0, as std::max(err, NaN) == err did; a NaN there implies a
+// non-finite u_new or v_new, which the probe reports. Shared by stage_row (the stage pass) and
+// the row pipeline, so both make the same operations in the same order.
+[[gnu::always_inline]] inline void update_node(const StageConstants& k, const Coeffs& c, double u0,
+                                               double v0, const double (&kk)[5], double a,
+                                               bool canonical, double& u_new, double& v_new,
+                                               std::int64_t& err_bits, std::int64_t& bad) noexcept
+{
+    double un = u0 + c.h * v0;
+    double vn = v0;
+    double eu = 0.0;
+    double ev = 0.0;
+    for (int m = 0; m < 5; ++m)
+    {
+        un = un + c.ub[m] * kk[m];
+        vn = vn + c.vb[m] * kk[m];
+        eu = eu + c.ue[m] * kk[m];
+        ev = ev + c.ve[m] * kk[m];
+    }
+    vn = vn + c.vb[5] * a;
+    ev = ev + c.ve[5] * a;
+    u_new = un;
+    v_new = vn;
+    const double su = std::fabs(eu) / (k.atol + k.rtol * std::max(std::fabs(u0), std::fabs(un)));
+    const double sv = std::fabs(ev) / (k.atol + k.rtol * std::max(std::fabs(v0), std::fabs(vn)));
+    const double e = canonical ? std::max(su, sv) : 0.0;
+    err_bits = std::max(err_bits, std::bit_cast<std::int64_t>(e > 0.0 ? e : 0.0));
+    const double nan_probe = (un - un) + (vn - vn);  // NaN iff something is not finite
+    bad |= nan_probe != 0.0 ? 1 : 0;
+}
+
 // The stage-S slopes of row r.y for x in [x0, x1). S < 5 writes kv_S; S == 5 writes u_new and
 // v_new and returns the row's error norm over canonical nodes (max); a non-finite u_new or v_new
 // sets `probe` to NaN.
@@ -154,11 +190,7 @@ inline double stage_row(const StageConstants& k, const Coeffs& c, const StageRow
     const double* __restrict k2 = r.kv[2];
     const double* __restrict k3 = r.kv[3];
     const double* __restrict k4 = r.kv[4];
-    // The error norm is a max over non-negative doubles, kept as the max of their bit patterns
-    // (IEEE order equals integer order for them) and the NaN probe as an integer flag: integer
-    // reductions vectorise, floating-point ones would not without reassociation (-ffast-math).
-    // NaN errors count as 0, as std::max(err, NaN) == err did; a NaN there implies a non-finite
-    // u_new or v_new, which the probe reports.
+    // Error norm and NaN probe as integers (update_node says why).
     std::int64_t err_bits = 0;
     std::int64_t bad = 0;
     // Canonical nodes of this row: x < 2W, and x <= W on the folded rows y = 0 and y = W.
@@ -191,32 +223,8 @@ inline double stage_row(const StageConstants& k, const Coeffs& c, const StageRow
         }
         else
         {
-            const double u0 = u[x];
-            const double v0 = v[x];
             const double kk[5] = {k0[x], k1[x], k2[x], k3[x], k4[x]};
-            double un = u0 + c.h * v0;
-            double vn = v0;
-            double eu = 0.0;
-            double ev = 0.0;
-            for (int m = 0; m < 5; ++m)
-            {
-                un = un + c.ub[m] * kk[m];
-                vn = vn + c.vb[m] * kk[m];
-                eu = eu + c.ue[m] * kk[m];
-                ev = ev + c.ve[m] * kk[m];
-            }
-            vn = vn + c.vb[5] * a;
-            ev = ev + c.ve[5] * a;
-            u_out[x] = un;
-            v_out[x] = vn;
-            const double su =
-                std::fabs(eu) / (k.atol + k.rtol * std::max(std::fabs(u0), std::fabs(un)));
-            const double sv =
-                std::fabs(ev) / (k.atol + k.rtol * std::max(std::fabs(v0), std::fabs(vn)));
-            const double e = x < x_canon ? std::max(su, sv) : 0.0;
-            err_bits = std::max(err_bits, std::bit_cast<std::int64_t>(e > 0.0 ? e : 0.0));
-            const double nan_probe = (un - un) + (vn - vn);  // NaN iff something is not finite
-            bad |= nan_probe != 0.0 ? 1 : 0;
+            update_node(k, c, u[x], v[x], kk, a, x < x_canon, u_out[x], v_out[x], err_bits, bad);
         }
     }
     if (bad != 0)

@@ -244,31 +244,7 @@ double pair_row(const Inputs& in, const Coeffs& c, const StageConstants& k, cons
         }
         else
         {
-            const double u0 = u[x];
-            const double v0 = v[x];
-            double un = u0 + c.h * v0;
-            double vn = v0;
-            double eu = 0.0;
-            double ev = 0.0;
-            for (int m = 0; m < 5; ++m)
-            {
-                un = un + c.ub[m] * kk[m];
-                vn = vn + c.vb[m] * kk[m];
-                eu = eu + c.ue[m] * kk[m];
-                ev = ev + c.ve[m] * kk[m];
-            }
-            vn = vn + c.vb[5] * sb;
-            ev = ev + c.ve[5] * sb;
-            u_out[x] = un;
-            v_out[x] = vn;
-            const double su =
-                std::fabs(eu) / (k.atol + k.rtol * std::max(std::fabs(u0), std::fabs(un)));
-            const double sv =
-                std::fabs(ev) / (k.atol + k.rtol * std::max(std::fabs(v0), std::fabs(vn)));
-            const double e = x < x_canon ? std::max(su, sv) : 0.0;
-            err_bits = std::max(err_bits, std::bit_cast<std::int64_t>(e > 0.0 ? e : 0.0));
-            const double nan_probe = (un - un) + (vn - vn);
-            bad |= nan_probe != 0.0 ? 1 : 0;
+            update_node(k, c, u[x], v[x], kk, sb, x < x_canon, u_out[x], v_out[x], err_bits, bad);
         }
     }
     if (bad != 0)
