@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include "stats_csv.h"
 #include "support/test_paths.h"
 
 #include <chrono>
@@ -17,43 +18,7 @@
 namespace
 {
 
-std::string read(const std::filesystem::path& p)
-{
-    std::ifstream in(p);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-}
-
-// Sum of a CSV column over the data rows.
-double column_sum(const std::filesystem::path& csv, const std::string& name)
-{
-    std::ifstream in(csv);
-    std::string line;
-    if (!std::getline(in, line))
-        return -1.0;
-    std::vector<std::string> header;
-    std::stringstream hs(line);
-    for (std::string cell; std::getline(hs, cell, ',');)
-        header.push_back(cell);
-    std::size_t col = header.size();
-    for (std::size_t k = 0; k < header.size(); ++k)
-        if (header[k] == name)
-            col = k;
-    if (col == header.size())
-        return -1.0;
-    double sum = 0.0;
-    while (std::getline(in, line))
-    {
-        std::stringstream ls(line);
-        std::string cell;
-        for (std::size_t k = 0; k <= col && std::getline(ls, cell, ','); ++k)
-        {
-        }
-        sum += std::atof(cell.c_str());
-    }
-    return sum;
-}
+using namespace pliant::session::test;  // read, rows, value, column_sum (stats_csv.h)
 
 TEST(SessionCli, HostAndTwoJoinsAsProcessesExchangeTraffic)
 {
@@ -88,38 +53,6 @@ TEST(SessionCli, HostAndTwoJoinsAsProcessesExchangeTraffic)
     EXPECT_GT(column_sum(dir / "p1.csv", "bytes_out"), 1000.0);  // halos and leaf states
     EXPECT_GT(column_sum(dir / "p1.csv", "steps"), 10.0);
     EXPECT_EQ(column_sum(dir / "v.csv", "steps"), 0.0);  // a viewer simulates nothing
-}
-
-// Rows of a CSV as maps from column name to value.
-std::vector<std::vector<std::pair<std::string, double>>> rows(const std::filesystem::path& csv)
-{
-    std::ifstream in(csv);
-    std::string line;
-    std::vector<std::string> header;
-    std::vector<std::vector<std::pair<std::string, double>>> out;
-    if (!std::getline(in, line))
-        return out;
-    std::stringstream hs(line);
-    for (std::string cell; std::getline(hs, cell, ',');)
-        header.push_back(cell);
-    while (std::getline(in, line))
-    {
-        std::stringstream ls(line);
-        std::vector<std::pair<std::string, double>> row;
-        std::string cell;
-        for (std::size_t k = 0; k < header.size() && std::getline(ls, cell, ','); ++k)
-            row.emplace_back(header[k], std::atof(cell.c_str()));
-        out.push_back(std::move(row));
-    }
-    return out;
-}
-
-double value(const std::vector<std::pair<std::string, double>>& row, const std::string& name)
-{
-    for (const auto& [k, v] : row)
-        if (k == name)
-            return v;
-    return -1.0;
 }
 
 // Kill -9 a participant, then the master, mid-session (fast coupling, so that the others keep

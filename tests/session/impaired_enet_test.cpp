@@ -33,22 +33,6 @@ namespace pliant::session::test
 namespace
 {
 
-constexpr double k_pi = 3.141592653589793;
-
-// Peer k's drag at time t [s]: 0.5 N turning at 1 Hz on the nodes within 0.3 m of its point
-// (as tests/session/fast_coupling_test.cpp).
-net::UserForce drag(int k, double t)
-{
-    static constexpr double points[3][3] = {{0.0, 0.0, 1.0}, {0.0, 0.0, -1.0}, {1.0, 0.0, 0.0}};
-    net::UserForce f;
-    f.target.kind = net::TargetKind::Position;
-    f.target.position = {points[k][0], points[k][1], points[k][2]};
-    f.target.radius = 0.3;
-    const double a = 2.0 * k_pi * t + k;
-    f.force = {0.5 * std::cos(a), 0.5 * std::sin(a), -0.3 * (points[k][2] + points[k][0])};
-    return f;
-}
-
 // The harness's material with a 4 ms step (16 steps per 60 Hz frame would be 1 ms): the
 // sessions run in real time, also in sanitizer builds on 2 cores, and the grid's fastest mode
 // at level 5 (~40 rad/s) stays far inside RKF45's stability region.
@@ -229,7 +213,7 @@ TEST(SessionImpaired, FastSessionOverEnetThroughALossyDelayingRelay)
             fr.time = peers[0]->time();
             for (std::size_t k = 0; k < simulating; ++k)
             {
-                const net::UserForce u = drag(static_cast<int>(k), now - start);
+                const net::UserForce u = turning_drag(static_cast<int>(k), now - start);
                 peers[k]->set_forces({u});
                 fr.forces.push_back(to_sim_force(u));
             }

@@ -21,6 +21,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "stats_csv.h"
 #include "support/test_paths.h"
 
 #include <algorithm>
@@ -34,6 +35,8 @@
 
 namespace
 {
+
+using namespace pliant::session::test;  // read, rows, value, column_sum (stats_csv.h)
 
 struct Shell
 {
@@ -54,47 +57,6 @@ Shell sh(const std::string& cmd)
     const int st = pclose(f);
     r.status = st != -1 && WIFEXITED(st) ? WEXITSTATUS(st) : -1;
     return r;
-}
-
-std::string read(const std::filesystem::path& p)
-{
-    std::ifstream in(p);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-}
-
-using Row = std::vector<std::pair<std::string, double>>;
-
-std::vector<Row> rows(const std::filesystem::path& csv)
-{
-    std::ifstream in(csv);
-    std::string line;
-    std::vector<std::string> header;
-    std::vector<Row> out;
-    if (!std::getline(in, line))
-        return out;
-    std::stringstream hs(line);
-    for (std::string cell; std::getline(hs, cell, ',');)
-        header.push_back(cell);
-    while (std::getline(in, line))
-    {
-        std::stringstream ls(line);
-        Row row;
-        std::string cell;
-        for (std::size_t k = 0; k < header.size() && std::getline(ls, cell, ','); ++k)
-            row.emplace_back(header[k], std::atof(cell.c_str()));
-        out.push_back(std::move(row));
-    }
-    return out;
-}
-
-double value(const Row& row, const std::string& name)
-{
-    for (const auto& [k, v] : row)
-        if (k == name)
-            return v;
-    return -1.0;
 }
 
 // Deletes namespaces plt<pid>-* whose pid no longer runs (left by a killed run).
