@@ -239,7 +239,7 @@ sim::Force to_sim_force(const net::UserForce& f)
 namespace
 {
 
-/// The grid-independent rules of coarse streaming (docs/session.md §5.2).
+/// The settings' own ranges (host and join refuse others with InvalidArgument).
 bool valid(const SessionSettings& s)
 {
     return s.stream_rate_hz > 0.0 && s.frame_rate_hz > 0.0 && s.ack_rate_hz > 0.0 &&
@@ -253,6 +253,7 @@ bool valid(const SessionSettings& s)
            s.name.size() <= net::k_max_name_length;
 }
 
+/// The grid-independent rules of coarse streaming (docs/session.md §5.2).
 core::Result<void> check_coarsen(const SessionSettings& settings, const char* who)
 {
     const int k = settings.stream_coarsen;
@@ -485,6 +486,7 @@ struct Session::Impl
     double last_now = 0.0;
     double next_stream = 0.0;
     double next_frame = 0.0;
+    double next_view = 0.0;  // view_u/v are refreshed at frame_rate_hz
     bool leaving = false;
     double leave_started = 0.0;
 
@@ -2659,7 +2661,7 @@ struct Session::Impl
             h.time[k] = leaf_time[l];
             ++h.count;
             Playout& pl = playout[h.sender];
-            if (!pl.set || leaf_time[l] > pl.newest)
+            if ((!pl.set && !pl.fresh) || leaf_time[l] > pl.newest)
             {
                 pl.newest = leaf_time[l];
                 pl.fresh = true;
@@ -2798,8 +2800,14 @@ struct Session::Impl
             next_stream = std::max(next_stream + 1.0 / settings.stream_rate_hz,
                                    now - 1.0 / settings.stream_rate_hz);
         }
-        if (s.model_ && !s.left_)
+        if (s.model_ && !s.left_ && now >= next_view)
+        {
+            // At the frame rate: a caller pumping faster (the CLI loop runs ~5 kHz) would
+            // otherwise copy and interpolate the whole object on every call.
             update_view(now);
+            next_view = std::max(next_view + 1.0 / settings.frame_rate_hz,
+                                 now - 1.0 / settings.frame_rate_hz);
+        }
         transport.flush();
     }
 };

@@ -127,7 +127,8 @@ struct SessionSettings
     /// tests/session/halo_rings_test.cpp; 6 also covers a scheme whose every stage reads the
     /// previous one, at ~10 % more work per peer at level 8 with 2 peers).
     int halo_rings = 6;
-    double frame_rate_hz = 60.0;  ///< fast mode: restricted advances per second, > 0
+    /// Fast mode: restricted advances per second; every mode: view_u/v updates per second; > 0.
+    double frame_rate_hz = 60.0;
     /// Fast mode: the bound on halo staleness, s (0: none). A frame steps only if every streamed
     /// state that holds a Dirichlet value next to an owned node is at most this old at the
     /// frame's end; otherwise the peer holds its clock (up to max_stall_s) and catches
@@ -274,8 +275,9 @@ public:
     [[nodiscard]] const core::Field<double>& display_v() const noexcept { return display_v_; }
     /// What to draw: display_u/v with the leaves this peer does not compute interpolated in
     /// time between the states received (SessionSettings::interpolate_view; equal to the display
-    /// when off). Updated by advance(). The display holds the newest values, which fast coupling
-    /// uses as Dirichlet values; the view lags them by view_delay_s and moves smoothly.
+    /// when off). Updated by advance(), at most frame_rate_hz times per second. The display holds
+    /// the newest values, which fast coupling uses as Dirichlet values; the view lags them by
+    /// view_delay_s and moves smoothly.
     [[nodiscard]] const core::Field<double>& view_u() const noexcept;
     [[nodiscard]] const core::Field<double>& view_v() const noexcept;
     /// Per leaf (LeafGraph order): the owner's simulation time of the state shown in the view,
