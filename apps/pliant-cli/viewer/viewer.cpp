@@ -442,7 +442,7 @@ void Viewer::simulate(double wall_dt)
             return;
         const session::SessionStats s = session_->stats();
         step_ms_.push(static_cast<float>((s.step_seconds - before.step_seconds) * 1e3));
-        latency_ms_.push(static_cast<float>(s.halo_age_s * 1e3));
+        latency_ms_.push(static_cast<float>((s.halo_age_s + s.view_delay_s) * 1e3));
         const double now = seconds(Clock::now().time_since_epoch());
         if (now - last_stats_time_ >= 0.5)
         {
