@@ -152,18 +152,26 @@ TEST(SessionCompression, FastModeViewsEqualTheOwnersQuantisedStateAndQuiescentLe
     EXPECT_EQ(total(h, &SessionStats::baseline_misses), 0u);
 }
 
-TEST(SessionCompression, QuiescentObjectSendsNoLeafStateAfterItsKeyStates)
+// A compressed fast session of a master and one partitioned participant, no force, stepping
+// without a tick limit; `refresh` is both peers' quiescent_refresh_s. \return partitioned.
+bool start_at_rest(Harness& h, double refresh)
 {
-    // quiescent_refresh_s = 0: a leaf at rest costs nothing at all once acknowledged.
-    Harness h;
     SessionSettings ms = compressed(Coupling::Fast, "master");
     SessionSettings ps = compressed(Coupling::Fast, "part");
-    ms.quiescent_refresh_s = ps.quiescent_refresh_s = 0.0;
+    ms.quiescent_refresh_s = ps.quiescent_refresh_s = refresh;
     ms.max_ticks = ps.max_ticks = 0;
     h.host(k_level, ms);
     Session& p = h.join(net::Role::Participant, ps);
     p.set_points_of_interest({net::Target{net::TargetKind::Face, 600, {0, 0, 0}, 0.0}});
-    ASSERT_TRUE(h.pump_until([&] { return p.ready() && h.peers[0]->epoch() >= 1; }, 8000));
+    return h.pump_until([&] { return p.ready() && h.peers[0]->epoch() >= 1; }, 8000);
+}
+
+TEST(SessionCompression, QuiescentObjectSendsNoLeafStateAfterItsKeyStates)
+{
+    // quiescent_refresh_s = 0: a leaf at rest costs nothing at all once acknowledged.
+    Harness h;
+    ASSERT_TRUE(start_at_rest(h, 0.0));
+    const Session& p = *h.peers[1];
     // No force: the object stays at rest. Give keys and acks time, then count.
     for (int k = 0; k < 400; ++k)
         h.pump_once(0.0005);
@@ -182,13 +190,8 @@ TEST(SessionCompression, QuiescentLeavesCostOnlyARefreshThatKeepsTheHaloAgeBound
     // The default: a leaf at rest is re-sent every quiescent_refresh_s (0.25 s) as an all-zero
     // delta of a few bytes, so the receivers' halo age stays bounded (docs/session.md §5.1).
     Harness h;
-    SessionSettings ms = compressed(Coupling::Fast, "master");
-    SessionSettings ps = compressed(Coupling::Fast, "part");
-    ms.max_ticks = ps.max_ticks = 0;
-    h.host(k_level, ms);
-    Session& p = h.join(net::Role::Participant, ps);
-    p.set_points_of_interest({net::Target{net::TargetKind::Face, 600, {0, 0, 0}, 0.0}});
-    ASSERT_TRUE(h.pump_until([&] { return p.ready() && h.peers[0]->epoch() >= 1; }, 8000));
+    ASSERT_TRUE(start_at_rest(h, SessionSettings{}.quiescent_refresh_s));
+    const Session& p = *h.peers[1];
     for (int k = 0; k < 1000; ++k)
         h.pump_once(0.0005);
     const std::uint64_t sent = total(h, &SessionStats::leaf_states_sent);
