@@ -281,13 +281,13 @@ Err check_quantised(const LeafState& m) noexcept
 
 /// Encoder side of encoding 3: `packed` must unpack to exactly `du` and `dv` (the decoder
 /// unpacks while reading, so it needs no second pass).
-Err check_packed(const LeafState& m) noexcept
+Err check_packed(const QuantisedDelta& q) noexcept
 {
-    const QuantisedDelta& q = m.quantised;
     std::array<std::int32_t, k_max_leaf_nodes_quantised> du{};
     std::array<std::int32_t, k_max_leaf_nodes_quantised> dv{};
     const std::size_t n = q.du.size();
-    if (auto err = unpack_residuals(q.packed, std::span(du.data(), n), std::span(dv.data(), n)))
+    if (auto err =
+            unpack_residuals(q.packing, q.packed, std::span(du.data(), n), std::span(dv.data(), n)))
         return err;
     if (!std::equal(q.du.begin(), q.du.end(), du.begin()) ||
         !std::equal(q.dv.begin(), q.dv.end(), dv.begin()))
@@ -380,6 +380,38 @@ Err check(const Ack& m) noexcept
     return {};
 }
 
+std::size_t body_size(const LeafBatch& m) noexcept;
+
+Err check(const LeafBatch& m) noexcept
+{
+    if (m.leaves.empty() || m.leaves.size() > k_max_batch_leaves)
+        return DecodeError::BadCount;
+    if (!valid_exponent(m.u_exponent) || !valid_exponent(m.v_exponent))
+        return DecodeError::BadRange;
+    const std::uint8_t depth = m.leaves.front().leaf.depth;
+    if (depth > k_max_partition_depth)
+        return DecodeError::BadRange;
+    for (const BatchLeaf& l : m.leaves)
+    {
+        const QuantisedDelta& q = l.quantised;
+        if (auto err = check_leaf(l.leaf))
+            return err;
+        if (l.leaf.depth != depth)
+            return DecodeError::BadRange;
+        if (q.du.empty() || q.du.size() != q.dv.size() || q.du.size() > k_max_leaf_nodes_quantised)
+            return DecodeError::BadCount;
+        if (q.packed.empty() || q.packed.size() > k_max_packed_residuals)
+            return DecodeError::BadCount;
+        if (q.u_exponent != m.u_exponent || q.v_exponent != m.v_exponent)
+            return DecodeError::BadRange;
+        if (q.extrapolated && q.baseline == 0)
+            return DecodeError::BadRange;
+    }
+    if (body_size(m) > k_max_state_payload)
+        return DecodeError::BadCount;
+    return check_time(m.time);
+}
+
 Err check_header(const Header& h, MessageType type) noexcept
 {
     if (h.session == 0 && type != MessageType::Hello && type != MessageType::Reject)
@@ -465,6 +497,23 @@ std::size_t body_size(const Pong&) noexcept
 std::size_t body_size(const Ack& m) noexcept
 {
     return 4 + k_ack_size * m.acks.size();
+}
+std::size_t varint_size(std::uint32_t v) noexcept
+{
+    std::size_t n = 1;
+    while (v >= 0x80u)
+    {
+        v >>= 7;
+        ++n;
+    }
+    return n;
+}
+std::size_t body_size(const LeafBatch& m) noexcept
+{
+    std::size_t n = k_leaf_batch_fixed;
+    for (const BatchLeaf& l : m.leaves)
+        n += k_batch_leaf_fixed + varint_size(l.quantised.baseline) + l.quantised.packed.size();
+    return n;
 }
 
 // ---- writers ---------------------------------------------------------------------------------
@@ -603,6 +652,15 @@ void write_body(ByteWriter& w, const Leave& m) noexcept
     w.u8(static_cast<std::uint8_t>(m.reason));
     w.zeros(3);
 }
+/// The u16 after a quantised delta's exponents: length c in bits 0..10, bits 11..12 reserved,
+/// bit 13 Rice packing, bit 14 extrapolated, bit 15 predicted.
+std::uint16_t packed_word(const QuantisedDelta& q) noexcept
+{
+    return static_cast<std::uint16_t>(q.packed.size() | (q.predicted ? 0x8000u : 0u) |
+                                      (q.extrapolated ? 0x4000u : 0u) |
+                                      (q.packing == Packing::Rice ? 0x2000u : 0u));
+}
+
 void write_body(ByteWriter& w, const LeafState& m) noexcept
 {
     w.u32(m.epoch);
@@ -618,8 +676,7 @@ void write_body(ByteWriter& w, const LeafState& m) noexcept
         w.u32(q.baseline);
         w.u8(static_cast<std::uint8_t>(q.u_exponent));
         w.u8(static_cast<std::uint8_t>(q.v_exponent));
-        w.u16(static_cast<std::uint16_t>(q.packed.size() | (q.predicted ? 0x8000u : 0u) |
-                                         (q.extrapolated ? 0x4000u : 0u)));
+        w.u16(packed_word(q));
         w.bytes(q.packed.data(), q.packed.size());
         return;
     }
@@ -658,6 +715,31 @@ void write_body(ByteWriter& w, const Pong& m) noexcept
     w.u32(m.nonce);
     w.u32(0);
     w.u64(m.time_us);
+}
+void write_body(ByteWriter& w, const LeafBatch& m) noexcept
+{
+    w.u32(m.epoch);
+    w.f64(m.time);
+    w.u8(static_cast<std::uint8_t>(m.u_exponent));
+    w.u8(static_cast<std::uint8_t>(m.v_exponent));
+    w.u8(m.leaves.front().leaf.depth);
+    w.u8(static_cast<std::uint8_t>(m.leaves.size()));
+    for (const BatchLeaf& l : m.leaves)
+    {
+        const QuantisedDelta& q = l.quantised;
+        const std::uint32_t side = 1u << l.leaf.depth;
+        w.u16(static_cast<std::uint16_t>((l.leaf.square * side + l.leaf.iy) * side + l.leaf.ix));
+        w.u8(static_cast<std::uint8_t>(q.du.size()));
+        w.u16(packed_word(q));
+        std::uint32_t b = q.baseline;
+        while (b >= 0x80u)
+        {
+            w.u8(static_cast<std::uint8_t>((b & 0x7Fu) | 0x80u));
+            b >>= 7;
+        }
+        w.u8(static_cast<std::uint8_t>(b));
+        w.bytes(q.packed.data(), q.packed.size());
+    }
 }
 void write_body(ByteWriter& w, const Ack& m) noexcept
 {
@@ -906,6 +988,30 @@ Err read_body(ByteReader& r, Leave& m) noexcept
     return read_reserved(r, 3);
 }
 
+/// The flags, and the packed residuals of n nodes, of a quantised delta whose u16 word (length and
+/// flags) has been read; unpacks them (hostile bytes: BadCompression).
+Err read_packed(ByteReader& r, std::uint16_t word, std::size_t n, QuantisedDelta& q) noexcept
+{
+    if ((word & 0x1800u) != 0)
+        return DecodeError::BadReserved;
+    q.predicted = (word & 0x8000u) != 0;
+    q.extrapolated = (word & 0x4000u) != 0;
+    q.packing = (word & 0x2000u) != 0 ? Packing::Rice : Packing::Zstd;
+    const std::size_t c = word & 0x07FFu;
+    if (c == 0 || c > k_max_packed_residuals)
+        return DecodeError::BadCount;
+    if (c > r.remaining())
+    {
+        r.skip(c);
+        return {};
+    }
+    q.packed.resize(c);
+    r.bytes(q.packed.data(), c);
+    q.du.resize(n);
+    q.dv.resize(n);
+    return unpack_residuals(q.packing, q.packed, q.du, q.dv);
+}
+
 Err read_body(ByteReader& r, LeafState& m) noexcept
 {
     m.epoch = r.u32();
@@ -934,23 +1040,7 @@ Err read_body(ByteReader& r, LeafState& m) noexcept
         const std::uint16_t packed = r.u16();
         if (r.short_read())
             return {};
-        if ((packed & 0x3800u) != 0)
-            return DecodeError::BadReserved;
-        q.predicted = (packed & 0x8000u) != 0;
-        q.extrapolated = (packed & 0x4000u) != 0;
-        const std::size_t c = packed & 0x07FFu;
-        if (c == 0 || c > k_max_packed_residuals)
-            return DecodeError::BadCount;
-        if (c > r.remaining())
-        {
-            r.skip(c);
-            return {};
-        }
-        q.packed.resize(c);
-        r.bytes(q.packed.data(), c);
-        q.du.resize(n);
-        q.dv.resize(n);
-        return unpack_residuals(q.packed, q.du, q.dv);
+        return read_packed(r, packed, n, q);
     }
     if (2 * std::size_t{n} * value_size(m.encoding) > r.remaining())
     {
@@ -1035,6 +1125,72 @@ Err read_body(ByteReader& r, Pong& m) noexcept
     return {};
 }
 
+/// A canonical LEB128 varint of at most 5 bytes and 32 bits (no redundant final 0x00 group).
+Err read_varint(ByteReader& r, std::uint32_t& value) noexcept
+{
+    std::uint64_t v = 0;
+    for (int k = 0; k < 5; ++k)
+    {
+        const std::uint8_t b = r.u8();
+        if (r.short_read())
+            return {};
+        v |= std::uint64_t{b & 0x7Fu} << (7 * k);
+        if ((b & 0x80u) == 0)
+        {
+            if ((b == 0 && k > 0) || v > 0xFFFFFFFFull)
+                return DecodeError::BadRange;
+            value = static_cast<std::uint32_t>(v);
+            return {};
+        }
+    }
+    return DecodeError::BadRange;
+}
+
+Err read_body(ByteReader& r, LeafBatch& m) noexcept
+{
+    m.epoch = r.u32();
+    m.time = r.f64();
+    m.u_exponent = static_cast<std::int8_t>(r.u8());
+    m.v_exponent = static_cast<std::int8_t>(r.u8());
+    const std::uint8_t depth = r.u8();
+    const std::uint8_t count = r.u8();
+    if (r.short_read())
+        return {};
+    if (count == 0 || count > k_max_batch_leaves)
+        return DecodeError::BadCount;
+    if (depth > k_max_partition_depth)
+        return DecodeError::BadRange;
+    const std::uint32_t side = 1u << depth;
+    m.leaves.resize(count);
+    for (BatchLeaf& l : m.leaves)
+    {
+        const std::uint16_t index = r.u16();
+        const std::uint8_t n = r.u8();
+        const std::uint16_t word = r.u16();
+        if (r.short_read())
+            return {};
+        if (index >= 2 * side * side)
+            return DecodeError::BadRange;
+        l.leaf = WireLeafId{static_cast<std::uint8_t>(index / (side * side)), depth,
+                            static_cast<std::uint16_t>(index % side),
+                            static_cast<std::uint16_t>((index / side) % side)};
+        if (n == 0 || n > k_max_leaf_nodes_quantised)
+            return DecodeError::BadCount;
+        QuantisedDelta& q = l.quantised;
+        q.u_exponent = m.u_exponent;
+        q.v_exponent = m.v_exponent;
+        if (auto err = read_varint(r, q.baseline))
+            return err;
+        if (r.short_read())
+            return {};
+        if (auto err = read_packed(r, word, n, q))
+            return err;
+        if (r.short_read())
+            return {};
+    }
+    return {};
+}
+
 Err read_body(ByteReader& r, Ack& m) noexcept
 {
     const std::uint8_t count = r.u8();
@@ -1055,7 +1211,7 @@ Err read_body(ByteReader& r, Ack& m) noexcept
     return {};
 }
 
-/// Default-constructs the body alternative for wire type `type` (1..16).
+/// Default-constructs the body alternative for wire type `type` (1..17).
 template <std::size_t I = 0>
 Body make_body(std::size_t index) noexcept
 {
@@ -1077,7 +1233,11 @@ std::optional<DecodeError> validate(const Message& message) noexcept
         return err;
     if (const auto* ls = std::get_if<LeafState>(&message.body);
         ls != nullptr && ls->encoding == ValueEncoding::QuantisedDelta)
-        return check_packed(*ls);
+        return check_packed(ls->quantised);
+    if (const auto* b = std::get_if<LeafBatch>(&message.body))
+        for (const BatchLeaf& l : b->leaves)
+            if (auto err = check_packed(l.quantised))
+                return err;
     return {};
 }
 

@@ -46,6 +46,7 @@ std::string_view to_string(MessageType type) noexcept
     case MessageType::Ping: return "ping";
     case MessageType::Pong: return "pong";
     case MessageType::Ack: return "ack";
+    case MessageType::LeafBatch: return "leaf-batch";
     }
     return "unknown";
 }

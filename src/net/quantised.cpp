@@ -77,6 +77,170 @@ bool get_varint(const std::byte* in, std::size_t size, std::size_t& pos, std::ui
     return false;
 }
 
+// ---- Rice coding (docs/protocol.md §5.6) ----------------------------------------------------
+// Bits are written least significant first into bytes (bit i of the string is bit i % 8 of byte
+// i / 8). A value z with parameter k: q = z >> k one-bits, a zero-bit, then the k low bits of z;
+// if q >= k_rice_escape: k_rice_escape one-bits and the 32 bits of z instead.
+
+class BitWriter
+{
+public:
+    explicit BitWriter(std::vector<std::byte>& out) noexcept : out_(out) { out_.clear(); }
+    /// Appends the low `count` bits of `bits` (count <= 32).
+    void put(std::uint32_t bits, int count)
+    {
+        acc_ |= std::uint64_t{bits} << fill_;
+        fill_ += count;
+        while (fill_ >= 8)
+        {
+            out_.push_back(static_cast<std::byte>(acc_ & 0xFFu));
+            acc_ >>= 8;
+            fill_ -= 8;
+        }
+    }
+    void finish()
+    {
+        if (fill_ > 0)
+            out_.push_back(static_cast<std::byte>(acc_ & 0xFFu));
+        acc_ = 0;
+        fill_ = 0;
+    }
+
+private:
+    std::vector<std::byte>& out_;
+    std::uint64_t acc_ = 0;
+    int fill_ = 0;
+};
+
+class BitReader
+{
+public:
+    explicit BitReader(std::span<const std::byte> in) noexcept : in_(in) {}
+    /// Reads `count` bits (count <= 32); false past the end.
+    bool get(int count, std::uint32_t& bits) noexcept
+    {
+        std::uint64_t v = 0;
+        for (int i = 0; i < count; ++i, ++pos_)
+        {
+            if (pos_ >= 8 * in_.size())
+                return false;
+            const auto byte = static_cast<std::uint8_t>(in_[pos_ / 8]);
+            v |= std::uint64_t{(byte >> (pos_ % 8)) & 1u} << i;
+        }
+        bits = static_cast<std::uint32_t>(v);
+        return true;
+    }
+    /// Counts one-bits up to the first zero-bit (consumed) or `limit` ones; false past the end.
+    bool unary(int limit, int& ones) noexcept
+    {
+        ones = 0;
+        while (ones < limit)
+        {
+            std::uint32_t b = 0;
+            if (!get(1, b))
+                return false;
+            if (b == 0)
+                return true;
+            ++ones;
+        }
+        return true;
+    }
+    /// True if the reader is in the last byte and every bit left in it is zero.
+    [[nodiscard]] bool at_clean_end() const noexcept
+    {
+        if ((pos_ + 7) / 8 != in_.size())
+            return false;
+        if (pos_ % 8 == 0)
+            return true;
+        const auto last = static_cast<std::uint8_t>(in_.back());
+        return (last >> (pos_ % 8)) == 0;
+    }
+
+private:
+    std::span<const std::byte> in_;
+    std::size_t pos_ = 0;
+};
+
+constexpr int k_rice_parameter_bits = 5;
+
+std::uint64_t rice_bits(std::uint32_t z, int k) noexcept
+{
+    const std::uint32_t q = z >> k;
+    return q < static_cast<std::uint32_t>(k_rice_escape)
+               ? std::uint64_t{q} + 1 + static_cast<std::uint64_t>(k)
+               : std::uint64_t{k_rice_escape} + 32;
+}
+
+/// The parameter with the fewest bits for `r` (the smallest such), and that count.
+int best_rice_parameter(std::span<const std::int32_t> r, std::uint64_t& bits) noexcept
+{
+    int best = 0;
+    bits = std::numeric_limits<std::uint64_t>::max();
+    for (int k = 0; k <= k_max_rice_parameter; ++k)
+    {
+        std::uint64_t total = 0;
+        for (const std::int32_t x : r)
+            total += rice_bits(zigzag(x), k);
+        if (total < bits)
+        {
+            bits = total;
+            best = k;
+        }
+    }
+    return best;
+}
+
+void put_rice(BitWriter& w, std::span<const std::int32_t> r, int k)
+{
+    w.put(static_cast<std::uint32_t>(k), k_rice_parameter_bits);
+    for (const std::int32_t x : r)
+    {
+        const std::uint32_t z = zigzag(x);
+        const std::uint32_t q = z >> k;
+        if (q < static_cast<std::uint32_t>(k_rice_escape))
+        {
+            w.put((1u << q) - 1u, static_cast<int>(q) + 1);  // q ones, then a zero
+            if (k > 0)
+                w.put(z & ((1u << k) - 1u), k);
+        }
+        else
+        {
+            w.put((1u << k_rice_escape) - 1u, k_rice_escape);
+            w.put(z, 32);
+        }
+    }
+}
+
+bool get_rice(BitReader& in, std::span<std::int32_t> r) noexcept
+{
+    std::uint32_t k = 0;
+    if (!in.get(k_rice_parameter_bits, k) || k > static_cast<std::uint32_t>(k_max_rice_parameter))
+        return false;
+    const int kk = static_cast<int>(k);
+    for (std::int32_t& x : r)
+    {
+        int q = 0;
+        if (!in.unary(k_rice_escape, q))
+            return false;
+        std::uint32_t z = 0;
+        if (q == k_rice_escape)
+        {
+            // Canonical: the escape only where the short form does not fit.
+            if (!in.get(32, z) || (z >> kk) < static_cast<std::uint32_t>(k_rice_escape))
+                return false;
+        }
+        else
+        {
+            std::uint32_t low = 0;
+            if (kk > 0 && !in.get(kk, low))
+                return false;
+            z = (static_cast<std::uint32_t>(q) << kk) | low;  // < 24 * 2^26: fits
+        }
+        x = unzigzag(z);
+    }
+    return true;
+}
+
 struct CctxFree
 {
     void operator()(ZSTD_CCtx* c) const noexcept { ZSTD_freeCCtx(c); }
@@ -240,6 +404,53 @@ std::optional<DecodeError> unpack_residuals(std::span<const std::byte> packed,
     if (pos != got)
         return DecodeError::BadCompression;
     return {};
+}
+
+std::size_t rice_packed_size(std::span<const std::int32_t> du,
+                             std::span<const std::int32_t> dv) noexcept
+{
+    std::uint64_t bu = 0;
+    std::uint64_t bv = 0;
+    (void)best_rice_parameter(du, bu);
+    (void)best_rice_parameter(dv, bv);
+    return static_cast<std::size_t>((2 * k_rice_parameter_bits + bu + bv + 7) / 8);
+}
+
+bool pack_residuals_rice(std::span<const std::int32_t> du, std::span<const std::int32_t> dv,
+                         std::size_t max_bytes, std::vector<std::byte>& out)
+{
+    std::uint64_t bu = 0;
+    std::uint64_t bv = 0;
+    const int ku = best_rice_parameter(du, bu);
+    const int kv = best_rice_parameter(dv, bv);
+    if ((2 * k_rice_parameter_bits + bu + bv + 7) / 8 > max_bytes)
+        return false;
+    BitWriter w(out);
+    put_rice(w, du, ku);
+    put_rice(w, dv, kv);
+    w.finish();
+    return true;
+}
+
+std::optional<DecodeError> unpack_residuals_rice(std::span<const std::byte> packed,
+                                                 std::span<std::int32_t> du,
+                                                 std::span<std::int32_t> dv) noexcept
+{
+    const std::size_t n = du.size();
+    if (n == 0 || n > k_max_leaf_nodes_quantised || dv.size() != n || packed.empty())
+        return DecodeError::BadCompression;
+    BitReader in(packed);
+    if (!get_rice(in, du) || !get_rice(in, dv) || !in.at_clean_end())
+        return DecodeError::BadCompression;
+    return {};
+}
+
+std::optional<DecodeError> unpack_residuals(Packing packing, std::span<const std::byte> packed,
+                                            std::span<std::int32_t> du,
+                                            std::span<std::int32_t> dv) noexcept
+{
+    return packing == Packing::Rice ? unpack_residuals_rice(packed, du, dv)
+                                    : unpack_residuals(packed, du, dv);
 }
 
 }  // namespace pliant::net

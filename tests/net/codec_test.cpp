@@ -115,12 +115,52 @@ TEST(Codec, PingMatchesBytesWrittenFromTheSpecification)
                          .tick = 0x100F0E0D0C0B0A09ULL},
               .body = Ping{.nonce = 0x14131211u, .time_us = 0x201F1E1D1C1B1A19ULL}};
     const auto expected = bytes_of({0x50, 0x4C, 0x4E, 0x54,  // "PLNT"
-                                    3,    14,   0,    0,     // version, type Ping, flags, reserved
+                                    4,    14,   0,    0,     // version, type Ping, flags, reserved
                                     0x01, 0x02, 0x03, 0x04,  // session
                                     0x05, 0x06, 0x07, 0x08,  // sender, sequence
                                     0x09, 0x0A, 0x0B, 0x0C, 0x0D, 0x0E, 0x0F, 0x10,  // tick
                                     0x11, 0x12, 0x13, 0x14, 0,    0,    0,    0,     // nonce, res.
                                     0x19, 0x1A, 0x1B, 0x1C, 0x1D, 0x1E, 0x1F, 0x20});
+    EXPECT_EQ(encode_vec(m), expected);
+    auto back = decode(expected);
+    ASSERT_TRUE(back.has_value());
+    EXPECT_EQ(*back, m);
+}
+
+TEST(Codec, LeafBatchMatchesBytesWrittenFromTheSpecification)
+{
+    // One leaf (square 1, depth 2, ix 3, iy 1: index (1 * 4 + 1) * 4 + 3 = 23) of one node,
+    // du = 0, dv = -1, Rice-packed: u's parameter 0 (5 bits) and value 0 ("0"), v's parameter 0
+    // and zigzag(-1) = 1 ("10"): 13 bits, bit 11 set -> bytes 0x00 0x08. Baseline 300 -> LEB128
+    // 0xAC 0x02.
+    LeafBatch b;
+    b.epoch = 0x01020304u;
+    b.time = 0.5;
+    b.u_exponent = -12;
+    b.v_exponent = -8;
+    BatchLeaf l;
+    l.leaf = WireLeafId{.square = 1, .depth = 2, .ix = 3, .iy = 1};
+    l.quantised.baseline = 300;
+    l.quantised.u_exponent = -12;
+    l.quantised.v_exponent = -8;
+    l.quantised.extrapolated = true;
+    l.quantised.packing = Packing::Rice;
+    l.quantised.du = {0};
+    l.quantised.dv = {-1};
+    l.quantised.packed = bytes_of({0x00, 0x08});
+    b.leaves.push_back(l);
+    Message m{.header = {.session = 7, .sender = PeerId{2}, .sequence = 0, .tick = 9}, .body = b};
+    const auto expected =
+        bytes_of({0x50, 0x4C, 0x4E, 0x54, 4, 17, 0,    0,     // "PLNT" v4 LeafBatch
+                  7,    0,    0,    0,    2, 0,  0,    0,     // session, sender, seq.
+                  9,    0,    0,    0,    0, 0,  0,    0,     // tick
+                  0x04, 0x03, 0x02, 0x01,                     // epoch
+                  0,    0,    0,    0,    0, 0,  0xE0, 0x3F,  // time 0.5
+                  0xF4, 0xF8, 2,    1,                        // exponents, depth, count
+                  23,   0,    1,                              // index, nodes
+                  0x02, 0x60,                                 // length 2, rice, extrap.
+                  0xAC, 0x02,                                 // baseline 300
+                  0x00, 0x08});                               // the Rice bits
     EXPECT_EQ(encode_vec(m), expected);
     auto back = decode(expected);
     ASSERT_TRUE(back.has_value());
@@ -203,9 +243,11 @@ TEST(Codec, HeaderErrors)
     EXPECT_EQ(decode_error(d), DecodeError::BadVersion);
     d[4] = std::byte{2};  // version 2 (before coarse leaf states)
     EXPECT_EQ(decode_error(d), DecodeError::BadVersion);
-    d[4] = std::byte{4};
+    d[4] = std::byte{3};  // version 3 (before Rice packing and leaf batches)
     EXPECT_EQ(decode_error(d), DecodeError::BadVersion);
-    for (int type : {0, 17, 255})
+    d[4] = std::byte{5};
+    EXPECT_EQ(decode_error(d), DecodeError::BadVersion);
+    for (int type : {0, 18, 255})
     {
         d = ping;
         d[5] = static_cast<std::byte>(type);

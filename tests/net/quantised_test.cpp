@@ -350,5 +350,207 @@ TEST(Quantised, EncoderRefusesPackedBytesThatDisagreeWithTheResiduals)
     EXPECT_EQ(validate(halo), DecodeError::BadEnum) << "halos stay f32/f64";
 }
 
+// ---- Rice packing (docs/protocol.md §5.6) ----------------------------------------------------
+
+/// Bits written by a slow, independent Rice coder: the same rule spelled out value by value.
+std::size_t reference_rice_bits(const std::vector<std::int32_t>& r)
+{
+    std::size_t best = std::numeric_limits<std::size_t>::max();
+    for (int k = 0; k <= k_max_rice_parameter; ++k)
+    {
+        std::size_t bits = 5;
+        for (const std::int32_t x : r)
+        {
+            const std::uint64_t z =
+                x >= 0 ? 2 * std::uint64_t(x) : 2 * std::uint64_t(-std::int64_t(x)) - 1;
+            const std::uint64_t q = z >> k;
+            bits += q < std::uint64_t(k_rice_escape) ? q + 1 + std::uint64_t(k)
+                                                     : std::uint64_t(k_rice_escape) + 32;
+        }
+        best = std::min(best, bits);
+    }
+    return best;
+}
+
+TEST(QuantisedRice, RoundTripsIncludingExtremesInTheFewestBits)
+{
+    std::mt19937 rng(5);
+    for (const std::size_t n : {std::size_t{1}, std::size_t{72}, k_max_leaf_nodes_quantised})
+        for (const int spread : {0, 1, 40, 5000, 1 << 24})
+        {
+            std::vector<std::int32_t> du(n), dv(n);
+            std::uniform_int_distribution<int> d(-spread, spread);
+            for (std::size_t i = 0; i < n; ++i)
+            {
+                du[i] = d(rng);
+                dv[i] = d(rng) / 3;
+            }
+            if (spread == 5000)
+            {
+                du[0] = std::numeric_limits<std::int32_t>::min();  // escapes
+                dv[n - 1] = std::numeric_limits<std::int32_t>::max();
+            }
+            std::vector<std::byte> packed;
+            ASSERT_TRUE(pack_residuals_rice(du, dv, k_max_packed_residuals, packed) ||
+                        n == k_max_leaf_nodes_quantised);
+            if (packed.empty())
+                continue;
+            EXPECT_EQ(packed.size(), rice_packed_size(du, dv));
+            EXPECT_EQ(packed.size(), (reference_rice_bits(du) + reference_rice_bits(dv) + 7) / 8)
+                << "n " << n << " spread " << spread;
+            std::vector<std::int32_t> bu(n), bv(n);
+            EXPECT_FALSE(unpack_residuals_rice(packed, bu, bv).has_value());
+            EXPECT_EQ(bu, du);
+            EXPECT_EQ(bv, dv);
+            EXPECT_FALSE(unpack_residuals(Packing::Rice, packed, bu, bv).has_value());
+            EXPECT_FALSE(pack_residuals_rice(du, dv, packed.size() - 1, packed))
+                << "a limit below the bits is refused";
+        }
+}
+
+TEST(QuantisedRice, SmallResidualsCostFarLessThanVarintBytes)
+{
+    // Residuals of magnitude <= 3 (what a well-predicted leaf sends): about 3 bits each, where
+    // the varints of the zstd packing start at 8 bits before compression.
+    std::mt19937 rng(9);
+    std::uniform_int_distribution<int> d(-3, 3);
+    std::vector<std::int32_t> du(72), dv(72);
+    for (std::size_t i = 0; i < 72; ++i)
+    {
+        du[i] = d(rng);
+        dv[i] = d(rng);
+    }
+    std::vector<std::byte> rice;
+    std::vector<std::byte> zstd;
+    ASSERT_TRUE(pack_residuals_rice(du, dv, k_max_packed_residuals, rice));
+    ASSERT_TRUE(pack_residuals(du, dv, k_max_packed_residuals, zstd));
+    EXPECT_LE(8.0 * static_cast<double>(rice.size()) / 144.0, 3.7);
+    EXPECT_LT(rice.size(), zstd.size());
+}
+
+/// Hand-written Rice bits (least significant bit first), for the hostile cases.
+std::vector<std::byte> bits_of(const std::vector<int>& bits)
+{
+    std::vector<std::byte> out((bits.size() + 7) / 8, std::byte{0});
+    for (std::size_t i = 0; i < bits.size(); ++i)
+        if (bits[i] != 0)
+            out[i / 8] |= static_cast<std::byte>(1u << (i % 8));
+    return out;
+}
+
+std::vector<int> parameter_bits(int k)
+{
+    std::vector<int> b;
+    for (int i = 0; i < 5; ++i)
+        b.push_back((k >> i) & 1);
+    return b;
+}
+
+TEST(QuantisedRice, HostileBitsAreRefused)
+{
+    std::vector<std::int32_t> du(1), dv(1);
+    // Sanity: k = 0 and the value 0 for u, then k = 0 and 0 for v: 12 bits.
+    auto good = parameter_bits(0);
+    good.push_back(0);
+    auto v = parameter_bits(0);
+    v.push_back(0);
+    good.insert(good.end(), v.begin(), v.end());
+    ASSERT_FALSE(unpack_residuals_rice(bits_of(good), du, dv).has_value());
+
+    std::vector<std::vector<std::byte>> hostile;
+    auto big_k = parameter_bits(k_max_rice_parameter + 1);  // parameter out of range
+    big_k.push_back(0);
+    big_k.insert(big_k.end(), 27, 0);
+    big_k.insert(big_k.end(), v.begin(), v.end());
+    hostile.push_back(bits_of(big_k));
+    auto cut = good;  // v's parameter and value missing: its bits run past the one byte
+    cut.resize(6);
+    hostile.push_back(bits_of(cut));
+    auto extra = bits_of(good);  // a byte too many
+    extra.push_back(std::byte{0});
+    hostile.push_back(extra);
+    auto padding = good;  // non-zero padding after the last value
+    padding.push_back(0);
+    padding.push_back(1);
+    hostile.push_back(bits_of(padding));
+    // An escape (24 ones and 32 bits) for the value 5, which the short form holds.
+    auto escape = parameter_bits(0);
+    escape.insert(escape.end(), k_rice_escape, 1);
+    for (int i = 0; i < 32; ++i)
+        escape.push_back((5 >> i) & 1);
+    escape.insert(escape.end(), v.begin(), v.end());
+    hostile.push_back(bits_of(escape));
+    std::vector<std::byte> ones(200, std::byte{0xFF});  // unary runs to the end
+    hostile.push_back(ones);
+    hostile.push_back({});
+    for (std::size_t k = 0; k < hostile.size(); ++k)
+        EXPECT_EQ(unpack_residuals_rice(hostile[k], du, dv), DecodeError::BadCompression)
+            << "case " << k;
+}
+
+TEST(QuantisedRice, LeafStateAndBatchRoundTripAndHostileRecordsAreCounted)
+{
+    for (const Message& m :
+         {Message{samples::header(), samples::quantised_leaf_state(72, 3, true, Packing::Rice)},
+          Message{samples::header(), samples::leaf_batch(6, 3, 72)}})
+    {
+        const auto bytes = encode_vec(m);
+        auto back = decode(bytes);
+        ASSERT_TRUE(back.has_value());
+        EXPECT_EQ(*back, m);
+    }
+    // The batch's fixed parts: 16 bytes, then 5 + varint per leaf before its packed bytes.
+    const LeafBatch b = samples::leaf_batch(5, 3, 8);
+    std::size_t expect = k_header_size + k_leaf_batch_fixed;
+    const std::size_t varint[] = {1, 1, 1, 2, 3};
+    for (std::size_t k = 0; k < 5; ++k)
+        expect += k_batch_leaf_fixed + varint[k] + b.leaves[k].quantised.packed.size();
+    EXPECT_EQ(encoded_size(Message{samples::header(), b}), expect);
+
+    auto invalid = [](LeafBatch x) { return validate(Message{samples::header(), std::move(x)}); };
+    LeafBatch mixed_depth = samples::leaf_batch(3, 3, 8);
+    mixed_depth.leaves[1].leaf.depth = 2;
+    mixed_depth.leaves[1].leaf.ix = 0;
+    mixed_depth.leaves[1].leaf.iy = 0;
+    EXPECT_EQ(invalid(mixed_depth), DecodeError::BadRange);
+    LeafBatch mixed_exponent = samples::leaf_batch(3, 3, 8);
+    mixed_exponent.leaves[2].quantised.u_exponent = -13;
+    EXPECT_EQ(invalid(mixed_exponent), DecodeError::BadRange);
+    LeafBatch deep = samples::leaf_batch(1, 8, 8);
+    EXPECT_EQ(invalid(deep), DecodeError::BadRange) << "depth 8 leaves do not fit a u16 index";
+    LeafBatch none = samples::leaf_batch(1, 3, 8);
+    none.leaves.clear();
+    EXPECT_EQ(invalid(none), DecodeError::BadCount);
+    LeafBatch over = samples::leaf_batch(40, 3, 72);
+    EXPECT_EQ(invalid(over), DecodeError::BadCount) << "over 1,200 bytes of body";
+    LeafBatch disagree = samples::leaf_batch(2, 3, 8);
+    disagree.leaves[1].quantised.dv[0] += 1;
+    EXPECT_EQ(invalid(disagree), DecodeError::BadCompression);
+
+    // Hostile bytes: a leaf index past the two squares, a non-canonical baseline varint, and
+    // corrupt Rice bits, each dropped and counted by the receiving Peer.
+    const Message one{samples::header(), samples::leaf_batch(1, 3, 8)};
+    const auto good = encode_vec(one);
+    const std::size_t rec = k_header_size + k_leaf_batch_fixed;
+    std::vector<std::vector<std::byte>> hostile;
+    auto index = good;
+    index[rec] = std::byte{128};  // 2 * 8 * 8 = 128 leaves at depth 3
+    hostile.push_back(index);
+    // Baseline 0 written as 0x80 0x00 (two bytes): the packed length is shifted by one byte.
+    auto redundant = good;
+    redundant[rec + 5] = std::byte{0x80};
+    redundant.insert(redundant.begin() + static_cast<std::ptrdiff_t>(rec + 6), std::byte{0});
+    hostile.push_back(redundant);
+    Peer peer(PeerHandle{1});
+    for (const auto& h : hostile)
+    {
+        ASSERT_FALSE(decode(h).has_value());
+        EXPECT_FALSE(peer.accept(Channel::State, h).has_value());
+    }
+    EXPECT_EQ(decode(hostile[0]).error(), DecodeError::BadRange);
+    EXPECT_EQ(decode(hostile[1]).error(), DecodeError::BadRange);
+    EXPECT_EQ(peer.bad_datagrams(), hostile.size());
+}
+
 }  // namespace
 }  // namespace pliant::net

@@ -52,7 +52,8 @@ inline LeafState leaf_state(ValueEncoding encoding, std::size_t n)
 
 /// A quantised-delta LeafState of n nodes (docs/protocol.md §5.5): smooth integers, residuals
 /// against nothing (key) or against a baseline `baseline` ticks back, packed with zstd.
-inline LeafState quantised_leaf_state(std::size_t n, std::uint32_t baseline, bool predicted)
+inline LeafState quantised_leaf_state(std::size_t n, std::uint32_t baseline, bool predicted,
+                                      Packing packing = Packing::Zstd)
 {
     LeafState s;
     s.epoch = 8;
@@ -70,9 +71,42 @@ inline LeafState quantised_leaf_state(std::size_t n, std::uint32_t baseline, boo
         q.du.push_back(predicted ? 3 - (k % 5) : 1000 * k - 20000);
         q.dv.push_back(predicted ? (k % 3) - 1 : -7 * k);
     }
-    if (!pack_residuals(q.du, q.dv, k_max_packed_residuals, q.packed))
+    q.packing = packing;
+    const bool packed = packing == Packing::Rice
+                            ? pack_residuals_rice(q.du, q.dv, k_max_packed_residuals, q.packed)
+                            : pack_residuals(q.du, q.dv, k_max_packed_residuals, q.packed);
+    if (!packed)
         q.packed.clear();
     return s;
+}
+
+/// A LeafBatch of `count` leaves at depth `depth` (indices spread over both squares), baselines
+/// 0, 1, 127, 128, 300000, ... (varints of 1 to 3 bytes), packings alternating.
+inline LeafBatch leaf_batch(std::size_t count, std::uint8_t depth, std::size_t n)
+{
+    LeafBatch b;
+    b.epoch = 12;
+    b.time = 2.5;
+    b.u_exponent = -12;
+    b.v_exponent = -8;
+    const std::uint32_t side = 1u << depth;
+    const std::uint32_t baselines[] = {0, 1, 127, 128, 300000};
+    for (std::size_t k = 0; k < count; ++k)
+    {
+        const std::uint32_t index = static_cast<std::uint32_t>((k * 7919) % (2 * side * side));
+        LeafState s = quantised_leaf_state(n, baselines[k % 5], k % 2 == 0,
+                                           k % 3 == 0 ? Packing::Zstd : Packing::Rice);
+        s.quantised.u_exponent = b.u_exponent;
+        s.quantised.v_exponent = b.v_exponent;
+        s.quantised.extrapolated = s.quantised.baseline != 0 && k % 4 == 1;
+        BatchLeaf l;
+        l.leaf = WireLeafId{static_cast<std::uint8_t>(index / (side * side)), depth,
+                            static_cast<std::uint16_t>(index % side),
+                            static_cast<std::uint16_t>((index / side) % side)};
+        l.quantised = s.quantised;
+        b.leaves.push_back(l);
+    }
+    return b;
 }
 
 inline Halo halo(ValueEncoding encoding, bool has_u, bool has_v)
@@ -179,6 +213,12 @@ inline std::vector<Message> all()
         coarse.coarsen = 1;
         add(coarse);
     }
+    // Version 4: Rice-packed residuals and batches of leaves.
+    add(quantised_leaf_state(72, 3, true, Packing::Rice));
+    add(quantised_leaf_state(k_max_leaf_nodes_quantised, 0, false, Packing::Rice));
+    add(leaf_batch(1, 0, 1));
+    add(leaf_batch(5, 3, 72));
+    add(leaf_batch(9, 7, 20));
     return out;
 }
 

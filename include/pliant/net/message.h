@@ -27,7 +27,7 @@ namespace pliant::net
 {
 
 inline constexpr std::uint32_t k_protocol_magic = 0x544E4C50;  ///< bytes "PLNT"
-inline constexpr std::uint8_t k_protocol_version = 3;
+inline constexpr std::uint8_t k_protocol_version = 4;
 inline constexpr std::size_t k_header_size = 24;
 /// The largest body of a LeafState or Halo (one leaf per datagram, no IP fragmentation).
 inline constexpr std::size_t k_max_state_payload = 1200;
@@ -62,6 +62,13 @@ inline constexpr std::size_t k_max_leaf_nodes_quantised = k_max_leaf_nodes_f32;
 inline constexpr std::size_t k_max_packed_residuals =
     k_max_state_payload - k_leaf_state_quantised_fixed;
 
+/// Fixed bytes of a LeafBatch body, and of each of its leaves before the packed residuals
+/// (docs/protocol.md §6 LeafBatch; the baseline varint comes on top, 1..5 bytes).
+inline constexpr std::size_t k_leaf_batch_fixed = 16;
+inline constexpr std::size_t k_batch_leaf_fixed = 5;
+/// Leaves of one LeafBatch at most.
+inline constexpr std::size_t k_max_batch_leaves = 128;
+
 /// Wire message types (docs/protocol.md §6); the order matches `Body`.
 enum class MessageType : std::uint8_t
 {
@@ -81,8 +88,9 @@ enum class MessageType : std::uint8_t
     Ping = 14,
     Pong = 15,
     Ack = 16,
+    LeafBatch = 17,
 };
-inline constexpr std::uint8_t k_message_type_count = 16;
+inline constexpr std::uint8_t k_message_type_count = 17;
 
 /// How node values are written (docs/protocol.md §5.4).
 enum class ValueEncoding : std::uint8_t
@@ -223,6 +231,13 @@ struct Leave
     friend bool operator==(const Leave&, const Leave&) = default;
 };
 
+/// How quantised residuals are packed (docs/protocol.md §5.5, §5.6).
+enum class Packing : std::uint8_t
+{
+    Zstd = 0,  ///< zigzag LEB128 varints in one zstd frame (net::pack_residuals)
+    Rice = 1,  ///< Rice-coded bit strings (net::pack_residuals_rice); version 4
+};
+
 /// The values of a quantised-delta LeafState (docs/protocol.md §5.5): residuals of the integers
 /// q = x / 2^exponent against a baseline the receiver holds (net/quantised.h computes them). The
 /// codec writes `packed` verbatim and checks on both sides that it unpacks to `du` and `dv`.
@@ -235,9 +250,10 @@ struct QuantisedDelta
     /// The session extrapolated the baseline of u before taking differences (docs/protocol.md
     /// §5.5: u + v dt); only with a baseline. The codec only carries the flag.
     bool extrapolated = false;
-    std::vector<std::int32_t> du;   ///< residual of u per node
-    std::vector<std::int32_t> dv;   ///< residual of v per node, as many as du
-    std::vector<std::byte> packed;  ///< the zstd frame (net::pack_residuals), 1..1,168 bytes
+    std::vector<std::int32_t> du;  ///< residual of u per node
+    std::vector<std::int32_t> dv;  ///< residual of v per node, as many as du
+    Packing packing = Packing::Zstd;
+    std::vector<std::byte> packed;  ///< the packed residuals (`packing`), 1..1,168 bytes
     friend bool operator==(const QuantisedDelta&, const QuantisedDelta&) = default;
 };
 
@@ -321,8 +337,30 @@ struct Ack
     friend bool operator==(const Ack&, const Ack&) = default;
 };
 
-using Body = std::variant<Hello, Welcome, Reject, PeerJoined, PeerLeft, Blob, PointsOfInterest,
-                          Partition, Force, Leave, LeafState, Halo, Heartbeat, Ping, Pong, Ack>;
+/// One leaf of a LeafBatch: a whole leaf's quantised delta (its exponents are the batch's).
+struct BatchLeaf
+{
+    WireLeafId leaf;  ///< at the batch's depth
+    QuantisedDelta quantised;
+    friend bool operator==(const BatchLeaf&, const BatchLeaf&) = default;
+};
+
+/// Quantised-delta states of several whole leaves of one sender, at one tick and time, in one
+/// datagram (docs/protocol.md §6 LeafBatch): the fixed part of a LeafState paid once per datagram
+/// rather than once per leaf. Every leaf has the batch's depth and exponents.
+struct LeafBatch
+{
+    std::uint32_t epoch = 0;
+    double time = 0.0;              ///< s
+    std::int8_t u_exponent = 0;     ///< -40..0, every leaf's
+    std::int8_t v_exponent = 0;     ///< -40..0, every leaf's
+    std::vector<BatchLeaf> leaves;  ///< 1..k_max_batch_leaves, body at most 1,200 bytes
+    friend bool operator==(const LeafBatch&, const LeafBatch&) = default;
+};
+
+using Body =
+    std::variant<Hello, Welcome, Reject, PeerJoined, PeerLeft, Blob, PointsOfInterest, Partition,
+                 Force, Leave, LeafState, Halo, Heartbeat, Ping, Pong, Ack, LeafBatch>;
 static_assert(std::variant_size_v<Body> == k_message_type_count);
 
 /// Fields every datagram carries besides its type (docs/protocol.md §4).

@@ -34,6 +34,11 @@ inline constexpr int k_max_step_exponent = 0;
 /// 32-bit zigzag value).
 inline constexpr std::size_t k_max_unpacked_bytes = 2 * k_max_leaf_nodes_quantised * 5;
 
+/// Largest Rice parameter (low bits per value) of pack_residuals_rice.
+inline constexpr int k_max_rice_parameter = 26;
+/// Unary length at which a Rice-coded value escapes to 32 raw bits.
+inline constexpr int k_rice_escape = 24;
+
 /// The step 2^exponent.
 [[nodiscard]] double quantum(int exponent) noexcept;
 
@@ -73,6 +78,33 @@ void dequantise(std::span<const std::int32_t> q, int exponent, std::span<double>
 [[nodiscard]] bool pack_residuals(std::span<const std::int32_t> du,
                                   std::span<const std::int32_t> dv, std::size_t max_bytes,
                                   std::vector<std::byte>& out);
+
+/// Packs residuals as two Rice-coded bit strings (docs/protocol.md §5.6), du then dv, each with
+/// its own Rice parameter chosen for the fewest bits. Sub-byte: a residual of magnitude m costs
+/// about log2(m) + 2 bits, where the varints of pack_residuals cost at least 8. \pre du.size()
+/// == dv.size() in 1..k_max_leaf_nodes_quantised. \return false if the bits would exceed
+/// `max_bytes`, `out` unspecified.
+[[nodiscard]] bool pack_residuals_rice(std::span<const std::int32_t> du,
+                                       std::span<const std::int32_t> dv, std::size_t max_bytes,
+                                       std::vector<std::byte>& out);
+
+/// Bytes pack_residuals_rice would write (without writing them).
+[[nodiscard]] std::size_t rice_packed_size(std::span<const std::int32_t> du,
+                                           std::span<const std::int32_t> dv) noexcept;
+
+/// Unpacks bits written by pack_residuals_rice into du and dv (n values each). Hostile bytes:
+/// parameters above k_max_rice_parameter, a value that does not fit 32 bits, an escape where the
+/// short form fits, bits past the end, a byte too many or non-zero padding are all
+/// DecodeError::BadCompression; the work is bounded by 2n values of at most 61 bits.
+[[nodiscard]] std::optional<DecodeError> unpack_residuals_rice(std::span<const std::byte> packed,
+                                                               std::span<std::int32_t> du,
+                                                               std::span<std::int32_t> dv) noexcept;
+
+/// Unpacks `packed` by `packing` (either function above).
+[[nodiscard]] std::optional<DecodeError> unpack_residuals(Packing packing,
+                                                          std::span<const std::byte> packed,
+                                                          std::span<std::int32_t> du,
+                                                          std::span<std::int32_t> dv) noexcept;
 
 /// Unpacks a frame written by pack_residuals into du and dv (n = du.size() = dv.size() values
 /// each). Hostile bytes: the content size is read from the frame header and must lie in
