@@ -177,7 +177,8 @@ struct StreamResult
 };
 
 StreamResult run_stream(int level, net::ValueEncoding encoding, double seconds, int u_exp,
-                        int v_exp, double drag_hz, double drag_n, double cap_mbit)
+                        int v_exp, double drag_hz, double drag_n, double cap_mbit,
+                        net::Packing packing, bool batch, double ack_hz)
 {
     net::SimulatedNetwork network;
     std::vector<std::unique_ptr<net::Transport>> tr;
@@ -189,6 +190,9 @@ StreamResult run_stream(int level, net::ValueEncoding encoding, double seconds, 
     set.u_step_exponent = u_exp;
     set.v_step_exponent = v_exp;
     set.bandwidth_cap_mbit_s = cap_mbit;
+    set.stream_packing = packing;
+    set.batch_leaves = batch;
+    set.ack_rate_hz = ack_hz;
     tr.push_back(network.create_endpoint());
     const net::Address master = tr.back()->open({}).value();
     s.push_back(
@@ -299,15 +303,29 @@ void stream_suite(bench::Report& report, int level, double seconds)
         net::ValueEncoding encoding;
         int u_exp, v_exp;
         double cap;
+        net::Packing packing = net::Packing::Rice;
+        bool batch = true;
+        double ack_hz = 60.0;
     };
+    constexpr auto zstd = net::Packing::Zstd;
+    constexpr auto rice = net::Packing::Rice;
+    constexpr auto q = net::ValueEncoding::QuantisedDelta;
     const Drag drags[] = {{"strong", 1.0, 0.5}, {"moderate", 0.25, 0.2}};
     const Case cases[] = {
         {"f64", net::ValueEncoding::F64, -16, -12, 0.0},
         {"f32", net::ValueEncoding::F32, -16, -12, 0.0},
-        {"q 2^-20 2^-16", net::ValueEncoding::QuantisedDelta, -20, -16, 0.0},
-        {"q 2^-16 2^-12", net::ValueEncoding::QuantisedDelta, -16, -12, 0.0},
-        {"q 2^-12 2^-8", net::ValueEncoding::QuantisedDelta, -12, -8, 0.0},
-        {"q 2^-16 2^-12 cap 1.8", net::ValueEncoding::QuantisedDelta, -16, -12, 1.8},
+        // Version 3's coding: zstd-packed varints, one LeafState per leaf, acks at 20 Hz (the
+        // acks in version 4's compact layout).
+        {"v3 q 2^-16 2^-12", q, -16, -12, 0.0, zstd, false, 20.0},
+        {"v3 q 2^-16 2^-12 cap 1.8", q, -16, -12, 1.8, zstd, false, 20.0},
+        // Version 4, one step at a time: Rice, then batches, then acks at 60 Hz.
+        {"rice q 2^-16 2^-12 ack 20", q, -16, -12, 0.0, rice, false, 20.0},
+        {"batch q 2^-16 2^-12 ack 20", q, -16, -12, 0.0, rice, true, 20.0},
+        {"v4 q 2^-16 2^-12", q, -16, -12, 0.0},
+        {"v4 q 2^-20 2^-16", q, -20, -16, 0.0},
+        {"v4 q 2^-14 2^-10 (default)", q, -14, -10, 0.0},
+        {"v4 q 2^-12 2^-8", q, -12, -8, 0.0},
+        {"v4 q 2^-14 2^-10 cap 1.0", q, -14, -10, 1.0},
     };
     const double leaves = static_cast<double>(
         2u << (2 * session::leaf_depth_for(core::TetraGrid::create(level).value(),
@@ -315,8 +333,8 @@ void stream_suite(bench::Report& report, int level, double seconds)
     for (const Drag& d : drags)
         for (const Case& c : cases)
         {
-            const StreamResult r =
-                run_stream(level, c.encoding, seconds, c.u_exp, c.v_exp, d.hz, d.newton, c.cap);
+            const StreamResult r = run_stream(level, c.encoding, seconds, c.u_exp, c.v_exp, d.hz,
+                                              d.newton, c.cap, c.packing, c.batch, c.ack_hz);
             const double bits_node = 8.0 * r.bytes_per_peer_s / (60.0 * r.owned_nodes);
             const double mbit = 8.0 * r.bytes_per_peer_s / 1e6;
             const double mbit_h =
@@ -327,7 +345,7 @@ void stream_suite(bench::Report& report, int level, double seconds)
                 static_cast<double>(r.leaf_states) / 2.0 / seconds * (2.0 * r.owned_nodes / leaves);
             const double bits_sent_node = 8.0 * r.bytes_per_peer_s / node_updates_per_peer_s;
             std::printf(
-                "%-8s | %-21s | %6.2f %6.2f | %6.2f (%6.2f) | %5.1f | %llu %llu %llu | "
+                "%-8s | %-26s | %6.2f %6.2f | %6.2f (%6.2f) | %5.1f | %llu %llu %llu | "
                 "%.4f\n",
                 d.name, c.name, bits_node, bits_sent_node, mbit, mbit_h, rate,
                 static_cast<unsigned long long>(r.leaf_states),

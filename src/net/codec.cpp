@@ -29,7 +29,7 @@ constexpr std::size_t k_peer_info_fixed = 24;
 constexpr std::size_t k_target_size = 40;
 constexpr std::size_t k_force_size = 64;
 constexpr std::size_t k_range_size = 8;
-constexpr std::size_t k_ack_size = 16;
+constexpr std::size_t k_ack_fixed = 12;
 constexpr std::size_t k_halo_fixed = 16;
 
 std::size_t value_size(ValueEncoding e) noexcept
@@ -374,9 +374,16 @@ Err check(const Ack& m) noexcept
 {
     if (m.acks.empty() || m.acks.size() > k_max_acks)
         return DecodeError::BadCount;
+    const std::uint8_t depth = m.acks.front().leaf.depth;
+    if (depth > k_max_partition_depth)
+        return DecodeError::BadRange;
     for (const LeafAck& a : m.acks)
+    {
         if (auto err = check_leaf(a.leaf))
             return err;
+        if (a.leaf.depth != depth)
+            return DecodeError::BadRange;
+    }
     return {};
 }
 
@@ -494,11 +501,23 @@ std::size_t body_size(const Pong&) noexcept
 {
     return 16;
 }
+std::size_t varint_size(std::uint64_t v) noexcept;
+std::uint64_t newest_tick(const Ack& m) noexcept
+{
+    std::uint64_t t = 0;
+    for (const LeafAck& a : m.acks)
+        t = std::max(t, a.tick);
+    return t;
+}
 std::size_t body_size(const Ack& m) noexcept
 {
-    return 4 + k_ack_size * m.acks.size();
+    const std::uint64_t newest = newest_tick(m);
+    std::size_t n = k_ack_fixed;
+    for (const LeafAck& a : m.acks)
+        n += 2 + varint_size(newest - a.tick);
+    return n;
 }
-std::size_t varint_size(std::uint32_t v) noexcept
+std::size_t varint_size(std::uint64_t v) noexcept
 {
     std::size_t n = 1;
     while (v >= 0x80u)
@@ -512,7 +531,7 @@ std::size_t body_size(const LeafBatch& m) noexcept
 {
     std::size_t n = k_leaf_batch_fixed;
     for (const BatchLeaf& l : m.leaves)
-        n += k_batch_leaf_fixed + varint_size(l.quantised.baseline) + l.quantised.packed.size();
+        n += batch_leaf_size(l);
     return n;
 }
 
@@ -716,6 +735,20 @@ void write_body(ByteWriter& w, const Pong& m) noexcept
     w.u32(0);
     w.u64(m.time_us);
 }
+void write_varint(ByteWriter& w, std::uint64_t v) noexcept
+{
+    while (v >= 0x80u)
+    {
+        w.u8(static_cast<std::uint8_t>((v & 0x7Fu) | 0x80u));
+        v >>= 7;
+    }
+    w.u8(static_cast<std::uint8_t>(v));
+}
+std::uint16_t leaf_index(const WireLeafId& l) noexcept
+{
+    const std::uint32_t side = 1u << l.depth;
+    return static_cast<std::uint16_t>((l.square * side + l.iy) * side + l.ix);
+}
 void write_body(ByteWriter& w, const LeafBatch& m) noexcept
 {
     w.u32(m.epoch);
@@ -727,29 +760,24 @@ void write_body(ByteWriter& w, const LeafBatch& m) noexcept
     for (const BatchLeaf& l : m.leaves)
     {
         const QuantisedDelta& q = l.quantised;
-        const std::uint32_t side = 1u << l.leaf.depth;
-        w.u16(static_cast<std::uint16_t>((l.leaf.square * side + l.leaf.iy) * side + l.leaf.ix));
+        w.u16(leaf_index(l.leaf));
         w.u8(static_cast<std::uint8_t>(q.du.size()));
         w.u16(packed_word(q));
-        std::uint32_t b = q.baseline;
-        while (b >= 0x80u)
-        {
-            w.u8(static_cast<std::uint8_t>((b & 0x7Fu) | 0x80u));
-            b >>= 7;
-        }
-        w.u8(static_cast<std::uint8_t>(b));
+        write_varint(w, q.baseline);
         w.bytes(q.packed.data(), q.packed.size());
     }
 }
 void write_body(ByteWriter& w, const Ack& m) noexcept
 {
+    const std::uint64_t newest = newest_tick(m);
     w.u8(static_cast<std::uint8_t>(m.acks.size()));
-    w.zeros(3);
+    w.u8(m.acks.front().leaf.depth);
+    w.u16(0);
+    w.u64(newest);
     for (const LeafAck& a : m.acks)
     {
-        write_leaf(w, a.leaf);
-        w.u16(0);
-        w.u64(a.tick);
+        w.u16(leaf_index(a.leaf));
+        write_varint(w, newest - a.tick);
     }
 }
 
@@ -1125,21 +1153,34 @@ Err read_body(ByteReader& r, Pong& m) noexcept
     return {};
 }
 
-/// A canonical LEB128 varint of at most 5 bytes and 32 bits (no redundant final 0x00 group).
-Err read_varint(ByteReader& r, std::uint32_t& value) noexcept
+/// The leaf with index (square * 2^depth + iy) * 2^depth + ix; \pre index < 2 * 4^depth.
+WireLeafId leaf_of_index(std::uint16_t index, std::uint8_t depth) noexcept
+{
+    const std::uint32_t side = 1u << depth;
+    return WireLeafId{static_cast<std::uint8_t>(index / (side * side)), depth,
+                      static_cast<std::uint16_t>(index % side),
+                      static_cast<std::uint16_t>((index / side) % side)};
+}
+
+/// A canonical LEB128 varint of a value up to `max` (no redundant final 0x00 group, at most
+/// 10 bytes; a short read leaves `value` unspecified and the reader short).
+Err read_varint(ByteReader& r, std::uint64_t& value, std::uint64_t max) noexcept
 {
     std::uint64_t v = 0;
-    for (int k = 0; k < 5; ++k)
+    for (int k = 0; k < 10; ++k)
     {
         const std::uint8_t b = r.u8();
         if (r.short_read())
             return {};
-        v |= std::uint64_t{b & 0x7Fu} << (7 * k);
+        const std::uint64_t group = b & 0x7Fu;
+        if (k == 9 && group > 1)  // bits beyond 64
+            return DecodeError::BadRange;
+        v |= group << (7 * k);
         if ((b & 0x80u) == 0)
         {
-            if ((b == 0 && k > 0) || v > 0xFFFFFFFFull)
+            if ((b == 0 && k > 0) || v > max)
                 return DecodeError::BadRange;
-            value = static_cast<std::uint32_t>(v);
+            value = v;
             return {};
         }
     }
@@ -1171,16 +1212,16 @@ Err read_body(ByteReader& r, LeafBatch& m) noexcept
             return {};
         if (index >= 2 * side * side)
             return DecodeError::BadRange;
-        l.leaf = WireLeafId{static_cast<std::uint8_t>(index / (side * side)), depth,
-                            static_cast<std::uint16_t>(index % side),
-                            static_cast<std::uint16_t>((index / side) % side)};
+        l.leaf = leaf_of_index(index, depth);
         if (n == 0 || n > k_max_leaf_nodes_quantised)
             return DecodeError::BadCount;
         QuantisedDelta& q = l.quantised;
         q.u_exponent = m.u_exponent;
         q.v_exponent = m.v_exponent;
-        if (auto err = read_varint(r, q.baseline))
+        std::uint64_t baseline = 0;
+        if (auto err = read_varint(r, baseline, 0xFFFFFFFFu))
             return err;
+        q.baseline = static_cast<std::uint32_t>(baseline);
         if (r.short_read())
             return {};
         if (auto err = read_packed(r, word, n, q))
@@ -1194,21 +1235,35 @@ Err read_body(ByteReader& r, LeafBatch& m) noexcept
 Err read_body(ByteReader& r, Ack& m) noexcept
 {
     const std::uint8_t count = r.u8();
-    if (auto err = read_reserved(r, 3))
+    const std::uint8_t depth = r.u8();
+    if (auto err = read_reserved(r, 2))
         return err;
+    const std::uint64_t newest = r.u64();
     if (r.short_read())
         return {};
     if (count == 0 || count > k_max_acks)
         return DecodeError::BadCount;
+    if (depth > k_max_partition_depth)
+        return DecodeError::BadRange;
+    const std::uint32_t side = 1u << depth;
     m.acks.resize(count);
+    bool newest_named = false;
     for (LeafAck& a : m.acks)
     {
-        read_leaf(r, a.leaf);
-        if (auto err = read_reserved(r, 2))
+        const std::uint16_t index = r.u16();
+        std::uint64_t age = 0;
+        if (auto err = read_varint(r, age, newest))
             return err;
-        a.tick = r.u64();
+        if (r.short_read())
+            return {};
+        if (index >= 2 * side * side)
+            return DecodeError::BadRange;
+        a.leaf = leaf_of_index(index, depth);
+        a.tick = newest - age;
+        newest_named = newest_named || age == 0;
     }
-    return {};
+    // Canonical: the newest tick is an entry's (one of the ages is 0).
+    return newest_named ? Err{} : DecodeError::BadRange;
 }
 
 /// Default-constructs the body alternative for wire type `type` (1..17).
@@ -1239,6 +1294,11 @@ std::optional<DecodeError> validate(const Message& message) noexcept
             if (auto err = check_packed(l.quantised))
                 return err;
     return {};
+}
+
+std::size_t batch_leaf_size(const BatchLeaf& leaf) noexcept
+{
+    return k_batch_leaf_fixed + varint_size(leaf.quantised.baseline) + leaf.quantised.packed.size();
 }
 
 std::size_t encoded_size(const Message& message) noexcept

@@ -440,6 +440,8 @@ struct Session::Impl
     // Bandwidth cap (settings.bandwidth_cap_mbit_s): per peer, a byte budget and leaf priorities.
     std::map<std::uint16_t, double> budget;
     std::map<std::uint16_t, std::vector<double>> priority;
+    // Batched streaming (settings.batch_leaves): per peer, the LeafBatch being filled this period.
+    std::map<std::uint16_t, net::Message> batch;
     std::vector<core::Vec3> leaf_centre;  // rest positions, m
     std::vector<double> leaf_radius;      // m
     std::vector<char> near_interest;      // per leaf, refreshed each stream
@@ -1567,7 +1569,49 @@ struct Session::Impl
             return false;
         q.du.assign(ru.begin(), ru.begin() + static_cast<std::ptrdiff_t>(n));
         q.dv.assign(rv.begin(), rv.begin() + static_cast<std::ptrdiff_t>(n));
-        return net::pack_residuals(q.du, q.dv, net::k_max_packed_residuals, q.packed);
+        q.packing = settings.stream_packing;
+        return q.packing == net::Packing::Rice
+                   ? net::pack_residuals_rice(q.du, q.dv, net::k_max_packed_residuals, q.packed)
+                   : net::pack_residuals(q.du, q.dv, net::k_max_packed_residuals, q.packed);
+    }
+
+    /// Adds quantised leaf state `m` to the LeafBatch being filled for `pid`, first sending that
+    /// batch if `m` would take it over one datagram. \return the bytes this adds to the stream
+    /// to `pid` (the leaf's record, plus a header and the batch's fixed part when it opens one).
+    std::size_t batch_leaf(std::uint16_t pid, net::LeafState&& m, std::uint64_t tick)
+    {
+        net::BatchLeaf leaf{m.leaf, std::move(m.quantised)};
+        const std::size_t record = net::batch_leaf_size(leaf);
+        auto it = batch.find(pid);
+        if (it != batch.end())
+        {
+            auto& b = std::get<net::LeafBatch>(it->second.body);
+            if (b.leaves.size() < net::k_max_batch_leaves &&
+                net::encoded_size(it->second) + record <=
+                    net::k_header_size + net::k_max_state_payload)
+            {
+                b.leaves.push_back(std::move(leaf));
+                return record;
+            }
+            send_to(pid, it->second, net::SendMode::Unsequenced);
+            batch.erase(it);
+        }
+        net::LeafBatch b;
+        b.epoch = m.epoch;
+        b.time = m.time;
+        b.u_exponent = static_cast<std::int8_t>(settings.u_step_exponent);
+        b.v_exponent = static_cast<std::int8_t>(settings.v_step_exponent);
+        b.leaves.push_back(std::move(leaf));
+        batch.emplace(pid, make(b, tick));
+        return net::k_header_size + net::k_leaf_batch_fixed + record;
+    }
+
+    /// Sends every LeafBatch being filled (the end of a stream period).
+    void flush_batches()
+    {
+        for (const auto& [pid, m] : batch)
+            send_to(pid, m, net::SendMode::Unsequenced);
+        batch.clear();
     }
 
     /// Quantised streaming of leaf `l` to every peer (docs/protocol.md §5.5). \return false if
@@ -1638,6 +1682,17 @@ struct Session::Impl
                     ++counters.key_states_sent;
             }
             ++counters.leaf_states_sent;
+            if (coded && settings.batch_leaves)
+            {
+                const std::size_t bytes = batch_leaf(pid, std::move(m), tick);
+                if (prio != nullptr)
+                {
+                    budget[pid] -= static_cast<double>(bytes);
+                    (*prio)[l] = 0.0;
+                }
+                leaf_sent_time[l] = s.state_.time;
+                continue;
+            }
             const net::Message msg = make(m, tick);
             if (prio != nullptr)
             {
@@ -1730,6 +1785,7 @@ struct Session::Impl
             send_all(make(m, s.state_.tick), net::SendMode::Unsequenced);
             leaf_sent_time[l] = s.state_.time;
         }
+        flush_batches();
     }
 
     // --- leaving -------------------------------------------------------------------------------
@@ -2453,6 +2509,21 @@ struct Session::Impl
         }
         display_dirty = true;
     }
+
+    /// A LeafBatch: each of its leaves as the quantised LeafState it stands for.
+    void on_leaf_batch(std::uint16_t from, const net::Message& m, const net::LeafBatch& b)
+    {
+        net::LeafState ls;
+        ls.epoch = b.epoch;
+        ls.encoding = net::ValueEncoding::QuantisedDelta;
+        ls.time = b.time;
+        for (const net::BatchLeaf& leaf : b.leaves)
+        {
+            ls.leaf = leaf.leaf;
+            ls.quantised = leaf.quantised;
+            on_leaf_state(from, m, ls);
+        }
+    }
     bool display_dirty = false;
     std::string refusal;  // why this joiner left on its own (settings refused by the session)
 
@@ -2561,6 +2632,9 @@ struct Session::Impl
                     transport.disconnect(*p.handle, net::DisconnectReason::Quit);
                 p.departed = true;
             }
+            return;
+        case net::MessageType::LeafBatch:
+            on_leaf_batch(from, m, std::get<net::LeafBatch>(m.body));
             return;
         case net::MessageType::LeafState:
             on_leaf_state(from, m, std::get<net::LeafState>(m.body));

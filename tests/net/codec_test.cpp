@@ -167,6 +167,40 @@ TEST(Codec, LeafBatchMatchesBytesWrittenFromTheSpecification)
     EXPECT_EQ(*back, m);
 }
 
+TEST(Codec, AckMatchesBytesWrittenFromTheSpecification)
+{
+    // Two leaves at depth 1 (indices (0 * 2 + 1) * 2 + 0 = 2 and (1 * 2 + 0) * 2 + 1 = 5), ticks
+    // 1000 (the newest) and 1000 - 200: ages 0 and 200 (LEB128 0xC8 0x01).
+    Ack a;
+    a.acks = {LeafAck{.leaf = WireLeafId{0, 1, 0, 1}, .tick = 1000},
+              LeafAck{.leaf = WireLeafId{1, 1, 1, 0}, .tick = 800}};
+    Message m{.header = {.session = 7, .sender = PeerId{2}, .sequence = 0, .tick = 9}, .body = a};
+    const auto expected = bytes_of({0x50, 0x4C, 0x4E, 0x54, 4, 16, 0, 0,  // "PLNT" v4 Ack
+                                    7,    0,    0,    0,    2, 0,  0, 0,  // session, sender, seq.
+                                    9,    0,    0,    0,    0, 0,  0, 0,  // tick
+                                    2,    1,    0,    0,                  // count, depth, reserved
+                                    0xE8, 0x03, 0,    0,    0, 0,  0, 0,  // newest tick 1000
+                                    2,    0,    0,                        // index 2, age 0
+                                    5,    0,    0xC8, 0x01});             // index 5, age 200
+    EXPECT_EQ(encode_vec(m), expected);
+    auto back = decode(expected);
+    ASSERT_TRUE(back.has_value());
+    EXPECT_EQ(*back, m);
+    // No entry at the newest tick (ages 1 and 201): not canonical.
+    auto d = expected;
+    d[38] = std::byte{1};
+    d[41] = std::byte{0xC9};
+    EXPECT_EQ(decode_error(d), DecodeError::BadRange);
+    // An age beyond the newest tick.
+    d = expected;
+    d[41] = std::byte{0xE9};
+    d[42] = std::byte{0x07};
+    EXPECT_EQ(decode_error(d), DecodeError::BadRange);
+    // Leaves of two depths cannot share one Ack.
+    a.acks[1].leaf = WireLeafId{1, 2, 1, 0};
+    EXPECT_EQ(validate(Message{.header = m.header, .body = a}), DecodeError::BadRange);
+}
+
 TEST(Codec, LeafStateMatchesBytesWrittenFromTheSpecification)
 {
     LeafState s;

@@ -202,7 +202,9 @@ inline std::vector<Message> all()
     add(Ping{.nonce = 0xA5A5A5A5u, .time_us = 123456789});
     add(Pong{.nonce = 0xA5A5A5A5u, .time_us = 123456789});
     add(Ack{.acks = {LeafAck{.leaf = WireLeafId{0, 3, 7, 7}, .tick = 99},
-                     LeafAck{.leaf = WireLeafId{1, 0, 0, 0}, .tick = 0xFFFFFFFFFFFFULL}}});
+                     LeafAck{.leaf = WireLeafId{1, 3, 0, 0}, .tick = 0xFFFFFFFFFFFFULL},
+                     LeafAck{.leaf = WireLeafId{1, 3, 2, 5}, .tick = 0xFFFFFFFFFFF0ULL}}});
+    add(Ack{.acks = {LeafAck{.leaf = WireLeafId{1, 0, 0, 0}, .tick = 0}}});
     // Appended after the version-1 samples so that the fuzz corpus's sample indices stay valid.
     add(quantised_leaf_state(72, 0, true));
     add(quantised_leaf_state(k_max_leaf_nodes_quantised, 6, false));

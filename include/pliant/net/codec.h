@@ -66,6 +66,9 @@ enum class EncodeError : std::uint8_t
 /// Bytes encode() writes for `message` (valid or not; at most k_max_datagram_size when valid).
 [[nodiscard]] std::size_t encoded_size(const Message& message) noexcept;
 
+/// Bytes one leaf adds to a LeafBatch body (docs/protocol.md §6 LeafBatch).
+[[nodiscard]] std::size_t batch_leaf_size(const BatchLeaf& leaf) noexcept;
+
 /// Writes `message` to the front of `out`. \return the number of bytes written;
 /// EncodeError::InvalidMessage if validate() fails; EncodeError::BufferTooSmall if `out` is shorter
 /// than encoded_size(). Nothing is written on error.

@@ -39,7 +39,7 @@ inline constexpr std::size_t k_max_blob_chunk = 32768;
 inline constexpr std::uint32_t k_max_blob_size = 256u << 20;
 inline constexpr std::size_t k_max_points = 16;  ///< points of interest and forces per message
 inline constexpr std::size_t k_max_halo_ranges = 32;
-inline constexpr std::size_t k_max_acks = 64;
+inline constexpr std::size_t k_max_acks = 128;
 inline constexpr int k_max_partition_depth = 7;
 inline constexpr int k_max_grid_level = 10;
 inline constexpr std::uint32_t k_max_face_index = 4u << 20;       ///< 4 * 4^10 faces at level 10
@@ -333,7 +333,7 @@ struct LeafAck
 
 struct Ack
 {
-    std::vector<LeafAck> acks;  ///< 1..64
+    std::vector<LeafAck> acks;  ///< 1..128, every leaf at one depth (0..7)
     friend bool operator==(const Ack&, const Ack&) = default;
 };
 
