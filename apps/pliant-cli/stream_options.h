@@ -24,7 +24,9 @@ struct StreamOptions
 inline void add_stream_options(CLI::App* cmd, StreamOptions& opt)
 {
     cmd->add_flag("--compress", opt.compress,
-                  "Stream quantised, delta-coded, zstd-packed leaf states (docs/session.md §5.1)");
+                  "Stream quantised leaf states (steps 61 um, 0.98 mm/s), delta-coded against\n"
+                  "what each receiver acknowledged, Rice-packed, several leaves per datagram:\n"
+                  "about 1.4 Mbit/s per peer at level 6 and 60 Hz (docs/session.md §5.1)");
     cmd->add_option("--cap", opt.cap_mbit,
                     "With --compress: leaf-state bytes per peer at most [Mbit/s] (0: no cap)")
         ->check(CLI::NonNegativeNumber);

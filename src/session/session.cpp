@@ -465,6 +465,7 @@ struct Session::Impl
     // leaf whose streamed state gives the neighbour's value. Rebuilt when the partition changes.
     std::uint32_t border_epoch = std::numeric_limits<std::uint32_t>::max();
     std::vector<core::GridCoord> border_nodes;
+    std::vector<char> border_mask;  // per canonical node: 1 on border_nodes
     std::vector<std::uint32_t> border_begin;
     std::vector<std::uint8_t> border_dir;
     std::vector<std::uint32_t> border_leaf;
@@ -1153,6 +1154,7 @@ struct Session::Impl
         if (e == border_epoch)
             return;
         border_epoch = e;
+        border_mask.assign(mine.size(), 0);
         border_nodes.clear();
         border_begin.clear();
         border_dir.clear();
@@ -1172,6 +1174,7 @@ struct Session::Impl
                     }
                 if (border_dir.size() != first)
                 {
+                    border_mask[n.value] = 1;
                     border_nodes.push_back(c);
                     border_begin.push_back(static_cast<std::uint32_t>(first));
                 }
@@ -1350,8 +1353,11 @@ struct Session::Impl
         return n;
     }
 
-    /// Fast mode with quantised streaming: the owner's state on its leaves becomes what it
-    /// streams, so its neighbours' Dirichlet values are its own state (docs/protocol.md §5.5).
+    /// Fast mode with quantised streaming: the owner's u on its border nodes (those a
+    /// neighbour's Dirichlet values come from) becomes what it streams, so both sides of a border
+    /// integrate from the same boundary values (docs/protocol.md §5.5, docs/session.md §5.1).
+    /// Interior nodes and v keep full precision: rounding every node every frame fed noise of
+    /// the step's size into the whole region, which the stream then had to carry (docs/results.md).
     void adopt_quantised()
     {
         const core::TetraGrid& g = s.model_->grid();
@@ -1360,14 +1366,13 @@ struct Session::Impl
             const std::size_t n = quantise_leaf(l);
             const auto nodes = s.graph_->nodes(l);
             for (std::size_t k = 0; k < n; ++k)
-            {
-                const core::GridCoord c = g.coord(nodes[k]);
-                s.state_.u.at(c.x, c.y) = xu[k];
-                s.state_.v.at(c.x, c.y) = xv[k];
-            }
+                if (border_mask[nodes[k].value] != 0)
+                {
+                    const core::GridCoord c = g.coord(nodes[k]);
+                    s.state_.u.at(c.x, c.y) = xu[k];
+                }
         }
         s.model_->sync(s.state_.u);
-        s.model_->sync(s.state_.v);
     }
 
     void copy_own_to_display(const PartitionEntry* p)

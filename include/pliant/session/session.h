@@ -43,11 +43,13 @@
 ///   quantised to power-of-two steps; each receiver acknowledges the leaf states it holds (Ack,
 ///   at `ack_rate_hz`), and the owner codes each leaf against the newest state that receiver
 ///   acknowledged (a key state when there is none), with left-neighbour prediction where it pays,
-///   packed with zstd. A leaf unchanged since the receiver's baseline costs nothing. Every peer,
-///   the owner included, displays the same dequantised bits. In `fast` mode, where the streamed
-///   values are the neighbours' Dirichlet values, the owner also adopts them: its owned nodes are
-///   quantised after every frame. In `exact` mode the stream is display-only and the integrated
-///   state is untouched (halos stay f64), so lockstep and replay stay bit-exact.
+///   Rice-packed, several leaves per LeafBatch datagram. A leaf unchanged since the receiver's
+///   baseline costs nothing. Every peer, the owner included, displays the same dequantised bits. In
+///   `fast` mode, where the streamed values are the neighbours' Dirichlet values, the owner also
+///   adopts them where they are used: u on its border nodes is quantised after every frame
+///   (interior nodes and v keep full precision, so no rounding noise is fed into the whole region).
+///   In `exact` mode the stream is display-only and the integrated state is untouched (halos stay
+///   f64), so lockstep and replay stay bit-exact.
 /// - Coarse streaming (`stream_coarsen = k`): an owner sends each leaf's nodes at level n - k
 ///   only; a receiver restricts what it shows to level n - k, refines it back k levels with
 ///   butterfly subdivision (`subdiv::refine`) and shows the refined values on the leaves it got
