@@ -61,13 +61,13 @@ render::OffscreenContext& context()
     return *ctx;
 }
 
-void BM_TexturePath(benchmark::State& state)
+void texture_path(benchmark::State& state, render::GridNormals normals)
 {
     context();
     const int level = static_cast<int>(state.range(0));
     const auto grid = core::TetraGrid::create(level).value();
     const auto p = test::sphere_positions(grid);
-    auto renderer = render::GridRenderer::create().value();
+    auto renderer = render::GridRenderer::create(normals).value();
     auto fb = render::Framebuffer::create(k_width, k_height).value();
     render::DrawSettings s;
     const bool upload_each_frame = state.range(1) != 0;
@@ -83,6 +83,16 @@ void BM_TexturePath(benchmark::State& state)
     state.counters["fps"] =
         benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
     state.counters["triangles"] = static_cast<double>(renderer.triangle_count());
+}
+
+void BM_TexturePath(benchmark::State& state)
+{
+    texture_path(state, render::GridNormals::Pass);
+}
+
+void BM_TexturePathVertexNormals(benchmark::State& state)
+{
+    texture_path(state, render::GridNormals::VertexShader);
 }
 
 void BM_VertexBufferPath(benchmark::State& state)
@@ -125,6 +135,11 @@ int main(int argc, char** argv)
         ->ArgNames({"level", "upload"})
         ->Unit(benchmark::kMillisecond)
         ->UseRealTime();
+    benchmark::RegisterBenchmark("BM_TexturePathVertexNormals", BM_TexturePathVertexNormals)
+        ->ArgsProduct({levels, {0, 1}})
+        ->ArgNames({"level", "upload"})
+        ->Unit(benchmark::kMillisecond)
+        ->UseRealTime();
     benchmark::RegisterBenchmark("BM_VertexBufferPath", BM_VertexBufferPath)
         ->DenseRange(6, static_cast<int>(max_level))
         ->ArgName("level")
@@ -138,7 +153,9 @@ int main(int argc, char** argv)
             const std::string& args = r.run_name.args;
             const auto lp = args.find("level:");
             const int level = lp == std::string::npos ? -1 : std::atoi(args.c_str() + lp + 6);
-            std::string c = fn == "BM_TexturePath" ? "texture path" : "vertex-buffer path";
+            std::string c = fn == "BM_TexturePath"                ? "texture path"
+                            : fn == "BM_TexturePathVertexNormals" ? "texture path, VS normals"
+                                                                  : "vertex-buffer path";
             if (args.find("upload:1") != std::string::npos)
                 c += " + upload";
             const double tris = bench::counter(r, "triangles");

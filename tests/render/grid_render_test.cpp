@@ -200,13 +200,13 @@ TEST_F(GlTest, NoCracksAndSmoothShadingAlongSeams)
     EXPECT_TRUE(is_background(shot.image, 0, 0));
 }
 
-TEST_F(GlTest, ShaderNormalsMatchAreaWeightedCpuNormals)
+void expect_gpu_normals_match_cpu_normals(render::GridNormals mode)
 {
     const auto grid = core::TetraGrid::create(3).value();
     const auto p = sphere_positions(grid);
     const auto cpu = render::grid_normals(grid, p);
     constexpr int k_fb = 384;
-    auto renderer = render::GridRenderer::create();
+    auto renderer = render::GridRenderer::create(mode);
     ASSERT_TRUE(renderer.has_value()) << renderer.error().message;
     auto fb = render::Framebuffer::create(k_fb, k_fb, render::PixelFormat::Rgba32f);
     ASSERT_TRUE(fb.has_value()) << fb.error().message;
@@ -267,6 +267,88 @@ TEST_F(GlTest, ShaderNormalsMatchAreaWeightedCpuNormals)
     EXPECT_GT(checked, 30);
     EXPECT_GT(border_checked, 8);
     EXPECT_LT(worst, 1e-4) << "float texture positions give ~1e-6; a wrong ghost gives ~0.1";
+}
+
+TEST_F(GlTest, ShaderNormalsMatchAreaWeightedCpuNormals)
+{
+    expect_gpu_normals_match_cpu_normals(render::GridNormals::Pass);
+}
+
+TEST_F(GlTest, VertexShaderNormalsMatchAreaWeightedCpuNormals)
+{
+    expect_gpu_normals_match_cpu_normals(render::GridNormals::VertexShader);
+}
+
+TEST_F(GlTest, NormalPassDrawsWhatVertexShaderNormalsDraw)
+{
+    // The default normal pass and per-vertex normals run the same formula on the same texels:
+    // the pictures must agree, and keep agreeing after new positions and owners (the pass
+    // must rerun after every upload, not only the first).
+    const auto grid = core::TetraGrid::create(4).value();
+    const auto round = sphere_positions(grid);
+    auto bumpy = sphere_positions(grid);
+    for (int y = 0; y < grid.ny(); ++y)
+        for (int x = 0; x < grid.nx(); ++x)
+        {
+            const core::Vec3 q{round[0].at(x, y), round[1].at(x, y), round[2].at(x, y)};
+            const double r = 1.0 + 0.08 * std::sin(7.0 * q.x) * std::cos(5.0 * q.y + 2.0 * q.z);
+            for (std::size_t c = 0; c < 3; ++c)
+                bumpy[c].at(x, y) = round[c].at(x, y) * r;
+        }
+    std::vector<std::uint16_t> halves(grid.node_count());
+    std::vector<std::uint16_t> thirds(grid.node_count());
+    for (std::uint32_t i = 0; i < grid.node_count(); ++i)
+    {
+        const core::GridCoord g = grid.coord(grid.canonical(core::NodeIndex{i}));
+        halves[i] = g.x <= grid.w() ? 0 : 1;
+        thirds[i] = static_cast<std::uint16_t>(g.x * 3 / grid.nx() + 2);
+    }
+    auto pass = render::GridRenderer::create(render::GridNormals::Pass);
+    ASSERT_TRUE(pass.has_value()) << pass.error().message;
+    auto per_vertex = render::GridRenderer::create(render::GridNormals::VertexShader);
+    ASSERT_TRUE(per_vertex.has_value()) << per_vertex.error().message;
+    auto fb = render::Framebuffer::create(k_size, k_size);
+    ASSERT_TRUE(fb.has_value()) << fb.error().message;
+    render::DrawSettings s = sphere_settings();
+    s.color = render::ColorMode::Owner;
+    s.wireframe = true;
+    auto shot = [&](const render::GridRenderer& r)
+    {
+        fb->bind();
+        r.draw(s, k_size, k_size);
+        return fb->read_rgba8();
+    };
+    auto compare = [&](const char* what)
+    {
+        const render::Image a = shot(*pass);
+        const render::Image b = shot(*per_vertex);
+        int worst = 0;
+        int differing = 0;
+        for (std::size_t i = 0; i < a.rgba.size(); ++i)
+        {
+            const int d = std::abs(a.rgba[i] - b.rgba[i]);
+            worst = std::max(worst, d);
+            differing += d > 0;
+        }
+        std::printf("[render] %s: %d of %zu channels differ, by at most %d\n", what, differing,
+                    a.rgba.size(), worst);
+        EXPECT_LE(worst, 1) << what;
+        return a;
+    };
+    for (render::GridRenderer* r : {&*pass, &*per_vertex})
+    {
+        r->upload(grid, round);
+        r->upload_owners(grid, halves);
+    }
+    const render::Image first = compare("sphere, two owners");
+    for (render::GridRenderer* r : {&*pass, &*per_vertex})
+        r->upload(grid, bumpy);
+    const render::Image second = compare("bumpy sphere, two owners");
+    for (render::GridRenderer* r : {&*pass, &*per_vertex})
+        r->upload_owners(grid, thirds);
+    const render::Image third = compare("bumpy sphere, three owners");
+    EXPECT_NE(first.rgba, second.rgba) << "new positions must change the picture";
+    EXPECT_NE(second.rgba, third.rgba) << "new owners must change the picture";
 }
 
 TEST_F(GlTest, OwnerColouringShowsTheTwoOwners)

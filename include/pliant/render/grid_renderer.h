@@ -10,10 +10,15 @@
 ///   displacement) for colouring.
 /// - One static index buffer per level holds the 4W^2 grid triangles over *canonical* node
 ///   indices, so the two sides of a seam share vertices and cannot crack.
-/// - The vertex shader fetches its node's position and its six neighbours by `texelFetch`, sums
-///   the six face cross products into the area-weighted normal, and the fragment shader shades
-///   with Phong under a head light. Neighbours across a seam come from the ghost ring, which
-///   holds exactly the nodes on the other side, so the normals are continuous there.
+/// - Normals (GridNormals::Pass, the default): after each upload, one triangle over an nx x ny
+///   RGBA32F target runs a fragment shader per node that fetches the node's six neighbours by
+///   `texelFetch` and sums the six face cross products into the area-weighted normal (w: the
+///   owner id). The vertex shader then fetches two texels: position and normal. Neighbours
+///   across a seam come from the ghost ring, which holds exactly the nodes on the other side,
+///   so the normals are continuous there. GridNormals::VertexShader does the same sum in every
+///   vertex invocation instead (the first design: more work wherever a shared vertex is shaded
+///   more than once, as on llvmpipe).
+/// - The fragment shader shades with Phong under a head light.
 /// Only positions (and owners when they change) are streamed per frame; nothing is allocated
 /// after the first upload of a level.
 ///
@@ -34,12 +39,23 @@
 namespace pliant::render
 {
 
+/// Where the grid's normals are computed (both from the six neighbour texels, same formula).
+enum class GridNormals : std::uint8_t
+{
+    /// Default: a normal pass after each upload writes one normal per node into a texture
+    /// (a fragment shader over an nx x ny target); the vertex shader fetches it.
+    Pass,
+    /// Every vertex-shader invocation computes its own normal (8 fetches per vertex instead of
+    /// 2). Slower on llvmpipe (docs/rendering.md); kept for comparison and tests.
+    VertexShader,
+};
+
 class GridRenderer
 {
 public:
-    /// Compiles the shaders. \pre a GL 3.3 context is current (`OffscreenContext` or the
-    /// viewer's window, with `load_gl` done). \return GraphicsError with the compiler's log.
-    static core::Result<GridRenderer> create();
+    /// Compiles the shaders for `normals`. \pre a GL 3.3 context is current (`OffscreenContext` or
+    /// the viewer's window, with `load_gl` done). \return GraphicsError with the compiler's log.
+    static core::Result<GridRenderer> create(GridNormals normals = GridNormals::Pass);
 
     GridRenderer(GridRenderer&&) noexcept;
     GridRenderer& operator=(GridRenderer&&) noexcept;
@@ -65,7 +81,9 @@ public:
     void upload_owners(const core::TetraGrid& grid, std::span<const std::uint16_t> owners);
 
     /// Draws into the bound framebuffer (viewport width x height), clearing it first unless
-    /// `settings.clear` is false. \pre something was uploaded.
+    /// `settings.clear` is false. With GridNormals::Pass, first reruns the normal pass if
+    /// positions or owners changed since the last draw (into its own framebuffer; the caller's
+    /// binding is restored). \pre something was uploaded.
     void draw(const DrawSettings& settings, int width, int height) const;
 
     /// The camera `draw` uses for these settings and this image size.
