@@ -1,8 +1,10 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: 2026 pliant contributors
 // Frames per second of the Phong renderer at 1280x720, offscreen, for a sphere grid of levels
-// 6..9 (16K .. 1M triangles): the texture path (GridRenderer: positions uploaded every frame,
-// normals in the vertex shader) beside the plain vertex-buffer path (MeshRenderer: static
+// 6..9 (16K .. 1M triangles): the texture path (GridRenderer: positions in a float texture,
+// normals from neighbour texels on the GPU, in its three GridNormals modes: the default normal
+// pass copied into a vertex buffer, the normal pass fetched in the vertex shader, normals
+// summed in the vertex shader) beside the plain vertex-buffer path (MeshRenderer: static
 // buffers, CPU normals) in the same run. Each iteration draws one frame and waits for it
 // (glFinish, as a buffer swap would in a window; no read-back). The counter "fps" is frames per
 // second of wall time; the line printed first names GL_RENDERER. upload:1 also re-uploads the
@@ -87,7 +89,12 @@ void texture_path(benchmark::State& state, render::GridNormals normals)
 
 void BM_TexturePath(benchmark::State& state)
 {
-    texture_path(state, render::GridNormals::Pass);
+    texture_path(state, render::GridNormals::PassToBuffer);
+}
+
+void BM_TexturePathFetch(benchmark::State& state)
+{
+    texture_path(state, render::GridNormals::PassFetch);
 }
 
 void BM_TexturePathVertexNormals(benchmark::State& state)
@@ -135,6 +142,11 @@ int main(int argc, char** argv)
         ->ArgNames({"level", "upload"})
         ->Unit(benchmark::kMillisecond)
         ->UseRealTime();
+    benchmark::RegisterBenchmark("BM_TexturePathFetch", BM_TexturePathFetch)
+        ->ArgsProduct({levels, {0, 1}})
+        ->ArgNames({"level", "upload"})
+        ->Unit(benchmark::kMillisecond)
+        ->UseRealTime();
     benchmark::RegisterBenchmark("BM_TexturePathVertexNormals", BM_TexturePathVertexNormals)
         ->ArgsProduct({levels, {0, 1}})
         ->ArgNames({"level", "upload"})
@@ -154,6 +166,7 @@ int main(int argc, char** argv)
             const auto lp = args.find("level:");
             const int level = lp == std::string::npos ? -1 : std::atoi(args.c_str() + lp + 6);
             std::string c = fn == "BM_TexturePath"                ? "texture path"
+                            : fn == "BM_TexturePathFetch"         ? "texture path, VS fetch"
                             : fn == "BM_TexturePathVertexNormals" ? "texture path, VS normals"
                                                                   : "vertex-buffer path";
             if (args.find("upload:1") != std::string::npos)

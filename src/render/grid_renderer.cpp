@@ -17,14 +17,19 @@ namespace pliant::render
 
 struct GridRenderer::Impl
 {
-    GridNormals normal_source = GridNormals::Pass;
-    Program program;            // grid.vert (Pass) or grid_vertex_normals.vert, + phong.frag
-    Program normal_pass;        // grid_normal_pass.vert + .frag (Pass only)
-    GLuint vao = 0;             // no attributes: every program here reads gl_VertexID only
-    GLuint positions = 0;       // RGBA32F, (nx + 2) x (ny + 2)
-    GLuint owners = 0;          // R16UI, same size
-    GLuint normals = 0;         // RGBA32F, nx x ny: unit normal, owner id (Pass only)
-    GLuint normal_fbo = 0;      // renders into `normals`
+    GridNormals normal_source = GridNormals::PassToBuffer;
+    Program program;        // grid.vert, grid_fetch.vert or grid_vertex_normals.vert; + phong.frag
+    Program normal_pass;    // grid_normal_pass.vert + .frag (not for VertexShader)
+    GLuint vao = 0;         // no attributes: the programs read gl_VertexID and textures
+    GLuint positions = 0;   // RGBA32F, (nx + 2) x (ny + 2)
+    GLuint owners = 0;      // R16UI, same size
+    GLuint normals = 0;     // RGBA32F, nx x ny: unit normal, owner id (not for VertexShader)
+    GLuint normal_fbo = 0;  // renders into `normals`
+    // PassToBuffer: `positions` as a read framebuffer, and the buffer the copy fills: nx*ny
+    // inner position texels, then nx*ny normal texels, read by `attrib_vao`.
+    GLuint positions_fbo = 0;
+    GLuint attributes = 0;
+    GLuint attrib_vao = 0;
     bool normals_stale = true;  // positions or owners changed since the last normal pass
     std::array<GLuint, core::k_max_level + 1> index_buffers{};  // per level, made on first use
     int level = 0;
@@ -46,6 +51,9 @@ struct GridRenderer::Impl
         const std::array<GLuint, 3> textures{positions, owners, normals};
         gl::glDeleteTextures(3, textures.data());
         gl::glDeleteFramebuffers(1, &normal_fbo);
+        gl::glDeleteFramebuffers(1, &positions_fbo);
+        gl::glDeleteBuffers(1, &attributes);
+        gl::glDeleteVertexArrays(1, &attrib_vao);
         gl::glDeleteVertexArrays(1, &vao);
     }
 
@@ -56,8 +64,9 @@ struct GridRenderer::Impl
     void prepare_level(const core::TetraGrid& grid);
     void upload_staging();
     void fill_owner_texture(std::span<const std::uint16_t> owners);
-    /// GridNormals::Pass: writes every node's unit normal and owner into `normals` (one
-    /// triangle over an nx x ny target), leaving the caller's framebuffer bound.
+    /// Writes every node's unit normal and owner into `normals` (one triangle over an nx x ny
+    /// target) and, for PassToBuffer, copies positions and normals into `attributes`; leaves
+    /// the caller's framebuffers bound.
     void run_normal_pass();
 };
 
@@ -125,7 +134,7 @@ void GridRenderer::Impl::prepare_level(const core::TetraGrid& grid)
     gl::glTexImage2D(GL_TEXTURE_2D, 0, GL_R16UI, padded_width(), padded_height(), 0, GL_RED_INTEGER,
                      GL_UNSIGNED_SHORT, owner_staging.data());
     normals_stale = true;
-    if (normal_source != GridNormals::Pass)
+    if (normal_source == GridNormals::VertexShader)
         return;
     gl::glBindTexture(GL_TEXTURE_2D, normals);
     gl::glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, nx, ny, 0, GL_RGBA, GL_FLOAT, nullptr);
@@ -138,6 +147,27 @@ void GridRenderer::Impl::prepare_level(const core::TetraGrid& grid)
     gl::glBindFramebuffer(GL_DRAW_FRAMEBUFFER, static_cast<GLuint>(bound));
     PLIANT_ASSERT(status == GL_FRAMEBUFFER_COMPLETE,
                   "GridRenderer: the RGBA32F normal target is incomplete");
+    if (normal_source != GridNormals::PassToBuffer)
+        return;
+    gl::glBindFramebuffer(GL_DRAW_FRAMEBUFFER, positions_fbo);
+    gl::glFramebufferTexture2D(GL_DRAW_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, positions,
+                               0);
+    const GLenum pstatus = gl::glCheckFramebufferStatus(GL_DRAW_FRAMEBUFFER);
+    gl::glBindFramebuffer(GL_DRAW_FRAMEBUFFER, static_cast<GLuint>(bound));
+    PLIANT_ASSERT(pstatus == GL_FRAMEBUFFER_COMPLETE,
+                  "GridRenderer: the positions texture cannot be read back");
+    const auto texels = static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny);
+    gl::glBindVertexArray(attrib_vao);
+    gl::glBindBuffer(GL_ARRAY_BUFFER, attributes);
+    gl::glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(texels * 2U * 16U), nullptr,
+                     GL_STREAM_COPY);
+    gl::glEnableVertexAttribArray(0);
+    gl::glVertexAttribPointer(0, 4, GL_FLOAT, GL_FALSE, 16, nullptr);
+    gl::glEnableVertexAttribArray(1);
+    gl::glVertexAttribPointer(1, 4, GL_FLOAT, GL_FALSE, 16,
+                              reinterpret_cast<const void*>(texels * 16U));
+    gl::glBindVertexArray(0);
+    gl::glBindBuffer(GL_ARRAY_BUFFER, 0);
 }
 
 void GridRenderer::Impl::run_normal_pass()
@@ -158,6 +188,21 @@ void GridRenderer::Impl::run_normal_pass()
     gl::glBindVertexArray(0);
     gl::glBindFramebuffer(GL_DRAW_FRAMEBUFFER, static_cast<GLuint>(bound));
     normals_stale = false;
+    if (normal_source != GridNormals::PassToBuffer)
+        return;
+    GLint read_bound = 0;
+    gl::glGetIntegerv(GL_READ_FRAMEBUFFER_BINDING, &read_bound);
+    const auto texels = static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny);
+    gl::glBindBuffer(GL_PIXEL_PACK_BUFFER, attributes);
+    gl::glPixelStorei(GL_PACK_ALIGNMENT, 4);
+    gl::glBindFramebuffer(GL_READ_FRAMEBUFFER, positions_fbo);
+    gl::glReadBuffer(GL_COLOR_ATTACHMENT0);
+    gl::glReadPixels(1, 1, nx, ny, GL_RGBA, GL_FLOAT, nullptr);
+    gl::glBindFramebuffer(GL_READ_FRAMEBUFFER, normal_fbo);
+    gl::glReadBuffer(GL_COLOR_ATTACHMENT0);
+    gl::glReadPixels(0, 0, nx, ny, GL_RGBA, GL_FLOAT, reinterpret_cast<void*>(texels * 16U));
+    gl::glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
+    gl::glBindFramebuffer(GL_READ_FRAMEBUFFER, static_cast<GLuint>(read_bound));
 }
 
 void GridRenderer::Impl::upload_staging()
@@ -192,9 +237,11 @@ core::Result<GridRenderer> GridRenderer::create(GridNormals normals)
     PLIANT_ASSERT(gl::is_loaded(), "GridRenderer::create: no GL context (call load_gl)");
     auto impl = std::make_unique<Impl>();
     impl->normal_source = normals;
-    if (normals == GridNormals::Pass)
+    if (normals != GridNormals::VertexShader)
     {
-        auto program = Program::create(shaders::k_grid_vert, shaders::k_phong_frag, "grid");
+        auto program = Program::create(
+            normals == GridNormals::PassFetch ? shaders::k_grid_fetch_vert : shaders::k_grid_vert,
+            shaders::k_phong_frag, "grid");
         if (!program)
             return program.error();
         auto pass = Program::create(shaders::k_grid_normal_pass_vert,
@@ -224,10 +271,13 @@ core::Result<GridRenderer> GridRenderer::create(GridNormals normals)
         set_integer_sampling(t);
     gl::glUseProgram(impl->program.id());
     gl::glUniform1i(impl->program.uniform("u_positions"), 0);
-    if (normals == GridNormals::Pass)
+    if (normals != GridNormals::VertexShader)
     {
         gl::glUniform1i(impl->program.uniform("u_normals"), 1);
         gl::glGenFramebuffers(1, &impl->normal_fbo);
+        gl::glGenFramebuffers(1, &impl->positions_fbo);
+        gl::glGenBuffers(1, &impl->attributes);
+        gl::glGenVertexArrays(1, &impl->attrib_vao);
         gl::glUseProgram(impl->normal_pass.id());
         gl::glUniform1i(impl->normal_pass.uniform("u_positions"), 0);
         gl::glUniform1i(impl->normal_pass.uniform("u_owners"), 1);
@@ -329,16 +379,17 @@ void GridRenderer::draw(const DrawSettings& settings, int width, int height) con
     Impl& s = *impl_;
     PLIANT_ASSERT(s.level > 0, "GridRenderer::draw: nothing uploaded");
     // Once per upload, not per draw: the wireframe pass and further views reuse the normals.
-    if (s.normal_source == GridNormals::Pass && s.normals_stale)
+    if (s.normal_source != GridNormals::VertexShader && s.normals_stale)
         s.run_normal_pass();
     const CameraMatrices cam = camera(settings.camera, width, height);
     set_draw_uniforms(s.program, settings, cam, static_cast<float>(s.max_abs_value));
     gl::glUniform1i(s.program.uniform("u_nx"), s.nx);
-    gl::glBindVertexArray(s.vao);
+    gl::glBindVertexArray(s.normal_source == GridNormals::PassToBuffer ? s.attrib_vao : s.vao);
     gl::glActiveTexture(GL_TEXTURE0);
     gl::glBindTexture(GL_TEXTURE_2D, s.positions);
     gl::glActiveTexture(GL_TEXTURE1);
-    gl::glBindTexture(GL_TEXTURE_2D, s.normal_source == GridNormals::Pass ? s.normals : s.owners);
+    gl::glBindTexture(GL_TEXTURE_2D,
+                      s.normal_source == GridNormals::PassFetch ? s.normals : s.owners);
     gl::glActiveTexture(GL_TEXTURE0);
     gl::glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, s.index_buffers[static_cast<std::size_t>(s.level)]);
     const auto count = static_cast<GLsizei>(triangle_count() * 3U);

@@ -15,6 +15,7 @@
 #include "sphere_grid.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <numbers>
@@ -271,7 +272,12 @@ void expect_gpu_normals_match_cpu_normals(render::GridNormals mode)
 
 TEST_F(GlTest, ShaderNormalsMatchAreaWeightedCpuNormals)
 {
-    expect_gpu_normals_match_cpu_normals(render::GridNormals::Pass);
+    expect_gpu_normals_match_cpu_normals(render::GridNormals::PassToBuffer);
+}
+
+TEST_F(GlTest, FetchedNormalsMatchAreaWeightedCpuNormals)
+{
+    expect_gpu_normals_match_cpu_normals(render::GridNormals::PassFetch);
 }
 
 TEST_F(GlTest, VertexShaderNormalsMatchAreaWeightedCpuNormals)
@@ -281,19 +287,20 @@ TEST_F(GlTest, VertexShaderNormalsMatchAreaWeightedCpuNormals)
 
 TEST_F(GlTest, NormalPassDrawsWhatVertexShaderNormalsDraw)
 {
-    // The default normal pass and per-vertex normals run the same formula on the same texels:
-    // the pictures must agree, and keep agreeing after new positions and owners (the pass
-    // must rerun after every upload, not only the first).
+    // The three GridNormals modes run the same formula on the same texels: the pictures must
+    // agree, and keep agreeing after new positions, new owners and new values (the pass and
+    // the copy must rerun after every upload, not only the first).
     const auto grid = core::TetraGrid::create(4).value();
     const auto round = sphere_positions(grid);
     auto bumpy = sphere_positions(grid);
+    core::Field<double> bump(grid);
     for (int y = 0; y < grid.ny(); ++y)
         for (int x = 0; x < grid.nx(); ++x)
         {
             const core::Vec3 q{round[0].at(x, y), round[1].at(x, y), round[2].at(x, y)};
-            const double r = 1.0 + 0.08 * std::sin(7.0 * q.x) * std::cos(5.0 * q.y + 2.0 * q.z);
+            bump.at(x, y) = 0.08 * std::sin(7.0 * q.x) * std::cos(5.0 * q.y + 2.0 * q.z);
             for (std::size_t c = 0; c < 3; ++c)
-                bumpy[c].at(x, y) = round[c].at(x, y) * r;
+                bumpy[c].at(x, y) = round[c].at(x, y) * (1.0 + bump.at(x, y));
         }
     std::vector<std::uint16_t> halves(grid.node_count());
     std::vector<std::uint16_t> thirds(grid.node_count());
@@ -303,10 +310,15 @@ TEST_F(GlTest, NormalPassDrawsWhatVertexShaderNormalsDraw)
         halves[i] = g.x <= grid.w() ? 0 : 1;
         thirds[i] = static_cast<std::uint16_t>(g.x * 3 / grid.nx() + 2);
     }
-    auto pass = render::GridRenderer::create(render::GridNormals::Pass);
-    ASSERT_TRUE(pass.has_value()) << pass.error().message;
-    auto per_vertex = render::GridRenderer::create(render::GridNormals::VertexShader);
-    ASSERT_TRUE(per_vertex.has_value()) << per_vertex.error().message;
+    constexpr std::array modes{render::GridNormals::PassToBuffer, render::GridNormals::PassFetch,
+                               render::GridNormals::VertexShader};  // the last is the reference
+    std::vector<render::GridRenderer> renderers;
+    for (const render::GridNormals mode : modes)
+    {
+        auto r = render::GridRenderer::create(mode);
+        ASSERT_TRUE(r.has_value()) << r.error().message;
+        renderers.push_back(std::move(*r));
+    }
     auto fb = render::Framebuffer::create(k_size, k_size);
     ASSERT_TRUE(fb.has_value()) << fb.error().message;
     render::DrawSettings s = sphere_settings();
@@ -320,35 +332,43 @@ TEST_F(GlTest, NormalPassDrawsWhatVertexShaderNormalsDraw)
     };
     auto compare = [&](const char* what)
     {
-        const render::Image a = shot(*pass);
-        const render::Image b = shot(*per_vertex);
-        int worst = 0;
-        int differing = 0;
-        for (std::size_t i = 0; i < a.rgba.size(); ++i)
+        const render::Image reference = shot(renderers.back());
+        for (std::size_t m = 0; m + 1 < renderers.size(); ++m)
         {
-            const int d = std::abs(a.rgba[i] - b.rgba[i]);
-            worst = std::max(worst, d);
-            differing += d > 0;
+            const render::Image a = shot(renderers[m]);
+            int worst = 0;
+            int differing = 0;
+            for (std::size_t i = 0; i < a.rgba.size(); ++i)
+            {
+                const int d = std::abs(a.rgba[i] - reference.rgba[i]);
+                worst = std::max(worst, d);
+                differing += d > 0;
+            }
+            std::printf("[render] %s, mode %zu: %d of %zu channels differ, by at most %d\n", what,
+                        m, differing, a.rgba.size(), worst);
+            EXPECT_LE(worst, 1) << what << ", mode " << m;
         }
-        std::printf("[render] %s: %d of %zu channels differ, by at most %d\n", what, differing,
-                    a.rgba.size(), worst);
-        EXPECT_LE(worst, 1) << what;
-        return a;
+        return reference;
     };
-    for (render::GridRenderer* r : {&*pass, &*per_vertex})
+    for (render::GridRenderer& r : renderers)
     {
-        r->upload(grid, round);
-        r->upload_owners(grid, halves);
+        r.upload(grid, round);
+        r.upload_owners(grid, halves);
     }
     const render::Image first = compare("sphere, two owners");
-    for (render::GridRenderer* r : {&*pass, &*per_vertex})
-        r->upload(grid, bumpy);
+    for (render::GridRenderer& r : renderers)
+        r.upload(grid, bumpy);
     const render::Image second = compare("bumpy sphere, two owners");
-    for (render::GridRenderer* r : {&*pass, &*per_vertex})
-        r->upload_owners(grid, thirds);
+    for (render::GridRenderer& r : renderers)
+        r.upload_owners(grid, thirds);
     const render::Image third = compare("bumpy sphere, three owners");
+    s.color = render::ColorMode::Displacement;
+    for (render::GridRenderer& r : renderers)
+        r.upload(grid, bumpy, &bump);
+    const render::Image fourth = compare("bumpy sphere, displacement colours");
     EXPECT_NE(first.rgba, second.rgba) << "new positions must change the picture";
     EXPECT_NE(second.rgba, third.rgba) << "new owners must change the picture";
+    EXPECT_NE(third.rgba, fourth.rgba);
 }
 
 TEST_F(GlTest, OwnerColouringShowsTheTwoOwners)

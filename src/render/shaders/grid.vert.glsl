@@ -1,16 +1,14 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: 2026 pliant contributors
 #version 330 core
-// Grid vertex shader (the default, GridNormals::Pass): two fetches per vertex. No vertex
-// attributes: the index buffer holds node indices (y * nx + x), so gl_VertexID is the node.
-// - u_positions: the ghost-padded RGBA32F positions, node (x, y) at texel (x + 1, y + 1);
-//   xyz = position, w = the scalar shown by displacement colouring.
-// - u_normals: the unpadded RGBA32F texture the normal pass (grid_normal_pass.frag.glsl) wrote
-//   this frame, node (x, y) at texel (x, y); xyz = unit normal, w = owner id.
+// Grid vertex shader (the default, GridNormals::PassToBuffer): the inner texels of the positions
+// texture and the normal pass's output, copied on the GPU into one buffer object
+// (GL_PIXEL_PACK_BUFFER, then bound as GL_ARRAY_BUFFER), arrive as two attributes per node;
+// gl_VertexID is still the node index (y * nx + x).
 
-uniform sampler2D u_positions;
-uniform sampler2D u_normals;
-uniform int u_nx;
+layout(location = 0) in vec4 a_position;  // xyz = position, w = the displacement scalar
+layout(location = 1) in vec4 a_normal;    // xyz = unit normal, w = owner id
+
 uniform mat4 u_view_projection;
 
 out vec3 v_world;
@@ -21,14 +19,10 @@ flat out int v_node;
 
 void main()
 {
-    int node = gl_VertexID;
-    ivec2 t = ivec2(node % u_nx, node / u_nx);
-    vec4 centre = texelFetch(u_positions, t + ivec2(1, 1), 0);
-    vec4 normal = texelFetch(u_normals, t, 0);
-    v_normal = normal.xyz;
-    v_world = centre.xyz;
-    v_value = centre.w;
-    v_owner = uint(normal.w);
-    v_node = node;
-    gl_Position = u_view_projection * vec4(centre.xyz, 1.0);
+    v_world = a_position.xyz;
+    v_normal = a_normal.xyz;
+    v_value = a_position.w;
+    v_owner = uint(a_normal.w);
+    v_node = gl_VertexID;
+    gl_Position = u_view_projection * vec4(a_position.xyz, 1.0);
 }
