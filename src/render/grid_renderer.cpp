@@ -194,7 +194,7 @@ void GridRenderer::Impl::run_normal_pass()
     gl::glGetIntegerv(GL_READ_FRAMEBUFFER_BINDING, &read_bound);
     const auto texels = static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny);
     gl::glBindBuffer(GL_PIXEL_PACK_BUFFER, attributes);
-    gl::glPixelStorei(GL_PACK_ALIGNMENT, 4);
+    // Rows of RGBA32F texels are multiples of 16 bytes: no pack alignment pads them.
     gl::glBindFramebuffer(GL_READ_FRAMEBUFFER, positions_fbo);
     gl::glReadBuffer(GL_COLOR_ATTACHMENT0);
     gl::glReadPixels(1, 1, nx, ny, GL_RGBA, GL_FLOAT, nullptr);
