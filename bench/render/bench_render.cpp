@@ -1,8 +1,10 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: 2026 pliant contributors
 // Frames per second of the Phong renderer at 1280x720, offscreen, for a sphere grid of levels
-// 6..9 (16K .. 1M triangles): the texture path (GridRenderer: positions uploaded every frame,
-// normals in the vertex shader) beside the plain vertex-buffer path (MeshRenderer: static
+// 6..9 (16K .. 1M triangles): the texture path (GridRenderer: positions in a float texture,
+// normals from neighbour texels on the GPU, in its three GridNormals modes: the default normal
+// pass copied into a vertex buffer, the normal pass fetched in the vertex shader, normals
+// summed in the vertex shader) beside the plain vertex-buffer path (MeshRenderer: static
 // buffers, CPU normals) in the same run. Each iteration draws one frame and waits for it
 // (glFinish, as a buffer swap would in a window; no read-back). The counter "fps" is frames per
 // second of wall time; the line printed first names GL_RENDERER. upload:1 also re-uploads the
@@ -61,13 +63,13 @@ render::OffscreenContext& context()
     return *ctx;
 }
 
-void BM_TexturePath(benchmark::State& state)
+void texture_path(benchmark::State& state, render::GridNormals normals)
 {
     context();
     const int level = static_cast<int>(state.range(0));
     const auto grid = core::TetraGrid::create(level).value();
     const auto p = test::sphere_positions(grid);
-    auto renderer = render::GridRenderer::create().value();
+    auto renderer = render::GridRenderer::create(normals).value();
     auto fb = render::Framebuffer::create(k_width, k_height).value();
     render::DrawSettings s;
     const bool upload_each_frame = state.range(1) != 0;
@@ -83,6 +85,21 @@ void BM_TexturePath(benchmark::State& state)
     state.counters["fps"] =
         benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
     state.counters["triangles"] = static_cast<double>(renderer.triangle_count());
+}
+
+void BM_TexturePath(benchmark::State& state)
+{
+    texture_path(state, render::GridNormals::PassToBuffer);
+}
+
+void BM_TexturePathFetch(benchmark::State& state)
+{
+    texture_path(state, render::GridNormals::PassFetch);
+}
+
+void BM_TexturePathVertexNormals(benchmark::State& state)
+{
+    texture_path(state, render::GridNormals::VertexShader);
 }
 
 void BM_VertexBufferPath(benchmark::State& state)
@@ -125,6 +142,16 @@ int main(int argc, char** argv)
         ->ArgNames({"level", "upload"})
         ->Unit(benchmark::kMillisecond)
         ->UseRealTime();
+    benchmark::RegisterBenchmark("BM_TexturePathFetch", BM_TexturePathFetch)
+        ->ArgsProduct({levels, {0, 1}})
+        ->ArgNames({"level", "upload"})
+        ->Unit(benchmark::kMillisecond)
+        ->UseRealTime();
+    benchmark::RegisterBenchmark("BM_TexturePathVertexNormals", BM_TexturePathVertexNormals)
+        ->ArgsProduct({levels, {0, 1}})
+        ->ArgNames({"level", "upload"})
+        ->Unit(benchmark::kMillisecond)
+        ->UseRealTime();
     benchmark::RegisterBenchmark("BM_VertexBufferPath", BM_VertexBufferPath)
         ->DenseRange(6, static_cast<int>(max_level))
         ->ArgName("level")
@@ -138,7 +165,10 @@ int main(int argc, char** argv)
             const std::string& args = r.run_name.args;
             const auto lp = args.find("level:");
             const int level = lp == std::string::npos ? -1 : std::atoi(args.c_str() + lp + 6);
-            std::string c = fn == "BM_TexturePath" ? "texture path" : "vertex-buffer path";
+            std::string c = fn == "BM_TexturePath"                ? "texture path"
+                            : fn == "BM_TexturePathFetch"         ? "texture path, VS fetch"
+                            : fn == "BM_TexturePathVertexNormals" ? "texture path, VS normals"
+                                                                  : "vertex-buffer path";
             if (args.find("upload:1") != std::string::npos)
                 c += " + upload";
             const double tris = bench::counter(r, "triangles");

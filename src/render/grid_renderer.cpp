@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <string>
 #include <vector>
 
 namespace pliant::render
@@ -16,10 +17,20 @@ namespace pliant::render
 
 struct GridRenderer::Impl
 {
-    Program program;
-    GLuint vao = 0;
-    GLuint positions = 0;                                       // RGBA32F, (nx + 2) x (ny + 2)
-    GLuint owners = 0;                                          // R16UI, same size
+    GridNormals normal_source = GridNormals::PassToBuffer;
+    Program program;        // grid.vert, grid_fetch.vert or grid_vertex_normals.vert; + phong.frag
+    Program normal_pass;    // grid_normal_pass.vert + .frag (not for VertexShader)
+    GLuint vao = 0;         // no attributes: the programs read gl_VertexID and textures
+    GLuint positions = 0;   // RGBA32F, (nx + 2) x (ny + 2)
+    GLuint owners = 0;      // R16UI, same size
+    GLuint normals = 0;     // RGBA32F, nx x ny: unit normal, owner id (not for VertexShader)
+    GLuint normal_fbo = 0;  // renders into `normals`
+    // PassToBuffer: `positions` as a read framebuffer, and the buffer the copy fills: nx*ny
+    // inner position texels, then nx*ny normal texels, read by `attrib_vao`.
+    GLuint positions_fbo = 0;
+    GLuint attributes = 0;
+    GLuint attrib_vao = 0;
+    bool normals_stale = true;  // positions or owners changed since the last normal pass
     std::array<GLuint, core::k_max_level + 1> index_buffers{};  // per level, made on first use
     int level = 0;
     int nx = 0;
@@ -37,8 +48,12 @@ struct GridRenderer::Impl
         for (const GLuint b : index_buffers)
             if (b != 0U)
                 gl::glDeleteBuffers(1, &b);
-        const std::array<GLuint, 2> textures{positions, owners};
-        gl::glDeleteTextures(2, textures.data());
+        const std::array<GLuint, 3> textures{positions, owners, normals};
+        gl::glDeleteTextures(3, textures.data());
+        gl::glDeleteFramebuffers(1, &normal_fbo);
+        gl::glDeleteFramebuffers(1, &positions_fbo);
+        gl::glDeleteBuffers(1, &attributes);
+        gl::glDeleteVertexArrays(1, &attrib_vao);
         gl::glDeleteVertexArrays(1, &vao);
     }
 
@@ -49,6 +64,10 @@ struct GridRenderer::Impl
     void prepare_level(const core::TetraGrid& grid);
     void upload_staging();
     void fill_owner_texture(std::span<const std::uint16_t> owners);
+    /// Writes every node's unit normal and owner into `normals` (one triangle over an nx x ny
+    /// target) and, for PassToBuffer, copies positions and normals into `attributes`; leaves
+    /// the caller's framebuffers bound.
+    void run_normal_pass();
 };
 
 namespace
@@ -61,6 +80,17 @@ void set_integer_sampling(GLuint texture)
     gl::glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
     gl::glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
     gl::glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+}
+
+/// `source` with grid_normal.glsl inserted after its #version line.
+std::string with_grid_normal(const char* source)
+{
+    std::string s(source);
+    const std::string version = "#version 330 core\n";
+    const std::size_t at = s.find(version);
+    PLIANT_ASSERT(at != std::string::npos, "with_grid_normal: shader without #version 330 core");
+    s.insert(at + version.size(), shaders::k_grid_normal);
+    return s;
 }
 
 }  // namespace
@@ -103,6 +133,76 @@ void GridRenderer::Impl::prepare_level(const core::TetraGrid& grid)
     gl::glBindTexture(GL_TEXTURE_2D, owners);
     gl::glTexImage2D(GL_TEXTURE_2D, 0, GL_R16UI, padded_width(), padded_height(), 0, GL_RED_INTEGER,
                      GL_UNSIGNED_SHORT, owner_staging.data());
+    normals_stale = true;
+    if (normal_source == GridNormals::VertexShader)
+        return;
+    gl::glBindTexture(GL_TEXTURE_2D, normals);
+    gl::glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, nx, ny, 0, GL_RGBA, GL_FLOAT, nullptr);
+    GLint bound = 0;
+    gl::glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &bound);
+    gl::glBindFramebuffer(GL_DRAW_FRAMEBUFFER, normal_fbo);
+    gl::glFramebufferTexture2D(GL_DRAW_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, normals,
+                               0);
+    const GLenum status = gl::glCheckFramebufferStatus(GL_DRAW_FRAMEBUFFER);
+    gl::glBindFramebuffer(GL_DRAW_FRAMEBUFFER, static_cast<GLuint>(bound));
+    PLIANT_ASSERT(status == GL_FRAMEBUFFER_COMPLETE,
+                  "GridRenderer: the RGBA32F normal target is incomplete");
+    if (normal_source != GridNormals::PassToBuffer)
+        return;
+    gl::glBindFramebuffer(GL_DRAW_FRAMEBUFFER, positions_fbo);
+    gl::glFramebufferTexture2D(GL_DRAW_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, positions,
+                               0);
+    const GLenum pstatus = gl::glCheckFramebufferStatus(GL_DRAW_FRAMEBUFFER);
+    gl::glBindFramebuffer(GL_DRAW_FRAMEBUFFER, static_cast<GLuint>(bound));
+    PLIANT_ASSERT(pstatus == GL_FRAMEBUFFER_COMPLETE,
+                  "GridRenderer: the positions texture cannot be read back");
+    const auto texels = static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny);
+    gl::glBindVertexArray(attrib_vao);
+    gl::glBindBuffer(GL_ARRAY_BUFFER, attributes);
+    gl::glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(texels * 2U * 16U), nullptr,
+                     GL_STREAM_COPY);
+    gl::glEnableVertexAttribArray(0);
+    gl::glVertexAttribPointer(0, 4, GL_FLOAT, GL_FALSE, 16, nullptr);
+    gl::glEnableVertexAttribArray(1);
+    gl::glVertexAttribPointer(1, 4, GL_FLOAT, GL_FALSE, 16,
+                              reinterpret_cast<const void*>(texels * 16U));
+    gl::glBindVertexArray(0);
+    gl::glBindBuffer(GL_ARRAY_BUFFER, 0);
+}
+
+void GridRenderer::Impl::run_normal_pass()
+{
+    GLint bound = 0;  // only the draw binding is touched
+    gl::glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &bound);
+    gl::glBindFramebuffer(GL_DRAW_FRAMEBUFFER, normal_fbo);
+    gl::glViewport(0, 0, nx, ny);
+    gl::glDisable(GL_DEPTH_TEST);
+    gl::glUseProgram(normal_pass.id());
+    gl::glActiveTexture(GL_TEXTURE0);
+    gl::glBindTexture(GL_TEXTURE_2D, positions);
+    gl::glActiveTexture(GL_TEXTURE1);
+    gl::glBindTexture(GL_TEXTURE_2D, owners);
+    gl::glActiveTexture(GL_TEXTURE0);
+    gl::glBindVertexArray(vao);
+    gl::glDrawArrays(GL_TRIANGLES, 0, 3);
+    gl::glBindVertexArray(0);
+    gl::glBindFramebuffer(GL_DRAW_FRAMEBUFFER, static_cast<GLuint>(bound));
+    normals_stale = false;
+    if (normal_source != GridNormals::PassToBuffer)
+        return;
+    GLint read_bound = 0;
+    gl::glGetIntegerv(GL_READ_FRAMEBUFFER_BINDING, &read_bound);
+    const auto texels = static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny);
+    gl::glBindBuffer(GL_PIXEL_PACK_BUFFER, attributes);
+    // Rows of RGBA32F texels are multiples of 16 bytes: no pack alignment pads them.
+    gl::glBindFramebuffer(GL_READ_FRAMEBUFFER, positions_fbo);
+    gl::glReadBuffer(GL_COLOR_ATTACHMENT0);
+    gl::glReadPixels(1, 1, nx, ny, GL_RGBA, GL_FLOAT, nullptr);
+    gl::glBindFramebuffer(GL_READ_FRAMEBUFFER, normal_fbo);
+    gl::glReadBuffer(GL_COLOR_ATTACHMENT0);
+    gl::glReadPixels(0, 0, nx, ny, GL_RGBA, GL_FLOAT, reinterpret_cast<void*>(texels * 16U));
+    gl::glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
+    gl::glBindFramebuffer(GL_READ_FRAMEBUFFER, static_cast<GLuint>(read_bound));
 }
 
 void GridRenderer::Impl::upload_staging()
@@ -111,6 +211,7 @@ void GridRenderer::Impl::upload_staging()
     gl::glBindTexture(GL_TEXTURE_2D, positions);
     gl::glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, padded_width(), padded_height(), GL_RGBA, GL_FLOAT,
                         staging.data());
+    normals_stale = true;
 }
 
 void GridRenderer::Impl::fill_owner_texture(std::span<const std::uint16_t> node_owners)
@@ -128,26 +229,61 @@ void GridRenderer::Impl::fill_owner_texture(std::span<const std::uint16_t> node_
     gl::glBindTexture(GL_TEXTURE_2D, owners);
     gl::glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, padded_width(), padded_height(), GL_RED_INTEGER,
                         GL_UNSIGNED_SHORT, owner_staging.data());
+    normals_stale = true;
 }
 
-core::Result<GridRenderer> GridRenderer::create()
+core::Result<GridRenderer> GridRenderer::create(GridNormals normals)
 {
     PLIANT_ASSERT(gl::is_loaded(), "GridRenderer::create: no GL context (call load_gl)");
-    auto program = Program::create(shaders::k_grid_vert, shaders::k_phong_frag, "grid");
-    if (!program)
-        return program.error();
     auto impl = std::make_unique<Impl>();
-    impl->program = std::move(*program);
+    impl->normal_source = normals;
+    if (normals != GridNormals::VertexShader)
+    {
+        auto program = Program::create(
+            normals == GridNormals::PassFetch ? shaders::k_grid_fetch_vert : shaders::k_grid_vert,
+            shaders::k_phong_frag, "grid");
+        if (!program)
+            return program.error();
+        auto pass = Program::create(shaders::k_grid_normal_pass_vert,
+                                    with_grid_normal(shaders::k_grid_normal_pass_frag).c_str(),
+                                    "grid normal pass");
+        if (!pass)
+            return pass.error();
+        impl->program = std::move(*program);
+        impl->normal_pass = std::move(*pass);
+    }
+    else
+    {
+        auto program =
+            Program::create(with_grid_normal(shaders::k_grid_vertex_normals_vert).c_str(),
+                            shaders::k_phong_frag, "grid (vertex-shader normals)");
+        if (!program)
+            return program.error();
+        impl->program = std::move(*program);
+    }
     gl::glGenVertexArrays(1, &impl->vao);
-    std::array<GLuint, 2> textures{};
-    gl::glGenTextures(2, textures.data());
+    std::array<GLuint, 3> textures{};
+    gl::glGenTextures(3, textures.data());
     impl->positions = textures[0];
     impl->owners = textures[1];
-    set_integer_sampling(impl->positions);
-    set_integer_sampling(impl->owners);
+    impl->normals = textures[2];
+    for (const GLuint t : textures)
+        set_integer_sampling(t);
     gl::glUseProgram(impl->program.id());
     gl::glUniform1i(impl->program.uniform("u_positions"), 0);
-    gl::glUniform1i(impl->program.uniform("u_owners"), 1);
+    if (normals != GridNormals::VertexShader)
+    {
+        gl::glUniform1i(impl->program.uniform("u_normals"), 1);
+        gl::glGenFramebuffers(1, &impl->normal_fbo);
+        gl::glGenFramebuffers(1, &impl->positions_fbo);
+        gl::glGenBuffers(1, &impl->attributes);
+        gl::glGenVertexArrays(1, &impl->attrib_vao);
+        gl::glUseProgram(impl->normal_pass.id());
+        gl::glUniform1i(impl->normal_pass.uniform("u_positions"), 0);
+        gl::glUniform1i(impl->normal_pass.uniform("u_owners"), 1);
+    }
+    else
+        gl::glUniform1i(impl->program.uniform("u_owners"), 1);
     return GridRenderer(std::move(impl));
 }
 
@@ -240,16 +376,20 @@ CameraMatrices GridRenderer::camera(const CameraSettings& settings, int width,
 
 void GridRenderer::draw(const DrawSettings& settings, int width, int height) const
 {
-    const Impl& s = *impl_;
+    Impl& s = *impl_;
     PLIANT_ASSERT(s.level > 0, "GridRenderer::draw: nothing uploaded");
+    // Once per upload, not per draw: the wireframe pass and further views reuse the normals.
+    if (s.normal_source != GridNormals::VertexShader && s.normals_stale)
+        s.run_normal_pass();
     const CameraMatrices cam = camera(settings.camera, width, height);
     set_draw_uniforms(s.program, settings, cam, static_cast<float>(s.max_abs_value));
     gl::glUniform1i(s.program.uniform("u_nx"), s.nx);
-    gl::glBindVertexArray(s.vao);
+    gl::glBindVertexArray(s.normal_source == GridNormals::PassToBuffer ? s.attrib_vao : s.vao);
     gl::glActiveTexture(GL_TEXTURE0);
     gl::glBindTexture(GL_TEXTURE_2D, s.positions);
     gl::glActiveTexture(GL_TEXTURE1);
-    gl::glBindTexture(GL_TEXTURE_2D, s.owners);
+    gl::glBindTexture(GL_TEXTURE_2D,
+                      s.normal_source == GridNormals::PassFetch ? s.normals : s.owners);
     gl::glActiveTexture(GL_TEXTURE0);
     gl::glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, s.index_buffers[static_cast<std::size_t>(s.level)]);
     const auto count = static_cast<GLsizei>(triangle_count() * 3U);

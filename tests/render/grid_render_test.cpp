@@ -15,6 +15,7 @@
 #include "sphere_grid.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <numbers>
@@ -200,13 +201,13 @@ TEST_F(GlTest, NoCracksAndSmoothShadingAlongSeams)
     EXPECT_TRUE(is_background(shot.image, 0, 0));
 }
 
-TEST_F(GlTest, ShaderNormalsMatchAreaWeightedCpuNormals)
+void expect_gpu_normals_match_cpu_normals(render::GridNormals mode)
 {
     const auto grid = core::TetraGrid::create(3).value();
     const auto p = sphere_positions(grid);
     const auto cpu = render::grid_normals(grid, p);
     constexpr int k_fb = 384;
-    auto renderer = render::GridRenderer::create();
+    auto renderer = render::GridRenderer::create(mode);
     ASSERT_TRUE(renderer.has_value()) << renderer.error().message;
     auto fb = render::Framebuffer::create(k_fb, k_fb, render::PixelFormat::Rgba32f);
     ASSERT_TRUE(fb.has_value()) << fb.error().message;
@@ -267,6 +268,107 @@ TEST_F(GlTest, ShaderNormalsMatchAreaWeightedCpuNormals)
     EXPECT_GT(checked, 30);
     EXPECT_GT(border_checked, 8);
     EXPECT_LT(worst, 1e-4) << "float texture positions give ~1e-6; a wrong ghost gives ~0.1";
+}
+
+TEST_F(GlTest, ShaderNormalsMatchAreaWeightedCpuNormals)
+{
+    expect_gpu_normals_match_cpu_normals(render::GridNormals::PassToBuffer);
+}
+
+TEST_F(GlTest, FetchedNormalsMatchAreaWeightedCpuNormals)
+{
+    expect_gpu_normals_match_cpu_normals(render::GridNormals::PassFetch);
+}
+
+TEST_F(GlTest, VertexShaderNormalsMatchAreaWeightedCpuNormals)
+{
+    expect_gpu_normals_match_cpu_normals(render::GridNormals::VertexShader);
+}
+
+TEST_F(GlTest, NormalPassDrawsWhatVertexShaderNormalsDraw)
+{
+    // The three GridNormals modes run the same formula on the same texels: the pictures must
+    // agree, and keep agreeing after new positions, new owners and new values (the pass and
+    // the copy must rerun after every upload, not only the first).
+    const auto grid = core::TetraGrid::create(4).value();
+    const auto round = sphere_positions(grid);
+    auto bumpy = sphere_positions(grid);
+    core::Field<double> bump(grid);
+    for (int y = 0; y < grid.ny(); ++y)
+        for (int x = 0; x < grid.nx(); ++x)
+        {
+            const core::Vec3 q{round[0].at(x, y), round[1].at(x, y), round[2].at(x, y)};
+            bump.at(x, y) = 0.08 * std::sin(7.0 * q.x) * std::cos(5.0 * q.y + 2.0 * q.z);
+            for (std::size_t c = 0; c < 3; ++c)
+                bumpy[c].at(x, y) = round[c].at(x, y) * (1.0 + bump.at(x, y));
+        }
+    std::vector<std::uint16_t> halves(grid.node_count());
+    std::vector<std::uint16_t> thirds(grid.node_count());
+    for (std::uint32_t i = 0; i < grid.node_count(); ++i)
+    {
+        const core::GridCoord g = grid.coord(grid.canonical(core::NodeIndex{i}));
+        halves[i] = g.x <= grid.w() ? 0 : 1;
+        thirds[i] = static_cast<std::uint16_t>(g.x * 3 / grid.nx() + 2);
+    }
+    constexpr std::array modes{render::GridNormals::PassToBuffer, render::GridNormals::PassFetch,
+                               render::GridNormals::VertexShader};  // the last is the reference
+    std::vector<render::GridRenderer> renderers;
+    for (const render::GridNormals mode : modes)
+    {
+        auto r = render::GridRenderer::create(mode);
+        ASSERT_TRUE(r.has_value()) << r.error().message;
+        renderers.push_back(std::move(*r));
+    }
+    auto fb = render::Framebuffer::create(k_size, k_size);
+    ASSERT_TRUE(fb.has_value()) << fb.error().message;
+    render::DrawSettings s = sphere_settings();
+    s.color = render::ColorMode::Owner;
+    s.wireframe = true;
+    auto shot = [&](const render::GridRenderer& r)
+    {
+        fb->bind();
+        r.draw(s, k_size, k_size);
+        return fb->read_rgba8();
+    };
+    auto compare = [&](const char* what)
+    {
+        const render::Image reference = shot(renderers.back());
+        for (std::size_t m = 0; m + 1 < renderers.size(); ++m)
+        {
+            const render::Image a = shot(renderers[m]);
+            int worst = 0;
+            int differing = 0;
+            for (std::size_t i = 0; i < a.rgba.size(); ++i)
+            {
+                const int d = std::abs(a.rgba[i] - reference.rgba[i]);
+                worst = std::max(worst, d);
+                differing += d > 0;
+            }
+            std::printf("[render] %s, mode %zu: %d of %zu channels differ, by at most %d\n", what,
+                        m, differing, a.rgba.size(), worst);
+            EXPECT_LE(worst, 1) << what << ", mode " << m;
+        }
+        return reference;
+    };
+    for (render::GridRenderer& r : renderers)
+    {
+        r.upload(grid, round);
+        r.upload_owners(grid, halves);
+    }
+    const render::Image first = compare("sphere, two owners");
+    for (render::GridRenderer& r : renderers)
+        r.upload(grid, bumpy);
+    const render::Image second = compare("bumpy sphere, two owners");
+    for (render::GridRenderer& r : renderers)
+        r.upload_owners(grid, thirds);
+    const render::Image third = compare("bumpy sphere, three owners");
+    s.color = render::ColorMode::Displacement;
+    for (render::GridRenderer& r : renderers)
+        r.upload(grid, bumpy, &bump);
+    const render::Image fourth = compare("bumpy sphere, displacement colours");
+    EXPECT_NE(first.rgba, second.rgba) << "new positions must change the picture";
+    EXPECT_NE(second.rgba, third.rgba) << "new owners must change the picture";
+    EXPECT_NE(third.rgba, fourth.rgba);
 }
 
 TEST_F(GlTest, OwnerColouringShowsTheTwoOwners)

@@ -10,10 +10,18 @@
 ///   displacement) for colouring.
 /// - One static index buffer per level holds the 4W^2 grid triangles over *canonical* node
 ///   indices, so the two sides of a seam share vertices and cannot crack.
-/// - The vertex shader fetches its node's position and its six neighbours by `texelFetch`, sums
-///   the six face cross products into the area-weighted normal, and the fragment shader shades
-///   with Phong under a head light. Neighbours across a seam come from the ghost ring, which
-///   holds exactly the nodes on the other side, so the normals are continuous there.
+/// - Normals: after each upload, one triangle over an nx x ny RGBA32F target runs a fragment
+///   shader per node that fetches the node's six neighbours by `texelFetch` and sums the six
+///   face cross products into the area-weighted normal (w: the owner id). Neighbours across a
+///   seam come from the ghost ring, which holds exactly the nodes on the other side, so the
+///   normals are continuous there.
+/// - The draw (GridNormals::PassToBuffer, the default): the inner positions texels and the
+///   normal texels are copied on the GPU (`glReadPixels` into a pixel-pack buffer) into one
+///   buffer object, which the draw reads as two vertex attributes per node; gl_VertexID is
+///   still the node. GridNormals::PassFetch fetches both texels in the vertex shader instead,
+///   GridNormals::VertexShader sums the normal in every vertex invocation (the first design).
+///   All three give the same picture; docs/rendering.md compares their speed.
+/// - The fragment shader shades with Phong under a head light.
 /// Only positions (and owners when they change) are streamed per frame; nothing is allocated
 /// after the first upload of a level.
 ///
@@ -34,12 +42,28 @@
 namespace pliant::render
 {
 
+/// Where the grid's normals are computed and how the vertex shader gets them. All three use
+/// the same formula on the same texels and draw the same picture.
+enum class GridNormals : std::uint8_t
+{
+    /// Default. A normal pass after each upload writes one normal per node into a texture
+    /// (a fragment shader over an nx x ny target); that texture and the positions texture are
+    /// then copied on the GPU into a buffer object (`glReadPixels` into a pixel-pack buffer)
+    /// that the draw reads as vertex attributes: no texel fetch per vertex.
+    PassToBuffer,
+    /// The same normal pass; the vertex shader fetches position and normal (2 texel fetches).
+    PassFetch,
+    /// Every vertex-shader invocation computes its own normal (8 texel fetches per vertex):
+    /// the first design, repeated for every vertex the pipeline shades more than once.
+    VertexShader,
+};
+
 class GridRenderer
 {
 public:
-    /// Compiles the shaders. \pre a GL 3.3 context is current (`OffscreenContext` or the
-    /// viewer's window, with `load_gl` done). \return GraphicsError with the compiler's log.
-    static core::Result<GridRenderer> create();
+    /// Compiles the shaders for `normals`. \pre a GL 3.3 context is current (`OffscreenContext` or
+    /// the viewer's window, with `load_gl` done). \return GraphicsError with the compiler's log.
+    static core::Result<GridRenderer> create(GridNormals normals = GridNormals::PassToBuffer);
 
     GridRenderer(GridRenderer&&) noexcept;
     GridRenderer& operator=(GridRenderer&&) noexcept;
@@ -65,7 +89,9 @@ public:
     void upload_owners(const core::TetraGrid& grid, std::span<const std::uint16_t> owners);
 
     /// Draws into the bound framebuffer (viewport width x height), clearing it first unless
-    /// `settings.clear` is false. \pre something was uploaded.
+    /// `settings.clear` is false. Except with GridNormals::VertexShader, first reruns the normal
+    /// pass (and copy) if positions or owners changed since the last draw (into its own
+    /// framebuffer; the caller's binding is restored). \pre something was uploaded.
     void draw(const DrawSettings& settings, int width, int height) const;
 
     /// The camera `draw` uses for these settings and this image size.
