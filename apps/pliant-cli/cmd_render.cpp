@@ -2,7 +2,7 @@
 // SPDX-FileCopyrightText: 2026 pliant contributors
 // `pliant render GRID|MESH -o shot.png`: a Phong-shaded picture with no display, through an
 // offscreen OpenGL context (EGL surfaceless, else OSMesa; docs/rendering.md). A GRID (.pgrid) is
-// drawn by the texture path (positions in a float texture, normals in the vertex shader), after
+// drawn by the texture path (positions in a float texture, normals from a GPU normal pass), after
 // optional butterfly refinement for display (--level-up); any other file is imported as a mesh
 // and drawn from a vertex buffer with CPU normals. --frames DIR renders every .pgrid of a folder
 // (simulation output) into a numbered PNG sequence with one still camera.
