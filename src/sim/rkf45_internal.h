@@ -236,12 +236,18 @@ inline double stage_row(const StageConstants& k, const Coeffs& c, const StageRow
 // false when a copy of the model's sync table does not fit the pipeline's row rules).
 void plan_pipeline(const MembraneModel& model, Rkf45Workspace& ws);
 
-// One full trial step with the fused row pipeline (row_pipeline.cpp) into ws.u_out / v_out.
-// \return the number of bands: their error norms and NaN probes are ws.leaf_error / leaf_probe
-// [0, bands).
+// Plans restricted steps over `owned` on the pipeline (the per-row segments of `ws`); nothing
+// to do when `owned` equals the regions of the last plan.
+void plan_restricted(const MembraneModel& model, std::span<const core::Region> owned,
+                     Rkf45Workspace& ws);
+
+// One trial step with the fused row pipeline (row_pipeline.cpp) into ws.u_out / v_out: a full
+// one, or a restricted one over the owned set of the last plan_restricted (only its rows and
+// segments are computed and written). \return the number of bands: their error norms and NaN
+// probes are ws.leaf_error / leaf_probe [0, bands).
 std::size_t pipeline_trial(const MembraneModel& model, const MembraneState& state,
                            Rkf45Workspace& ws, const Coeffs& c, const StageConstants& k,
-                           int threads);
+                           int threads, bool restricted);
 
 // Sets FTZ and DAZ for the current thread for its lifetime (x86 SSE; elsewhere a no-op): the
 // far tails of a wave decay into denormal numbers, which cost ~100x per operation on x86.
