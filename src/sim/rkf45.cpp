@@ -566,7 +566,9 @@ StepReport step_prepared(MembraneModel& model, MembraneState& state, Rkf45Worksp
         if (t.error > 1.0 && !set.fixed_step)
             report.status = report.status | StepStatus::MinStepReached;
         // Accept.
-        if (restricted)
+        if (restricted && ws.pipeline_ok && ws.use_pipeline)
+            detail::accept_restricted(ws, state);
+        else if (restricted)
         {
             copy_regions(ws.u_out, state.u, regions);
             copy_regions(ws.v_out, state.v, regions);

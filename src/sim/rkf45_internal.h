@@ -241,6 +241,10 @@ void plan_pipeline(const MembraneModel& model, Rkf45Workspace& ws);
 void plan_restricted(const MembraneModel& model, std::span<const core::Region> owned,
                      Rkf45Workspace& ws);
 
+// Accepts a restricted pipeline trial: u_out and v_out into the state over the planned owned
+// regions (their merged row segments; the nodes copy_regions would copy).
+void accept_restricted(const Rkf45Workspace& ws, MembraneState& state) noexcept;
+
 // One trial step with the fused row pipeline (row_pipeline.cpp) into ws.u_out / v_out: a full
 // one, or a restricted one over the owned set of the last plan_restricted (only its rows and
 // segments are computed and written). \return the number of bands: their error norms and NaN

@@ -545,6 +545,31 @@ void plan_restricted(const MembraneModel& model, std::span<const core::Region> o
     ws.restricted_planned = true;
 }
 
+void accept_restricted(const Rkf45Workspace& ws, MembraneState& state) noexcept
+{
+    const std::ptrdiff_t s = state.u.stride();
+    const double* const uo = ws.u_out.origin();
+    const double* const vo = ws.v_out.origin();
+    double* const u = state.u.origin();
+    double* const v = state.v.origin();
+    for (int y = ws.restricted_y0; y < ws.restricted_y1; ++y)
+    {
+        const auto r = static_cast<std::size_t>(y);
+        const std::ptrdiff_t row = static_cast<std::ptrdiff_t>(y) * s;
+        // The segments of a row are disjoint and increasing: copy each maximal run at once.
+        std::size_t i = ws.kernel_start[r];
+        while (i < ws.kernel_start[r + 1])
+        {
+            const int x0 = ws.kernel_segments[i].x0;
+            int x1 = ws.kernel_segments[i].x1;
+            for (++i; i < ws.kernel_start[r + 1] && ws.kernel_segments[i].x0 == x1; ++i)
+                x1 = ws.kernel_segments[i].x1;
+            std::copy(uo + row + x0, uo + row + x1, u + row + x0);
+            std::copy(vo + row + x0, vo + row + x1, v + row + x0);
+        }
+    }
+}
+
 std::size_t pipeline_trial(const MembraneModel& model, const MembraneState& state,
                            Rkf45Workspace& ws, const Coeffs& c, const StageConstants& k,
                            int threads, bool restricted)
