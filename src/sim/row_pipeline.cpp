@@ -366,8 +366,13 @@ double stage_pair(const Inputs& in, const Coeffs& c, const StageConstants& k, co
         err = pair_row<P>(in, c, k, b, y, 0, in.nx, probe);
     if constexpr (P < 4)
     {
-        copy_row(in, b, P, y);
-        copy_row(in, b, P + 1, y);
+        // Restricted: a row none of whose copies reads a moving node is skipped (every copy
+        // would write a Dirichlet position, whose slopes are never read).
+        if (!Restricted || in.ws->copies_move[static_cast<std::size_t>(y)] != 0)
+        {
+            copy_row(in, b, P, y);
+            copy_row(in, b, P + 1, y);
+        }
     }
     return err;
 }
@@ -538,6 +543,24 @@ void plan_restricted(const MembraneModel& model, std::span<const core::Region> o
         for (const Interval& i : iv)
             split(ws.fill_segments, y, i.first, i.second);
         ws.fill_start.push_back(ws.fill_segments.size());
+    }
+    // Rows whose twin and ghost copies read a moving node.
+    ws.copies_move.assign(static_cast<std::size_t>(ny), 0);
+    const auto src_moves = [&](int y, const core::GhostCopy& cp)
+    { return moves(static_cast<int>(cp.src) - 1, y); };
+    for (int y = 0; y < ny; ++y)
+    {
+        const auto r = static_cast<std::size_t>(y);
+        char any = 0;
+        for (std::size_t i = ws.row_copy_start[r]; i < ws.row_copy_start[r + 1]; ++i)
+            any = static_cast<char>(any | (src_moves(y, ws.row_copies[i]) ? 1 : 0));
+        if (y == 1)
+            for (const core::GhostCopy& cp : ws.below_copies)
+                any = static_cast<char>(any | (src_moves(y, cp) ? 1 : 0));
+        if (y == ny - 2)
+            for (const core::GhostCopy& cp : ws.above_copies)
+                any = static_cast<char>(any | (src_moves(y, cp) ? 1 : 0));
+        ws.copies_move[r] = any;
     }
     if (ws.restricted_y0 >= ws.restricted_y1)
         ws.restricted_y0 = ws.restricted_y1 = 0;

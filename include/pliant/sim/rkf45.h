@@ -177,6 +177,7 @@ public:
     std::vector<RowSegment> kernel_segments;
     std::vector<std::size_t> kernel_start;
     std::vector<std::size_t> restricted_work;  ///< [y]: work of rows < y (width + a row cost)
+    std::vector<char> copies_move;  ///< [y]: a twin/ghost copy of row y reads a moving node
     int restricted_y0 = 0;
     int restricted_y1 = 0;
     bool use_pipeline = true;  ///< false: full steps run stage by stage too (tests, benchmarks)
