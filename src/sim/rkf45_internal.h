@@ -3,11 +3,12 @@
 #pragma once
 
 // The RKF45 arithmetic shared by the two ways a trial step is run (rkf45.cpp): the stage-by-stage
-// pass over owned regions (restricted steps) calls the row kernels below; the fused row pipeline
-// of full steps (row_pipeline.cpp) runs two stages per loop but gives every node the same
-// operations in the same order (tests/sim/pipeline_test.cpp checks it bit for bit). So results
-// are the same whichever path, thread or band computes a node: full and restricted steps stay
-// bit-identical, as sessions require.
+// pass over regions (grids whose copies do not fit the pipeline; the tests' reference) calls the
+// row kernels below; the fused row pipeline of full and restricted steps (row_pipeline.cpp) runs
+// two stages per loop but gives every node the same operations in the same order
+// (tests/sim/pipeline_test.cpp checks it bit for bit). So results are the same whichever path,
+// thread or band computes a node: full and restricted steps stay bit-identical, as sessions
+// require.
 //
 // Row kernels take row pointers indexed by grid x (ghost column x = -1 included), not plane
 // offsets, so a row can live in a full plane or in a small ring buffer.

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: 2026 pliant contributors
 //
-// The fused row pipeline of a full RKF45 trial step (docs/physics.md §8).
+// The fused row pipeline of an RKF45 trial step, full or restricted (docs/physics.md §8).
 //
 // Design
 // - Since u' = v, stage S applies K only to U_S = u + h c_S v + h^2 sum (A^2)_Sm kv_m, and
@@ -24,7 +24,17 @@
 //   need no barrier; the extra work is 6 row-stages per band end (under 1 % at level 8 on two
 //   threads). Every node gets the same operations with the same inputs whichever band or thread
 //   computes it, so results are bit-identical for any thread count and to the stage-by-stage
-//   pass of restricted steps.
+//   pass.
+// - Restricted steps (StepOptions::owned) run the same sweep over the rows holding owned nodes,
+//   and within a row over the planned x-segments only (plan_restricted, once per owned set): the
+//   kernels over the owned regions' merged x-intervals, the U fills over those of the row and its
+//   two neighbours one node wider. Positions whose canonical node is not owned are Dirichlet:
+//   the stage pass gives them v = 0 and zero slopes, so their U is u + 0.0 for every stage and
+//   no slope outside the owned set is ever needed (no growing halo). A slope is read only at a
+//   moving position, which this sweep computed (or copied from its canonical node), so stale
+//   ring values elsewhere are never read. Twins inside an owned rectangle whose canonical node is
+//   not owned are computed at the last pair with zero inputs (dirichlet_row), as the stage pass
+//   does, for the NaN probe.
 //
 // Alternatives rejected: square leaf tiles with a shrinking halo (the first plan): they need a
 // ghost ring of 3 on every model and state plane and redundant halo work on four sides (13 % at

@@ -138,7 +138,7 @@ public:
     // scratch.
     std::vector<core::Field<double>> kv;  ///< kv_1 .. kv_5
     core::Field<double> u_out, v_out;     ///< trial state
-    core::Field<double> v_src;            ///< v, masked to the owned nodes in restricted steps
+    core::Field<double> v_src;            ///< v masked to the owned nodes (restricted stage pass)
     core::Field<double> accel;            ///< force accelerations [m/s^2]
     std::vector<double> row_buffers;      ///< per thread: 3 rows of stage displacements
     std::size_t row_buffer_len = 0;       ///< doubles per thread
@@ -180,7 +180,7 @@ public:
     std::vector<char> copies_move;  ///< [y]: a twin/ghost copy of row y reads a moving node
     int restricted_y0 = 0;
     int restricted_y1 = 0;
-    bool use_pipeline = true;  ///< false: full steps run stage by stage too (tests, benchmarks)
+    bool use_pipeline = true;  ///< false: all steps run stage by stage (tests, benchmarks)
     std::vector<std::int64_t> touched;  ///< accel offsets written by the last force set
     int max_threads = 1;
 
