@@ -180,7 +180,7 @@ public:
     std::vector<char> copies_move;  ///< [y]: a twin/ghost copy of row y reads a moving node
     int restricted_y0 = 0;
     int restricted_y1 = 0;
-    bool use_pipeline = true;  ///< false: all steps run stage by stage (tests, benchmarks)
+    bool use_pipeline = true;           ///< false: all steps run stage by stage (tests, benchmarks)
     std::vector<std::int64_t> touched;  ///< accel offsets written by the last force set
     int max_threads = 1;
 
