@@ -9,6 +9,8 @@
 //   pliant_bench_session --stream [level] [--seconds S]   (streaming cost of 2 dragging peers)
 //   pliant_bench_session --coarse [levels...] [--seconds S]   (coarse streaming, k = 0, 1, 2;
 //   default levels 6 7)
+//   pliant_bench_session --steps [levels...]   (each peer's restricted sim step alone against
+//   the full step, thread CPU time; default levels 6 7 8)
 // --json/--csv rows (bench/common/bench_report.h), sized by the number of peers (1..4): per
 // coupling ("exact", "fast", "fast 1 kHz") the step seconds per simulated second of the busiest
 // peer and the mean peer, their ratio to one process stepping every node, the payload bytes sent
@@ -22,6 +24,8 @@
 #include <pliant/subdiv/convolution_plan.h>
 #include <pliant/subdiv/refine.h>
 
+#include <time.h>
+
 #include "bench_report.h"
 #include "grid_shapes.h"
 
@@ -31,7 +35,9 @@
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
+#include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 using namespace pliant;
@@ -582,6 +588,108 @@ void add_rows(bench::Report& report, const std::string& name, int level, int pee
         report.add(name, level, n, "peers", "error_vs_single_rel", r.max_u_diff / r.max_u, "1");
 }
 
+double thread_cpu_s()
+{
+    timespec t{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+    return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
+/// --steps: the sim step alone, in thread CPU time (which the load of a shared machine inflates
+/// far less than the wall time the session counters use): per level and peer count, each peer's
+/// restricted step over its fast set (its leaves) and over its exact set (its leaves dilated by
+/// the default halo_rings, as node runs) against the full step of one process; fixed dt 1 ms,
+/// the two pulls of the session runs held on, one thread. Best of 5 interleaved rounds.
+void steps_suite(bench::Report& report, const std::vector<int>& levels)
+{
+    std::printf(
+        "# sim step CPU per peer / full step (thread CPU time, best of 5 rounds, 1 "
+        "thread)\nlevel peers | fast: max mean | exact: max mean | full step us\n");
+    for (const int level : levels)
+    {
+        const core::TetraGrid grid = core::TetraGrid::create(level).value();
+        auto model =
+            sim::MembraneModel::create(grid, scenes::sphere_grid(grid, 1.0), material()).value();
+        const auto faces = static_cast<std::uint32_t>(grid.face_count());
+        const std::vector<sim::Force> forces = {session::to_sim_force(pull(faces / 7)),
+                                                session::to_sim_force(pull(faces / 2 + 5))};
+        const int steps =
+            std::max(20, static_cast<int>(4e6 / static_cast<double>(grid.node_count())));
+        const auto time_steps = [&](std::span<const core::Region> owned)
+        {
+            sim::MembraneState st = sim::MembraneState::at_rest(grid);
+            sim::Rkf45Workspace ws(model, 1);
+            sim::StepOptions opt;
+            opt.owned = owned;
+            for (int k = 0; k < 3; ++k)
+                (void)sim::step(model, st, ws, forces, opt);
+            const double t0 = thread_cpu_s();
+            for (int k = 0; k < steps; ++k)
+                (void)sim::step(model, st, ws, forces, opt);
+            return (thread_cpu_s() - t0) / steps;
+        };
+        const session::LeafGraph graph(grid,
+                                       session::leaf_depth_for(grid, net::ValueEncoding::F64));
+        for (int peers = 2; peers <= 4; ++peers)
+        {
+            std::vector<session::Seat> seats;
+            for (int k = 0; k < peers; ++k)
+                seats.push_back({net::PeerId{static_cast<std::uint16_t>(k)}, std::nullopt});
+            const auto owners = session::partition_leaves(grid, graph, seats);
+            std::vector<std::vector<core::Region>> fast_sets(static_cast<std::size_t>(peers));
+            std::vector<std::vector<core::Region>> exact_sets(static_cast<std::size_t>(peers));
+            for (int p = 0; p < peers; ++p)
+            {
+                std::vector<char> mask(grid.node_count(), 0);
+                for (std::size_t l = 0; l < owners.size(); ++l)
+                    if (owners[l].value == p)
+                    {
+                        fast_sets[static_cast<std::size_t>(p)].push_back(graph.regions()[l]);
+                        for (const core::NodeIndex n : graph.nodes(l))
+                            mask[n.value] = 1;
+                    }
+                exact_sets[static_cast<std::size_t>(p)] = session::node_runs(
+                    grid, session::dilate_nodes(grid, std::move(mask),
+                                                session::SessionSettings{}.halo_rings));
+            }
+            double full = 1e30;
+            std::vector<double> fast(static_cast<std::size_t>(peers), 1e30);
+            std::vector<double> exact(static_cast<std::size_t>(peers), 1e30);
+            for (int round = 0; round < 5; ++round)
+            {
+                full = std::min(full, time_steps({}));
+                for (std::size_t p = 0; p < fast.size(); ++p)
+                {
+                    fast[p] = std::min(fast[p], time_steps(fast_sets[p]));
+                    exact[p] = std::min(exact[p], time_steps(exact_sets[p]));
+                }
+            }
+            const auto max_mean = [&](const std::vector<double>& t)
+            {
+                double worst = 0.0;
+                double sum = 0.0;
+                for (const double x : t)
+                {
+                    worst = std::max(worst, x);
+                    sum += x;
+                }
+                return std::pair<double, double>{worst / full,
+                                                 sum / static_cast<double>(t.size()) / full};
+            };
+            const auto [fmax, fmean] = max_mean(fast);
+            const auto [emax, emean] = max_mean(exact);
+            std::printf("%5d %5d | %.2f %.2f | %.2f %.2f | %.0f\n", level, peers, fmax, fmean, emax,
+                        emean, full * 1e6);
+            std::fflush(stdout);
+            const double n = static_cast<double>(peers);
+            report.add("step only, fast", level, n, "peers", "step_cpu_vs_full_max", fmax, "1");
+            report.add("step only, fast", level, n, "peers", "step_cpu_vs_full_mean", fmean, "1");
+            report.add("step only, exact", level, n, "peers", "step_cpu_vs_full_max", emax, "1");
+            report.add("step only, exact", level, n, "peers", "step_cpu_vs_full_mean", emean, "1");
+        }
+    }
+}
+
 }  // namespace
 
 int main(int argc, char** argv)
@@ -592,6 +700,7 @@ int main(int argc, char** argv)
     std::vector<int> levels;
     bool stream_only = false;
     bool coarse_only = false;
+    bool steps_only = false;
     double stream_seconds = 2.0;
     for (int k = 1; k < argc; ++k)
     {
@@ -599,10 +708,17 @@ int main(int argc, char** argv)
             stream_only = true;
         else if (std::string(argv[k]) == "--coarse")
             coarse_only = true;
+        else if (std::string(argv[k]) == "--steps")
+            steps_only = true;
         else if (std::string(argv[k]) == "--seconds" && k + 1 < argc)
             stream_seconds = std::atof(argv[++k]);
         else
             levels.push_back(std::atoi(argv[k]));
+    }
+    if (steps_only)
+    {
+        steps_suite(report, levels.empty() ? std::vector<int>{6, 7, 8} : levels);
+        return report.write() ? 0 : 1;
     }
     if (coarse_only)
     {

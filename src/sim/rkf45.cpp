@@ -204,8 +204,8 @@ void stage_trial(const MembraneModel& model, const MembraneState& state, Rkf45Wo
     }
 }
 
-// One trial step: the fused row pipeline for full steps (when the grid's copies fit it), the
-// stage-by-stage pass for restricted ones. Both run the same row kernels.
+// One trial step: the fused row pipeline, full or restricted (planned by step_prepared), when
+// the grid's copies fit it; else the stage-by-stage pass. Both run the same row kernels.
 TrialResult trial(const MembraneModel& model, const MembraneState& state, Rkf45Workspace& ws,
                   std::span<const core::Region> regions, double h, int threads, bool restricted)
 {
@@ -213,8 +213,8 @@ TrialResult trial(const MembraneModel& model, const MembraneState& state, Rkf45W
     const Coeffs c = detail::make_coeffs(h);
     const detail::StageConstants k{set.beta, set.k_f, set.rtol, set.atol, model.grid().w()};
     std::size_t parts = regions.size();
-    if (!restricted && ws.pipeline_ok && ws.use_pipeline)
-        parts = detail::pipeline_trial(model, state, ws, c, k, threads);
+    if (ws.pipeline_ok && ws.use_pipeline)
+        parts = detail::pipeline_trial(model, state, ws, c, k, threads, restricted);
     else
         stage_trial(model, state, ws, regions, c, k, threads, restricted);
     TrialResult t;
@@ -520,11 +520,16 @@ StepReport step_prepared(MembraneModel& model, MembraneState& state, Rkf45Worksp
             PLIANT_ASSERT(r.x0 >= 0 && r.y0 >= 0 && r.x1 <= model.grid().nx() &&
                               r.y1 <= model.grid().ny() && r.x0 <= r.x1 && r.y0 <= r.y1,
                           "step: owned region outside the grid");
-        ws.v_src.fill(0.0);
-        copy_regions(state.v, ws.v_src, regions);
-        model.sync(ws.v_src);
-        for (auto& k : ws.kv)
-            k.fill(0.0);
+        if (ws.pipeline_ok && ws.use_pipeline)
+            detail::plan_restricted(model, regions, ws);  // once per owned set
+        else
+        {
+            ws.v_src.fill(0.0);
+            copy_regions(state.v, ws.v_src, regions);
+            model.sync(ws.v_src);
+            for (auto& k : ws.kv)
+                k.fill(0.0);
+        }
     }
 
     double h = set.fixed_step ? set.fixed_dt : std::clamp(ws.next_dt(), set.dt_min, set.dt_max);
@@ -561,7 +566,9 @@ StepReport step_prepared(MembraneModel& model, MembraneState& state, Rkf45Worksp
         if (t.error > 1.0 && !set.fixed_step)
             report.status = report.status | StepStatus::MinStepReached;
         // Accept.
-        if (restricted)
+        if (restricted && ws.pipeline_ok && ws.use_pipeline)
+            detail::accept_restricted(ws, state);
+        else if (restricted)
         {
             copy_regions(ws.u_out, state.u, regions);
             copy_regions(ws.v_out, state.v, regions);

@@ -3,11 +3,12 @@
 #pragma once
 
 // The RKF45 arithmetic shared by the two ways a trial step is run (rkf45.cpp): the stage-by-stage
-// pass over owned regions (restricted steps) calls the row kernels below; the fused row pipeline
-// of full steps (row_pipeline.cpp) runs two stages per loop but gives every node the same
-// operations in the same order (tests/sim/pipeline_test.cpp checks it bit for bit). So results
-// are the same whichever path, thread or band computes a node: full and restricted steps stay
-// bit-identical, as sessions require.
+// pass over regions (grids whose copies do not fit the pipeline; the tests' reference) calls the
+// row kernels below; the fused row pipeline of full and restricted steps (row_pipeline.cpp) runs
+// two stages per loop but gives every node the same operations in the same order
+// (tests/sim/pipeline_test.cpp checks it bit for bit). So results are the same whichever path,
+// thread or band computes a node: full and restricted steps stay bit-identical, as sessions
+// require.
 //
 // Row kernels take row pointers indexed by grid x (ghost column x = -1 included), not plane
 // offsets, so a row can live in a full plane or in a small ring buffer.
@@ -236,12 +237,22 @@ inline double stage_row(const StageConstants& k, const Coeffs& c, const StageRow
 // false when a copy of the model's sync table does not fit the pipeline's row rules).
 void plan_pipeline(const MembraneModel& model, Rkf45Workspace& ws);
 
-// One full trial step with the fused row pipeline (row_pipeline.cpp) into ws.u_out / v_out.
-// \return the number of bands: their error norms and NaN probes are ws.leaf_error / leaf_probe
-// [0, bands).
+// Plans restricted steps over `owned` on the pipeline (the per-row segments of `ws`); nothing
+// to do when `owned` equals the regions of the last plan.
+void plan_restricted(const MembraneModel& model, std::span<const core::Region> owned,
+                     Rkf45Workspace& ws);
+
+// Accepts a restricted pipeline trial: u_out and v_out into the state over the planned owned
+// regions (their merged row segments; the nodes copy_regions would copy).
+void accept_restricted(const Rkf45Workspace& ws, MembraneState& state) noexcept;
+
+// One trial step with the fused row pipeline (row_pipeline.cpp) into ws.u_out / v_out: a full
+// one, or a restricted one over the owned set of the last plan_restricted (only its rows and
+// segments are computed and written). \return the number of bands: their error norms and NaN
+// probes are ws.leaf_error / leaf_probe [0, bands).
 std::size_t pipeline_trial(const MembraneModel& model, const MembraneState& state,
                            Rkf45Workspace& ws, const Coeffs& c, const StageConstants& k,
-                           int threads);
+                           int threads, bool restricted);
 
 // Sets FTZ and DAZ for the current thread for its lifetime (x86 SSE; elsewhere a no-op): the
 // far tails of a wave decay into denormal numbers, which cost ~100x per operation on x86.

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: 2026 pliant contributors
 //
-// The fused row pipeline of a full RKF45 trial step (docs/physics.md §8).
+// The fused row pipeline of an RKF45 trial step, full or restricted (docs/physics.md §8).
 //
 // Design
 // - Since u' = v, stage S applies K only to U_S = u + h c_S v + h^2 sum (A^2)_Sm kv_m, and
@@ -24,7 +24,17 @@
 //   need no barrier; the extra work is 6 row-stages per band end (under 1 % at level 8 on two
 //   threads). Every node gets the same operations with the same inputs whichever band or thread
 //   computes it, so results are bit-identical for any thread count and to the stage-by-stage
-//   pass of restricted steps.
+//   pass.
+// - Restricted steps (StepOptions::owned) run the same sweep over the rows holding owned nodes,
+//   and within a row over the planned x-segments only (plan_restricted, once per owned set): the
+//   kernels over the owned regions' merged x-intervals, the U fills over those of the row and its
+//   two neighbours one node wider. Positions whose canonical node is not owned are Dirichlet:
+//   the stage pass gives them v = 0 and zero slopes, so their U is u + 0.0 for every stage and
+//   no slope outside the owned set is ever needed (no growing halo). A slope is read only at a
+//   moving position, which this sweep computed (or copied from its canonical node), so stale
+//   ring values elsewhere are never read. Twins inside an owned rectangle whose canonical node is
+//   not owned are computed at the last pair with zero inputs (dirichlet_row), as the stage pass
+//   does, for the NaN probe.
 //
 // Alternatives rejected: square leaf tiles with a shrinking halo (the first plan): they need a
 // ghost ring of 3 on every model and state plane and redundant halo work on four sides (13 % at
@@ -40,6 +50,9 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <span>
+#include <utility>
+#include <vector>
 
 namespace pliant::sim::detail
 {
@@ -129,10 +142,11 @@ void copy_row(const Inputs& in, const BandBuffers& b, int m, int y) noexcept
     }
 }
 
-// U_P and U_{P+1} of row yy, x in [-1, nx], in one loop over u and v (and kv_0..kv_3 as each
-// needs), with the operations of fill_row<P> and fill_row<P + 1>.
+// U_P and U_{P+1} of row yy, x in [x0, x1) (full steps: [-1, nx]), in one loop over u and v (and
+// kv_0..kv_3 as each needs), with the operations of fill_row<P> and fill_row<P + 1>.
 template <int P>
-void fill_pair(const Inputs& in, const Coeffs& c, const BandBuffers& b, int yy) noexcept
+void fill_pair(const Inputs& in, const Coeffs& c, const BandBuffers& b, int yy, int x0,
+               int x1) noexcept
 {
     constexpr int A = P;
     constexpr int B = P + 1;
@@ -147,7 +161,7 @@ void fill_pair(const Inputs& in, const Coeffs& c, const BandBuffers& b, int yy) 
     const double cua = c.cu[A];
     const double cub = c.cu[B];
 #pragma GCC ivdep
-    for (int x = -1; x <= in.nx; ++x)
+    for (int x = x0; x < x1; ++x)
     {
         double ua = u[x] + cua * v[x];
         if constexpr (A > 1)
@@ -170,6 +184,23 @@ void fill_pair(const Inputs& in, const Coeffs& c, const BandBuffers& b, int yy) 
     }
 }
 
+// U_P and U_{P+1} at Dirichlet nodes of row yy, x in [x0, x1) (restricted steps): the stage pass
+// computes u + c_S h v + ... with v and every slope +0.0 there, which is u + 0.0 for every stage
+// (h > 0, so h c_S 0 = +0.0; the slope terms then add +-0.0 to a value that is not -0.0).
+template <int P>
+void fill_pair_dirichlet(const Inputs& in, const BandBuffers& b, int yy, int x0, int x1) noexcept
+{
+    const double* __restrict u = in.row(in.u, yy);
+    double* __restrict da = b.U_row(P, yy);
+    double* __restrict db = b.U_row(P + 1, yy);
+    for (int x = x0; x < x1; ++x)
+    {
+        const double value = u[x] + 0.0;
+        da[x] = value;
+        db[x] = value;
+    }
+}
+
 // Stages P and P + 1 of row y in one loop, with the operations of stage_row<P> and
 // stage_row<P + 1> (checked bit for bit by tests/sim/pipeline_test.cpp). Stage P + 1 reads
 // kv_P only at its own node: the value just computed, which for a canonical node is what the
@@ -179,7 +210,7 @@ void fill_pair(const Inputs& in, const Coeffs& c, const BandBuffers& b, int yy) 
 // rkf45_internal.h for the reductions).
 template <int P>
 double pair_row(const Inputs& in, const Coeffs& c, const StageConstants& k, const BandBuffers& b,
-                int y, double& probe) noexcept
+                int y, int x0, int x1, double& probe) noexcept
 {
     constexpr int A = P;
     constexpr int B = P + 1;
@@ -209,9 +240,8 @@ double pair_row(const Inputs& in, const Coeffs& c, const StageConstants& k, cons
     std::int64_t err_bits = 0;
     std::int64_t bad = 0;
     const int x_canon = (y == 0 || y == k.w) ? k.w + 1 : 2 * k.w;
-    const int nx = in.nx;
 #pragma GCC ivdep
-    for (int x = 0; x < nx; ++x)
+    for (int x = x0; x < x1; ++x)
     {
         double kk[5] = {};
         if constexpr (A > 0)
@@ -252,29 +282,114 @@ double pair_row(const Inputs& in, const Coeffs& c, const StageConstants& k, cons
     return std::bit_cast<double>(err_bits);
 }
 
+// The last stage and the update at the Dirichlet nodes of a restricted step's kernel segment
+// [x0, x1) of row y: twins inside an owned region whose canonical node is not owned. The stage
+// pass computes them with v and every slope +0.0 (its masked planes); their u_new and v_new are
+// overwritten by the accept's twin copy, but their NaN probe counts, so they are computed here
+// with the same operations. Their slopes kv_0..kv_4 are never read (twin copies overwrite them,
+// and readers of Dirichlet nodes take zeros), so the earlier pairs skip them.
+double dirichlet_row(const Inputs& in, const Coeffs& c, const StageConstants& k,
+                     const BandBuffers& b, int y, int x0, int x1, double& probe) noexcept
+{
+    const double* __restrict wx = in.row(in.wx, y);
+    const double* __restrict wy = in.row(in.wy, y);
+    const double* __restrict wd = in.row(in.wd, y);
+    const double* __restrict wyb = in.row(in.wy, y - 1);
+    const double* __restrict wdb = in.row(in.wd, y - 1);
+    const double* __restrict inv_m = in.row(in.inv_m, y);
+    const double* __restrict acc = in.row(in.acc, y);
+    const double* __restrict bp = b.U_row(5, y - 1);
+    const double* __restrict bc = b.U_row(5, y);
+    const double* __restrict bn = b.U_row(5, y + 1);
+    const double* __restrict u = in.row(in.u, y);
+    double* __restrict u_out = in.u_out + static_cast<std::ptrdiff_t>(y) * in.s;
+    double* __restrict v_out = in.v_out + static_cast<std::ptrdiff_t>(y) * in.s;
+    std::int64_t err_bits = 0;
+    std::int64_t bad = 0;
+    const int x_canon = (y == 0 || y == k.w) ? k.w + 1 : 2 * k.w;
+    for (int x = x0; x < x1; ++x)
+    {
+        const double kk[5] = {0.0, 0.0, 0.0, 0.0, 0.0};
+        double vel = 0.0;
+        for (int m = 0; m < 5; ++m)
+            vel = vel + c.cv[5][m] * kk[m];
+        const double uc = bc[x];
+        const double ku = stencil(uc, bc[x + 1], bc[x - 1], bn[x], bp[x], bn[x + 1], bp[x - 1],
+                                  wx[x], wx[x - 1], wy[x], wyb[x], wd[x], wdb[x - 1]);
+        const double a = ((-k.beta * vel - k.k_f * uc) - inv_m[x] * ku) + acc[x];
+        update_node(k, c, u[x], 0.0, kk, a, x < x_canon, u_out[x], v_out[x], err_bits, bad);
+    }
+    if (bad != 0)
+        probe = std::numeric_limits<double>::quiet_NaN();
+    return std::bit_cast<double>(err_bits);
+}
+
+// The U rows of stages P, P + 1 at row yy: the whole row (full steps) or the row's fill segments
+// (restricted steps).
+template <int P, bool Restricted>
+void fill_rows(const Inputs& in, const Coeffs& c, const BandBuffers& b, int yy) noexcept
+{
+    if constexpr (Restricted)
+    {
+        const Rkf45Workspace& ws = *in.ws;
+        const auto r = static_cast<std::size_t>(yy + 1);
+        for (std::size_t i = ws.fill_start[r]; i < ws.fill_start[r + 1]; ++i)
+        {
+            const Rkf45Workspace::RowSegment& seg = ws.fill_segments[i];
+            if (seg.moves)
+                fill_pair<P>(in, c, b, yy, seg.x0, seg.x1);
+            else
+                fill_pair_dirichlet<P>(in, b, yy, seg.x0, seg.x1);
+        }
+    }
+    else
+        fill_pair<P>(in, c, b, yy, -1, in.nx + 1);
+}
+
 // Stages P and P + 1 at row y (the band's first row of this pair is `first`): the next U rows,
 // the pair kernel, then the copies of the new slope rows. Returns the row's error norm (P = 4).
-template <int P>
+template <int P, bool Restricted>
 double stage_pair(const Inputs& in, const Coeffs& c, const StageConstants& k, const BandBuffers& b,
                   int y, int first, double& probe) noexcept
 {
     if (y == first)
     {
-        fill_pair<P>(in, c, b, y - 1);
-        fill_pair<P>(in, c, b, y);
+        fill_rows<P, Restricted>(in, c, b, y - 1);
+        fill_rows<P, Restricted>(in, c, b, y);
     }
-    fill_pair<P>(in, c, b, y + 1);
-    const double err = pair_row<P>(in, c, k, b, y, probe);
+    fill_rows<P, Restricted>(in, c, b, y + 1);
+    double err = 0.0;
+    if constexpr (Restricted)
+    {
+        const Rkf45Workspace& ws = *in.ws;
+        const auto r = static_cast<std::size_t>(y);
+        for (std::size_t i = ws.kernel_start[r]; i < ws.kernel_start[r + 1]; ++i)
+        {
+            const Rkf45Workspace::RowSegment& seg = ws.kernel_segments[i];
+            if (seg.moves)
+                err = std::max(err, pair_row<P>(in, c, k, b, y, seg.x0, seg.x1, probe));
+            else if constexpr (P == 4)
+                err = std::max(err, dirichlet_row(in, c, k, b, y, seg.x0, seg.x1, probe));
+        }
+    }
+    else
+        err = pair_row<P>(in, c, k, b, y, 0, in.nx, probe);
     if constexpr (P < 4)
     {
-        copy_row(in, b, P, y);
-        copy_row(in, b, P + 1, y);
+        // Restricted: a row none of whose copies reads a moving node is skipped (every copy
+        // would write a Dirichlet position, whose slopes are never read).
+        if (!Restricted || in.ws->copies_move[static_cast<std::size_t>(y)] != 0)
+        {
+            copy_row(in, b, P, y);
+            copy_row(in, b, P + 1, y);
+        }
     }
     return err;
 }
 
 // Rows [y0, y1) of the new state: the wavefront, with the slope rows beyond the band that its
 // stages read recomputed here.
+template <bool Restricted>
 void run_band(const Inputs& in, const Coeffs& c, const StageConstants& k, const BandBuffers& b,
               int y0, int y1, double& err, double& probe) noexcept
 {
@@ -285,11 +400,11 @@ void run_band(const Inputs& in, const Coeffs& c, const StageConstants& k, const 
     for (int j = lo01; j <= y1 + 1; ++j)
     {
         if (j < hi01)
-            (void)stage_pair<0>(in, c, k, b, j, lo01, probe);
+            (void)stage_pair<0, Restricted>(in, c, k, b, j, lo01, probe);
         if (const int y = j - 1; y >= lo23 && y < hi23)
-            (void)stage_pair<2>(in, c, k, b, y, lo23, probe);
+            (void)stage_pair<2, Restricted>(in, c, k, b, y, lo23, probe);
         if (const int y = j - 2; y >= y0 && y < y1)
-            err = std::max(err, stage_pair<4>(in, c, k, b, y, y0, probe));
+            err = std::max(err, stage_pair<4, Restricted>(in, c, k, b, y, y0, probe));
     }
 }
 
@@ -354,9 +469,143 @@ void plan_pipeline(const MembraneModel& model, Rkf45Workspace& ws)
     ws.pipeline_ok = ok;
 }
 
+void plan_restricted(const MembraneModel& model, std::span<const core::Region> owned,
+                     Rkf45Workspace& ws)
+{
+    if (ws.restricted_planned && std::ranges::equal(owned, ws.restricted_key))
+        return;
+    const core::TetraGrid& g = model.grid();
+    const int ny = g.ny();
+    using Interval = std::pair<int, int>;
+    // The kernel's x-intervals of every row: the owned regions, merged.
+    std::vector<std::vector<Interval>> rows(static_cast<std::size_t>(ny));
+    std::vector<char> inside(g.node_count(), 0);
+    for (const core::Region& r : owned)
+        for (int y = r.y0; y < r.y1 && r.x0 < r.x1; ++y)
+        {
+            rows[static_cast<std::size_t>(y)].emplace_back(r.x0, r.x1);
+            for (int x = r.x0; x < r.x1; ++x)
+                inside[g.index(x, y).value] = 1;
+        }
+    const auto merge = [](std::vector<Interval>& iv)
+    {
+        std::sort(iv.begin(), iv.end());
+        std::size_t n = 0;
+        for (const Interval& i : iv)
+        {
+            if (n > 0 && i.first <= iv[n - 1].second)
+                iv[n - 1].second = std::max(iv[n - 1].second, i.second);
+            else
+                iv[n++] = i;
+        }
+        iv.resize(n);
+    };
+    for (auto& iv : rows)
+        merge(iv);
+    // A position moves iff the canonical node it stands for lies in an owned region.
+    const auto moves = [&](int x, int y) { return inside[g.image(x, y).value] != 0; };
+    // Splits [x0, x1) of row y into runs of moving and of Dirichlet positions.
+    const auto split = [&](std::vector<Rkf45Workspace::RowSegment>& out, int y, int x0, int x1)
+    {
+        for (int x = x0; x < x1;)
+        {
+            const bool m = moves(x, y);
+            int e = x + 1;
+            while (e < x1 && moves(e, y) == m)
+                ++e;
+            out.push_back({x, e, m});
+            x = e;
+        }
+    };
+    ws.kernel_segments.clear();
+    ws.kernel_start.assign(1, 0);
+    ws.fill_segments.clear();
+    ws.fill_start.assign(1, 0);
+    ws.restricted_work.assign(1, 0);
+    ws.restricted_y0 = ny;
+    ws.restricted_y1 = 0;
+    for (int y = 0; y < ny; ++y)
+    {
+        std::size_t width = 0;
+        for (const Interval& i : rows[static_cast<std::size_t>(y)])
+        {
+            split(ws.kernel_segments, y, i.first, i.second);
+            width += static_cast<std::size_t>(i.second - i.first);
+        }
+        ws.kernel_start.push_back(ws.kernel_segments.size());
+        if (width > 0)
+        {
+            ws.restricted_y0 = std::min(ws.restricted_y0, y);
+            ws.restricted_y1 = y + 1;
+        }
+        // A row's fills, copies and loop set-up cost about as much as 32 nodes.
+        ws.restricted_work.push_back(ws.restricted_work.back() + width + (width > 0 ? 32 : 0));
+    }
+    // The fills: the kernel intervals of the row and its two neighbours, one node wider on each
+    // side (the stencil reads x - 1 .. x + 1), over rows -1 .. ny.
+    for (int y = -1; y <= ny; ++y)
+    {
+        std::vector<Interval> iv;
+        for (int yy = std::max(0, y - 1); yy <= std::min(ny - 1, y + 1); ++yy)
+            for (const Interval& i : rows[static_cast<std::size_t>(yy)])
+                iv.emplace_back(i.first - 1, i.second + 1);
+        merge(iv);
+        for (const Interval& i : iv)
+            split(ws.fill_segments, y, i.first, i.second);
+        ws.fill_start.push_back(ws.fill_segments.size());
+    }
+    // Rows whose twin and ghost copies read a moving node.
+    ws.copies_move.assign(static_cast<std::size_t>(ny), 0);
+    const auto src_moves = [&](int y, const core::GhostCopy& cp)
+    { return moves(static_cast<int>(cp.src) - 1, y); };
+    for (int y = 0; y < ny; ++y)
+    {
+        const auto r = static_cast<std::size_t>(y);
+        char any = 0;
+        for (std::size_t i = ws.row_copy_start[r]; i < ws.row_copy_start[r + 1]; ++i)
+            any = static_cast<char>(any | (src_moves(y, ws.row_copies[i]) ? 1 : 0));
+        if (y == 1)
+            for (const core::GhostCopy& cp : ws.below_copies)
+                any = static_cast<char>(any | (src_moves(y, cp) ? 1 : 0));
+        if (y == ny - 2)
+            for (const core::GhostCopy& cp : ws.above_copies)
+                any = static_cast<char>(any | (src_moves(y, cp) ? 1 : 0));
+        ws.copies_move[r] = any;
+    }
+    if (ws.restricted_y0 >= ws.restricted_y1)
+        ws.restricted_y0 = ws.restricted_y1 = 0;
+    ws.restricted_key.assign(owned.begin(), owned.end());
+    ws.restricted_planned = true;
+}
+
+void accept_restricted(const Rkf45Workspace& ws, MembraneState& state) noexcept
+{
+    const std::ptrdiff_t s = state.u.stride();
+    const double* const uo = ws.u_out.origin();
+    const double* const vo = ws.v_out.origin();
+    double* const u = state.u.origin();
+    double* const v = state.v.origin();
+    for (int y = ws.restricted_y0; y < ws.restricted_y1; ++y)
+    {
+        const auto r = static_cast<std::size_t>(y);
+        const std::ptrdiff_t row = static_cast<std::ptrdiff_t>(y) * s;
+        // The segments of a row are disjoint and increasing: copy each maximal run at once.
+        std::size_t i = ws.kernel_start[r];
+        while (i < ws.kernel_start[r + 1])
+        {
+            const int x0 = ws.kernel_segments[i].x0;
+            int x1 = ws.kernel_segments[i].x1;
+            for (++i; i < ws.kernel_start[r + 1] && ws.kernel_segments[i].x0 == x1; ++i)
+                x1 = ws.kernel_segments[i].x1;
+            std::copy(uo + row + x0, uo + row + x1, u + row + x0);
+            std::copy(vo + row + x0, vo + row + x1, v + row + x0);
+        }
+    }
+}
+
 std::size_t pipeline_trial(const MembraneModel& model, const MembraneState& state,
                            Rkf45Workspace& ws, const Coeffs& c, const StageConstants& k,
-                           int threads)
+                           int threads, bool restricted)
 {
     const core::TetraGrid& g = model.grid();
     Inputs in{};
@@ -373,7 +622,26 @@ std::size_t pipeline_trial(const MembraneModel& model, const MembraneState& stat
     in.nx = g.nx();
     in.ny = g.ny();
     in.ws = &ws;
-    const int bands = std::clamp(threads, 1, in.ny);
+    // Restricted steps: the rows holding owned nodes, split into bands of equal work.
+    const int ylo = restricted ? ws.restricted_y0 : 0;
+    const int yhi = restricted ? ws.restricted_y1 : in.ny;
+    if (yhi <= ylo)
+        return 0;
+    const int bands = std::clamp(threads, 1, yhi - ylo);
+    const auto band_start = [&](int band)
+    {
+        if (!restricted)
+            return in.ny * band / bands;
+        if (band == bands)
+            return yhi;
+        const std::size_t w0 = ws.restricted_work[static_cast<std::size_t>(ylo)];
+        const std::size_t total = ws.restricted_work[static_cast<std::size_t>(yhi)] - w0;
+        const std::size_t target =
+            w0 + total * static_cast<std::size_t>(band) / static_cast<std::size_t>(bands);
+        const auto it = std::lower_bound(ws.restricted_work.begin() + ylo,
+                                         ws.restricted_work.begin() + yhi, target);
+        return static_cast<int>(it - ws.restricted_work.begin());
+    };
     double* const rows = aligned_rows(ws);
 #pragma omp parallel num_threads(threads)
     {
@@ -385,11 +653,17 @@ std::size_t pipeline_trial(const MembraneModel& model, const MembraneState& stat
             const BandBuffers b{
                 rows + static_cast<std::size_t>(omp_get_thread_num()) * ws.pipeline_buffer_len,
                 ws.pipeline_row_len, in.ny};
-            const int y0 = in.ny * band / bands;
-            const int y1 = in.ny * (band + 1) / bands;
+            const int y0 = band_start(band);
+            const int y1 = band_start(band + 1);
             double err = 0.0;
             double probe = 0.0;
-            run_band(in, c, k, b, y0, y1, err, probe);
+            if (restricted)
+            {
+                if (y0 < y1)
+                    run_band<true>(in, c, k, b, y0, y1, err, probe);
+            }
+            else
+                run_band<false>(in, c, k, b, y0, y1, err, probe);
             ws.leaf_error[static_cast<std::size_t>(band)] = err;
             ws.leaf_probe[static_cast<std::size_t>(band)] = probe;
         }

@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 #include <vector>
 
 namespace pliant::sim
@@ -138,6 +139,111 @@ TEST(Pipeline, EqualsStageByStagePassBitForBit)
             for (std::size_t k = 0; k < ref.size(); ++k)
                 ASSERT_EQ(got[k].hash(), ref[k].hash()) << "level " << level << " restricted";
         }
+}
+
+// Owned sets shaped like a session's (leaves at depth level - 3, as sessions use): one leaf,
+// the first half of the leaves, every other leaf (disjoint leaves touching at corners), the
+// leaves of square 1 (its seams with square 0 and the folded rows), every leaf (a full step),
+// exact-mode-like runs (a block of leaves dilated by two rings, as single-row regions), strips
+// holding the twin column x = 2W or the folded halves of rows 0 and W without their canonical
+// nodes (Dirichlet twins inside owned regions), and the overlapping regions of some_regions.
+std::vector<std::vector<core::Region>> partition_like_sets(const MembraneModel& m)
+{
+    const core::TetraGrid& g = m.grid();
+    const int w = g.w();
+    std::vector<core::Region> leaves;
+    for (const core::LeafId& l : g.leaves(std::max(0, g.level() - 3)))
+        leaves.push_back(g.leaf_region(l));
+    const std::size_t n = leaves.size();
+    std::vector<std::vector<core::Region>> sets;
+    sets.push_back({leaves[n / 2 + (n > 4 ? 1 : 0)]});
+    sets.emplace_back(leaves.begin(), leaves.begin() + static_cast<std::ptrdiff_t>(n / 2));
+    std::vector<core::Region> every_other;
+    for (std::size_t k = 0; k < n; k += 2)
+        every_other.push_back(leaves[k]);
+    sets.push_back(every_other);
+    std::vector<core::Region> square1;
+    for (const core::Region& r : leaves)
+        if (r.x0 >= w)
+            square1.push_back(r);
+    sets.push_back(square1);
+    sets.push_back(leaves);
+    // A block of leaves around (W/2, W/2) dilated by two rings, row by row.
+    const core::Region block{std::max(0, w / 4 - 2), std::max(0, w / 4 - 2),
+                             std::min(g.nx(), 3 * w / 4 + 2), std::min(g.ny(), 3 * w / 4 + 2)};
+    std::vector<core::Region> runs;
+    for (int y = block.y0; y < block.y1; ++y)
+        runs.push_back({block.x0, y, block.x1, y + 1});
+    sets.push_back(runs);
+    sets.push_back({{2 * w - 2, 0, 2 * w + 1, g.ny()}});            // x = 2W without x = 0
+    sets.push_back({{0, 0, 3, g.ny()}, {w + 1, 0, 2 * w + 1, 1}});  // x = 0; folded row 0
+    sets.push_back({{w, w, 2 * w + 1, w + 1}, {w - 1, w - 1, w + 2, w + 1}});  // folded row W
+    sets.push_back(some_regions(m));
+    return sets;
+}
+
+// Restricted steps on the pipeline give the stage pass's bits for partition-like owned sets,
+// step by step, at levels 1-6, adaptive and fixed, for 1-3 threads.
+TEST(Pipeline, RestrictedEqualsStageByStagePassBitForBit)
+{
+    for (int level = 1; level <= 6; ++level)
+        for (const bool fixed : {false, true})
+        {
+            const MembraneModel probe = test::sphere_model(level, settings(1, fixed));
+            const std::vector<std::vector<core::Region>> sets = partition_like_sets(probe);
+            for (std::size_t set = 0; set < sets.size(); ++set)
+            {
+                std::vector<StepReport> ref_reports;
+                const std::vector<MembraneState> ref =
+                    run(test::sphere_model(level, settings(1, fixed)), false, sets[set], 12,
+                        ref_reports);
+                for (const int threads : {1, 2, 3})
+                {
+                    std::vector<StepReport> reports;
+                    const std::vector<MembraneState> got =
+                        run(test::sphere_model(level, settings(threads, fixed)), true, sets[set],
+                            12, reports);
+                    for (std::size_t k = 0; k < ref.size(); ++k)
+                    {
+                        const std::string where =
+                            "level " + std::to_string(level) + (fixed ? " fixed" : " adaptive") +
+                            ", set " + std::to_string(set) + ", " + std::to_string(threads) +
+                            " threads, step " + std::to_string(k);
+                        ASSERT_EQ(got[k].hash(), ref[k].hash()) << where;
+                        ASSERT_EQ(got[k].u, ref[k].u) << where;
+                        ASSERT_EQ(got[k].v, ref[k].v) << where;
+                        ASSERT_EQ(reports[k].dt, ref_reports[k].dt) << where;
+                        ASSERT_EQ(reports[k].error, ref_reports[k].error) << where;
+                        ASSERT_EQ(reports[k].rejections, ref_reports[k].rejections) << where;
+                    }
+                }
+            }
+        }
+}
+
+// Alternating owned sets in one workspace (the plan is cached per set) still gives the stage
+// pass's bits.
+TEST(Pipeline, RestrictedPlanFollowsTheOwnedSet)
+{
+    MembraneModel m = test::sphere_model(4, settings(2, false));
+    const std::vector<std::vector<core::Region>> sets = partition_like_sets(m);
+    MembraneState a = initial_state(m);
+    MembraneState b = a;
+    Rkf45Workspace wa(m, 2);
+    Rkf45Workspace wb(m, 2);
+    wb.use_pipeline = false;
+    const std::vector<Force> f = forces_for(m);
+    for (int k = 0; k < 30; ++k)
+    {
+        StepOptions opt;
+        opt.owned = sets[static_cast<std::size_t>(k * 7) % sets.size()];
+        const StepReport ra = step(m, a, wa, f, opt);
+        const StepReport rb = step(m, b, wb, f, opt);
+        ASSERT_EQ(a.u, b.u) << "step " << k;
+        ASSERT_EQ(a.v, b.v) << "step " << k;
+        ASSERT_EQ(ra.dt, rb.dt) << "step " << k;
+        ASSERT_EQ(ra.rejections, rb.rejections) << "step " << k;
+    }
 }
 
 // The slow reference: one RKF45 step of size h with the classic tableau on full planes.

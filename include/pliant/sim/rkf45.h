@@ -16,9 +16,11 @@
 /// - Full steps run as a row pipeline (src/sim/row_pipeline.cpp, docs/physics.md §8): all six
 ///   stages in one sweep over the rows, the slopes in per-thread ring rows, one band of rows per
 ///   thread and no barrier inside a step; only u, v and the model are read from memory.
-///   Restricted steps run stage by stage over their regions (kv planes, a barrier and a
-///   twin/ghost copy after each stage). Every node gets the same operations in the same order
-///   either way.
+///   Restricted steps run on the same pipeline over the rows and x-segments of their owned
+///   regions only (plus the one-node ring of Dirichlet stage displacements the stencil reads),
+///   planned once per owned set. The stage-by-stage pass (kv planes, a barrier and a twin/ghost
+///   copy after each stage) remains for grids whose copies do not fit the pipeline and for tests.
+///   Every node gets the same operations in the same order either way.
 /// - The propagated solution is the 5th-order one (local extrapolation); the embedded 4th-order
 ///   solution only gives the error estimate, in the max norm over canonical nodes,
 ///   |e_i| / (atol + rtol max(|y_i|, |y_new_i|)) for u and v. Max is order-independent, so the
@@ -136,7 +138,7 @@ public:
     // scratch.
     std::vector<core::Field<double>> kv;  ///< kv_1 .. kv_5
     core::Field<double> u_out, v_out;     ///< trial state
-    core::Field<double> v_src;            ///< v, masked to the owned nodes in restricted steps
+    core::Field<double> v_src;            ///< v masked to the owned nodes (restricted stage pass)
     core::Field<double> accel;            ///< force accelerations [m/s^2]
     std::vector<double> row_buffers;      ///< per thread: 3 rows of stage displacements
     std::size_t row_buffer_len = 0;       ///< doubles per thread
@@ -156,7 +158,29 @@ public:
     std::vector<core::GhostCopy> below_copies;
     std::vector<core::GhostCopy> above_copies;
     bool pipeline_ok = false;  ///< the copies fit the pipeline (always, for TetraGrid's gluing)
-    bool use_pipeline = true;  ///< false: full steps run stage by stage too (tests, benchmarks)
+    // Restricted steps on the pipeline (docs/physics.md §8), planned once per owned set
+    // (`restricted_key`, the regions of the last plan): per row, the x-segments [x0, x1) of the
+    // stage-displacement fills (rows -1 .. ny, at fill_start[y + 1]) and of the slope kernels
+    // (rows 0 .. ny - 1, at kernel_start[y]), each marked by whether its nodes move (their
+    // canonical node is owned) or are Dirichlet; the rows [restricted_y0, restricted_y1) that
+    // hold owned nodes and the prefix sums of their kernel widths (band split).
+    struct RowSegment
+    {
+        int x0 = 0;
+        int x1 = 0;
+        bool moves = false;
+    };
+    std::vector<core::Region> restricted_key;
+    bool restricted_planned = false;
+    std::vector<RowSegment> fill_segments;
+    std::vector<std::size_t> fill_start;
+    std::vector<RowSegment> kernel_segments;
+    std::vector<std::size_t> kernel_start;
+    std::vector<std::size_t> restricted_work;  ///< [y]: work of rows < y (width + a row cost)
+    std::vector<char> copies_move;  ///< [y]: a twin/ghost copy of row y reads a moving node
+    int restricted_y0 = 0;
+    int restricted_y1 = 0;
+    bool use_pipeline = true;           ///< false: all steps run stage by stage (tests, benchmarks)
     std::vector<std::int64_t> touched;  ///< accel offsets written by the last force set
     int max_threads = 1;
 
