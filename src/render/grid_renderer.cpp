@@ -82,17 +82,6 @@ void set_integer_sampling(GLuint texture)
     gl::glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
 }
 
-/// `source` with grid_normal.glsl inserted after its #version line.
-std::string with_grid_normal(const char* source)
-{
-    std::string s(source);
-    const std::string version = "#version 330 core\n";
-    const std::size_t at = s.find(version);
-    PLIANT_ASSERT(at != std::string::npos, "with_grid_normal: shader without #version 330 core");
-    s.insert(at + version.size(), shaders::k_grid_normal);
-    return s;
-}
-
 }  // namespace
 
 void GridRenderer::Impl::prepare_level(const core::TetraGrid& grid)
@@ -240,13 +229,17 @@ core::Result<GridRenderer> GridRenderer::create(GridNormals normals)
     if (normals != GridNormals::VertexShader)
     {
         auto program = Program::create(
-            normals == GridNormals::PassFetch ? shaders::k_grid_fetch_vert : shaders::k_grid_vert,
+            with_snippets(normals == GridNormals::PassFetch ? shaders::k_grid_fetch_vert
+                                                            : shaders::k_grid_vert,
+                          {shaders::k_phong_outputs})
+                .c_str(),
             shaders::k_phong_frag, "grid");
         if (!program)
             return program.error();
-        auto pass = Program::create(shaders::k_grid_normal_pass_vert,
-                                    with_grid_normal(shaders::k_grid_normal_pass_frag).c_str(),
-                                    "grid normal pass");
+        auto pass = Program::create(
+            shaders::k_grid_normal_pass_vert,
+            with_snippets(shaders::k_grid_normal_pass_frag, {shaders::k_grid_normal}).c_str(),
+            "grid normal pass");
         if (!pass)
             return pass.error();
         impl->program = std::move(*program);
@@ -255,7 +248,9 @@ core::Result<GridRenderer> GridRenderer::create(GridNormals normals)
     else
     {
         auto program =
-            Program::create(with_grid_normal(shaders::k_grid_vertex_normals_vert).c_str(),
+            Program::create(with_snippets(shaders::k_grid_vertex_normals_vert,
+                                          {shaders::k_phong_outputs, shaders::k_grid_normal})
+                                .c_str(),
                             shaders::k_phong_frag, "grid (vertex-shader normals)");
         if (!program)
             return program.error();

@@ -38,7 +38,9 @@ struct MeshRenderer::Impl
 core::Result<MeshRenderer> MeshRenderer::create()
 {
     PLIANT_ASSERT(gl::is_loaded(), "MeshRenderer::create: no GL context (call load_gl)");
-    auto program = Program::create(shaders::k_mesh_vert, shaders::k_phong_frag, "mesh");
+    auto program =
+        Program::create(with_snippets(shaders::k_mesh_vert, {shaders::k_phong_outputs}).c_str(),
+                        shaders::k_phong_frag, "mesh");
     if (!program)
         return program.error();
     auto impl = std::make_unique<Impl>();

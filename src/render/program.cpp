@@ -119,4 +119,17 @@ Program::~Program()
         gl::glDeleteProgram(id_);
 }
 
+std::string with_snippets(const char* source, std::initializer_list<const char*> snippets)
+{
+    std::string s(source);
+    const std::string version = "#version 330 core\n";
+    const std::size_t at = s.find(version);
+    PLIANT_ASSERT(at != std::string::npos, "with_snippets: shader without #version 330 core");
+    std::string inserted;
+    for (const char* snippet : snippets)
+        inserted += snippet;
+    s.insert(at + version.size(), inserted);
+    return s;
+}
+
 }  // namespace pliant::render

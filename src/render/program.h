@@ -10,6 +10,8 @@
 
 #include "render/gl_api.h"
 
+#include <initializer_list>
+#include <string>
 #include <utility>
 
 namespace pliant::render
@@ -41,6 +43,11 @@ public:
 private:
     GLuint id_ = 0;
 };
+
+/// `source` with each snippet inserted, in order, after its `#version 330 core` line (GLSL has no
+/// #include: shared declarations such as phong_outputs.glsl travel this way).
+[[nodiscard]] std::string with_snippets(const char* source,
+                                        std::initializer_list<const char*> snippets);
 
 /// Binds `program` and sets the uniforms of phong.frag.glsl and `u_view_projection`.
 void set_draw_uniforms(const Program& program, const DrawSettings& settings,

@@ -11,11 +11,7 @@ layout(location = 1) in vec4 a_normal;    // xyz = unit normal, w = owner id
 
 uniform mat4 u_view_projection;
 
-out vec3 v_world;
-out vec3 v_normal;
-out float v_value;
-flat out uint v_owner;
-flat out int v_node;
+// The outputs to phong.frag.glsl come from phong_outputs.glsl.
 
 void main()
 {

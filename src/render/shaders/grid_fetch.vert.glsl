@@ -13,11 +13,7 @@ uniform sampler2D u_normals;
 uniform int u_nx;
 uniform mat4 u_view_projection;
 
-out vec3 v_world;
-out vec3 v_normal;
-out float v_value;
-flat out uint v_owner;
-flat out int v_node;
+// The outputs to phong.frag.glsl come from phong_outputs.glsl.
 
 void main()
 {

@@ -2,7 +2,7 @@
 // SPDX-FileCopyrightText: 2026 pliant contributors
 #version 330 core
 // Grid vertex shader, GridNormals::VertexShader: every vertex invocation computes its normal
-// from its six neighbour texels (grid_normal.glsl, inserted after the #version line). No vertex
+// from its six neighbour texels (grid_normal.glsl and phong_outputs.glsl, inserted after the #version line). No vertex
 // attributes: the index buffer holds node indices (y * nx + x), so gl_VertexID is the node; its
 // position is texel (x + 1, y + 1) of the ghost-padded RGBA32F texture (xyz = position, w = the
 // scalar shown by displacement colouring).
@@ -12,11 +12,7 @@ uniform usampler2D u_owners;
 uniform int u_nx;
 uniform mat4 u_view_projection;
 
-out vec3 v_world;
-out vec3 v_normal;
-out float v_value;
-flat out uint v_owner;
-flat out int v_node;
+// The outputs to phong.frag.glsl come from phong_outputs.glsl.
 
 void main()
 {

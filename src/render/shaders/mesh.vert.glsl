@@ -9,11 +9,7 @@ layout(location = 2) in float a_value;
 
 uniform mat4 u_view_projection;
 
-out vec3 v_world;
-out vec3 v_normal;
-out float v_value;
-flat out uint v_owner;
-flat out int v_node;
+// The outputs to phong.frag.glsl come from phong_outputs.glsl.
 
 void main()
 {
