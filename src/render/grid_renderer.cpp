@@ -82,6 +82,20 @@ void set_integer_sampling(GLuint texture)
     gl::glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
 }
 
+/// Attaches `texture` as colour attachment 0 of `fbo`, restoring the draw framebuffer binding.
+/// \return whether `fbo` is complete.
+bool attach_colour(GLuint fbo, GLuint texture)
+{
+    GLint bound = 0;
+    gl::glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &bound);
+    gl::glBindFramebuffer(GL_DRAW_FRAMEBUFFER, fbo);
+    gl::glFramebufferTexture2D(GL_DRAW_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, texture,
+                               0);
+    const GLenum status = gl::glCheckFramebufferStatus(GL_DRAW_FRAMEBUFFER);
+    gl::glBindFramebuffer(GL_DRAW_FRAMEBUFFER, static_cast<GLuint>(bound));
+    return status == GL_FRAMEBUFFER_COMPLETE;
+}
+
 }  // namespace
 
 void GridRenderer::Impl::prepare_level(const core::TetraGrid& grid)
@@ -127,24 +141,12 @@ void GridRenderer::Impl::prepare_level(const core::TetraGrid& grid)
         return;
     gl::glBindTexture(GL_TEXTURE_2D, normals);
     gl::glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, nx, ny, 0, GL_RGBA, GL_FLOAT, nullptr);
-    GLint bound = 0;
-    gl::glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &bound);
-    gl::glBindFramebuffer(GL_DRAW_FRAMEBUFFER, normal_fbo);
-    gl::glFramebufferTexture2D(GL_DRAW_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, normals,
-                               0);
-    const GLenum status = gl::glCheckFramebufferStatus(GL_DRAW_FRAMEBUFFER);
-    gl::glBindFramebuffer(GL_DRAW_FRAMEBUFFER, static_cast<GLuint>(bound));
-    PLIANT_ASSERT(status == GL_FRAMEBUFFER_COMPLETE,
-                  "GridRenderer: the RGBA32F normal target is incomplete");
+    [[maybe_unused]] const bool normals_complete = attach_colour(normal_fbo, normals);
+    PLIANT_ASSERT(normals_complete, "GridRenderer: the RGBA32F normal target is incomplete");
     if (normal_source != GridNormals::PassToBuffer)
         return;
-    gl::glBindFramebuffer(GL_DRAW_FRAMEBUFFER, positions_fbo);
-    gl::glFramebufferTexture2D(GL_DRAW_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, positions,
-                               0);
-    const GLenum pstatus = gl::glCheckFramebufferStatus(GL_DRAW_FRAMEBUFFER);
-    gl::glBindFramebuffer(GL_DRAW_FRAMEBUFFER, static_cast<GLuint>(bound));
-    PLIANT_ASSERT(pstatus == GL_FRAMEBUFFER_COMPLETE,
-                  "GridRenderer: the positions texture cannot be read back");
+    [[maybe_unused]] const bool positions_complete = attach_colour(positions_fbo, positions);
+    PLIANT_ASSERT(positions_complete, "GridRenderer: the positions texture cannot be read back");
     const auto texels = static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny);
     gl::glBindVertexArray(attrib_vao);
     gl::glBindBuffer(GL_ARRAY_BUFFER, attributes);
