@@ -3,6 +3,7 @@
 //
 // Domain -> sphere and sampling (design in include/pliant/remesh/sample.h).
 
+#include <pliant/core/sphere_domain.h>
 #include <pliant/remesh/sample.h>
 
 #include "remesh/sphere_geometry_internal.h"
@@ -131,55 +132,7 @@ private:
 
 core::Vec3Field<double> domain_sphere(const core::TetraGrid& grid)
 {
-    const double r = 1.0 / std::sqrt(3.0);
-    // corners a, b, c, d of DESIGN §1; abc is counter-clockwise from outside (det > 0)
-    const Vec3 A{r, r, r}, B{r, -r, -r}, C{-r, r, -r}, D{-r, -r, r};
-    core::Vec3Field<double> out{core::Field<double>(grid), core::Field<double>(grid),
-                                core::Field<double>(grid)};
-    const int w = grid.w();
-    const double inv_w = 1.0 / static_cast<double>(w);
-    for (int y = 0; y <= w; ++y)
-        for (int x = 0; x <= 2 * w; ++x)
-        {
-            const core::NodeIndex n = grid.index(x, y);
-            if (!grid.is_canonical(n))
-                continue;
-            Vec3 p;
-            if (x <= w)
-            {
-                if (y <= x)  // triangle a(0,0) b(W,0) c(W,W)
-                {
-                    const double s = (x - y) * inv_w, t = y * inv_w;
-                    p = A * (1.0 - s - t) + B * s + C * t;
-                }
-                else  // triangle a(0,0) c(W,W) d(0,W)
-                {
-                    const double s = x * inv_w, t = (y - x) * inv_w;
-                    p = A * (1.0 - s - t) + C * s + D * t;
-                }
-            }
-            else
-            {
-                const int xl = x - w;
-                if (y <= xl)  // triangle b(W,0) a(2W,0) d(2W,W)
-                {
-                    const double s = (xl - y) * inv_w, t = y * inv_w;
-                    p = B * (1.0 - s - t) + A * s + D * t;
-                }
-                else  // triangle b(W,0) d(2W,W) c(W,W)
-                {
-                    const double s = xl * inv_w, t = (y - xl) * inv_w;
-                    p = B * (1.0 - s - t) + D * s + C * t;
-                }
-            }
-            p = core::normalized(p);
-            out[0][n] = p.x;
-            out[1][n] = p.y;
-            out[2][n] = p.z;
-        }
-    for (auto& f : out)
-        core::sync_twins(grid, f);
-    return out;
+    return core::sphere_domain(grid, core::SphereMap::Gnomonic);
 }
 
 std::size_t count_inverted_domain(const core::TetraGrid& grid,
