@@ -3,6 +3,7 @@
 // `pliant host [GRID] [--port P] [--mode exact|fast] [--duration S] [--script F] [--stats F.csv]`:
 // starts a collaborative session as its master over ENet (docs/session.md).
 #include <pliant/core/grid_io.h>
+#include <pliant/core/sphere_domain.h>
 #include <pliant/core/tetra_grid.h>
 #include <pliant/net/enet_transport.h>
 #include <pliant/net/secure_transport.h>
@@ -60,6 +61,7 @@ struct HostOptions
 {
     std::string grid;
     int level = 5;
+    std::string sphere_map = "equal-area";
     std::uint16_t port = 7777;
     std::string mode = "exact";
     double duration = 60.0;
@@ -93,7 +95,9 @@ int run_host(const HostOptions& opt)
     else
     {
         grid = core::TetraGrid::create(opt.level).value();
-        rest = scenes::sphere_grid(*grid, 1.0);
+        rest = scenes::sphere_grid(
+            *grid, 1.0, 0,
+            core::sphere_map_from_string(opt.sphere_map).value_or(core::SphereMap::EqualArea));
     }
     session::RunOptions run;
     run.duration_s = opt.duration;
@@ -160,6 +164,11 @@ void add_host_command(CLI::App& app, const GlobalOptions& global)
                     "Rest geometry (.pgrid from `pliant remesh`); omitted: a sphere of --level");
     cmd->add_option("-l,--level", opt->level, "Sphere level when GRID is omitted")
         ->check(CLI::Range(1, 10))
+        ->capture_default_str();
+    cmd->add_option("--sphere-map", opt->sphere_map,
+                    "How the sphere's grid lies on it when GRID is omitted: equal-area (even "
+                    "cells) or gnomonic (the paper's central projection)")
+        ->check(CLI::IsMember({"equal-area", "gnomonic"}))
         ->capture_default_str();
     cmd->add_option("-p,--port", opt->port, "UDP port to listen on")->capture_default_str();
     cmd->add_option("--mode", opt->mode, "Coupling: exact or fast")

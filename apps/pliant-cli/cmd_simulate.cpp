@@ -6,6 +6,7 @@
 // frame and energy.csv.
 // TOML stays in this file: the sim library knows no file formats.
 #include <pliant/core/grid_io.h>
+#include <pliant/core/sphere_domain.h>
 #include <pliant/core/tetra_grid.h>
 #include <pliant/mesh/io.h>
 #include <pliant/sim/membrane.h>
@@ -25,6 +26,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <set>
@@ -41,7 +43,7 @@ struct TimedForce
     double start = 0.0;  ///< s
     double end = 0.0;    ///< s (exclusive)
     sim::Force force;
-    std::optional<core::Vec3> to;  ///< a point force moves linearly to here by `end`
+    std::optional<core::Vec3> to;  ///< a point force slides to here by `end` (slide_point)
     std::int64_t line = 0;         ///< where the [[force]] table starts in the file
 };
 
@@ -61,6 +63,7 @@ struct SimulateOptions
     std::string format = "pgrid";
     int level = 6;
     double radius = 1.0;
+    std::string sphere_map = "equal-area";
     int threads = 0;
 };
 
@@ -295,9 +298,36 @@ core::Result<Scenario> parse_scenario(const std::filesystem::path& path)
     return sc;
 }
 
+// Where a point sliding from `a` to `b` is at fraction s: on the arc about `centre` (the rest
+// surface's centroid), its direction turned at a constant rate in the plane of the two ends and
+// its distance from the centre interpolated linearly. On a sphere about its centre the point stays
+// on the surface (a great circle); the chord, which the scenario used before, cuts inside a
+// curved surface, and where it passes more than the force's radius below it every node is out of
+// reach and the whole force falls on one node. Ends seen from the centre in the same or opposite
+// directions (no unique plane) slide along the chord.
+core::Vec3 slide_point(const core::Vec3& a, const core::Vec3& b, double s, const core::Vec3& centre)
+{
+    const core::Vec3 da = a - centre;
+    const core::Vec3 db = b - centre;
+    const double ra = core::norm(da);
+    const double rb = core::norm(db);
+    const core::Vec3 chord = a + (b - a) * s;
+    if (!(ra > 0.0) || !(rb > 0.0))
+        return chord;
+    const core::Vec3 ua = da / ra;
+    const core::Vec3 ub = db / rb;
+    const double angle = std::atan2(core::norm(core::cross(ua, ub)), core::dot(ua, ub));
+    if (!(angle > 1e-9) || !(angle < 3.14159))
+        return chord;
+    const core::Vec3 dir = ua * (std::sin((1.0 - s) * angle) / std::sin(angle)) +
+                           ub * (std::sin(s * angle) / std::sin(angle));
+    return centre + dir * ((1.0 - s) * ra + s * rb);
+}
+
 // The forces active over [t0, t1): those whose interval contains t0 (the caller splits frame
 // intervals at every start and end); moving points are taken at the interval's midpoint.
-void active_forces(const Scenario& sc, double t0, double t1, std::vector<sim::Force>& out)
+void active_forces(const Scenario& sc, double t0, double t1, const core::Vec3& centre,
+                   std::vector<sim::Force>& out)
 {
     out.clear();
     for (const TimedForce& f : sc.forces)
@@ -308,9 +338,52 @@ void active_forces(const Scenario& sc, double t0, double t1, std::vector<sim::Fo
         if (f.to)
         {
             const double s = std::clamp((0.5 * (t0 + t1) - f.start) / (f.end - f.start), 0.0, 1.0);
-            g.point = f.force.point + (*f.to - f.force.point) * s;
+            g.point = slide_point(f.force.point, *f.to, s, centre);
         }
         out.push_back(g);
+    }
+}
+
+// The rest surface's centroid (mean of its vertices).
+core::Vec3 rest_centroid(const core::TetraGrid& grid, const core::Vec3Field<double>& rest)
+{
+    core::Vec3 sum{};
+    for (const core::NodeIndex n : grid.node_of_unique())
+        sum += core::Vec3{rest[0][n], rest[1][n], rest[2][n]};
+    return sum / static_cast<double>(grid.unique_count());
+}
+
+// Warns about point forces that come farther than their radius from every rest vertex (checked at
+// both ends and seven points between): there the whole force falls on the nearest vertex.
+void warn_unreachable_points(const Scenario& sc, const core::TetraGrid& grid,
+                             const core::Vec3Field<double>& rest, const core::Vec3& centre,
+                             const std::filesystem::path& path)
+{
+    for (std::size_t k = 0; k < sc.forces.size(); ++k)
+    {
+        const TimedForce& f = sc.forces[k];
+        if (f.force.face >= 0)
+            continue;
+        double worst = 0.0;
+        const int samples = f.to ? 9 : 1;
+        for (int i = 0; i < samples; ++i)
+        {
+            const double s = samples > 1 ? static_cast<double>(i) / (samples - 1) : 0.0;
+            const core::Vec3 p =
+                f.to ? slide_point(f.force.point, *f.to, s, centre) : f.force.point;
+            double nearest = std::numeric_limits<double>::infinity();
+            for (const core::NodeIndex n : grid.node_of_unique())
+            {
+                const core::Vec3 d = core::Vec3{rest[0][n], rest[1][n], rest[2][n]} - p;
+                nearest = std::min(nearest, core::dot(d, d));
+            }
+            worst = std::max(worst, std::sqrt(nearest));
+        }
+        if (worst > f.force.radius)
+            spdlog::warn(
+                "{}:{}: force[{}]'s point comes {:.3g} m from the nearest vertex, beyond "
+                "its radius {:.3g} m: there the whole force falls on that one vertex",
+                path.string(), f.line, k, worst, f.force.radius);
     }
 }
 
@@ -370,8 +443,11 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
         if (!g)
             return report(g.error());
         grid = std::move(*g);
-        rest = scenes::sphere_grid(*grid, opt.radius);
+        rest = scenes::sphere_grid(
+            *grid, opt.radius, 0,
+            core::sphere_map_from_string(opt.sphere_map).value_or(core::SphereMap::EqualArea));
     }
+    const core::Vec3 centre = rest_centroid(*grid, rest);
     auto model = sim::MembraneModel::create(*grid, rest, sc.settings);
     if (!model)
         return report(model.error());
@@ -381,6 +457,8 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
     if (auto ok = sim::validate_forces(*model, check); !ok)
         return report(
             {core::ErrorCode::BadScenario, opt.scenario.string() + ": " + ok.error().message});
+
+    warn_unreachable_points(sc, *grid, rest, centre, opt.scenario);
 
     std::error_code ec;
     std::filesystem::create_directories(opt.out, ec);
@@ -414,7 +492,7 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
                 for (const double e : {f.start, f.end})
                     if (e > state.time + 1e-12 && e < t_next)
                         t_next = e;
-            active_forces(sc, state.time, t_next, forces);
+            active_forces(sc, state.time, t_next, centre, forces);
             const sim::AdvanceReport r = sim::advance_to(*model, state, ws, t_next, forces);
             rep.status = rep.status | r.status;
             rep.steps += r.steps;
@@ -459,8 +537,8 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global)
         "The scenario (TOML) sets the material (T N/m, rho kg/m^2, beta 1/s, k_f 1/s^2), the\n"
         "integrator (rtol, atol, dt_min, dt_max, fixed_step, fixed_dt, reassemble_every,\n"
         "threads), duration [s], frame_rate [1/s] and timed forces ([[force]]: start, end, face\n"
-        "or point + radius [m], optional 'to' for a moving point, vector [N]); see\n"
-        "scenes/pull.toml and docs/physics.md. Errors name the key and its line.\n\n"
+        "or point + radius [m], optional 'to' for a point sliding over the surface, vector [N]);\n"
+        "see scenes/pull.toml and docs/physics.md. Errors name the key and its line.\n\n"
         "DIR receives frame_NNNNN.pgrid per frame (channels px py pz = deformed positions\n"
         "P + u N, u [m], v [m/s]; or surfaces with --format ply, obj, gltf or glb) and\n"
         "energy.csv (frame, time, kinetic, strain, foundation, total energy [J], steps,\n"
@@ -482,6 +560,11 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global)
         ->capture_default_str();
     cmd->add_option("--radius", opt->radius, "Sphere radius [m] when GRID is omitted")
         ->check(CLI::PositiveNumber)
+        ->capture_default_str();
+    cmd->add_option("--sphere-map", opt->sphere_map,
+                    "How the sphere's grid lies on it when GRID is omitted: equal-area (even "
+                    "cells, twice the stable step) or gnomonic (the paper's central projection)")
+        ->check(CLI::IsMember({"equal-area", "gnomonic"}))
         ->capture_default_str();
     cmd->add_option("-j,--threads", opt->threads,
                     "Threads (overrides the scenario; results are identical for any count)")

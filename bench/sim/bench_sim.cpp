@@ -4,10 +4,16 @@
 //   triad,<threads>,<GB/s>
 //   step,<level>,<threads>,<grid nodes>,<ns per node-step>,<node-steps/s>,<GB/s effective>
 //   realtime,<level>,<threads>,<simulated s>,<wall s>,<ratio>,<steps>
-// Usage: pliant_bench_sim [max_level=10] [realtime_seconds=1.5] [min_level=6] [kernel]
+// Usage: pliant_bench_sim [max_level=10] [realtime_seconds=1.5] [min_level=6] [kernel|gnomonic]
 //                         [--quick] [--json FILE] [--csv FILE]
 //   "kernel" runs only the step timing, 1 thread, 10 steps per level (for callgrind, whose
 //   instruction counts are exactly repeatable on a shared machine).
+//   The sphere is the equal-area grid (core::SphereMap::EqualArea, the CLI's built-in sphere);
+//   "gnomonic" runs everything on the gnomonic one instead, for comparison.
+// The moving force slides from (1,0,0) to (0,0,1) along the great circle over 2 s (0.785 m/s),
+// staying on the surface. (Until 2026-12-02 it slid along the chord: from 0.45 s to 1.55 s the
+// point was more than its 0.2 m radius inside the sphere and the whole force fell on the nearest
+// node, a singular load that forced ever smaller steps as the level grew.)
 //   --quick: levels 5..8, 0.6 s per real-time run, 3 repetitions; --json/--csv: the same figures
 //   as rows (bench/common/bench_report.h) plus the CPU share of the real-time scenario: process
 //   CPU seconds per simulated second (the fraction of one core the simulation needs to keep up
@@ -26,8 +32,10 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <numbers>
 #include <string>
 #include <vector>
 
@@ -108,6 +116,9 @@ int main(int argc, char** argv)
     const double rt_seconds = argc > 2 ? std::atof(argv[2]) : (quick ? 0.6 : 1.5);
     const int min_level = argc > 3 ? std::atoi(argv[3]) : (quick ? 5 : 6);
     const bool kernel_only = argc > 4 && std::string(argv[4]) == "kernel";
+    const core::SphereMap sphere_map = argc > 4 && std::string(argv[4]) == "gnomonic"
+                                           ? core::SphereMap::Gnomonic
+                                           : core::SphereMap::EqualArea;
     const int reps = quick ? 3 : 5;
     const double node_steps_per_rep = quick ? 3e6 : 3e7;
     const double rep_cap_s = quick ? 0.4 : 4.0;  // wall seconds per repetition at most
@@ -120,7 +131,9 @@ int main(int argc, char** argv)
 #endif
     report.meta("material",
                 "unit sphere, T=1 N/m, rho=1 kg/m2, beta=0.5 1/s, k_f=1 1/s2, "
-                "rtol=1e-4, one moving point force, frames of 1/60 s");
+                "rtol=1e-4, one point force sliding on the surface, frames of 1/60 s");
+    report.meta("sphere_map", std::string(core::to_string(sphere_map)));
+    std::printf("sphere: %s grid\n", std::string(core::to_string(sphere_map)).c_str());
     if (!kernel_only)
         for (const int threads : {1, 2})
         {
@@ -144,7 +157,8 @@ int main(int argc, char** argv)
             set.fixed_dt = 1e-4;
             set.threads = threads;
             sim::MembraneModel model =
-                sim::MembraneModel::create(grid, scenes::sphere_grid(grid, 1.0), set).value();
+                sim::MembraneModel::create(grid, scenes::sphere_grid(grid, 1.0, 0, sphere_map), set)
+                    .value();
             sim::MembraneState state = sim::MembraneState::at_rest(grid);
             sim::Rkf45Workspace ws(model, threads);
             const sim::Force force{-1, {1.0, 0.0, 0.0}, 0.2, {-1.0, 0.0, 0.0}};
@@ -199,7 +213,8 @@ int main(int argc, char** argv)
             sim::MembraneSettings set = bench_material();
             set.threads = threads;
             sim::MembraneModel model =
-                sim::MembraneModel::create(grid, scenes::sphere_grid(grid, 1.0), set).value();
+                sim::MembraneModel::create(grid, scenes::sphere_grid(grid, 1.0, 0, sphere_map), set)
+                    .value();
             sim::MembraneState state = sim::MembraneState::at_rest(grid);
             sim::Rkf45Workspace ws(model, threads);
             const auto t0 = Clock::now();
@@ -210,8 +225,10 @@ int main(int argc, char** argv)
             {
                 ++frame;
                 const double t = frame / 60.0;
-                const double s = std::min(1.0, t / 2.0);  // the finger slides over 2 s
-                const sim::Force force{-1, {1.0 - s, 0.0, s}, 0.2, {-1.0, 0.0, -1.0}};
+                const double s = std::min(1.0, t / 2.0);            // the finger slides over 2 s
+                const double angle = s * (std::numbers::pi / 2.0);  // along the great circle
+                const sim::Force force{
+                    -1, {std::cos(angle), 0.0, std::sin(angle)}, 0.2, {-1.0, 0.0, -1.0}};
                 steps +=
                     sim::advance_to(model, state, ws, t, std::span<const sim::Force>(&force, 1))
                         .steps;

@@ -1,0 +1,26 @@
+# SPDX-License-Identifier: MIT
+# SPDX-FileCopyrightText: 2026 pliant contributors
+# What `pliant simulate --scenario scenes/pull.toml --level 4` must leave in DIR: frames 0..100
+# (4 s at 25 frames/s) and energy.csv with a header and one finite row per frame.
+foreach(frame 00000 00050 00100)
+    if(NOT EXISTS ${DIR}/frame_${frame}.pgrid)
+        message(FATAL_ERROR "missing ${DIR}/frame_${frame}.pgrid")
+    endif()
+endforeach()
+if(EXISTS ${DIR}/frame_00101.pgrid)
+    message(FATAL_ERROR "${DIR}/frame_00101.pgrid: one frame too many")
+endif()
+file(STRINGS ${DIR}/energy.csv rows)
+list(LENGTH rows count)
+if(NOT count EQUAL 102)
+    message(FATAL_ERROR "energy.csv: ${count} lines, expected a header and 101 rows")
+endif()
+list(GET rows 0 header)
+if(NOT header STREQUAL "frame,time,kinetic,strain,foundation,total,steps,rejections,flags")
+    message(FATAL_ERROR "energy.csv: unexpected header '${header}'")
+endif()
+foreach(row IN LISTS rows)
+    if(row MATCHES "nan|inf")
+        message(FATAL_ERROR "energy.csv: non-finite row '${row}'")
+    endif()
+endforeach()
