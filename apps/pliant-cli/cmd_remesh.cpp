@@ -40,6 +40,7 @@ struct RemeshOptions
     std::string method = "auto";
     bool no_measure = false;
     bool gpu = false;
+    std::string domain_map;  // empty: equal-area, or gnomonic with --gpu
 };
 
 std::string lower_extension(const std::filesystem::path& p)
@@ -68,6 +69,13 @@ int run_remesh(const RemeshOptions& opt, const GlobalOptions& global)
 
     remesh::RemeshSettings settings;
     settings.level = opt.level;
+    // The GPU sampler's views are perspective projections: it needs the gnomonic domain map.
+    if (opt.gpu && opt.domain_map == "equal-area")
+        return report({core::ErrorCode::InvalidArgument,
+                       "remesh: --gpu samples on the gnomonic domain map only (its views are "
+                       "perspective projections); drop --domain-map equal-area or --gpu"});
+    settings.domain_map = opt.gpu || opt.domain_map == "gnomonic" ? core::SphereMap::Gnomonic
+                                                                  : core::SphereMap::EqualArea;
     settings.measure = !opt.no_measure || !opt.report.empty();
     settings.sphere.method = opt.method == "spring"   ? remesh::SphereMethod::SpringEmbedder
                              : opt.method == "coarse" ? remesh::SphereMethod::CoarseToFine
@@ -150,13 +158,16 @@ void add_remesh_command(CLI::App& app, const GlobalOptions& global)
         "Remesh a closed genus-0 mesh onto the tetrahedral grid (a geometry image).\n\n"
         "The mesh is validated first (see `pliant info`), mapped onto the unit sphere without\n"
         "folds (the paper's spring embedder where it suffices, else a coarse-to-fine embedding\n"
-        "over a progressive mesh), the grid's tetrahedron is projected onto the sphere, and the\n"
-        "input surface is sampled at every grid node. A result with inverted triangles is never\n"
-        "written. The quality report (distances, PSNR, stretch, area spread, times) is printed\n"
-        "and, with --report, written as JSON (keys in docs/remesh.md).\n\n"
-        "--gpu samples on the GPU the way the reference paper does: the sphere-mapped mesh is\n"
-        "rendered from the sphere's centre into a float framebuffer with its original positions\n"
-        "as colours, one view per tetrahedron face, each grid node exactly on a pixel centre.\n"
+        "over a progressive mesh), the grid's tetrahedron is laid on the sphere (equal-area by\n"
+        "default, so the samples spread evenly; --domain-map gnomonic for the paper's central\n"
+        "projection), and the input surface is sampled at every grid node. A result with\n"
+        "inverted triangles is never written. The quality report (distances, PSNR, stretch,\n"
+        "area spread, times) is printed and, with --report, written as JSON (keys in\n"
+        "docs/remesh.md).\n\n"
+        "--gpu samples on the GPU the way the reference paper does, on the gnomonic domain map\n"
+        "(which it implies): the sphere-mapped mesh is rendered from the sphere's centre into a\n"
+        "float framebuffer with its original positions as colours, one view per tetrahedron\n"
+        "face, each grid node exactly on a pixel centre.\n"
         "Needs an OpenGL 3.3 context (EGL surfaceless or OSMesa, no display). The result\n"
         "matches the CPU sampler within the tolerance in docs/remesh.md (\"GPU sampling\"):\n"
         "float32 rounding and the rasteriser's sub-pixel snapping: typically 1e-7 to a few\n"
@@ -182,6 +193,10 @@ void add_remesh_command(CLI::App& app, const GlobalOptions& global)
         ->capture_default_str();
     cmd->add_flag("--no-measure", opt->no_measure,
                   "Skip the distance measurement (about as long as the remeshing itself)");
+    cmd->add_option("--domain-map", opt->domain_map,
+                    "Where the grid's nodes lie on the sphere: equal-area (default: even samples) "
+                    "or gnomonic (the paper's central projection; the default with --gpu)")
+        ->check(CLI::IsMember({"equal-area", "gnomonic"}));
     cmd->add_flag("--gpu", opt->gpu,
                   "Sample the surface on the GPU (offscreen OpenGL 3.3; matches the CPU sampler "
                   "within the tolerance in docs/remesh.md, \"GPU sampling\")");

@@ -4,6 +4,7 @@
 // The remesh driver: runs the phases, times them, and assembles the report. Holds no
 // algorithm of its own.
 
+#include <pliant/core/sphere_domain.h>
 #include <pliant/remesh/remesh.h>
 #include <pliant/remesh/sample.h>
 
@@ -83,7 +84,8 @@ core::Result<RemeshResult> remesh(const mesh::TriMesh& input, const RemeshSettin
     report.stretch_efficiency = map->stretch_efficiency;
 
     t0 = Clock::now();
-    const core::Vec3Field<double> domain = domain_sphere(*grid);
+    const core::Vec3Field<double> domain = core::sphere_domain(*grid, settings.domain_map);
+    report.domain_map = std::string(core::to_string(settings.domain_map));
     report.inverted_domain = count_inverted_domain(*grid, domain);
     report.phases.push_back({"domain map", seconds_since(t0)});
     if (report.inverted_mesh > 0 || report.inverted_domain > 0)
@@ -140,6 +142,7 @@ std::string to_json(const QualityReport& r)
     kv("spring_folds", std::to_string(r.spring_folds));
     kv("inverted_mesh_triangles", std::to_string(r.inverted_mesh));
     kv("inverted_domain_triangles", std::to_string(r.inverted_domain));
+    kv("domain_map", "\"" + r.domain_map + "\"");
     kv("rms_stretch", num(r.rms_stretch));
     kv("l2_stretch_efficiency", num(r.stretch_efficiency));
     if (r.measured)
@@ -181,9 +184,10 @@ std::string to_text(const QualityReport& r)
                   r.output_vertices, r.output_faces, r.input_vertices, r.input_faces);
     s += buf;
     std::snprintf(buf, sizeof buf,
-                  "sphere map: %s (gnomonic folds %zu), inverted triangles: mesh %zu, domain "
-                  "%zu\n",
-                  r.sphere_method.c_str(), r.gnomonic_folds, r.inverted_mesh, r.inverted_domain);
+                  "sphere map: %s (gnomonic folds %zu), domain map: %s, inverted triangles: mesh "
+                  "%zu, domain %zu\n",
+                  r.sphere_method.c_str(), r.gnomonic_folds, r.domain_map.c_str(), r.inverted_mesh,
+                  r.inverted_domain);
     s += buf;
     std::snprintf(buf, sizeof buf, "rms stretch %.4f, L2 stretch efficiency %.4f\n", r.rms_stretch,
                   r.stretch_efficiency);

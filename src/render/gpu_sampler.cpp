@@ -189,10 +189,10 @@ core::Result<core::Vec3Field<double>> sample_on_gpu(
             const double ri = std::round(si), rj = std::round(sj);
             if (!(best_score >= -k_lattice_tolerance) || std::abs(si - ri) > k_lattice_tolerance ||
                 std::abs(sj - rj) > k_lattice_tolerance || ri + rj > wd)
-                return invalid("the sphere point of node (" + std::to_string(x) + ", " +
-                               std::to_string(y) +
-                               ") is not a lattice point of the domain tetrahedron (a domain map "
-                               "other than remesh::domain_sphere?)");
+                return invalid(
+                    "the sphere point of node (" + std::to_string(x) + ", " + std::to_string(y) +
+                    ") is not a lattice point of the domain tetrahedron (the GPU sampler "
+                    "needs the gnomonic domain map, core::SphereMap::Gnomonic)");
             entries[best].push_back({n, static_cast<int>(ri), static_cast<int>(rj)});
         }
     for (auto& e : entries)

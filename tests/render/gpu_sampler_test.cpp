@@ -252,6 +252,7 @@ TEST_F(GpuSamplerTest, RemeshRunsThePluggedSamplerAndReportsIt)
     remesh::RemeshSettings settings;
     settings.level = 5;
     settings.measure = false;
+    settings.domain_map = core::SphereMap::Gnomonic;  // the GPU sampler's views need it
     auto cpu = remesh::remesh(*m, settings);
     ASSERT_TRUE(cpu) << cpu.error().message;
     EXPECT_EQ(cpu->report.sampler, "cpu");
