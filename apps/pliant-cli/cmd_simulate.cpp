@@ -28,6 +28,7 @@
 #include <fstream>
 #include <limits>
 #include <memory>
+#include <numbers>
 #include <optional>
 #include <set>
 #include <string>
@@ -317,7 +318,7 @@ core::Vec3 slide_point(const core::Vec3& a, const core::Vec3& b, double s, const
     const core::Vec3 ua = da / ra;
     const core::Vec3 ub = db / rb;
     const double angle = std::atan2(core::norm(core::cross(ua, ub)), core::dot(ua, ub));
-    if (!(angle > 1e-9) || !(angle < 3.14159))
+    if (!(angle > 1e-9) || !(angle < std::numbers::pi - 1e-6))
         return chord;
     const core::Vec3 dir = ua * (std::sin((1.0 - s) * angle) / std::sin(angle)) +
                            ub * (std::sin(s * angle) / std::sin(angle));

@@ -89,6 +89,7 @@ Vec3 equal_area(int w, int x, int y) noexcept
     const int j = (k + 2) % 3;
     const Vec3 vi = normalized(k_corner[f.corner[i]]);
     const Vec3 vj = normalized(k_corner[f.corner[j]]);
+    // the face's centre direction is minus its opposite corner (the indices sum to 0+1+2+3)
     const Vec3 centre = -normalized(k_corner[6 - f.corner[0] - f.corner[1] - f.corner[2]]);
     const int span = w - 3 * f.weight[k];  // s = span / W
     if (span == 0)
