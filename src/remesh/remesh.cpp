@@ -4,7 +4,6 @@
 // The remesh driver: runs the phases, times them, and assembles the report. Holds no
 // algorithm of its own.
 
-#include <pliant/core/sphere_domain.h>
 #include <pliant/remesh/remesh.h>
 #include <pliant/remesh/sample.h>
 

@@ -30,9 +30,8 @@ namespace pliant::remesh
 {
 
 /// Unit-sphere point of every grid node (twins equal): core::sphere_domain with the gnomonic map,
-/// which the GPU sampler needs (its views are perspective projections). Oriented so that the grid's
-/// triangles
-/// (`TetraGrid::triangles()`) are counter-clockwise seen from outside.
+/// which the GPU sampler needs (its views are perspective projections). Oriented so that the
+/// grid's triangles (`TetraGrid::triangles()`) are counter-clockwise seen from outside.
 [[nodiscard]] core::Vec3Field<double> domain_sphere(const core::TetraGrid& grid);
 
 /// Grid triangles whose spherical triangle is not positively oriented.
