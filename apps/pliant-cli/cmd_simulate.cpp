@@ -148,6 +148,21 @@ public:
         return std::nullopt;
     }
 
+    // Reads an optional string that must be one of `allowed`.
+    [[nodiscard]] std::optional<core::Error> choice(const std::string& key, std::string& out,
+                                                    const std::set<std::string>& allowed) const
+    {
+        const toml::node* node = table_.get(key);
+        if (node == nullptr)
+            return std::nullopt;
+        const std::optional<std::string> v = node->value_exact<std::string>();
+        if (!v || allowed.count(*v) == 0)
+            return scenario_error(file_, node->source(), prefix_ + key,
+                                  "must be one of: " + join(allowed) + " (a quoted string)");
+        out = *v;
+        return std::nullopt;
+    }
+
     [[nodiscard]] std::optional<core::Error> vec3(const std::string& key,
                                                   std::optional<core::Vec3>& out) const
     {
@@ -209,6 +224,9 @@ core::Result<Scenario> parse_scenario(const std::filesystem::path& path)
                                std::string(e.description())};
     }
     Scenario sc;
+    // Scenario forces are functions of time: sampled at frame (and start/end) times and held
+    // linearly between them unless the file asks for the zero-order hold.
+    sc.settings.force_hold = sim::ForceHold::Linear;
     const Reader top(path, root, "");
     PLIANT_TRY(top.unknown_keys({"duration", "frame_rate", "material", "integrator", "force"}));
     PLIANT_TRY(top.number("duration", sc.duration, 0.0, 1e6));
@@ -233,7 +251,7 @@ core::Result<Scenario> parse_scenario(const std::filesystem::path& path)
         const Reader r(path, *node->as_table(), "integrator.");
         PLIANT_TRY(r.unknown_keys({"rtol", "atol", "dt_min", "dt_max", "dt_initial", "safety",
                                    "max_growth", "min_shrink", "fixed_step", "fixed_dt",
-                                   "reassemble_every", "threads"}));
+                                   "reassemble_every", "threads", "force_hold"}));
         PLIANT_TRY(r.number("rtol", s.rtol, 0.0, 0.5));
         PLIANT_TRY(r.number("atol", s.atol, 1e-300, 1e6));
         PLIANT_TRY(r.number("dt_min", s.dt_min, 1e-300, 1e6));
@@ -246,6 +264,9 @@ core::Result<Scenario> parse_scenario(const std::filesystem::path& path)
         PLIANT_TRY(r.number("fixed_dt", s.fixed_dt, 1e-300, 1e6));
         PLIANT_TRY(r.integer("reassemble_every", s.reassemble_every, 0, 1 << 30));
         PLIANT_TRY(r.integer("threads", s.threads, 0, 1024));
+        std::string hold = s.force_hold == sim::ForceHold::Linear ? "linear" : "step";
+        PLIANT_TRY(r.choice("force_hold", hold, {"linear", "step"}));
+        s.force_hold = hold == "linear" ? sim::ForceHold::Linear : sim::ForceHold::Step;
         if (s.dt_min > s.dt_max || s.dt_initial < s.dt_min || s.dt_initial > s.dt_max)
             return scenario_error(path, node->source(), "integrator",
                                   "needs dt_min <= dt_initial <= dt_max");
@@ -331,14 +352,21 @@ void active_forces(const Scenario& sc, double t0, double t1, const core::Vec3& c
                    std::vector<sim::Force>& out)
 {
     out.clear();
+    const bool linear = sc.settings.force_hold == sim::ForceHold::Linear;
     for (const TimedForce& f : sc.forces)
     {
-        if (!(t0 >= f.start && t0 < f.end))
+        // Zero-order hold: what acts at the interval's start, a sliding point at its middle.
+        // Linear hold: the value at its end t1 (on for start < t1 <= end), which advance_to
+        // reaches linearly from the previous interval's: a force ramps up over the first
+        // interval after its start and down over the first after its end.
+        const bool on = linear ? (t1 > f.start && t1 <= f.end) : (t0 >= f.start && t0 < f.end);
+        if (!on)
             continue;
         sim::Force g = f.force;
         if (f.to)
         {
-            const double s = std::clamp((0.5 * (t0 + t1) - f.start) / (f.end - f.start), 0.0, 1.0);
+            const double t = linear ? t1 : 0.5 * (t0 + t1);
+            const double s = std::clamp((t - f.start) / (f.end - f.start), 0.0, 1.0);
             g.point = slide_point(f.force.point, *f.to, s, centre);
         }
         out.push_back(g);
@@ -537,9 +565,12 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global)
     cmd->footer(
         "The scenario (TOML) sets the material (T N/m, rho kg/m^2, beta 1/s, k_f 1/s^2), the\n"
         "integrator (rtol, atol, dt_min, dt_max, fixed_step, fixed_dt, reassemble_every,\n"
-        "threads), duration [s], frame_rate [1/s] and timed forces ([[force]]: start, end, face\n"
-        "or point + radius [m], optional 'to' for a point sliding over the surface, vector [N]);\n"
-        "see scenes/pull.toml and docs/physics.md. Errors name the key and its line.\n\n"
+        "threads, force_hold), duration [s], frame_rate [1/s] and timed forces ([[force]]: start,\n"
+        "end, face or point + radius [m], optional 'to' for a point sliding over the surface,\n"
+        "vector [N]); see scenes/pull.toml and docs/physics.md. Errors name the key and its line.\n"
+        "Forces are sampled at frame times and ramp linearly between samples (force_hold =\n"
+        "\"linear\", the default: a force ramps up over the frame after its start and down over\n"
+        "the frame after its end); force_hold = \"step\" holds each sample for the whole frame.\n\n"
         "DIR receives frame_NNNNN.pgrid per frame (channels px py pz = deformed positions\n"
         "P + u N, u [m], v [m/s]; or surfaces with --format ply, obj, gltf or glb) and\n"
         "energy.csv (frame, time, kinetic, strain, foundation, total energy [J], steps,\n"

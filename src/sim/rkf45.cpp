@@ -72,6 +72,7 @@ struct Planes
     const double* wd;
     const double* inv_m;
     const double* acc;
+    const double* acc_rate;
     double* u_out;
     double* v_out;
     std::ptrdiff_t s;
@@ -116,6 +117,7 @@ void stage_region(const detail::StageConstants& k, const Planes& p, const Coeffs
         sr.wd_below = row(p.wd, y - 1);
         sr.inv_m = row(p.inv_m, y);
         sr.acc = row(p.acc, y);
+        sr.acc_rate = row(p.acc_rate, y);
         sr.U_below = rows[0];
         sr.U = rows[1];
         sr.U_above = rows[2];
@@ -176,6 +178,7 @@ void stage_trial(const MembraneModel& model, const MembraneState& state, Rkf45Wo
     p.wd = model.weight_d().origin();
     p.inv_m = model.inverse_mass().origin();
     p.acc = ws.accel.origin();
+    p.acc_rate = ws.accel_rate.origin();
     p.u_out = ws.u_out.origin();
     p.v_out = ws.v_out.origin();
     p.s = state.u.stride();
@@ -210,7 +213,10 @@ TrialResult trial(const MembraneModel& model, const MembraneState& state, Rkf45W
                   std::span<const core::Region> regions, double h, int threads, bool restricted)
 {
     const MembraneSettings& set = model.settings();
-    const Coeffs c = detail::make_coeffs(h);
+    Coeffs c = detail::make_coeffs(h);
+    // The forces' time at each stage, from the time their plane holds (0 but in a linear hold).
+    for (int s = 0; s < 6; ++s)
+        c.ft[s] = (state.time - ws.accel_time) + c.cu[s];
     const detail::StageConstants k{set.beta, set.k_f, set.rtol, set.atol, model.grid().w()};
     std::size_t parts = regions.size();
     if (ws.pipeline_ok && ws.use_pipeline)
@@ -236,14 +242,20 @@ void copy_regions(const Field<double>& from, Field<double>& to,
                       to.origin() + to.offset(r.x0, y));
 }
 
-void add_node_accel(const MembraneModel& model, Rkf45Workspace& ws, core::NodeIndex n,
-                    double force_n)
+// An acceleration plane being written and the offsets it has written (to clear them later).
+struct AccelTarget
+{
+    Field<double>& plane;
+    std::vector<std::int64_t>& touched;
+};
+
+void add_node_accel(const MembraneModel& model, AccelTarget to, core::NodeIndex n, double force_n)
 {
     const core::NodeIndex c = model.grid().canonical(n);
     const core::GridCoord g = model.grid().coord(c);
-    const std::ptrdiff_t off = ws.accel.padded_offset(g.x, g.y);
-    ws.accel.padded()[static_cast<std::size_t>(off)] += force_n / model.unique_mass(c);
-    ws.touched.push_back(off);
+    const std::ptrdiff_t off = to.plane.padded_offset(g.x, g.y);
+    to.plane.padded()[static_cast<std::size_t>(off)] += force_n / model.unique_mass(c);
+    to.touched.push_back(off);
 }
 
 core::Vec3 normal_at(const MembraneModel& model, int x, int y)
@@ -257,7 +269,7 @@ core::Vec3 rest_at(const MembraneModel& model, int x, int y)
             model.rest_positions()[2].at(x, y)};
 }
 
-void add_point_force(const MembraneModel& model, Rkf45Workspace& ws, const Force& f)
+void add_point_force(const MembraneModel& model, AccelTarget to, const Force& f)
 {
     const core::TetraGrid& g = model.grid();
     const auto regions = model.leaf_regions();
@@ -291,7 +303,7 @@ void add_point_force(const MembraneModel& model, Rkf45Workspace& ws, const Force
                     if (pass == 0)
                         wsum += w;
                     else
-                        add_node_accel(model, ws, g.index(x, y),
+                        add_node_accel(model, to, g.index(x, y),
                                        w / wsum * core::dot(f.vector, normal_at(model, x, y)));
                 }
         }
@@ -317,7 +329,48 @@ void add_point_force(const MembraneModel& model, Rkf45Workspace& ws, const Force
         }
     }
     const core::GridCoord c = g.coord(best_node);
-    add_node_accel(model, ws, best_node, core::dot(f.vector, normal_at(model, c.x, c.y)));
+    add_node_accel(model, to, best_node, core::dot(f.vector, normal_at(model, c.x, c.y)));
+}
+
+// Clears the plane at the offsets it has written (canonical nodes) and forgets them; the
+// caller syncs the plane's twins and ghosts.
+void clear_written(AccelTarget to)
+{
+    auto data = to.plane.padded();
+    for (const std::int64_t off : to.touched)
+        data[static_cast<std::size_t>(off)] = 0.0;
+    to.touched.clear();
+}
+
+// The accelerations of `forces` into `to.plane` (the previous ones cleared), synced.
+void write_forces(const MembraneModel& model, AccelTarget to, std::span<const Force> forces)
+{
+    clear_written(to);
+    const core::TetraGrid& g = model.grid();
+    const int w2 = 2 * g.w();
+    for (const Force& f : forces)
+    {
+        if (f.face >= 0)
+        {
+            PLIANT_ASSERT(static_cast<std::size_t>(f.face) < g.face_count(),
+                          "set_forces: face out of range");
+            const auto cell = f.face / 2;
+            const int x = static_cast<int>(cell % w2);
+            const int y = static_cast<int>(cell / w2);
+            const core::NodeIndex n[3] = {
+                g.index(x, y), (f.face % 2 == 0) ? g.index(x + 1, y) : g.index(x + 1, y + 1),
+                (f.face % 2 == 0) ? g.index(x + 1, y + 1) : g.index(x, y + 1)};
+            for (const core::NodeIndex node : n)
+            {
+                const core::GridCoord c = g.coord(node);
+                add_node_accel(model, to, node,
+                               core::dot(f.vector, normal_at(model, c.x, c.y)) / 3.0);
+            }
+        }
+        else
+            add_point_force(model, to, f);
+    }
+    model.sync(to.plane);
 }
 
 }  // namespace
@@ -353,6 +406,9 @@ Rkf45Workspace::Rkf45Workspace(const MembraneModel& model, int threads)
     v_out = Field<double>(g, 1);
     v_src = Field<double>(g, 1);
     accel = Field<double>(g, 1);
+    accel_rate = Field<double>(g, 1);
+    accel_end = Field<double>(g, 1);
+    forced_rows.assign(static_cast<std::size_t>(g.ny()), 0);
     row_buffer_len = 3 * static_cast<std::size_t>(g.nx() + 3);
     row_buffers.assign(row_buffer_len * static_cast<std::size_t>(max_threads), 0.0);
     const std::size_t parts =
@@ -455,37 +511,91 @@ core::Result<void> validate_forces(const MembraneModel& model, std::span<const F
     return {};
 }
 
+namespace
+{
+
+// ws.forced_rows from the offsets of non-zero accelerations and rates (canonical nodes) and the
+// rows their twin and ghost copies write, so the pipeline reads the force planes only there.
+void mark_forced_rows(const MembraneModel& model, Rkf45Workspace& ws)
+{
+    const std::ptrdiff_t stride = ws.accel.stride();
+    const int ny = model.grid().ny();
+    std::fill(ws.forced_rows.begin(), ws.forced_rows.end(), 0);
+    // Padded offset -> row y (ghost ring 1); the ghost rows -1 and ny are read by no kernel.
+    const auto row_of = [stride](std::int64_t off) { return static_cast<int>(off / stride) - 1; };
+    const auto mark = [&](std::int64_t off)
+    {
+        if (const int y = row_of(off); y >= 0 && y < ny)
+            ws.forced_rows[static_cast<std::size_t>(y)] = 1;
+    };
+    for (const std::int64_t off : ws.touched)
+        mark(off);
+    for (const std::int64_t off : ws.rate_touched)
+        mark(off);
+    for (const core::GhostCopy& cp : model.sync_table())
+        if (const int y = row_of(cp.src);
+            y >= 0 && y < ny && ws.forced_rows[static_cast<std::size_t>(y)] != 0)
+            mark(cp.dst);
+}
+
+}  // namespace
+
 void set_forces(const MembraneModel& model, Rkf45Workspace& ws, std::span<const Force> forces)
 {
-    auto data = ws.accel.padded();
-    for (const std::int64_t off : ws.touched)
-        data[static_cast<std::size_t>(off)] = 0.0;
-    ws.touched.clear();
-    const core::TetraGrid& g = model.grid();
-    const int w2 = 2 * g.w();
-    for (const Force& f : forces)
+    if (!ws.rate_touched.empty())
+        end_force_ramp(model, ws, ws.accel_time, false);  // drop a ramp left open: rate zero
+    write_forces(model, AccelTarget{ws.accel, ws.touched}, forces);
+    mark_forced_rows(model, ws);
+}
+
+void begin_force_ramp(const MembraneModel& model, Rkf45Workspace& ws, std::span<const Force> forces,
+                      double t0, double t1)
+{
+    PLIANT_ASSERT(t1 > t0, "begin_force_ramp: needs t1 > t0");
+    if (!ws.rate_touched.empty())
+        end_force_ramp(model, ws, t0, false);
+    write_forces(model, AccelTarget{ws.accel_end, ws.end_touched}, forces);
+    // The nodes whose acceleration may change: those of the old forces and of the new.
+    ws.rate_touched.assign(ws.touched.begin(), ws.touched.end());
+    ws.rate_touched.insert(ws.rate_touched.end(), ws.end_touched.begin(), ws.end_touched.end());
+    std::sort(ws.rate_touched.begin(), ws.rate_touched.end());
+    ws.rate_touched.erase(std::unique(ws.rate_touched.begin(), ws.rate_touched.end()),
+                          ws.rate_touched.end());
+    const double inv = 1.0 / (t1 - t0);
+    const auto a0 = ws.accel.padded();
+    const auto a1 = ws.accel_end.padded();
+    auto rate = ws.accel_rate.padded();
+    for (const std::int64_t off : ws.rate_touched)
     {
-        if (f.face >= 0)
-        {
-            PLIANT_ASSERT(static_cast<std::size_t>(f.face) < g.face_count(),
-                          "set_forces: face out of range");
-            const auto cell = f.face / 2;
-            const int x = static_cast<int>(cell % w2);
-            const int y = static_cast<int>(cell / w2);
-            const core::NodeIndex n[3] = {
-                g.index(x, y), (f.face % 2 == 0) ? g.index(x + 1, y) : g.index(x + 1, y + 1),
-                (f.face % 2 == 0) ? g.index(x + 1, y + 1) : g.index(x, y + 1)};
-            for (const core::NodeIndex node : n)
-            {
-                const core::GridCoord c = g.coord(node);
-                add_node_accel(model, ws, node,
-                               core::dot(f.vector, normal_at(model, c.x, c.y)) / 3.0);
-            }
-        }
-        else
-            add_point_force(model, ws, f);
+        const auto o = static_cast<std::size_t>(off);
+        rate[o] = (a1[o] - a0[o]) * inv;
     }
+    model.sync(ws.accel_rate);
+    ws.accel_time = t0;
+    mark_forced_rows(model, ws);
+}
+
+void end_force_ramp(const MembraneModel& model, Rkf45Workspace& ws, double t, bool reached)
+{
+    auto a = ws.accel.padded();
+    auto rate = ws.accel_rate.padded();
+    const auto a1 = ws.accel_end.padded();
+    const double dt = t - ws.accel_time;
+    for (const std::int64_t off : ws.rate_touched)
+    {
+        const auto o = static_cast<std::size_t>(off);
+        a[o] = reached ? a1[o] : a[o] + dt * rate[o];
+        rate[o] = 0.0;
+    }
+    // `accel` is now non-zero at most on the ramp's nodes.
+    std::swap(ws.touched, ws.rate_touched);
+    ws.rate_touched.clear();
+    clear_written(AccelTarget{ws.accel_end, ws.end_touched});
     model.sync(ws.accel);
+    model.sync(ws.accel_rate);
+    model.sync(ws.accel_end);
+    ws.accel_time = t;
+    mark_forced_rows(model, ws);
 }
 
 StepReport step_prepared(MembraneModel& model, MembraneState& state, Rkf45Workspace& ws,
@@ -613,9 +723,13 @@ AdvanceReport advance_to(MembraneModel& model, MembraneState& state, Rkf45Worksp
                          double target_time, std::span<const Force> forces,
                          const StepOptions& options, std::uint64_t max_steps)
 {
-    set_forces(model, ws, forces);
-    AdvanceReport report;
     const MembraneSettings& set = model.settings();
+    const bool ramp = set.force_hold == ForceHold::Linear && target_time > state.time;
+    if (ramp)
+        begin_force_ramp(model, ws, forces, state.time, target_time);
+    else
+        set_forces(model, ws, forces);
+    AdvanceReport report;
     const double slack = 1e-12 * std::max(1.0, std::fabs(target_time));
     StepOptions opt = options;
     while (report.steps < max_steps)
@@ -636,6 +750,8 @@ AdvanceReport advance_to(MembraneModel& model, MembraneState& state, Rkf45Worksp
         if (!set.fixed_step && r.dt >= remaining)
             state.time = target_time;  // land exactly, whatever the rounding of time += h
     }
+    if (ramp)
+        end_force_ramp(model, ws, state.time, state.time == target_time);
     return report;
 }
 

@@ -64,6 +64,7 @@ struct Coeffs
     double vb[6];     // h b5_m
     double ue[6];     // h^2 ((b5 - b4) A)_m
     double ve[6];     // h (b5 - b4)_m
+    double ft[6];     // force time of stage s since the force key
     double h = 0.0;
 };
 
@@ -94,6 +95,7 @@ struct StageRow
     const double* wd_below;  // wd of row y - 1
     const double* inv_m;
     const double* acc;
+    const double* acc_rate;
     const double* U_below;
     const double* U;
     const double* U_above;
@@ -183,6 +185,7 @@ inline double stage_row(const StageConstants& k, const Coeffs& c, const StageRow
     const double* __restrict wdb = r.wd_below;
     const double* __restrict inv_m = r.inv_m;
     const double* __restrict acc = r.acc;
+    const double* __restrict rate = r.acc_rate;
     const double* __restrict bp = r.U_below;
     const double* __restrict bc = r.U;
     const double* __restrict bn = r.U_above;
@@ -217,7 +220,8 @@ inline double stage_row(const StageConstants& k, const Coeffs& c, const StageRow
         const double uc = bc[x];
         const double ku = stencil(uc, bc[x + 1], bc[x - 1], bn[x], bp[x], bn[x + 1], bp[x - 1],
                                   wx[x], wx[x - 1], wy[x], wyb[x], wd[x], wdb[x - 1]);
-        const double a = ((-k.beta * vel - k.k_f * uc) - inv_m[x] * ku) + acc[x];
+        const double a =
+            ((-k.beta * vel - k.k_f * uc) - inv_m[x] * ku) + (acc[x] + c.ft[S] * rate[x]);
         if constexpr (S < 5)
         {
             out[x] = a;

@@ -107,6 +107,8 @@ struct Inputs
     const double* wd;
     const double* inv_m;
     const double* acc;
+    const double* acc_rate;
+    const char* forced;  // [y]: row y has a non-zero force acceleration or rate
     double* u_out;
     double* v_out;
     std::ptrdiff_t s;
@@ -208,7 +210,9 @@ void fill_pair_dirichlet(const Inputs& in, const BandBuffers& b, int yy, int x0,
 // other node reads them). P < 4 writes kv_P and kv_{P+1}; P == 4 finishes the step (u_new,
 // v_new: kv_4 and kv_5 are never stored) and returns the row's error norm (see update_row in
 // rkf45_internal.h for the reductions).
-template <int P>
+// Rows without forces (Forced = false; most rows of a picked surface) read neither force plane
+// and add the +0.0 that acc + ft rate is there, so the bits are those of the stage pass.
+template <int P, bool Forced>
 double pair_row(const Inputs& in, const Coeffs& c, const StageConstants& k, const BandBuffers& b,
                 int y, int x0, int x1, double& probe) noexcept
 {
@@ -225,7 +229,8 @@ double pair_row(const Inputs& in, const Coeffs& c, const StageConstants& k, cons
     const double* __restrict wyb = in.row(in.wy, y - 1);
     const double* __restrict wdb = in.row(in.wd, y - 1);
     const double* __restrict inv_m = in.row(in.inv_m, y);
-    const double* __restrict acc = in.row(in.acc, y);
+    const double* __restrict acc = Forced ? in.row(in.acc, y) : nullptr;
+    const double* __restrict rate = Forced ? in.row(in.acc_rate, y) : nullptr;
     const double* __restrict ap = b.U_row(A, y - 1);
     const double* __restrict ac = b.U_row(A, y);
     const double* __restrict an = b.U_row(A, y + 1);
@@ -258,7 +263,14 @@ double pair_row(const Inputs& in, const Coeffs& c, const StageConstants& k, cons
         const double uc = ac[x];
         const double ku = stencil(uc, ac[x + 1], ac[x - 1], an[x], ap[x], an[x + 1], ap[x - 1],
                                   wx[x], wx[x - 1], wy[x], wyb[x], wd[x], wdb[x - 1]);
-        const double sa = ((-k.beta * vel - k.k_f * uc) - inv_m[x] * ku) + acc[x];
+        double fa = 0.0;
+        double fb = 0.0;
+        if constexpr (Forced)
+        {
+            fa = acc[x] + c.ft[A] * rate[x];
+            fb = acc[x] + c.ft[B] * rate[x];
+        }
+        const double sa = ((-k.beta * vel - k.k_f * uc) - inv_m[x] * ku) + fa;
         kk[A] = sa;
         double vel_b = v[x];
         for (int m = 0; m < B; ++m)
@@ -266,7 +278,7 @@ double pair_row(const Inputs& in, const Coeffs& c, const StageConstants& k, cons
         const double ucb = bc[x];
         const double kub = stencil(ucb, bc[x + 1], bc[x - 1], bn[x], bp[x], bn[x + 1], bp[x - 1],
                                    wx[x], wx[x - 1], wy[x], wyb[x], wd[x], wdb[x - 1]);
-        const double sb = ((-k.beta * vel_b - k.k_f * ucb) - inv_m[x] * kub) + acc[x];
+        const double sb = ((-k.beta * vel_b - k.k_f * ucb) - inv_m[x] * kub) + fb;
         if constexpr (P < 4)
         {
             out_a[x] = sa;
@@ -298,6 +310,7 @@ double dirichlet_row(const Inputs& in, const Coeffs& c, const StageConstants& k,
     const double* __restrict wdb = in.row(in.wd, y - 1);
     const double* __restrict inv_m = in.row(in.inv_m, y);
     const double* __restrict acc = in.row(in.acc, y);
+    const double* __restrict rate = in.row(in.acc_rate, y);
     const double* __restrict bp = b.U_row(5, y - 1);
     const double* __restrict bc = b.U_row(5, y);
     const double* __restrict bn = b.U_row(5, y + 1);
@@ -316,7 +329,8 @@ double dirichlet_row(const Inputs& in, const Coeffs& c, const StageConstants& k,
         const double uc = bc[x];
         const double ku = stencil(uc, bc[x + 1], bc[x - 1], bn[x], bp[x], bn[x + 1], bp[x - 1],
                                   wx[x], wx[x - 1], wy[x], wyb[x], wd[x], wdb[x - 1]);
-        const double a = ((-k.beta * vel - k.k_f * uc) - inv_m[x] * ku) + acc[x];
+        const double a =
+            ((-k.beta * vel - k.k_f * uc) - inv_m[x] * ku) + (acc[x] + c.ft[5] * rate[x]);
         update_node(k, c, u[x], 0.0, kk, a, x < x_canon, u_out[x], v_out[x], err_bits, bad);
     }
     if (bad != 0)
@@ -359,6 +373,7 @@ double stage_pair(const Inputs& in, const Coeffs& c, const StageConstants& k, co
     }
     fill_rows<P, Restricted>(in, c, b, y + 1);
     double err = 0.0;
+    const bool forced = in.forced[y] != 0;
     if constexpr (Restricted)
     {
         const Rkf45Workspace& ws = *in.ws;
@@ -367,13 +382,16 @@ double stage_pair(const Inputs& in, const Coeffs& c, const StageConstants& k, co
         {
             const Rkf45Workspace::RowSegment& seg = ws.kernel_segments[i];
             if (seg.moves)
-                err = std::max(err, pair_row<P>(in, c, k, b, y, seg.x0, seg.x1, probe));
+                err = std::max(err,
+                               forced ? pair_row<P, true>(in, c, k, b, y, seg.x0, seg.x1, probe)
+                                      : pair_row<P, false>(in, c, k, b, y, seg.x0, seg.x1, probe));
             else if constexpr (P == 4)
                 err = std::max(err, dirichlet_row(in, c, k, b, y, seg.x0, seg.x1, probe));
         }
     }
     else
-        err = pair_row<P>(in, c, k, b, y, 0, in.nx, probe);
+        err = forced ? pair_row<P, true>(in, c, k, b, y, 0, in.nx, probe)
+                     : pair_row<P, false>(in, c, k, b, y, 0, in.nx, probe);
     if constexpr (P < 4)
     {
         // Restricted: a row none of whose copies reads a moving node is skipped (every copy
@@ -616,6 +634,8 @@ std::size_t pipeline_trial(const MembraneModel& model, const MembraneState& stat
     in.wd = model.weight_d().origin();
     in.inv_m = model.inverse_mass().origin();
     in.acc = ws.accel.origin();
+    in.acc_rate = ws.accel_rate.origin();
+    in.forced = ws.forced_rows.data();
     in.u_out = ws.u_out.origin();
     in.v_out = ws.v_out.origin();
     in.s = state.u.stride();

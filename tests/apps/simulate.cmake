@@ -4,7 +4,7 @@
 # writes every frame and the energy table, and its finger slides over the surface (no vertex is
 # ever out of its reach: the chord it used to follow passed 0.29 m below the surface); a point
 # force out of every vertex's reach is warned about, naming the file, line and distance; a
-# misspelt key is refused, naming the file, line and key.
+# misspelt key or an unknown force hold is refused, naming the file, line and key.
 if(TARGET pliant)
     set(sim_out ${CMAKE_CURRENT_BINARY_DIR}/simulate-pull)
     add_test(NAME cli_simulate_pull
@@ -34,4 +34,11 @@ if(TARGET pliant)
                      "-DREGEX=bad_key.toml:8: 'material.tension' is not a known key"
                      -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_failure.cmake)
     set_tests_properties(cli_simulate_refuses_unknown_key PROPERTIES TIMEOUT 60)
+
+    add_test(NAME cli_simulate_refuses_unknown_force_hold
+             COMMAND ${CMAKE_COMMAND}
+                     "-DCOMMAND=$<TARGET_FILE:pliant>;simulate;--scenario;${PROJECT_SOURCE_DIR}/tests/data/scenarios/bad_hold.toml;-o;${CMAKE_CURRENT_BINARY_DIR}/simulate-bad-hold;--level;3"
+                     "-DREGEX=bad_hold.toml:8: 'integrator.force_hold' must be one of: linear, step"
+                     -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_failure.cmake)
+    set_tests_properties(cli_simulate_refuses_unknown_force_hold PROPERTIES TIMEOUT 60)
 endif()

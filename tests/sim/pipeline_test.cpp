@@ -72,8 +72,10 @@ std::vector<core::Region> some_regions(const MembraneModel& m)
     return r;
 }
 
+// `ramp`: the forces ramp up over the first half (a linear hold, begin_force_ramp) and down
+// to none over the second, so every stage adds accel + ft * rate with both planes non-zero.
 std::vector<MembraneState> run(MembraneModel m, bool pipeline, std::span<const core::Region> owned,
-                               int steps, std::vector<StepReport>& reports)
+                               int steps, std::vector<StepReport>& reports, bool ramp = false)
 {
     MembraneState s = initial_state(m);
     Rkf45Workspace ws(m, std::max(1, m.settings().threads));
@@ -85,8 +87,18 @@ std::vector<MembraneState> run(MembraneModel m, bool pipeline, std::span<const c
     std::vector<MembraneState> states;
     for (int k = 0; k < steps; ++k)
     {
-        reports.push_back(step(
-            m, s, ws, k < steps / 2 ? std::span<const Force>(f) : std::span<const Force>(), opt));
+        if (ramp)
+        {
+            if (k == 0)
+                begin_force_ramp(m, ws, f, s.time, s.time + 0.02);
+            if (k == steps / 2)
+                begin_force_ramp(m, ws, {}, s.time, s.time + 0.01);
+            reports.push_back(step_prepared(m, s, ws, opt));
+        }
+        else
+            reports.push_back(
+                step(m, s, ws, k < steps / 2 ? std::span<const Force>(f) : std::span<const Force>(),
+                     opt));
         states.push_back(s);
     }
     return states;
@@ -110,35 +122,40 @@ TEST(Pipeline, EqualsStageByStagePassBitForBit)
 {
     for (int level = 1; level <= 6; ++level)
         for (const bool fixed : {false, true})
-        {
-            std::vector<StepReport> ref_reports;
-            const std::vector<MembraneState> ref =
-                run(test::sphere_model(level, settings(1, fixed)), false, {}, 24, ref_reports);
-            for (const int threads : {1, 2, 3})
+            for (const bool ramp : {false, true})
             {
+                std::vector<StepReport> ref_reports;
+                const std::vector<MembraneState> ref =
+                    run(test::sphere_model(level, settings(1, fixed)), false, {}, 24, ref_reports,
+                        ramp);
+                for (const int threads : {1, 2, 3})
+                {
+                    std::vector<StepReport> reports;
+                    const std::vector<MembraneState> got =
+                        run(test::sphere_model(level, settings(threads, fixed)), true, {}, 24,
+                            reports, ramp);
+                    for (std::size_t k = 0; k < ref.size(); ++k)
+                    {
+                        ASSERT_EQ(got[k].hash(), ref[k].hash())
+                            << "level " << level << (fixed ? " fixed" : " adaptive")
+                            << (ramp ? " ramp" : "") << ", " << threads << " threads, step " << k;
+                        ASSERT_EQ(got[k].u, ref[k].u);
+                        ASSERT_EQ(got[k].v, ref[k].v);
+                        ASSERT_EQ(reports[k].dt, ref_reports[k].dt);
+                        ASSERT_EQ(reports[k].error, ref_reports[k].error);
+                        ASSERT_EQ(reports[k].rejections, ref_reports[k].rejections);
+                    }
+                }
+                // Restricted to every leaf: the stage pass again, equal to the pipeline.
+                MembraneModel m = test::sphere_model(level, settings(2, fixed));
+                const std::vector<core::Region> all(m.leaf_regions().begin(),
+                                                    m.leaf_regions().end());
                 std::vector<StepReport> reports;
                 const std::vector<MembraneState> got =
-                    run(test::sphere_model(level, settings(threads, fixed)), true, {}, 24, reports);
+                    run(std::move(m), true, all, 24, reports, ramp);
                 for (std::size_t k = 0; k < ref.size(); ++k)
-                {
-                    ASSERT_EQ(got[k].hash(), ref[k].hash())
-                        << "level " << level << (fixed ? " fixed" : " adaptive") << ", " << threads
-                        << " threads, step " << k;
-                    ASSERT_EQ(got[k].u, ref[k].u);
-                    ASSERT_EQ(got[k].v, ref[k].v);
-                    ASSERT_EQ(reports[k].dt, ref_reports[k].dt);
-                    ASSERT_EQ(reports[k].error, ref_reports[k].error);
-                    ASSERT_EQ(reports[k].rejections, ref_reports[k].rejections);
-                }
+                    ASSERT_EQ(got[k].hash(), ref[k].hash()) << "level " << level << " restricted";
             }
-            // Restricted to every leaf: the stage pass again, equal to the pipeline.
-            MembraneModel m = test::sphere_model(level, settings(2, fixed));
-            const std::vector<core::Region> all(m.leaf_regions().begin(), m.leaf_regions().end());
-            std::vector<StepReport> reports;
-            const std::vector<MembraneState> got = run(std::move(m), true, all, 24, reports);
-            for (std::size_t k = 0; k < ref.size(); ++k)
-                ASSERT_EQ(got[k].hash(), ref[k].hash()) << "level " << level << " restricted";
-        }
 }
 
 // Owned sets shaped like a session's (leaves at depth level - 3, as sessions use): one leaf,
@@ -253,9 +270,11 @@ struct ReferenceStep
     double error = 0.0;
 };
 
+// The force at stage s is accel + (t_force + c_s h) rate: t_force is the step's start time less
+// the time the accel plane holds (Rkf45Workspace::accel_time).
 ReferenceStep reference_step(const MembraneModel& m, const MembraneState& s0,
-                             const core::Field<double>& accel, double h,
-                             std::span<const core::Region> owned)
+                             const core::Field<double>& accel, const core::Field<double>& rate,
+                             double t_force, double h, std::span<const core::Region> owned)
 {
     static constexpr double c[6] = {0.0, 1.0 / 4.0, 3.0 / 8.0, 12.0 / 13.0, 1.0, 1.0 / 2.0};
     static constexpr double a[6][5] = {
@@ -269,7 +288,6 @@ ReferenceStep reference_step(const MembraneModel& m, const MembraneState& s0,
                                      28561.0 / 56430.0, -9.0 / 50.0, 2.0 / 55.0};
     static constexpr double b4[6] = {25.0 / 216.0,    0.0,        1408.0 / 2565.0,
                                      2197.0 / 4104.0, -1.0 / 5.0, 0.0};
-    (void)c;
     const core::TetraGrid& g = m.grid();
     const MembraneSettings& set = m.settings();
     // A node moves iff its canonical node lies in an owned region (all nodes when none).
@@ -314,7 +332,8 @@ ReferenceStep reference_step(const MembraneModel& m, const MembraneState& s0,
             for (int x = 0; x < g.nx(); ++x)
                 kv[s].at(x, y) = moves(x, y)
                                      ? -set.beta * V[s].at(x, y) - set.k_f * U[s].at(x, y) -
-                                           m.inverse_mass().at(x, y) * Ku.at(x, y) + accel.at(x, y)
+                                           m.inverse_mass().at(x, y) * Ku.at(x, y) +
+                                           (accel.at(x, y) + (t_force + c[s] * h) * rate.at(x, y))
                                      : 0.0;
         m.sync(kv[s]);
     }
@@ -373,44 +392,53 @@ TEST(Pipeline, MatchesStraightforwardStep)
     for (int level = 1; level <= 5; ++level)
         for (const bool restricted : {false, true})
             for (const int threads : {1, 2})
-            {
-                MembraneModel m = test::sphere_model(level, settings(threads, true, 1));
-                const std::vector<core::Region> owned =
-                    restricted ? some_regions(m) : std::vector<core::Region>{};
-                MembraneState s = initial_state(m);
-                Rkf45Workspace ws(m, threads);
-                const std::vector<Force> f = forces_for(m);
-                // Reach a state with every slope non-zero, then compare one step.
-                for (int k = 0; k < 3; ++k)
-                    (void)step(m, s, ws, f);
-                const MembraneState before = s;
-                set_forces(m, ws, f);
-                const double h = m.settings().fixed_dt;
-                const ReferenceStep ref = reference_step(m, before, ws.accel, h, owned);
-                StepOptions opt;
-                opt.owned = owned;
-                const StepReport r = step_prepared(m, s, ws, opt);
-                const std::string where = "level " + std::to_string(level) +
-                                          (restricted ? " restricted" : " full") + ", " +
-                                          std::to_string(threads) + " threads";
-                // Same arithmetic in another order: agreement to rounding.
-                EXPECT_LE(max_diff(s.u, ref.u), 1e-13 * max_abs(ref.u)) << where;
-                EXPECT_LE(max_diff(s.v, ref.v), 1e-13 * max_abs(ref.v)) << where;
-                // The estimate is a small difference (tiny at level 1, where it nears the
-                // rounding of u and v scaled by 1/atol): relative plus absolute tolerance.
-                EXPECT_NEAR(r.error, ref.error, 1e-6 * ref.error + 1e-10) << where;
-                EXPECT_GT(ref.error, 0.0);
-                // The nodes that do not move keep their bits.
-                if (restricted)
-                    for (int y = 0; y < m.grid().ny(); ++y)
-                        for (int x = 0; x < m.grid().nx(); ++x)
-                            if (ref.u.at(x, y) == before.u.at(x, y) &&
-                                ref.v.at(x, y) == before.v.at(x, y))
-                            {
-                                ASSERT_EQ(s.u.at(x, y), before.u.at(x, y)) << where;
-                                ASSERT_EQ(s.v.at(x, y), before.v.at(x, y)) << where;
-                            }
-            }
+                for (const bool ramp : {false, true})
+                {
+                    MembraneModel m = test::sphere_model(level, settings(threads, true, 1));
+                    const std::vector<core::Region> owned =
+                        restricted ? some_regions(m) : std::vector<core::Region>{};
+                    MembraneState s = initial_state(m);
+                    Rkf45Workspace ws(m, threads);
+                    const std::vector<Force> f = forces_for(m);
+                    // Reach a state with every slope non-zero, then compare one step.
+                    for (int k = 0; k < 3; ++k)
+                        (void)step(m, s, ws, f);
+                    const MembraneState before = s;
+                    set_forces(m, ws, f);
+                    if (ramp)  // from f, held since 1 ms ago, towards f's mirror image
+                    {
+                        std::vector<Force> g = f;
+                        for (Force& one : g)
+                            one.vector = one.vector * -1.5;
+                        begin_force_ramp(m, ws, g, s.time - 1e-3, s.time + 0.01);
+                    }
+                    const double h = m.settings().fixed_dt;
+                    const ReferenceStep ref = reference_step(m, before, ws.accel, ws.accel_rate,
+                                                             before.time - ws.accel_time, h, owned);
+                    StepOptions opt;
+                    opt.owned = owned;
+                    const StepReport r = step_prepared(m, s, ws, opt);
+                    const std::string where =
+                        "level " + std::to_string(level) + (restricted ? " restricted" : " full") +
+                        (ramp ? " ramp" : "") + ", " + std::to_string(threads) + " threads";
+                    // Same arithmetic in another order: agreement to rounding.
+                    EXPECT_LE(max_diff(s.u, ref.u), 1e-13 * max_abs(ref.u)) << where;
+                    EXPECT_LE(max_diff(s.v, ref.v), 1e-13 * max_abs(ref.v)) << where;
+                    // The estimate is a small difference (tiny at level 1, where it nears the
+                    // rounding of u and v scaled by 1/atol): relative plus absolute tolerance.
+                    EXPECT_NEAR(r.error, ref.error, 1e-6 * ref.error + 1e-10) << where;
+                    EXPECT_GT(ref.error, 0.0);
+                    // The nodes that do not move keep their bits.
+                    if (restricted)
+                        for (int y = 0; y < m.grid().ny(); ++y)
+                            for (int x = 0; x < m.grid().nx(); ++x)
+                                if (ref.u.at(x, y) == before.u.at(x, y) &&
+                                    ref.v.at(x, y) == before.v.at(x, y))
+                                {
+                                    ASSERT_EQ(s.u.at(x, y), before.u.at(x, y)) << where;
+                                    ASSERT_EQ(s.v.at(x, y), before.v.at(x, y)) << where;
+                                }
+                }
 }
 
 }  // namespace

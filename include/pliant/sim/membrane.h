@@ -38,6 +38,21 @@
 namespace pliant::sim
 {
 
+/// How `advance_to` holds the forces it is given between calls (docs/physics.md §3).
+enum class ForceHold : std::uint8_t
+{
+    /// Zero-order hold: the forces act unchanged from the call's start to its target time.
+    /// Lockstep sessions use it (every peer applies a user's force from the same tick).
+    Step,
+    /// First-order hold: the forces are the values at the call's target time, and each node's
+    /// force goes linearly from the value the previous call reached to it, evaluated at every
+    /// Runge-Kutta stage. A force sampled once per frame (a dragged pick, a scenario's moving
+    /// finger) then changes continuously instead of jumping at every frame, which excites far
+    /// less high-frequency motion; it reaches its new value at the frame's end (half a frame
+    /// later on average than the zero-order hold).
+    Linear,
+};
+
 /// Material, integrator and threading settings (SI units). Validated by `MembraneModel::create`.
 struct MembraneSettings
 {
@@ -57,7 +72,8 @@ struct MembraneSettings
     double min_shrink = 0.2;   ///< smallest step factor after a rejection, in (0, 1)
     bool fixed_step = false;   ///< lockstep mode: every step is exactly `fixed_dt`, never rejected
     double fixed_dt = 1e-3;    ///< step of the fixed-step mode [s], > 0
-    int threads = 0;           ///< OpenMP threads for a step; 0 = OpenMP's default
+    ForceHold force_hold = ForceHold::Step;  ///< how `advance_to` holds forces between calls
+    int threads = 0;                         ///< OpenMP threads for a step; 0 = OpenMP's default
     int leaf_depth = -1;  ///< quad-tree depth of the parallel work split; -1 = level - 6 (64 x 64
                           ///< node leaves), clamped to 0..level
 };

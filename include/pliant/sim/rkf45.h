@@ -32,8 +32,12 @@
 ///   others are Dirichlet values held fixed at their step-start u during the step (their v and
 ///   slopes are taken as zero) and are left untouched. Restricting to all leaves gives the full
 ///   step bit for bit.
-/// - Forces are constant over a step (evaluated at its start) and enter as a dense acceleration
-///   plane built from the force list; see `Force` for how they are spread over nodes.
+/// - Forces enter as dense acceleration planes built from the force list (see `Force` for how
+///   they are spread over nodes): the acceleration `accel` at time `accel_time` and its rate
+///   `accel_rate`, so stage s of a step from t with size h adds
+///   accel + (t + c_s h - accel_time) accel_rate. The rate is zero (forces constant over the
+///   step) except inside `advance_to` with `ForceHold::Linear`, which ramps each node's force
+///   from its value at the call's start to the new forces' at its target time.
 
 #include <pliant/core/field.h>
 #include <pliant/core/tetra_grid.h>
@@ -139,7 +143,10 @@ public:
     std::vector<core::Field<double>> kv;  ///< kv_1 .. kv_5
     core::Field<double> u_out, v_out;     ///< trial state
     core::Field<double> v_src;            ///< v masked to the owned nodes (restricted stage pass)
-    core::Field<double> accel;            ///< force accelerations [m/s^2]
+    core::Field<double> accel;            ///< force accelerations [m/s^2] at `accel_time`
+    core::Field<double> accel_rate;       ///< their rate of change [m/s^3] (zero but in a ramp)
+    core::Field<double> accel_end;        ///< a linear hold's accelerations at its end time
+    double accel_time = 0.0;              ///< the time [s] at which `accel` holds
     std::vector<double> row_buffers;      ///< per thread: 3 rows of stage displacements
     std::size_t row_buffer_len = 0;       ///< doubles per thread
     std::vector<double> leaf_error;       ///< per leaf (or pipeline band) error norm
@@ -182,15 +189,33 @@ public:
     int restricted_y1 = 0;
     bool use_pipeline = true;           ///< false: all steps run stage by stage (tests, benchmarks)
     std::vector<std::int64_t> touched;  ///< accel offsets written by the last force set
+    std::vector<std::int64_t> end_touched;   ///< accel_end offsets written (linear hold)
+    std::vector<std::int64_t> rate_touched;  ///< accel_rate offsets set (linear hold)
+    /// [y]: accel or accel_rate may be non-zero in row y (the pipeline reads them only there).
+    /// Kept by set_forces and the ramp functions; code that writes the planes directly must
+    /// mark the rows it writes.
+    std::vector<char> forced_rows;
     int max_threads = 1;
 
 private:
     double next_dt_ = 0.0;
 };
 
-/// Writes the accelerations of `forces` into `ws.accel` (clearing the previous ones).
+/// Writes the accelerations of `forces` into `ws.accel` (clearing the previous ones), held
+/// constant from now on (zero rate).
 /// \pre `validate_forces(model, forces)` succeeded.
 void set_forces(const MembraneModel& model, Rkf45Workspace& ws, std::span<const Force> forces);
+
+/// A linear hold: from time `t0` (where `ws.accel` holds the current forces, rate zero) to `t1`
+/// > t0, each node's acceleration goes linearly to that of `forces`. Only the nodes the old or
+/// new forces touch are visited. `end_force_ramp` closes it.
+/// \pre `validate_forces(model, forces)` succeeded.
+void begin_force_ramp(const MembraneModel& model, Rkf45Workspace& ws, std::span<const Force> forces,
+                      double t0, double t1);
+
+/// Ends a linear hold at time `t`: `ws.accel` becomes the ramp's value there (the new forces
+/// exactly when `reached`, i.e. t is the ramp's end) and the rate zero.
+void end_force_ramp(const MembraneModel& model, Rkf45Workspace& ws, double t, bool reached);
 
 /// One step (adaptive or fixed per the model's settings) with the forces last given to
 /// `set_forces`. Re-assembles K and M first when the tick is a multiple of R. A rejected trial
@@ -205,8 +230,10 @@ StepReport step(MembraneModel& model, MembraneState& state, Rkf45Workspace& ws,
 
 /// Steps until `state.time` reaches `target_time` [s] (adaptive: the last step is shortened to
 /// land on it; fixed-step: as many whole steps as fit, the remainder waits for the next call),
-/// with `forces` held for the whole call. Real-time use: one call per frame. Stops early after
-/// `max_steps` steps or on NonFinite.
+/// with `forces` held as the model's `force_hold` says: unchanged over the call (Step), or
+/// ramped linearly from the previous call's forces to reach `forces` at `target_time` (Linear;
+/// the first call ramps up from zero). Real-time use: one call per frame. Stops early after
+/// `max_steps` steps or on NonFinite (a linear hold then keeps the forces it reached).
 AdvanceReport advance_to(MembraneModel& model, MembraneState& state, Rkf45Workspace& ws,
                          double target_time, std::span<const Force> forces,
                          const StepOptions& options = {}, std::uint64_t max_steps = 10'000'000);
