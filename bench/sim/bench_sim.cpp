@@ -11,17 +11,17 @@
 //   The sphere is the equal-area grid (core::SphereMap::EqualArea, the CLI's built-in sphere);
 //   "gnomonic" runs everything on the gnomonic one instead, for comparison.
 //   The scenario's force is sampled once per frame and held linearly between frames
-//   (sim::ForceHold::Linear, as `pliant simulate` and the viewer do); "step" holds it constant
+//   (sim::ForceHold::Linear, as `pliant simulate` does); "step" holds it constant
 //   over each frame instead (the zero-order hold every run used until 2026-12-02).
 // The moving force slides from (1,0,0) to (0,0,1) along the great circle over 2 s (0.785 m/s),
 // staying on the surface. (Until 2026-12-02 it slid along the chord: from 0.45 s to 1.55 s the
 // point was more than its 0.2 m radius inside the sphere and the whole force fell on the nearest
 // node, a singular load that forced ever smaller steps as the level grew.)
 //   A real-time run simulates the scenario's 2 s, or stops at realtime_seconds of wall time.
-//   --quick: levels 5..8, real-time runs cut at 0.6 s, 3 repetitions; --json/--csv: the same figures
-//   as rows (bench/common/bench_report.h) plus the CPU share of the real-time scenario: process
-//   CPU seconds per simulated second (the fraction of one core the simulation needs to keep up
-//   with real time; load-independent where wall time is not), and the same estimated from the
+//   --quick: levels 5..8, real-time runs cut at 0.6 s, 3 repetitions; --json/--csv: the same
+//   figures as rows (bench/common/bench_report.h) plus the CPU share of the real-time scenario:
+//   process CPU seconds per simulated second (the fraction of one core the simulation needs to keep
+//   up with real time; load-independent where wall time is not), and the same estimated from the
 //   fixed-step time per step times the adaptive run's steps per simulated second.
 // Timings are medians of repeated runs; the machine is shared, so compare ratios within a run.
 
