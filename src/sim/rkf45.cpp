@@ -406,8 +406,7 @@ Rkf45Workspace::Rkf45Workspace(const MembraneModel& model, int threads)
     v_out = Field<double>(g, 1);
     v_src = Field<double>(g, 1);
     accel = Field<double>(g, 1);
-    accel_rate = Field<double>(g, 1);
-    accel_end = Field<double>(g, 1);
+    accel_rate = Field<double>(g, 1);  // accel_end: on the first linear hold
     forced_rows.assign(static_cast<std::size_t>(g.ny()), 0);
     row_buffer_len = 3 * static_cast<std::size_t>(g.nx() + 3);
     row_buffers.assign(row_buffer_len * static_cast<std::size_t>(max_threads), 0.0);
@@ -554,6 +553,8 @@ void begin_force_ramp(const MembraneModel& model, Rkf45Workspace& ws, std::span<
     PLIANT_ASSERT(t1 > t0, "begin_force_ramp: needs t1 > t0");
     if (!ws.rate_touched.empty())
         end_force_ramp(model, ws, t0, false);
+    if (ws.accel_end.padded().empty())  // once per workspace: zero-order holds never need it
+        ws.accel_end = Field<double>(model.grid(), 1);
     write_forces(model, AccelTarget{ws.accel_end, ws.end_touched}, forces);
     // The nodes whose acceleration may change: those of the old forces and of the new.
     ws.rate_touched.assign(ws.touched.begin(), ws.touched.end());

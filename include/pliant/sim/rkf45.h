@@ -145,12 +145,13 @@ public:
     core::Field<double> v_src;            ///< v masked to the owned nodes (restricted stage pass)
     core::Field<double> accel;            ///< force accelerations [m/s^2] at `accel_time`
     core::Field<double> accel_rate;       ///< their rate of change [m/s^3] (zero but in a ramp)
-    core::Field<double> accel_end;        ///< a linear hold's accelerations at its end time
-    double accel_time = 0.0;              ///< the time [s] at which `accel` holds
-    std::vector<double> row_buffers;      ///< per thread: 3 rows of stage displacements
-    std::size_t row_buffer_len = 0;       ///< doubles per thread
-    std::vector<double> leaf_error;       ///< per leaf (or pipeline band) error norm
-    std::vector<double> leaf_probe;       ///< per leaf (or pipeline band) NaN probe
+    core::Field<double> accel_end;  ///< a linear hold's accelerations at its end (allocated by the
+                                    ///< first one)
+    double accel_time = 0.0;        ///< the time [s] at which `accel` holds
+    std::vector<double> row_buffers;  ///< per thread: 3 rows of stage displacements
+    std::size_t row_buffer_len = 0;   ///< doubles per thread
+    std::vector<double> leaf_error;   ///< per leaf (or pipeline band) error norm
+    std::vector<double> leaf_probe;   ///< per leaf (or pipeline band) NaN probe
     // The fused row pipeline of full steps (docs/physics.md §8): per thread, ring rows of
     // kv_1..kv_4 and the rolling stage-displacement rows; the model's twin and ghost copies
     // regrouped by the row they read, as column pairs (dst, src) with x + 1 (0 = ghost column
