@@ -582,14 +582,17 @@ void end_force_ramp(const MembraneModel& model, Rkf45Workspace& ws, double t, bo
     auto rate = ws.accel_rate.padded();
     const auto a1 = ws.accel_end.padded();
     const double dt = t - ws.accel_time;
+    // `accel` is now non-zero at most on the ramp's nodes: those stay in `touched` if they are
+    // (a node the old forces left must not stay, or the list would grow frame after frame).
+    ws.touched.clear();
     for (const std::int64_t off : ws.rate_touched)
     {
         const auto o = static_cast<std::size_t>(off);
         a[o] = reached ? a1[o] : a[o] + dt * rate[o];
         rate[o] = 0.0;
+        if (a[o] != 0.0)
+            ws.touched.push_back(off);
     }
-    // `accel` is now non-zero at most on the ramp's nodes.
-    std::swap(ws.touched, ws.rate_touched);
     ws.rate_touched.clear();
     clear_written(AccelTarget{ws.accel_end, ws.end_touched});
     model.sync(ws.accel);

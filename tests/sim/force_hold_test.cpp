@@ -236,8 +236,31 @@ TEST(ForceHold, EachCallEndsOnItsForcesAndClearsTheRamp)
     }
     EXPECT_EQ(ws.accel_rate, zero);
     expect_rows(ws, ws.accel);
+    // A finger sliding for 20 frames: the planes follow it, and what the workspace keeps (the
+    // written offsets, the forced rows) is the last frame's force, not the path.
+    for (int frame = 1; frame <= 20; ++frame)
+    {
+        const std::vector<Force> at = {
+            {-1, test::rest(m, g.index(frame * g.w() / 10, g.w() / 2)), 0.3, {0.0, 0.0, 1.0}}};
+        ASSERT_TRUE(advance_to(m, s, ws, 0.2 + 0.01 * frame, at).reached);
+        if (frame == 20)
+        {
+            EXPECT_EQ(ws.accel, plane_of(at));
+            std::size_t nonzero = 0;
+            for (const std::int64_t off : ws.touched)
+                nonzero += ws.accel.padded()[static_cast<std::size_t>(off)] != 0.0 ? 1 : 0;
+            EXPECT_EQ(nonzero, ws.touched.size());
+            for (int y = 0; y < g.ny(); ++y)
+            {
+                bool any = false;
+                for (int x = 0; x < g.nx(); ++x)
+                    any = any || ws.accel.at(x, y) != 0.0;
+                EXPECT_EQ(ws.forced_rows[static_cast<std::size_t>(y)] != 0, any) << "row " << y;
+            }
+        }
+    }
     // No forces: the ramp goes down to nothing, then set_forces-style planes are all zero.
-    ASSERT_TRUE(advance_to(m, s, ws, 0.3, {}).reached);
+    ASSERT_TRUE(advance_to(m, s, ws, 0.5, {}).reached);
     EXPECT_EQ(ws.accel, zero);
     EXPECT_EQ(ws.accel_rate, zero);
     EXPECT_EQ(ws.accel_end, zero);
