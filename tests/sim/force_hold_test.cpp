@@ -26,45 +26,12 @@ namespace pliant::sim
 namespace
 {
 
-constexpr double k_beta = 0.2;
-constexpr double k_kf = 0.5;
-
-MembraneSettings settings()
-{
-    MembraneSettings s;
-    s.T = 1.0;
-    s.rho = 1.0;
-    s.beta = k_beta;
-    s.k_f = k_kf;
-    s.threads = 1;
-    return s;
-}
-
-// q'' + beta q' + w2 q = c0 + c1 t from (q, p) at t = 0, in closed form (w2 > beta^2 / 4):
-// the particular solution A t + B plus the damped oscillation that meets the initial values.
-struct Oscillator
-{
-    double q = 0.0;
-    double p = 0.0;
-
-    void advance(double w2, double c0, double c1, double t)
-    {
-        const double A = c1 / w2;
-        const double B = (c0 - k_beta * A) / w2;
-        const double a = q - B;
-        const double wd = std::sqrt(w2 - 0.25 * k_beta * k_beta);
-        const double b = ((p - A) + 0.5 * k_beta * a) / wd;
-        const double e = std::exp(-0.5 * k_beta * t);
-        const double c = std::cos(wd * t);
-        const double s = std::sin(wd * t);
-        q = A * t + B + e * (a * c + b * s);
-        p = A + e * ((-0.5 * k_beta) * (a * c + b * s) + (-a * wd * s + b * wd * c));
-    }
-};
+using test::DampedOscillator;
+using test::k_ode_kf;
 
 // The largest |u - u_exact| and |v - v_exact| over all in-range nodes, for an exact solution
 // that is the same at every node.
-double uniform_error(const MembraneModel& m, const MembraneState& s, const Oscillator& exact)
+double uniform_error(const MembraneModel& m, const MembraneState& s, const DampedOscillator& exact)
 {
     double worst = 0.0;
     for (int y = 0; y < m.grid().ny(); ++y)
@@ -81,7 +48,7 @@ double uniform_error(const MembraneModel& m, const MembraneState& s, const Oscil
 TEST(ForceHold, StagesEvaluateARampAtTheirOwnTimesFifthOrder)
 {
     constexpr double r = 0.3;  // m/s^3
-    MembraneSettings set = settings();
+    MembraneSettings set = test::ode_settings();
     set.fixed_step = true;
     MembraneModel m = test::sphere_model(2, set);
     std::vector<double> errors;
@@ -96,8 +63,8 @@ TEST(ForceHold, StagesEvaluateARampAtTheirOwnTimesFifthOrder)
         std::fill(ws.forced_rows.begin(), ws.forced_rows.end(), 1);  // the kernels read it
         for (int k = 0; k < n; ++k)
             ASSERT_EQ(step_prepared(m, s, ws).status, StepStatus::Ok);
-        Oscillator exact;
-        exact.advance(k_kf, 0.0, r, s.time);
+        DampedOscillator exact;
+        exact.advance(k_ode_kf, 0.0, r, s.time);
         errors.push_back(uniform_error(m, s, exact));
         ASSERT_GT(exact.q, 1e-3);  // the ramp moved the surface
     }
@@ -117,7 +84,7 @@ TEST(ForceHold, StagesEvaluateARampAtTheirOwnTimesFifthOrder)
 TEST(ForceHold, LinearHoldFollowsTheRampedModalSolution)
 {
     constexpr double tau = 0.25;
-    MembraneSettings set = settings();
+    MembraneSettings set = test::ode_settings();
     set.rtol = 1e-9;
     set.atol = 1e-12;
     MembraneModel m = test::sphere_model(2, set);
@@ -134,7 +101,7 @@ TEST(ForceHold, LinearHoldFollowsTheRampedModalSolution)
     set_forces(m, probe, forces);
     const Eigen::VectorXd g =
         eig.eigenvectors().transpose() * ref.M.asDiagonal() * test::unique_vector(m, probe.accel);
-    std::vector<Oscillator> modes(static_cast<std::size_t>(g.size()));
+    std::vector<DampedOscillator> modes(static_cast<std::size_t>(g.size()));
     const auto exact_u = [&]()
     {
         Eigen::VectorXd q(g.size());
@@ -149,7 +116,7 @@ TEST(ForceHold, LinearHoldFollowsTheRampedModalSolution)
         ASSERT_TRUE(m.set_settings(set).has_value());
         MembraneState s = MembraneState::at_rest(m.grid());
         Rkf45Workspace ws(m, 1);
-        std::fill(modes.begin(), modes.end(), Oscillator{});
+        std::fill(modes.begin(), modes.end(), DampedOscillator{});
         double worst = 0.0;
         double scale = 0.0;
         for (int call = 1; call <= 2; ++call)
@@ -159,8 +126,8 @@ TEST(ForceHold, LinearHoldFollowsTheRampedModalSolution)
             ASSERT_EQ(s.time, call * tau);
             for (Eigen::Index k = 0; k < g.size(); ++k)
             {
-                const double w2 = eig.eigenvalues()(k) + k_kf;
-                Oscillator& o = modes[static_cast<std::size_t>(k)];
+                const double w2 = eig.eigenvalues()(k) + k_ode_kf;
+                DampedOscillator& o = modes[static_cast<std::size_t>(k)];
                 if (call == 1)
                     o.advance(w2, 0.0, g(k) / tau, tau);
                 else
@@ -182,7 +149,7 @@ TEST(ForceHold, LinearHoldFollowsTheRampedModalSolution)
 // old forces; a call stopped early keeps the force reached at its time.
 TEST(ForceHold, EachCallEndsOnItsForcesAndClearsTheRamp)
 {
-    MembraneSettings set = settings();
+    MembraneSettings set = test::ode_settings();
     set.force_hold = ForceHold::Linear;
     MembraneModel m = test::sphere_model(4, set);
     const core::TetraGrid& g = m.grid();

@@ -24,19 +24,7 @@ namespace pliant::sim
 namespace
 {
 
-constexpr double k_beta = 0.2;
-constexpr double k_kf = 0.5;
-
-MembraneSettings ode_settings()
-{
-    MembraneSettings s;
-    s.T = 1.0;
-    s.rho = 1.0;
-    s.beta = k_beta;
-    s.k_f = k_kf;
-    s.threads = 1;
-    return s;
-}
+using test::ode_settings;
 
 double u0_of(const core::Vec3& p)
 {
@@ -73,15 +61,10 @@ public:
         Eigen::VectorXd p(q0_.size());
         for (Eigen::Index k = 0; k < q0_.size(); ++k)
         {
-            const double w0 = lambda_(k) + k_kf;
-            const double wd = std::sqrt(w0 - 0.25 * k_beta * k_beta);
-            const double a = q0_(k);
-            const double b = (p0_(k) + 0.5 * k_beta * a) / wd;
-            const double e = std::exp(-0.5 * k_beta * t);
-            const double c = std::cos(wd * t);
-            const double s = std::sin(wd * t);
-            q(k) = e * (a * c + b * s);
-            p(k) = e * ((-0.5 * k_beta) * (a * c + b * s) + (-a * wd * s + b * wd * c));
+            test::DampedOscillator o{q0_(k), p0_(k)};
+            o.advance(lambda_(k) + test::k_ode_kf, 0.0, 0.0, t);
+            q(k) = o.q;
+            p(k) = o.p;
         }
         return {phi_ * q, phi_ * p};
     }

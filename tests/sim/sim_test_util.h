@@ -97,6 +97,45 @@ inline Reference reference_assembly(const MembraneModel& m)
     return ref;
 }
 
+/// The material of the tests against closed-form solutions of the semi-discrete ODE: T = rho = 1,
+/// beta = 0.2, k_f = 0.5 (every mode underdamped), one thread.
+inline constexpr double k_ode_beta = 0.2;
+inline constexpr double k_ode_kf = 0.5;
+
+inline MembraneSettings ode_settings()
+{
+    MembraneSettings s;
+    s.T = 1.0;
+    s.rho = 1.0;
+    s.beta = k_ode_beta;
+    s.k_f = k_ode_kf;
+    s.threads = 1;
+    return s;
+}
+
+/// One mode of it: q'' + beta q' + w2 q = c0 + c1 t from (q, p) at t = 0, in closed form
+/// (w2 > beta^2 / 4): the particular solution A t + B plus the damped oscillation that meets the
+/// initial values.
+struct DampedOscillator
+{
+    double q = 0.0;
+    double p = 0.0;
+
+    void advance(double w2, double c0, double c1, double t, double beta = k_ode_beta)
+    {
+        const double A = c1 / w2;
+        const double B = (c0 - beta * A) / w2;
+        const double a = q - B;
+        const double wd = std::sqrt(w2 - 0.25 * beta * beta);
+        const double b = ((p - A) + 0.5 * beta * a) / wd;
+        const double e = std::exp(-0.5 * beta * t);
+        const double c = std::cos(wd * t);
+        const double s = std::sin(wd * t);
+        q = A * t + B + e * (a * c + b * s);
+        p = A + e * ((-0.5 * beta) * (a * c + b * s) + (-a * wd * s + b * wd * c));
+    }
+};
+
 /// Real zonal spherical harmonic Y_l0 (unnormalised: the Legendre polynomial of cos theta) at
 /// the direction of p.
 inline double zonal(int l, const core::Vec3& p)
