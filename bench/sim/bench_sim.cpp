@@ -4,6 +4,7 @@
 //   triad,<threads>,<GB/s>
 //   step,<level>,<threads>,<grid nodes>,<ns per node-step>,<node-steps/s>,<GB/s effective>
 //   realtime,<level>,<threads>,<simulated s>,<wall s>,<ratio>,<steps>
+//   largest real-time level, <threads> thread(s): <level> (ran the whole scenario in real time)
 // Usage: pliant_bench_sim [max_level=10] [realtime_seconds=4] [min_level=6]
 //                         [kernel] [gnomonic] [step] [--quick] [--json FILE] [--csv FILE]
 //   "kernel" runs only the step timing, 1 thread, 10 steps per level (for callgrind, whose
@@ -227,6 +228,8 @@ int main(int argc, char** argv)
         return report.write() ? 0 : 1;
     // Real time: the benchmark scenario (adaptive, one moving force), frames of 1/60 s.
     for (const int threads : {1, 2})
+    {
+        int largest = 0;  // the largest level that ran the scenario in real time (0: none)
         for (int level = min_level; level <= max_level; ++level)
         {
             const core::TetraGrid grid = core::TetraGrid::create(level).value();
@@ -269,8 +272,15 @@ int main(int argc, char** argv)
                 report.add(c, level, nodes, "nodes", "cpu_share_from_step_time",
                            ms_per_step_1[static_cast<std::size_t>(level)] * 1e-3 * steps_per_sim_s,
                            "1");
+            if (state.time >= wall && frame == k_scenario_frames)
+                largest = level;
             if (state.time < wall * 0.5)
                 break;  // far from real time: finer levels only get slower
         }
+        std::printf("largest real-time level, %d %s: %d\n", threads,
+                    threads == 1 ? "thread" : "threads", largest);
+        report.add(std::to_string(threads) + (threads == 1 ? " thread" : " threads"), -1, threads,
+                   "threads", "largest_realtime_level", largest, "level");
+    }
     return report.write() ? 0 : 1;
 }
