@@ -4,9 +4,11 @@
 #include <pliant/session/partition.h>
 
 #include <algorithm>
+#include <cmath>
 #include <deque>
 #include <limits>
 #include <map>
+#include <optional>
 #include <utility>
 
 namespace pliant::session
@@ -228,17 +230,11 @@ std::uint32_t nearest_free(const LeafGraph& g, std::uint32_t start,
     return k_unowned;
 }
 
-}  // namespace
-
-std::vector<net::PeerId> partition_leaves(const core::TetraGrid& grid, const LeafGraph& graph,
-                                          std::span<const Seat> seats_in)
+/// The balanced BFS growth from the seats' leaves (the file comment of partition.h), as a seat
+/// index per leaf. \pre seats sorted by peer id, non-empty.
+std::vector<std::uint32_t> grow_seats(const core::TetraGrid& grid, const LeafGraph& graph,
+                                      std::span<const Seat> seats)
 {
-    PLIANT_ASSERT(!seats_in.empty(), "partition_leaves: no participant");
-    std::vector<Seat> seats(seats_in.begin(), seats_in.end());
-    std::sort(seats.begin(), seats.end(),
-              [](const Seat& a, const Seat& b) { return a.peer < b.peer; });
-    for (std::size_t k = 1; k < seats.size(); ++k)
-        PLIANT_ASSERT(seats[k - 1].peer != seats[k].peer, "partition_leaves: duplicate peer");
     const std::size_t p = seats.size();
     const std::size_t n = graph.size();
     std::vector<std::uint32_t> owner(n, k_unowned);  // seat index
@@ -322,10 +318,171 @@ std::vector<net::PeerId> partition_leaves(const core::TetraGrid& grid, const Lea
             owner[l] = static_cast<std::uint32_t>(smallest);
             count[static_cast<std::size_t>(smallest)] += graph.node_count(l);
         }
-    std::vector<net::PeerId> out(n);
-    for (std::size_t l = 0; l < n; ++l)
+    return owner;
+}
+
+/// Slabs: runs of the leaves in row-major order (leaf rows top to bottom, x increasing), one
+/// per seat, cut where the running node count passes k/p of the total, seats ordered by the row
+/// of their point; each cut then moves (leaf by leaf) as far as needed to put every point's leaf
+/// in its own seat's slab. A seat index per leaf, or nothing when that needs a slab outside
+/// k_slab_balance of the mean (the growth is used then). \pre seats sorted by peer id.
+std::optional<std::vector<std::uint32_t>> slab_seats(const core::TetraGrid& grid,
+                                                     const LeafGraph& graph,
+                                                     std::span<const Seat> seats)
+{
+    const std::size_t p = seats.size();
+    const std::size_t n = graph.size();
+    if (p > n)
+        return std::nullopt;
+    std::vector<std::uint32_t> order(n);  // leaves, row-major
+    for (std::uint32_t l = 0; l < n; ++l)
+        order[l] = l;
+    const auto regions = graph.regions();
+    std::sort(order.begin(), order.end(),
+              [&](std::uint32_t a, std::uint32_t b)
+              {
+                  return regions[a].y0 != regions[b].y0 ? regions[a].y0 < regions[b].y0
+                                                        : regions[a].x0 < regions[b].x0;
+              });
+    std::vector<std::size_t> rank(n);        // leaf -> position in `order`
+    std::vector<std::size_t> before(n + 1);  // nodes of order[0 .. k)
+    for (std::size_t k = 0; k < n; ++k)
+    {
+        rank[order[k]] = k;
+        before[k + 1] = before[k] + graph.node_count(order[k]);
+    }
+    const std::size_t total = before[n];
+    // Balanced cuts: slab k starts at cut[k] (cut[0] = 0, cut[p] = n), at the leaf boundary
+    // nearest to k/p of the nodes.
+    std::vector<std::size_t> cut(p + 1, 0);
+    cut[p] = n;
+    for (std::size_t k = 1; k < p; ++k)
+    {
+        const double goal =
+            static_cast<double>(total) * static_cast<double>(k) / static_cast<double>(p);
+        std::size_t c = cut[k - 1] + 1;
+        while (c < n - (p - k) && static_cast<double>(before[c + 1]) <= goal)
+            ++c;
+        if (c < n - (p - k) &&
+            goal - static_cast<double>(before[c]) > static_cast<double>(before[c + 1]) - goal)
+            ++c;
+        cut[k] = c;
+    }
+    // Slab positions: seats with a point in the order of their point's leaf (ties: peer id),
+    // each at the slab holding its point or the next free one, the rest in peer order.
+    std::vector<std::size_t> with_point;
+    for (std::size_t s = 0; s < p; ++s)
+        if (seats[s].seed)
+        {
+            PLIANT_ASSERT(seats[s].seed->value < grid.node_count(), "partition_leaves: bad seed");
+            with_point.push_back(s);
+        }
+    const auto seed_rank = [&](std::size_t s) { return rank[graph.leaf_of(*seats[s].seed)]; };
+    std::stable_sort(with_point.begin(), with_point.end(),
+                     [&](std::size_t a, std::size_t b) { return seed_rank(a) < seed_rank(b); });
+    const std::size_t q = with_point.size();
+    std::vector<std::size_t> pos(q);
+    for (std::size_t i = 0; i < q; ++i)
+    {
+        const std::size_t natural = static_cast<std::size_t>(
+            std::upper_bound(cut.begin() + 1, cut.end() - 1, seed_rank(with_point[i])) -
+            (cut.begin() + 1));
+        pos[i] = std::max(natural, i > 0 ? pos[i - 1] + 1 : 0);
+    }
+    for (std::size_t i = q; i-- > 0;)
+        pos[i] = std::min(pos[i], std::min(p - q + i, i + 1 < q ? pos[i + 1] - 1 : p - 1));
+    std::vector<std::uint32_t> seat_at(p, k_unowned);
+    for (std::size_t i = 0; i < q; ++i)
+        seat_at[pos[i]] = static_cast<std::uint32_t>(with_point[i]);
+    std::size_t next = 0;
+    for (std::size_t s = 0; s < p; ++s)
+        if (!seats[s].seed)
+        {
+            while (seat_at[next] != k_unowned)
+                ++next;
+            seat_at[next] = static_cast<std::uint32_t>(s);
+        }
+    // Move the cuts so that every point's leaf and its neighbours lie in its seat's slab:
+    // cut[k] <= rank < cut[k + 1] for all of them (the rank range [lo, hi] of the point).
+    std::vector<std::pair<std::size_t, std::size_t>> span(q);
+    for (std::size_t i = 0; i < q; ++i)
+    {
+        const std::uint32_t leaf = graph.leaf_of(*seats[with_point[i]].seed);
+        span[i] = {rank[leaf], rank[leaf]};
+        for (const std::uint32_t b : graph.neighbours(leaf))
+            span[i] = {std::min(span[i].first, rank[b]), std::max(span[i].second, rank[b])};
+        cut[pos[i]] = std::min(cut[pos[i]], span[i].first);
+        cut[pos[i] + 1] = std::max(cut[pos[i] + 1], span[i].second + 1);
+    }
+    // Points whose spans overlap pull a cut both ways: the later move wins, so check them all
+    // again. A violated span, an empty slab or one out of balance rules the slabs out.
+    for (std::size_t i = 0; i < q; ++i)
+        if (span[i].first < cut[pos[i]] || span[i].second >= cut[pos[i] + 1])
+            return std::nullopt;
+    const double mean = static_cast<double>(total) / static_cast<double>(p);
+    for (std::size_t k = 0; k < p; ++k)
+    {
+        if (cut[k + 1] <= cut[k])
+            return std::nullopt;
+        const double nodes = static_cast<double>(before[cut[k + 1]] - before[cut[k]]);
+        if (std::abs(nodes - mean) > k_slab_balance * mean)
+            return std::nullopt;
+    }
+    std::vector<std::uint32_t> owner(n);
+    for (std::size_t k = 0; k < p; ++k)
+        for (std::size_t i = cut[k]; i < cut[k + 1]; ++i)
+            owner[order[i]] = seat_at[k];
+    return owner;
+}
+
+std::vector<Seat> sorted_seats(std::span<const Seat> seats_in)
+{
+    PLIANT_ASSERT(!seats_in.empty(), "partition_leaves: no participant");
+    std::vector<Seat> seats(seats_in.begin(), seats_in.end());
+    std::sort(seats.begin(), seats.end(),
+              [](const Seat& a, const Seat& b) { return a.peer < b.peer; });
+    for (std::size_t k = 1; k < seats.size(); ++k)
+        PLIANT_ASSERT(seats[k - 1].peer != seats[k].peer, "partition_leaves: duplicate peer");
+    return seats;
+}
+
+std::vector<net::PeerId> to_peers(const std::vector<std::uint32_t>& owner,
+                                  std::span<const Seat> seats)
+{
+    std::vector<net::PeerId> out(owner.size());
+    for (std::size_t l = 0; l < owner.size(); ++l)
         out[l] = seats[owner[l]].peer;
     return out;
+}
+
+}  // namespace
+
+std::vector<net::PeerId> grown_partition(const core::TetraGrid& grid, const LeafGraph& graph,
+                                         std::span<const Seat> seats_in)
+{
+    const std::vector<Seat> seats = sorted_seats(seats_in);
+    return to_peers(grow_seats(grid, graph, seats), seats);
+}
+
+std::optional<std::vector<net::PeerId>> slab_partition(const core::TetraGrid& grid,
+                                                       const LeafGraph& graph,
+                                                       std::span<const Seat> seats_in)
+{
+    const std::vector<Seat> seats = sorted_seats(seats_in);
+    if (auto owner = slab_seats(grid, graph, seats))
+        return to_peers(*owner, seats);
+    return std::nullopt;
+}
+
+std::vector<net::PeerId> partition_leaves(const core::TetraGrid& grid, const LeafGraph& graph,
+                                          std::span<const Seat> seats)
+{
+    std::vector<net::PeerId> owners = grown_partition(grid, graph, seats);
+    if (auto slabs = slab_partition(grid, graph, seats);
+        slabs && measure_partition(grid, graph, *slabs).busiest_cost <
+                     measure_partition(grid, graph, owners).busiest_cost)
+        owners = std::move(*slabs);
+    return owners;
 }
 
 PartitionQuality measure_partition(const core::TetraGrid& grid, const LeafGraph& graph,
@@ -374,6 +531,17 @@ PartitionQuality measure_partition(const core::TetraGrid& grid, const LeafGraph&
     // A corner sees some neighbours twice through the ghost map: keep each pair once.
     std::sort(edges.begin(), edges.end());
     edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+    // Row segments: the restricted step's x-runs of owned nodes, one per grid row they span.
+    for (auto& [id, share] : shares)
+    {
+        std::vector<char> mask(grid.node_count(), 0);
+        for (std::size_t l = 0; l < owners.size(); ++l)
+            if (owners[l] == id)
+                for (const core::NodeIndex m : graph.nodes(l))
+                    mask[m.value] = 1;
+        for (const core::Region& r : node_runs(grid, mask))
+            share.row_segments += static_cast<std::size_t>(r.y1 - r.y0);
+    }
     PartitionQuality q;
     for (const auto& [a, b] : edges)
     {
@@ -388,6 +556,7 @@ PartitionQuality measure_partition(const core::TetraGrid& grid, const LeafGraph&
     for (const auto& [id, s] : shares)
     {
         q.imbalance = std::max(q.imbalance, std::abs(static_cast<double>(s.nodes) - mean) / mean);
+        q.busiest_cost = std::max(q.busiest_cost, step_cost(s));
         q.shares.push_back(s);
     }
     return q;

@@ -118,6 +118,7 @@ void run_pulling(Harness& h, Coupling c, net::Packing packing = net::Packing::Ri
     h.host(k_level, ms);
     Session& p = h.join(net::Role::Participant, ps);
     p.set_points_of_interest({net::Target{net::TargetKind::Face, 600, {0, 0, 0}, 0.0}});
+    h.peers[0]->set_points_of_interest({point_push(0.0, 0.0, 1.0, 0.3, 0.4).target});
     ASSERT_TRUE(h.pump_until(
         [&]
         {
@@ -314,6 +315,7 @@ TEST(SessionCompression, BandwidthCapHoldsAndEveryLeafStillArrives)
     h.host(k_level, ms);
     Session& p = h.join(net::Role::Participant, ps);
     p.set_points_of_interest({net::Target{net::TargetKind::Face, 600, {0, 0, 0}, 0.0}});
+    h.peers[0]->set_points_of_interest({point_push(0.0, 0.0, 1.0, 0.3, 0.4).target});
     ASSERT_TRUE(h.pump_until(
         [&]
         {

@@ -169,6 +169,7 @@ TEST(SessionFast, TwoPeersStayWithinTheDocumentedError)
     h.host(k_level, settings_for(Coupling::Fast, "master"));
     Session& p = h.join(net::Role::Participant, settings_for(Coupling::Fast, "part"));
     p.set_points_of_interest({net::Target{net::TargetKind::Face, 600, {0, 0, 0}, 0.0}});
+    h.peers[0]->set_points_of_interest({point_push(0.0, 0.0, 1.0, 0.3, 0.4).target});
     ASSERT_TRUE(h.pump_until(
         [&]
         {

@@ -21,6 +21,20 @@
 ///   first balances node counts to within about one leaf; growing along BFS fronts keeps each
 ///   share compact (short borders) and connected unless it gets enclosed. Everything is a
 ///   function of (grid, depth, sorted participants), so every peer computing it agrees.
+/// - Slabs (`slab_partition`): the leaves in row-major order (leaf rows top to bottom, x
+///   increasing) cut into one run per participant, balanced to a leaf; participants with a point
+///   take the slabs in the order of their points' rows, and each cut moves as far as needed to
+///   put every point's leaf and its neighbouring leaves inside its own slab. Every grid row is a
+///   closed loop around the tetrahedron (x is periodic), so a slab is a band like a zone of
+///   latitude: connected, bordered by one row loop per cut, and one x-run per grid row.
+/// - Why two candidates: a restricted sim step pays per row segment (one x-run of owned nodes in
+///   one grid row) about what 16 nodes cost (`k_row_segment_cost`). A grown share spans most
+///   rows, often as two runs (the periodic seam splits it), so half the nodes cost 0.61-0.71 of a
+///   full step at levels 6-8; a slab spans 1/p of the rows in one run each.
+///   `partition_leaves` takes the slabs when the busiest participant's modelled cost
+///   (`step_cost`) is lower with them and every point fits in its own slab within
+///   `k_slab_balance`; otherwise (points in the same rows, more participants than leaves) the
+///   grown shares.
 /// - Rejected: recursive coordinate bisection (balanced but ignores the points of interest and
 ///   cuts across the seams arbitrarily); METIS-style multilevel partitioning (not in Debian's
 ///   C++ packages we use, and non-deterministic across versions).
@@ -98,11 +112,33 @@ struct Seat
     std::optional<core::NodeIndex> seed;
 };
 
+/// The partitioner's model of a restricted sim step's cost per row segment (a maximal x-run of
+/// owned nodes in one grid row), in nodes: 0.11-0.13 us per segment against 7.4 ns per node,
+/// measured on the development machine (docs/session.md §3).
+inline constexpr double k_row_segment_cost = 16.0;
+/// How far from the mean node count a slab may be, as a fraction, after its cuts moved to put
+/// the points in their seats' slabs (the balance the partition tests require of every share;
+/// the cost comparison in `partition_leaves` counts the extra nodes of the busiest).
+inline constexpr double k_slab_balance = 0.10;
+
 /// Owner of every leaf (index as `LeafGraph::leaves()`), deterministic in its inputs (the seats
 /// are sorted by peer id first; their order does not matter). \pre seats non-empty, ids unique.
+/// Of the two candidates in the file comment, the slabs when their busiest participant's
+/// `step_cost` is lower, else the grown shares.
 [[nodiscard]] std::vector<net::PeerId> partition_leaves(const core::TetraGrid& grid,
                                                         const LeafGraph& graph,
                                                         std::span<const Seat> seats);
+
+/// The grown shares alone (same contract as `partition_leaves`).
+[[nodiscard]] std::vector<net::PeerId> grown_partition(const core::TetraGrid& grid,
+                                                       const LeafGraph& graph,
+                                                       std::span<const Seat> seats);
+
+/// The slabs alone, or nothing when a slab would be empty or farther than `k_slab_balance` from
+/// the mean node count once every point's leaf and its neighbours are inside its own slab.
+[[nodiscard]] std::optional<std::vector<net::PeerId>> slab_partition(const core::TetraGrid& grid,
+                                                                     const LeafGraph& graph,
+                                                                     std::span<const Seat> seats);
 
 /// Per-peer quality of a partition.
 struct PeerShare
@@ -112,7 +148,14 @@ struct PeerShare
     std::size_t nodes = 0;         ///< canonical nodes owned
     std::size_t fragments = 0;     ///< connected components of its leaves in the leaf graph
     std::size_t border_edges = 0;  ///< surface edges with one end owned by it, one by another
+    std::size_t row_segments = 0;  ///< x-runs of its canonical nodes, one per grid row
 };
+
+/// The modelled cost of one restricted sim step over a share, in nodes.
+[[nodiscard]] constexpr double step_cost(const PeerShare& s) noexcept
+{
+    return static_cast<double>(s.nodes) + k_row_segment_cost * static_cast<double>(s.row_segments);
+}
 
 struct PartitionQuality
 {
@@ -120,6 +163,8 @@ struct PartitionQuality
     std::size_t border_edges = 0;   ///< surface edges whose ends have different owners
     /// max |nodes - mean| / mean over the peers.
     double imbalance = 0.0;
+    /// The largest `step_cost` of a share.
+    double busiest_cost = 0.0;
 };
 
 /// Measures a leaf -> owner table (every distinct owner gets a share).
