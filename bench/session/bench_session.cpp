@@ -600,11 +600,16 @@ double thread_cpu_s()
 /// restricted step over its fast set (its leaves) and over its exact set (its leaves dilated by
 /// the default halo_rings, as node runs) against the full step of one process; fixed dt 1 ms,
 /// the two pulls of the session runs held on, one thread. Best of 5 interleaved rounds.
+/// Two seat layouts: no points of interest, and the session runs' (participant k declares face
+/// k F / P, the master none). Each coupling gets the partition a session of it computes
+/// (session::PointClearance: AsGrown for fast, Inside for exact), named g (grown shares) or s
+/// (slabs).
 void steps_suite(bench::Report& report, const std::vector<int>& levels)
 {
     std::printf(
         "# sim step CPU per peer / full step (thread CPU time, best of 5 rounds, 1 "
-        "thread)\nlevel peers | fast: max mean | exact: max mean | full step us\n");
+        "thread); partition: g grown shares, s slabs\nlevel peers points | fast: max "
+        "mean | exact: max mean | full step us\n");
     for (const int level : levels)
     {
         const core::TetraGrid grid = core::TetraGrid::create(level).value();
@@ -631,62 +636,83 @@ void steps_suite(bench::Report& report, const std::vector<int>& levels)
         const session::LeafGraph graph(grid,
                                        session::leaf_depth_for(grid, net::ValueEncoding::F64));
         for (int peers = 2; peers <= 4; ++peers)
-        {
-            std::vector<session::Seat> seats;
-            for (int k = 0; k < peers; ++k)
-                seats.push_back({net::PeerId{static_cast<std::uint16_t>(k)}, std::nullopt});
-            const auto owners = session::partition_leaves(grid, graph, seats);
-            std::vector<std::vector<core::Region>> fast_sets(static_cast<std::size_t>(peers));
-            std::vector<std::vector<core::Region>> exact_sets(static_cast<std::size_t>(peers));
-            for (int p = 0; p < peers; ++p)
+            for (const bool points : {false, true})
             {
-                std::vector<char> mask(grid.node_count(), 0);
-                for (std::size_t l = 0; l < owners.size(); ++l)
-                    if (owners[l].value == p)
+                std::vector<session::Seat> seats;
+                for (int k = 0; k < peers; ++k)
+                {
+                    seats.push_back({net::PeerId{static_cast<std::uint16_t>(k)}, std::nullopt});
+                    if (points && k > 0)  // Session::seed_of: a face's cell corner
                     {
-                        fast_sets[static_cast<std::size_t>(p)].push_back(graph.regions()[l]);
-                        for (const core::NodeIndex n : graph.nodes(l))
-                            mask[n.value] = 1;
+                        const std::uint32_t cell = static_cast<std::uint32_t>(k) * faces /
+                                                   static_cast<std::uint32_t>(peers) / 2;
+                        const auto w2 = static_cast<std::uint32_t>(2 * grid.w());
+                        seats.back().seed = grid.canonical(
+                            grid.index(static_cast<int>(cell % w2), static_cast<int>(cell / w2)));
                     }
-                exact_sets[static_cast<std::size_t>(p)] = session::node_runs(
-                    grid, session::dilate_nodes(grid, std::move(mask),
-                                                session::SessionSettings{}.halo_rings));
-            }
-            double full = 1e30;
-            std::vector<double> fast(static_cast<std::size_t>(peers), 1e30);
-            std::vector<double> exact(static_cast<std::size_t>(peers), 1e30);
-            for (int round = 0; round < 5; ++round)
-            {
-                full = std::min(full, time_steps({}));
-                for (std::size_t p = 0; p < fast.size(); ++p)
-                {
-                    fast[p] = std::min(fast[p], time_steps(fast_sets[p]));
-                    exact[p] = std::min(exact[p], time_steps(exact_sets[p]));
                 }
-            }
-            const auto max_mean = [&](const std::vector<double>& t)
-            {
-                double worst = 0.0;
-                double sum = 0.0;
-                for (const double x : t)
+                const auto fast_owners = session::partition_leaves(grid, graph, seats);
+                const auto exact_owners =
+                    session::partition_leaves(grid, graph, seats, session::PointClearance::Inside);
+                const auto kind = [&](const std::vector<net::PeerId>& owners)
+                { return owners == session::grown_partition(grid, graph, seats) ? 'g' : 's'; };
+                std::vector<std::vector<core::Region>> fast_sets(static_cast<std::size_t>(peers));
+                std::vector<std::vector<core::Region>> exact_sets(static_cast<std::size_t>(peers));
+                for (int p = 0; p < peers; ++p)
                 {
-                    worst = std::max(worst, x);
-                    sum += x;
+                    std::vector<char> mask(grid.node_count(), 0);
+                    for (std::size_t l = 0; l < fast_owners.size(); ++l)
+                    {
+                        if (fast_owners[l].value == p)
+                            fast_sets[static_cast<std::size_t>(p)].push_back(graph.regions()[l]);
+                        if (exact_owners[l].value == p)
+                            for (const core::NodeIndex n : graph.nodes(l))
+                                mask[n.value] = 1;
+                    }
+                    exact_sets[static_cast<std::size_t>(p)] = session::node_runs(
+                        grid, session::dilate_nodes(grid, std::move(mask),
+                                                    session::SessionSettings{}.halo_rings));
                 }
-                return std::pair<double, double>{worst / full,
-                                                 sum / static_cast<double>(t.size()) / full};
-            };
-            const auto [fmax, fmean] = max_mean(fast);
-            const auto [emax, emean] = max_mean(exact);
-            std::printf("%5d %5d | %.2f %.2f | %.2f %.2f | %.0f\n", level, peers, fmax, fmean, emax,
-                        emean, full * 1e6);
-            std::fflush(stdout);
-            const double n = static_cast<double>(peers);
-            report.add("step only, fast", level, n, "peers", "step_cpu_vs_full_max", fmax, "1");
-            report.add("step only, fast", level, n, "peers", "step_cpu_vs_full_mean", fmean, "1");
-            report.add("step only, exact", level, n, "peers", "step_cpu_vs_full_max", emax, "1");
-            report.add("step only, exact", level, n, "peers", "step_cpu_vs_full_mean", emean, "1");
-        }
+                double full = 1e30;
+                std::vector<double> fast(static_cast<std::size_t>(peers), 1e30);
+                std::vector<double> exact(static_cast<std::size_t>(peers), 1e30);
+                for (int round = 0; round < 5; ++round)
+                {
+                    full = std::min(full, time_steps({}));
+                    for (std::size_t p = 0; p < fast.size(); ++p)
+                    {
+                        fast[p] = std::min(fast[p], time_steps(fast_sets[p]));
+                        exact[p] = std::min(exact[p], time_steps(exact_sets[p]));
+                    }
+                }
+                const auto max_mean = [&](const std::vector<double>& t)
+                {
+                    double worst = 0.0;
+                    double sum = 0.0;
+                    for (const double x : t)
+                    {
+                        worst = std::max(worst, x);
+                        sum += x;
+                    }
+                    return std::pair<double, double>{worst / full,
+                                                     sum / static_cast<double>(t.size()) / full};
+                };
+                const auto [fmax, fmean] = max_mean(fast);
+                const auto [emax, emean] = max_mean(exact);
+                std::printf("%5d %5d %6s | %c %.2f %.2f | %c %.2f %.2f | %.0f\n", level, peers,
+                            points ? "yes" : "none", kind(fast_owners), fmax, fmean,
+                            kind(exact_owners), emax, emean, full * 1e6);
+                std::fflush(stdout);
+                const double n = static_cast<double>(peers);
+                const std::string fast_name =
+                    points ? "step only, fast, session points" : "step only, fast";
+                const std::string exact_name =
+                    points ? "step only, exact, session points" : "step only, exact";
+                report.add(fast_name, level, n, "peers", "step_cpu_vs_full_max", fmax, "1");
+                report.add(fast_name, level, n, "peers", "step_cpu_vs_full_mean", fmean, "1");
+                report.add(exact_name, level, n, "peers", "step_cpu_vs_full_max", emax, "1");
+                report.add(exact_name, level, n, "peers", "step_cpu_vs_full_mean", emean, "1");
+            }
     }
 }
 

@@ -474,15 +474,42 @@ std::optional<std::vector<net::PeerId>> slab_partition(const core::TetraGrid& gr
     return std::nullopt;
 }
 
+std::uint32_t border_hops(const LeafGraph& graph, std::span<const net::PeerId> owners,
+                          core::NodeIndex point)
+{
+    const std::uint32_t start = graph.leaf_of(point);
+    std::vector<std::uint32_t> dist(graph.size(), k_unowned);
+    std::deque<std::uint32_t> queue{start};
+    dist[start] = 0;
+    while (!queue.empty())
+    {
+        const std::uint32_t a = queue.front();
+        queue.pop_front();
+        if (owners[a] != owners[start])
+            return dist[a];
+        for (const std::uint32_t b : graph.neighbours(a))
+            if (dist[b] == k_unowned)
+            {
+                dist[b] = dist[a] + 1;
+                queue.push_back(b);
+            }
+    }
+    return k_unowned;  // one owner holds every leaf
+}
+
 std::vector<net::PeerId> partition_leaves(const core::TetraGrid& grid, const LeafGraph& graph,
-                                          std::span<const Seat> seats)
+                                          std::span<const Seat> seats, PointClearance clearance)
 {
     std::vector<net::PeerId> owners = grown_partition(grid, graph, seats);
-    if (auto slabs = slab_partition(grid, graph, seats);
-        slabs && measure_partition(grid, graph, *slabs).busiest_cost <
-                     measure_partition(grid, graph, owners).busiest_cost)
-        owners = std::move(*slabs);
-    return owners;
+    auto slabs = slab_partition(grid, graph, seats);
+    if (!slabs || measure_partition(grid, graph, *slabs).busiest_cost >=
+                      measure_partition(grid, graph, owners).busiest_cost)
+        return owners;
+    if (clearance == PointClearance::AsGrown)
+        for (const Seat& s : seats)
+            if (s.seed && border_hops(graph, *slabs, *s.seed) < border_hops(graph, owners, *s.seed))
+                return owners;
+    return std::move(*slabs);
 }
 
 PartitionQuality measure_partition(const core::TetraGrid& grid, const LeafGraph& graph,

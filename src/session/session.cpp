@@ -740,7 +740,11 @@ struct Session::Impl
         for (const auto& [id, p] : peers)
             if (p.ready && !p.leaving && !p.departed && p.info.role == net::Role::Participant)
                 seats.push_back(Seat{net::PeerId{id}, seed_of(p.points)});
-        return partition_leaves(s.model_->grid(), *s.graph_, seats);
+        // Exact coupling's state does not depend on the borders; fast coupling's errs next to
+        // them, so there the points keep the distance the grown shares give them.
+        return partition_leaves(
+            s.model_->grid(), *s.graph_, seats,
+            s.coupling_ == Coupling::Exact ? PointClearance::Inside : PointClearance::AsGrown);
     }
 
     void master_repartition(std::uint64_t apply)

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <limits>
 #include <map>
 #include <set>
 
@@ -308,7 +309,14 @@ TEST(Partition, TakesTheSlabsExactlyWhenTheirBusiestStepIsCheaper)
                     return worst;
                 };
                 const bool cheaper = slabs && busiest(*slabs) < busiest(grown);
-                EXPECT_EQ(partition_leaves(g, graph, seats), cheaper ? *slabs : grown);
+                bool as_far = true;  // no point nearer a border than in the grown shares
+                for (const Seat& s : seats)
+                    if (slabs && s.seed &&
+                        border_hops(graph, *slabs, *s.seed) < border_hops(graph, grown, *s.seed))
+                        as_far = false;
+                EXPECT_EQ(partition_leaves(g, graph, seats), cheaper && as_far ? *slabs : grown);
+                EXPECT_EQ(partition_leaves(g, graph, seats, PointClearance::Inside),
+                          cheaper ? *slabs : grown);
                 EXPECT_DOUBLE_EQ(measure_partition(g, graph, grown).busiest_cost, busiest(grown));
                 if (level >= 6 && !points)  // what the slabs are for: 9-30 % less here
                 {
@@ -317,10 +325,43 @@ TEST(Partition, TakesTheSlabsExactlyWhenTheirBusiestStepIsCheaper)
                 }
                 std::printf(
                     "level %d peers %d points %d: busiest modelled step, grown %.0f, "
-                    "slabs %.0f\n",
-                    level, p, points ? 1 : 0, busiest(grown), slabs ? busiest(*slabs) : 0.0);
+                    "slabs %.0f%s\n",
+                    level, p, points ? 1 : 0, busiest(grown), slabs ? busiest(*slabs) : 0.0,
+                    slabs && !as_far ? " (a point nearer a border)" : "");
             }
     }
+}
+
+TEST(Partition, BorderHopsEqualTheHopsFromTheOnlyForeignLeaf)
+{
+    const auto g = grid_of(5);
+    const LeafGraph graph(g, leaf_depth_for(g, net::ValueEncoding::F64));
+    const std::uint32_t foreign = 5;
+    std::vector<net::PeerId> owners(graph.size(), net::PeerId{1});
+    owners[foreign] = net::PeerId{2};
+    // Reference: breadth-first distances from the foreign leaf, level by level.
+    std::vector<int> dist(graph.size(), -1);
+    dist[foreign] = 0;
+    for (int d = 0, reached = 1; reached > 0; ++d)
+    {
+        reached = 0;
+        for (std::size_t l = 0; l < graph.size(); ++l)
+            if (dist[l] == d)
+                for (const std::uint32_t b : graph.neighbours(l))
+                    if (dist[b] < 0)
+                    {
+                        dist[b] = d + 1;
+                        ++reached;
+                    }
+    }
+    // From the foreign leaf itself, any neighbour is another owner's.
+    for (std::size_t l = 0; l < graph.size(); ++l)
+        EXPECT_EQ(border_hops(graph, owners, graph.nodes(l).front()),
+                  l == foreign ? 1U : static_cast<std::uint32_t>(dist[l]))
+            << "leaf " << l;
+    const std::vector<net::PeerId> one(graph.size(), net::PeerId{1});
+    EXPECT_EQ(border_hops(graph, one, graph.nodes(0).front()),
+              std::numeric_limits<std::uint32_t>::max());
 }
 
 TEST(Partition, PointsInTheSameRowsKeepTheGrownShares)

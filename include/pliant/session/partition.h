@@ -33,8 +33,11 @@
 ///   full step at levels 6-8; a slab spans 1/p of the rows in one run each.
 ///   `partition_leaves` takes the slabs when the busiest participant's modelled cost
 ///   (`step_cost`) is lower with them and every point fits in its own slab within
-///   `k_slab_balance`; otherwise (points in the same rows, more participants than leaves) the
-///   grown shares.
+///   `k_slab_balance`; in fast coupling also only when no point is closer to a border (in leaf
+///   hops) than in the grown shares, where it sits at the centre of its share: fast coupling
+///   errs most next to borders, so slabs never bring a border nearer a user's grab
+///   (`PointClearance`). Otherwise (points in the same rows or off their slab's middle, more
+///   participants than leaves) the grown shares.
 /// - Rejected: recursive coordinate bisection (balanced but ignores the points of interest and
 ///   cuts across the seams arbitrarily); METIS-style multilevel partitioning (not in Debian's
 ///   C++ packages we use, and non-deterministic across versions).
@@ -121,13 +124,29 @@ inline constexpr double k_row_segment_cost = 16.0;
 /// the cost comparison in `partition_leaves` counts the extra nodes of the busiest).
 inline constexpr double k_slab_balance = 0.10;
 
+/// What the slabs must leave around the points of interest to be taken.
+enum class PointClearance : std::uint8_t
+{
+    /// No point fewer `border_hops` from a border than in the grown shares: fast coupling errs
+    /// most next to borders (docs/session.md §4.2), so a user's grab keeps its distance.
+    AsGrown,
+    /// Only each point's leaf and its neighbours in its own slab: exact coupling gives the same
+    /// state whatever the borders, so only the cost counts.
+    Inside,
+};
+
 /// Owner of every leaf (index as `LeafGraph::leaves()`), deterministic in its inputs (the seats
 /// are sorted by peer id first; their order does not matter). \pre seats non-empty, ids unique.
 /// Of the two candidates in the file comment, the slabs when their busiest participant's
-/// `step_cost` is lower, else the grown shares.
-[[nodiscard]] std::vector<net::PeerId> partition_leaves(const core::TetraGrid& grid,
-                                                        const LeafGraph& graph,
-                                                        std::span<const Seat> seats);
+/// `step_cost` is lower and they meet `clearance`, else the grown shares.
+[[nodiscard]] std::vector<net::PeerId> partition_leaves(
+    const core::TetraGrid& grid, const LeafGraph& graph, std::span<const Seat> seats,
+    PointClearance clearance = PointClearance::AsGrown);
+
+/// Hops in the leaf graph from the leaf of `point` to the nearest leaf of another owner
+/// (UINT32_MAX when one owner holds every leaf).
+[[nodiscard]] std::uint32_t border_hops(const LeafGraph& graph, std::span<const net::PeerId> owners,
+                                        core::NodeIndex point);
 
 /// The grown shares alone (same contract as `partition_leaves`).
 [[nodiscard]] std::vector<net::PeerId> grown_partition(const core::TetraGrid& grid,
