@@ -73,6 +73,27 @@ net::UserForce pull(std::uint32_t face)
     return f;
 }
 
+/// The seats of the session runs: participant k declares face k F / P (its cell corner, as
+/// Session::seed_of takes it), the master declares none; without `points`, nobody does.
+std::vector<session::Seat> session_seats(const core::TetraGrid& grid, int peers, bool points)
+{
+    const auto faces = static_cast<std::uint32_t>(grid.face_count());
+    const auto w2 = static_cast<std::uint32_t>(2 * grid.w());
+    std::vector<session::Seat> seats;
+    for (int k = 0; k < peers; ++k)
+    {
+        seats.push_back({net::PeerId{static_cast<std::uint16_t>(k)}, std::nullopt});
+        if (points && k > 0)
+        {
+            const std::uint32_t cell =
+                static_cast<std::uint32_t>(k) * faces / static_cast<std::uint32_t>(peers) / 2;
+            seats.back().seed = grid.canonical(
+                grid.index(static_cast<int>(cell % w2), static_cast<int>(cell / w2)));
+        }
+    }
+    return seats;
+}
+
 /// One run: `peers` participants (master included), `ticks` steps after everyone is in.
 RunResult run(int level, int peers, session::Coupling coupling, std::uint64_t ticks,
               const sim::MembraneState* reference_state, double rate_hz = 60.0)
@@ -638,19 +659,7 @@ void steps_suite(bench::Report& report, const std::vector<int>& levels)
         for (int peers = 2; peers <= 4; ++peers)
             for (const bool points : {false, true})
             {
-                std::vector<session::Seat> seats;
-                for (int k = 0; k < peers; ++k)
-                {
-                    seats.push_back({net::PeerId{static_cast<std::uint16_t>(k)}, std::nullopt});
-                    if (points && k > 0)  // Session::seed_of: a face's cell corner
-                    {
-                        const std::uint32_t cell = static_cast<std::uint32_t>(k) * faces /
-                                                   static_cast<std::uint32_t>(peers) / 2;
-                        const auto w2 = static_cast<std::uint32_t>(2 * grid.w());
-                        seats.back().seed = grid.canonical(
-                            grid.index(static_cast<int>(cell % w2), static_cast<int>(cell / w2)));
-                    }
-                }
+                const std::vector<session::Seat> seats = session_seats(grid, peers, points);
                 const auto fast_owners = session::partition_leaves(grid, graph, seats);
                 const auto exact_owners =
                     session::partition_leaves(grid, graph, seats, session::PointClearance::Inside);
@@ -809,11 +818,10 @@ int main(int argc, char** argv)
             add_rows(report, "fast", level, peers, fast, single_s, sim_seconds);
             const session::LeafGraph graph(grid,
                                            session::leaf_depth_for(grid, net::ValueEncoding::F64));
-            std::vector<session::Seat> seats;
-            for (int k = 0; k < peers; ++k)
-                seats.push_back({net::PeerId{static_cast<std::uint16_t>(k)}, std::nullopt});
+            // The fast runs' partition (the exact runs' may be slabs where this one is not).
             const auto q = session::measure_partition(
-                grid, graph, session::partition_leaves(grid, graph, seats));
+                grid, graph,
+                session::partition_leaves(grid, graph, session_seats(grid, peers, true)));
             std::size_t frags = 0;
             for (const auto& sh : q.shares)
                 frags += sh.fragments;
