@@ -264,9 +264,11 @@ core::Result<Scenario> parse_scenario(const std::filesystem::path& path)
         PLIANT_TRY(r.number("fixed_dt", s.fixed_dt, 1e-300, 1e6));
         PLIANT_TRY(r.integer("reassemble_every", s.reassemble_every, 0, 1 << 30));
         PLIANT_TRY(r.integer("threads", s.threads, 0, 1024));
-        std::string hold = s.force_hold == sim::ForceHold::Linear ? "linear" : "step";
-        PLIANT_TRY(r.choice("force_hold", hold, {"linear", "step"}));
-        s.force_hold = hold == "linear" ? sim::ForceHold::Linear : sim::ForceHold::Step;
+        const std::string linear(sim::to_string(sim::ForceHold::Linear));
+        std::string hold(sim::to_string(s.force_hold));
+        PLIANT_TRY(r.choice("force_hold", hold,
+                            {linear, std::string(sim::to_string(sim::ForceHold::Step))}));
+        s.force_hold = hold == linear ? sim::ForceHold::Linear : sim::ForceHold::Step;
         if (s.dt_min > s.dt_max || s.dt_initial < s.dt_min || s.dt_initial > s.dt_max)
             return scenario_error(path, node->source(), "integrator",
                                   "needs dt_min <= dt_initial <= dt_max");

@@ -42,6 +42,7 @@
 #include <cstdlib>
 #include <numbers>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace
@@ -126,17 +127,19 @@ int main(int argc, char** argv)
     // Wall-time cap of a real-time run, which otherwise runs the whole scenario.
     const double rt_seconds = argc > 2 ? std::atof(argv[2]) : (quick ? 0.6 : 4.0);
     const int min_level = argc > 3 ? std::atoi(argv[3]) : (quick ? 5 : 6);
-    const auto has_word = [&](const char* word)
+    const auto has_word = [&](std::string_view word)
     {
         for (int i = 4; i < argc; ++i)
-            if (std::string(argv[i]) == word)
+            if (argv[i] == word)
                 return true;
         return false;
     };
     const bool kernel_only = has_word("kernel");
     const core::SphereMap sphere_map =
         has_word("gnomonic") ? core::SphereMap::Gnomonic : core::SphereMap::EqualArea;
-    const sim::ForceHold hold = has_word("step") ? sim::ForceHold::Step : sim::ForceHold::Linear;
+    const sim::ForceHold hold = has_word(sim::to_string(sim::ForceHold::Step))
+                                    ? sim::ForceHold::Step
+                                    : sim::ForceHold::Linear;
     const int reps = quick ? 3 : 5;
     const double node_steps_per_rep = quick ? 3e6 : 3e7;
     const double rep_cap_s = quick ? 0.4 : 4.0;  // wall seconds per repetition at most
@@ -152,9 +155,9 @@ int main(int argc, char** argv)
                 "rtol=1e-4, one point force sliding on the surface, frames of 1/60 s");
     report.meta("sphere_map", std::string(core::to_string(sphere_map)));
     std::printf("sphere: %s grid\n", std::string(core::to_string(sphere_map)).c_str());
-    const char* hold_name = hold == sim::ForceHold::Linear ? "linear" : "step";
+    const std::string hold_name(sim::to_string(hold));
     report.meta("force_hold", hold_name);
-    std::printf("force hold between frames: %s\n", hold_name);
+    std::printf("force hold between frames: %s\n", hold_name.c_str());
     if (!kernel_only)
         for (const int threads : {1, 2})
         {

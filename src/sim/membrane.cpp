@@ -8,9 +8,15 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <string_view>
 
 namespace pliant::sim
 {
+
+std::string_view to_string(ForceHold hold) noexcept
+{
+    return hold == ForceHold::Linear ? "linear" : "step";
+}
 namespace
 {
 

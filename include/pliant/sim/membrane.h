@@ -33,6 +33,7 @@
 
 #include <cstdint>
 #include <span>
+#include <string_view>
 #include <vector>
 
 namespace pliant::sim
@@ -52,6 +53,9 @@ enum class ForceHold : std::uint8_t
     /// later on average than the zero-order hold).
     Linear,
 };
+
+/// "step" or "linear": the names `pliant simulate`'s scenarios and the benchmarks use.
+[[nodiscard]] std::string_view to_string(ForceHold hold) noexcept;
 
 /// Material, integrator and threading settings (SI units). Validated by `MembraneModel::create`.
 struct MembraneSettings
