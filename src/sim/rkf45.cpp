@@ -517,7 +517,7 @@ namespace
 // pipeline reads the force planes only there. Their twin and ghost copies need no marking of
 // their own: the pipeline runs only when every copy into rows 0..ny-1 stays in its source's row
 // (plan_pipeline checks it on the copy table), and nothing else reads forced_rows. (Walking the
-// copy table here, one integer division per entry, was 4 % of a level-6 step.)
+// copy table here, one integer division per entry, took 4 % of a level-6 perf profile.)
 void mark_forced_rows(const MembraneModel& model, Rkf45Workspace& ws)
 {
     const std::ptrdiff_t stride = ws.accel.stride();
