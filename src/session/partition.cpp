@@ -324,8 +324,9 @@ std::vector<std::uint32_t> grow_seats(const core::TetraGrid& grid, const LeafGra
 /// Slabs: runs of the leaves in row-major order (leaf rows top to bottom, x increasing), one
 /// per seat, cut where the running node count passes k/p of the total, seats ordered by the row
 /// of their point; each cut then moves (leaf by leaf) as far as needed to put every point's leaf
-/// in its own seat's slab. A seat index per leaf, or nothing when that needs a slab outside
-/// k_slab_balance of the mean (the growth is used then). \pre seats sorted by peer id.
+/// and its neighbouring leaves in its own seat's slab. A seat index per leaf, or nothing when
+/// that needs a slab outside k_slab_balance of the mean (the growth is used then). \pre seats
+/// sorted by peer id.
 std::optional<std::vector<std::uint32_t>> slab_seats(const core::TetraGrid& grid,
                                                      const LeafGraph& graph,
                                                      std::span<const Seat> seats)
@@ -446,6 +447,51 @@ std::vector<Seat> sorted_seats(std::span<const Seat> seats_in)
     return seats;
 }
 
+/// Row segments per owner index (`owner[l]` < out.size() for every leaf l): the x-runs of each
+/// owner's canonical nodes, row by row, as `node_runs` cuts them for the restricted step (a
+/// twin ends a run). One pass over the grid.
+void count_row_segments(const core::TetraGrid& grid, const LeafGraph& graph,
+                        const std::vector<std::uint32_t>& owner, std::vector<std::size_t>& out)
+{
+    for (int y = 0; y < grid.ny(); ++y)
+    {
+        std::uint32_t prev = k_unowned;
+        for (int x = 0; x < grid.nx(); ++x)
+        {
+            const core::NodeIndex n = grid.index(x, y);
+            if (!grid.is_canonical(n))
+            {
+                prev = k_unowned;
+                continue;
+            }
+            const std::uint32_t o = owner[graph.leaf_of(n)];
+            if (o != prev)
+                ++out[o];
+            prev = o;
+        }
+    }
+}
+
+/// The largest `step_cost` over the seats of a seat-index table.
+double busiest_cost(const core::TetraGrid& grid, const LeafGraph& graph,
+                    const std::vector<std::uint32_t>& owner, std::size_t seats)
+{
+    std::vector<std::size_t> nodes(seats, 0);
+    std::vector<std::size_t> segments(seats, 0);
+    for (std::size_t l = 0; l < owner.size(); ++l)
+        nodes[owner[l]] += graph.node_count(l);
+    count_row_segments(grid, graph, owner, segments);
+    double worst = 0.0;
+    for (std::size_t s = 0; s < seats; ++s)
+    {
+        PeerShare share;
+        share.nodes = nodes[s];
+        share.row_segments = segments[s];
+        worst = std::max(worst, step_cost(share));
+    }
+    return worst;
+}
+
 std::vector<net::PeerId> to_peers(const std::vector<std::uint32_t>& owner,
                                   std::span<const Seat> seats)
 {
@@ -498,18 +544,24 @@ std::uint32_t border_hops(const LeafGraph& graph, std::span<const net::PeerId> o
 }
 
 std::vector<net::PeerId> partition_leaves(const core::TetraGrid& grid, const LeafGraph& graph,
-                                          std::span<const Seat> seats, PointClearance clearance)
+                                          std::span<const Seat> seats_in, PointClearance clearance)
 {
-    std::vector<net::PeerId> owners = grown_partition(grid, graph, seats);
-    auto slabs = slab_partition(grid, graph, seats);
-    if (!slabs || measure_partition(grid, graph, *slabs).busiest_cost >=
-                      measure_partition(grid, graph, owners).busiest_cost)
-        return owners;
+    // O(leaves) for the candidates and O(grid nodes) for their costs: no sort, no node masks
+    // (a repartition runs on the master between frames).
+    const std::vector<Seat> seats = sorted_seats(seats_in);
+    const std::vector<std::uint32_t> grown = grow_seats(grid, graph, seats);
+    const auto slabs = slab_seats(grid, graph, seats);
+    if (!slabs || busiest_cost(grid, graph, *slabs, seats.size()) >=
+                      busiest_cost(grid, graph, grown, seats.size()))
+        return to_peers(grown, seats);
+    const std::vector<net::PeerId> grown_peers = to_peers(grown, seats);
+    std::vector<net::PeerId> slab_peers = to_peers(*slabs, seats);
     if (clearance == PointClearance::AsGrown)
         for (const Seat& s : seats)
-            if (s.seed && border_hops(graph, *slabs, *s.seed) < border_hops(graph, owners, *s.seed))
-                return owners;
-    return std::move(*slabs);
+            if (s.seed &&
+                border_hops(graph, slab_peers, *s.seed) < border_hops(graph, grown_peers, *s.seed))
+                return grown_peers;
+    return slab_peers;
 }
 
 PartitionQuality measure_partition(const core::TetraGrid& grid, const LeafGraph& graph,
@@ -559,15 +611,17 @@ PartitionQuality measure_partition(const core::TetraGrid& grid, const LeafGraph&
     std::sort(edges.begin(), edges.end());
     edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
     // Row segments: the restricted step's x-runs of owned nodes, one per grid row they span.
-    for (auto& [id, share] : shares)
     {
-        std::vector<char> mask(grid.node_count(), 0);
+        std::map<net::PeerId, std::uint32_t> index;
+        for (const auto& [id, share] : shares)
+            index.emplace(id, static_cast<std::uint32_t>(index.size()));
+        std::vector<std::uint32_t> owner(owners.size());
         for (std::size_t l = 0; l < owners.size(); ++l)
-            if (owners[l] == id)
-                for (const core::NodeIndex m : graph.nodes(l))
-                    mask[m.value] = 1;
-        for (const core::Region& r : node_runs(grid, mask))
-            share.row_segments += static_cast<std::size_t>(r.y1 - r.y0);
+            owner[l] = index.at(owners[l]);
+        std::vector<std::size_t> segments(index.size(), 0);
+        count_row_segments(grid, graph, owner, segments);
+        for (auto& [id, share] : shares)
+            share.row_segments = segments[index.at(id)];
     }
     PartitionQuality q;
     for (const auto& [a, b] : edges)
