@@ -29,7 +29,7 @@
 ///   latitude: connected, bordered by one row loop per cut, and one x-run per grid row.
 /// - Why two candidates: a restricted sim step pays per row segment (one x-run of owned nodes in
 ///   one grid row) about what 16 nodes cost (`k_row_segment_cost`). A grown share spans most
-///   rows, often as two runs (the periodic seam splits it), so half the nodes cost 0.61-0.71 of a
+///   rows, often as two runs (the periodic seam splits it), so half the nodes cost 0.57-0.71 of a
 ///   full step at levels 6-8; a slab spans 1/p of the rows in one run each.
 ///   `partition_leaves` takes the slabs when the busiest participant's modelled cost
 ///   (`step_cost`) is lower with them and every point fits in its own slab within
