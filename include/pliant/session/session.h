@@ -133,10 +133,11 @@ struct SessionSettings
     /// (the streamed values are the neighbours' Dirichlet values there) and with QuantisedDelta
     /// (its baselines are whole leaves). A per-sender choice; every peer refines what it gets.
     int stream_coarsen = 0;
-    /// Exact mode: dilation of the integrated set, >= 3 (3 are exact for the sim's fused RKF45,
-    /// tests/session/halo_rings_test.cpp; 6 also covers a scheme whose every stage reads the
-    /// previous one, at ~10 % more work per peer at level 8 with 2 peers).
-    int halo_rings = 6;
+    /// Exact mode: dilation of the integrated set, >= 3: the sim's fused RKF45 moves a boundary
+    /// error one ring per two stages, so 3 rings are exact (tests/session/halo_rings_test.cpp
+    /// fails if that stops holding). More rings cost compute and halo traffic for nothing with
+    /// this integrator (6 would cover one whose every stage reads the previous one).
+    int halo_rings = 3;
     /// Fast mode: restricted advances per second; every mode: view_u/v updates per second; > 0.
     double frame_rate_hz = 60.0;
     /// Fast mode: the bound on halo staleness, s (0: none). A frame steps only if every streamed
