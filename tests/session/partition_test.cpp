@@ -230,106 +230,110 @@ std::vector<std::size_t> row_major(const LeafGraph& graph)
     return order;
 }
 
-TEST(Partition, SlabsAreRowMajorRunsBalancedWithEveryPointInsideItsOwnSlab)
+// Every seat layout of the slab tests: levels 5-8, 2-4 participants, with and without points.
+template <typename Fn>
+void for_each_layout(Fn fn)
 {
-    int built = 0;
     for (int level = 5; level <= 8; ++level)
     {
         const auto g = grid_of(level);
         const LeafGraph graph(g, leaf_depth_for(g, net::ValueEncoding::F64));
         for (int p = 2; p <= 4; ++p)
             for (const bool points : {true, false})
-            {
-                const auto seats = seats_of(g, p, points);
-                const auto slabs = slab_partition(g, graph, seats);
-                if (level >= 6 && !points)
-                {
-                    ASSERT_TRUE(slabs.has_value()) << "level " << level << " p " << p;
-                }
-                if (!slabs)
-                    continue;
-                ++built;
-                // One run per peer along the row-major order.
-                std::vector<net::PeerId> run_owner;
-                for (const std::size_t l : row_major(graph))
-                    if (run_owner.empty() || run_owner.back() != (*slabs)[l])
-                        run_owner.push_back((*slabs)[l]);
-                EXPECT_EQ(run_owner.size(), static_cast<std::size_t>(p)) << level << " " << p;
-                std::set<std::uint16_t> distinct;
-                for (const net::PeerId id : run_owner)
-                    distinct.insert(id.value);
-                EXPECT_EQ(distinct.size(), static_cast<std::size_t>(p));
-                const auto q = measure_partition(g, graph, *slabs);
-                EXPECT_LE(q.imbalance, k_slab_balance);
-                for (const auto& share : q.shares)
-                {
-                    EXPECT_EQ(share.fragments, 1U) << "a band is connected";
-                    EXPECT_EQ(share.row_segments, brute_row_segments(g, graph, *slabs, share.peer));
-                }
-                // Each point's leaf and its neighbours belong to its own participant.
-                for (const Seat& s : seats)
-                    if (s.seed)
-                    {
-                        const std::uint32_t leaf = graph.leaf_of(*s.seed);
-                        EXPECT_EQ((*slabs)[leaf], s.peer);
-                        for (const std::uint32_t b : graph.neighbours(leaf))
-                            EXPECT_EQ((*slabs)[b], s.peer) << "level " << level << " p " << p;
-                    }
-            }
+                fn(g, graph, level, p, points, seats_of(g, p, points));
     }
+}
+
+TEST(Partition, SlabsAreRowMajorRunsBalancedWithEveryPointInsideItsOwnSlab)
+{
+    int built = 0;
+    for_each_layout(
+        [&](const core::TetraGrid& g, const LeafGraph& graph, int level, int p, bool points,
+            const std::vector<Seat>& seats)
+        {
+            const auto slabs = slab_partition(g, graph, seats);
+            if (level >= 6 && !points)
+            {
+                ASSERT_TRUE(slabs.has_value()) << "level " << level << " p " << p;
+            }
+            if (!slabs)
+                return;
+            ++built;
+            // One run per peer along the row-major order.
+            std::vector<net::PeerId> run_owner;
+            for (const std::size_t l : row_major(graph))
+                if (run_owner.empty() || run_owner.back() != (*slabs)[l])
+                    run_owner.push_back((*slabs)[l]);
+            EXPECT_EQ(run_owner.size(), static_cast<std::size_t>(p)) << level << " " << p;
+            std::set<std::uint16_t> distinct;
+            for (const net::PeerId id : run_owner)
+                distinct.insert(id.value);
+            EXPECT_EQ(distinct.size(), static_cast<std::size_t>(p));
+            const auto q = measure_partition(g, graph, *slabs);
+            EXPECT_LE(q.imbalance, k_slab_balance);
+            for (const auto& share : q.shares)
+            {
+                EXPECT_EQ(share.fragments, 1U) << "a band is connected";
+                EXPECT_EQ(share.row_segments, brute_row_segments(g, graph, *slabs, share.peer));
+            }
+            // Each point's leaf and its neighbours belong to its own participant.
+            for (const Seat& s : seats)
+                if (s.seed)
+                {
+                    const std::uint32_t leaf = graph.leaf_of(*s.seed);
+                    EXPECT_EQ((*slabs)[leaf], s.peer);
+                    for (const std::uint32_t b : graph.neighbours(leaf))
+                        EXPECT_EQ((*slabs)[b], s.peer) << "level " << level << " p " << p;
+                }
+        });
     EXPECT_GE(built, 12);
 }
 
 TEST(Partition, TakesTheSlabsExactlyWhenTheirBusiestStepIsCheaper)
 {
-    for (int level = 5; level <= 8; ++level)
-    {
-        const auto g = grid_of(level);
-        const LeafGraph graph(g, leaf_depth_for(g, net::ValueEncoding::F64));
-        for (int p = 2; p <= 4; ++p)
-            for (const bool points : {true, false})
+    for_each_layout(
+        [&](const core::TetraGrid& g, const LeafGraph& graph, int level, int p, bool points,
+            const std::vector<Seat>& seats)
+        {
+            const auto grown = grown_partition(g, graph, seats);
+            const auto slabs = slab_partition(g, graph, seats);
+            // The modelled cost from brute-force counts, not from measure_partition.
+            const auto busiest = [&](const std::vector<net::PeerId>& owners)
             {
-                const auto seats = seats_of(g, p, points);
-                const auto grown = grown_partition(g, graph, seats);
-                const auto slabs = slab_partition(g, graph, seats);
-                // The modelled cost from brute-force counts, not from measure_partition.
-                const auto busiest = [&](const std::vector<net::PeerId>& owners)
-                {
-                    double worst = 0.0;
-                    for (const Seat& s : seats)
-                    {
-                        std::size_t nodes = 0;
-                        for (std::size_t l = 0; l < owners.size(); ++l)
-                            nodes += owners[l] == s.peer ? graph.node_count(l) : 0U;
-                        worst = std::max(
-                            worst, static_cast<double>(nodes) +
-                                       k_row_segment_cost * static_cast<double>(brute_row_segments(
-                                                                g, graph, owners, s.peer)));
-                    }
-                    return worst;
-                };
-                const bool cheaper = slabs && busiest(*slabs) < busiest(grown);
-                bool as_far = true;  // no point nearer a border than in the grown shares
+                double worst = 0.0;
                 for (const Seat& s : seats)
-                    if (slabs && s.seed &&
-                        border_hops(graph, *slabs, *s.seed) < border_hops(graph, grown, *s.seed))
-                        as_far = false;
-                EXPECT_EQ(partition_leaves(g, graph, seats), cheaper && as_far ? *slabs : grown);
-                EXPECT_EQ(partition_leaves(g, graph, seats, PointClearance::Inside),
-                          cheaper ? *slabs : grown);
-                EXPECT_DOUBLE_EQ(measure_partition(g, graph, grown).busiest_cost, busiest(grown));
-                if (level >= 6 && !points)  // what the slabs are for: 9-30 % less here
                 {
-                    ASSERT_TRUE(cheaper);
-                    EXPECT_LT(busiest(*slabs), 0.95 * busiest(grown)) << level << " " << p;
+                    std::size_t nodes = 0;
+                    for (std::size_t l = 0; l < owners.size(); ++l)
+                        nodes += owners[l] == s.peer ? graph.node_count(l) : 0U;
+                    worst = std::max(
+                        worst, static_cast<double>(nodes) +
+                                   k_row_segment_cost * static_cast<double>(brute_row_segments(
+                                                            g, graph, owners, s.peer)));
                 }
-                std::printf(
-                    "level %d peers %d points %d: busiest modelled step, grown %.0f, "
-                    "slabs %.0f%s\n",
-                    level, p, points ? 1 : 0, busiest(grown), slabs ? busiest(*slabs) : 0.0,
-                    slabs && !as_far ? " (a point nearer a border)" : "");
+                return worst;
+            };
+            const bool cheaper = slabs && busiest(*slabs) < busiest(grown);
+            bool as_far = true;  // no point nearer a border than in the grown shares
+            for (const Seat& s : seats)
+                if (slabs && s.seed &&
+                    border_hops(graph, *slabs, *s.seed) < border_hops(graph, grown, *s.seed))
+                    as_far = false;
+            EXPECT_EQ(partition_leaves(g, graph, seats), cheaper && as_far ? *slabs : grown);
+            EXPECT_EQ(partition_leaves(g, graph, seats, PointClearance::Inside),
+                      cheaper ? *slabs : grown);
+            EXPECT_DOUBLE_EQ(measure_partition(g, graph, grown).busiest_cost, busiest(grown));
+            if (level >= 6 && !points)  // what the slabs are for: 9-30 % less here
+            {
+                ASSERT_TRUE(cheaper);
+                EXPECT_LT(busiest(*slabs), 0.95 * busiest(grown)) << level << " " << p;
             }
-    }
+            std::printf(
+                "level %d peers %d points %d: busiest modelled step, grown %.0f, "
+                "slabs %.0f%s\n",
+                level, p, points ? 1 : 0, busiest(grown), slabs ? busiest(*slabs) : 0.0,
+                slabs && !as_far ? " (a point nearer a border)" : "");
+        });
 }
 
 TEST(Partition, BorderHopsEqualTheHopsFromTheOnlyForeignLeaf)
