@@ -17,6 +17,7 @@ std::string_view to_string(ForceHold hold) noexcept
 {
     return hold == ForceHold::Linear ? "linear" : "step";
 }
+
 namespace
 {
 

@@ -196,7 +196,7 @@ TEST(SessionFast, TwoPeersStayWithinTheDocumentedError)
     }
     std::printf("fast vs single-process after %llu ticks: max |du| / max |u| = %.3e\n",
                 static_cast<unsigned long long>(k_ticks), worst);
-    EXPECT_LE(worst, 1e-3);  // docs/session.md §4: measured 2.1e-4
+    EXPECT_LE(worst, 1e-3);  // docs/session.md §4.2: measured 1.6e-4
     EXPECT_GT(worst, 0.0);   // fast mode is not exact: the test can tell the two apart
 }
 
