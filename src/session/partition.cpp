@@ -321,22 +321,11 @@ std::vector<std::uint32_t> grow_seats(const core::TetraGrid& grid, const LeafGra
     return owner;
 }
 
-/// Slabs: runs of the leaves in row-major order (leaf rows top to bottom, x increasing), one
-/// per seat, cut where the running node count passes k/p of the total, seats ordered by the row
-/// of their point; each cut then moves (leaf by leaf) as far as needed to put every point's leaf
-/// and its neighbouring leaves in its own seat's slab. A seat index per leaf, or nothing when
-/// that needs a slab outside k_slab_balance of the mean (the growth is used then). \pre seats
-/// sorted by peer id.
-std::optional<std::vector<std::uint32_t>> slab_seats(const core::TetraGrid& grid,
-                                                     const LeafGraph& graph,
-                                                     std::span<const Seat> seats)
+/// The leaves in row-major order (leaf rows top to bottom, x increasing).
+std::vector<std::uint32_t> row_major_leaves(const LeafGraph& graph)
 {
-    const std::size_t p = seats.size();
-    const std::size_t n = graph.size();
-    if (p > n)
-        return std::nullopt;
-    std::vector<std::uint32_t> order(n);  // leaves, row-major
-    for (std::uint32_t l = 0; l < n; ++l)
+    std::vector<std::uint32_t> order(graph.size());
+    for (std::uint32_t l = 0; l < order.size(); ++l)
         order[l] = l;
     const auto regions = graph.regions();
     std::sort(order.begin(), order.end(),
@@ -345,6 +334,26 @@ std::optional<std::vector<std::uint32_t>> slab_seats(const core::TetraGrid& grid
                   return regions[a].y0 != regions[b].y0 ? regions[a].y0 < regions[b].y0
                                                         : regions[a].x0 < regions[b].x0;
               });
+    return order;
+}
+
+/// Slabs: runs of the leaves in row-major order started at position `shift` and wrapping
+/// round (the order is a cycle), one per seat, cut where the running node count passes k/p of
+/// the total, seats ordered by the position of their point; each cut then moves (leaf by leaf)
+/// as far as needed to put every point's leaf and its neighbouring leaves in its own seat's
+/// slab. A seat index per leaf, or nothing when that needs a slab outside k_slab_balance of the
+/// mean (the growth is used then). \pre seats sorted by peer id.
+std::optional<std::vector<std::uint32_t>> slab_seats(const core::TetraGrid& grid,
+                                                     const LeafGraph& graph,
+                                                     std::span<const std::uint32_t> row_major,
+                                                     std::span<const Seat> seats, std::size_t shift)
+{
+    const std::size_t p = seats.size();
+    const std::size_t n = graph.size();
+    if (p > n || shift >= n)
+        return std::nullopt;
+    std::vector<std::uint32_t> order(row_major.begin(), row_major.end());
+    std::rotate(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(shift), order.end());
     std::vector<std::size_t> rank(n);        // leaf -> position in `order`
     std::vector<std::size_t> before(n + 1);  // nodes of order[0 .. k)
     for (std::size_t k = 0; k < n; ++k)
@@ -501,6 +510,49 @@ std::vector<net::PeerId> to_peers(const std::vector<std::uint32_t>& owner,
     return out;
 }
 
+/// `centred_slab_shift` for seats sorted by peer id (`order`: `row_major_leaves`).
+std::size_t centred_shift(const LeafGraph& graph, std::span<const std::uint32_t> order,
+                          std::span<const Seat> seats)
+{
+    const std::size_t n = graph.size();
+    std::vector<std::size_t> rank(n);
+    std::vector<double> before(n + 1, 0.0);  // nodes of order[0 .. k)
+    for (std::size_t k = 0; k < n; ++k)
+    {
+        rank[order[k]] = k;
+        before[k + 1] = before[k] + static_cast<double>(graph.node_count(order[k]));
+    }
+    // Each point's position along the cycle (the middle of its leaf), modulo one slab.
+    const double slab = before[n] / static_cast<double>(seats.size());
+    std::vector<double> phase;
+    for (const Seat& s : seats)
+        if (s.seed)
+        {
+            const std::size_t k = rank[graph.leaf_of(*s.seed)];
+            phase.push_back(std::fmod(0.5 * (before[k] + before[k + 1]), slab));
+        }
+    if (phase.empty())
+        return 0;
+    std::sort(phase.begin(), phase.end());
+    // The widest gap between consecutive phases (round the cycle of one slab): cuts in its
+    // middle are the farthest from every point.
+    double widest = phase.front() + slab - phase.back();
+    double middle = phase.back() + 0.5 * widest;
+    for (std::size_t i = 1; i < phase.size(); ++i)
+        if (phase[i] - phase[i - 1] > widest)
+        {
+            widest = phase[i] - phase[i - 1];
+            middle = phase[i - 1] + 0.5 * widest;
+        }
+    middle = std::fmod(middle, slab);
+    // The leaf boundary nearest to it.
+    const auto above = static_cast<std::size_t>(
+        std::lower_bound(before.begin(), before.end(), middle) - before.begin());
+    const std::size_t shift =
+        above > 0 && middle - before[above - 1] < before[above] - middle ? above - 1 : above;
+    return shift % n;
+}
+
 }  // namespace
 
 std::vector<net::PeerId> grown_partition(const core::TetraGrid& grid, const LeafGraph& graph,
@@ -512,12 +564,18 @@ std::vector<net::PeerId> grown_partition(const core::TetraGrid& grid, const Leaf
 
 std::optional<std::vector<net::PeerId>> slab_partition(const core::TetraGrid& grid,
                                                        const LeafGraph& graph,
-                                                       std::span<const Seat> seats_in)
+                                                       std::span<const Seat> seats_in,
+                                                       std::size_t shift)
 {
     const std::vector<Seat> seats = sorted_seats(seats_in);
-    if (auto owner = slab_seats(grid, graph, seats))
+    if (auto owner = slab_seats(grid, graph, row_major_leaves(graph), seats, shift))
         return to_peers(*owner, seats);
     return std::nullopt;
+}
+
+std::size_t centred_slab_shift(const LeafGraph& graph, std::span<const Seat> seats)
+{
+    return centred_shift(graph, row_major_leaves(graph), sorted_seats(seats));
 }
 
 std::uint32_t border_hops(const LeafGraph& graph, std::span<const net::PeerId> owners,
@@ -546,22 +604,43 @@ std::uint32_t border_hops(const LeafGraph& graph, std::span<const net::PeerId> o
 std::vector<net::PeerId> partition_leaves(const core::TetraGrid& grid, const LeafGraph& graph,
                                           std::span<const Seat> seats_in, PointClearance clearance)
 {
-    // O(leaves) for the candidates and O(grid nodes) for their costs: no sort, no node masks
-    // (a repartition runs on the master between frames).
+    // O(leaves log leaves) for the candidates (one sort of the leaves into row-major order) and
+    // O(grid nodes) for their costs, no node masks: a repartition runs on the master between
+    // frames.
     const std::vector<Seat> seats = sorted_seats(seats_in);
     const std::vector<std::uint32_t> grown = grow_seats(grid, graph, seats);
-    const auto slabs = slab_seats(grid, graph, seats);
-    if (!slabs || busiest_cost(grid, graph, *slabs, seats.size()) >=
-                      busiest_cost(grid, graph, grown, seats.size()))
-        return to_peers(grown, seats);
-    const std::vector<net::PeerId> grown_peers = to_peers(grown, seats);
-    std::vector<net::PeerId> slab_peers = to_peers(*slabs, seats);
+    std::vector<net::PeerId> best = to_peers(grown, seats);
+    double best_cost = busiest_cost(grid, graph, grown, seats.size());
+    std::vector<std::uint32_t> grown_hops;  // per seat with a point, in the grown shares
     if (clearance == PointClearance::AsGrown)
         for (const Seat& s : seats)
-            if (s.seed &&
-                border_hops(graph, slab_peers, *s.seed) < border_hops(graph, grown_peers, *s.seed))
-                return grown_peers;
-    return slab_peers;
+            if (s.seed)
+                grown_hops.push_back(border_hops(graph, best, *s.seed));
+    // Candidates: the slabs from the first leaf, and the slabs turned to keep the points
+    // farthest from the cuts; the cheaper one that keeps the clearance, if cheaper than grown.
+    const std::vector<std::uint32_t> row_major = row_major_leaves(graph);
+    const std::array<std::size_t, 2> shifts = {0, centred_shift(graph, row_major, seats)};
+    for (std::size_t c = 0; c < (shifts[1] == 0 ? 1U : 2U); ++c)
+    {
+        const std::size_t shift = shifts[c];
+        const auto slabs = slab_seats(grid, graph, row_major, seats, shift);
+        if (!slabs)
+            continue;
+        const double cost = busiest_cost(grid, graph, *slabs, seats.size());
+        if (cost >= best_cost)
+            continue;
+        std::vector<net::PeerId> peers = to_peers(*slabs, seats);
+        bool clear = true;
+        if (clearance == PointClearance::AsGrown)
+            for (std::size_t s = 0, i = 0; s < seats.size(); ++s)
+                if (seats[s].seed)
+                    clear = clear && border_hops(graph, peers, *seats[s].seed) >= grown_hops[i++];
+        if (!clear)
+            continue;
+        best = std::move(peers);
+        best_cost = cost;
+    }
+    return best;
 }
 
 PartitionQuality measure_partition(const core::TetraGrid& grid, const LeafGraph& graph,

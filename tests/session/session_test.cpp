@@ -64,15 +64,19 @@ std::function<bool(core::NodeIndex)> owned_by(const Session& s)
     return [owners, g, id](core::NodeIndex n) { return owners[g->leaf_of(n)] == id; };
 }
 
-void run_exact(int participants, bool late_viewer, bool one_leaves)
+// Participant k (from 0) declares face first_face + 2500 k as its point of interest.
+void run_exact(int participants, bool late_viewer, bool one_leaves, int level = k_level,
+               std::uint32_t first_face = 600)
 {
     Harness h;
-    h.host(k_level, settings_for(Coupling::Exact, "master"));
+    h.host(level, settings_for(Coupling::Exact, "master"));
     for (int k = 0; k < participants; ++k)
     {
         Session& p = h.join(net::Role::Participant, settings_for(Coupling::Exact, "part"));
-        p.set_points_of_interest({net::Target{
-            net::TargetKind::Face, static_cast<std::uint32_t>(600 + 2500 * k), {0, 0, 0}, 0.0}});
+        p.set_points_of_interest({net::Target{net::TargetKind::Face,
+                                              first_face + 2500 * static_cast<std::uint32_t>(k),
+                                              {0, 0, 0},
+                                              0.0}});
     }
     const auto sched = schedule(participants);
     apply_schedule(h, sched);
@@ -112,8 +116,22 @@ void run_exact(int participants, bool late_viewer, bool one_leaves)
     for (int k = 0; k < 200; ++k)
         h.pump_once(0.0005);
 
-    const sim::MembraneState ref = reference_run(k_level, k_ticks, sched);
+    const sim::MembraneState ref = reference_run(level, k_ticks, sched);
     const core::TetraGrid& g = h.peers[0]->model()->grid();
+    if (level == 6 && participants == 1 && first_face == g.face_count() / 2)
+    {
+        // The participant's point lies on the cut of the plain slabs (mid-height): the turned
+        // slabs hold it in a band about it, and the master gets the two caps.
+        const PartitionQuality q =
+            measure_partition(g, *h.peers[0]->leaf_graph(), h.peers[0]->owners());
+        ASSERT_EQ(q.shares.size(), 2U);
+        EXPECT_EQ(q.shares[0].fragments, 2U);
+        EXPECT_EQ(q.shares[1].fragments, 1U);
+        const PartitionQuality whole = measure_partition(
+            g, *h.peers[0]->leaf_graph(),
+            std::vector<net::PeerId>(h.peers[0]->owners().size(), h.peers[0]->id()));
+        EXPECT_LT(q.busiest_cost, 0.52 * whole.busiest_cost);
+    }
     if (one_leaves)
     {
         const auto owners = h.peers[0]->owners();
@@ -159,6 +177,14 @@ TEST(SessionExact, ThreePeersEqualSingleProcessAndLateViewerSeesTheSameState)
 TEST(SessionExact, ParticipantLeavingRepartitionsAndStaysExact)
 {
     run_exact(2, false, true);
+}
+
+TEST(SessionExact, TurnedSlabsWithACapsShareEqualSingleProcess)
+{
+    // Level 6, the participant's point at mid-height (face F/2, x = 0): the partition is the
+    // turned slabs (a band for the participant, two caps for the master), checked inside.
+    run_exact(1, false, false, 6,
+              static_cast<std::uint32_t>(core::TetraGrid::create(6)->face_count() / 2));
 }
 
 // Fast coupling: halos one frame old held as Dirichlet values. Measured error against the

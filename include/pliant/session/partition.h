@@ -27,17 +27,22 @@
 ///   put every point's leaf and its neighbouring leaves inside its own slab. Every grid row is a
 ///   closed loop around the tetrahedron (x is periodic), so a slab is a band like a zone of
 ///   latitude: connected, bordered by one row loop per cut, and one x-run per grid row.
-/// - Why two candidates: a restricted sim step pays per row segment (one x-run of owned nodes in
+/// - Turned slabs: the row-major order is a cycle, so the balanced cuts may start at any leaf
+///   (`slab_partition`'s `shift`; the slab across the order's end and start is a cap at the
+///   top and one at the bottom of the grid). `centred_slab_shift` puts the cuts where they fall
+///   farthest from the points, so that points on the plain slabs' cuts get bands about them.
+/// - Why slabs: a restricted sim step pays per row segment (one x-run of owned nodes in
 ///   one grid row) about what 16 nodes cost (`k_row_segment_cost`). A grown share spans most
 ///   rows, often as two runs (the periodic seam splits it), so half the nodes cost 0.57-0.71 of a
 ///   full step at levels 6-8; a slab spans 1/p of the rows in one run each.
-///   `partition_leaves` takes the slabs when the busiest participant's modelled cost
-///   (`step_cost`) is lower with them and every point fits in its own slab within
-///   `k_slab_balance`; in fast coupling also only when no point is closer to a border (in leaf
-///   hops) than in the grown shares, where it sits at the centre of its share: fast coupling
-///   errs most next to borders, so slabs never bring a border nearer a user's grab
-///   (`PointClearance`). Otherwise (points in the same rows or off their slab's middle, more
-///   participants than leaves) the grown shares.
+///   `partition_leaves` takes, of the grown shares, the plain slabs and the turned slabs, the
+///   one with the lowest modelled cost of the busiest participant (`step_cost`; ties: the
+///   earlier) among those that exist (every point in its own slab within `k_slab_balance`) and,
+///   in fast coupling, bring no point closer to a border (in leaf hops) than the grown shares,
+///   where it sits at the centre of its share: fast coupling errs most next to borders, so
+///   slabs never bring a border nearer a user's grab (`PointClearance`). So the grown shares
+///   stay for points in the same rows or too close together for bands of their own, and in
+///   fast coupling wherever a band is thinner about a point than its grown share.
 /// - Rejected: recursive coordinate bisection (balanced but ignores the points of interest and
 ///   cuts across the seams arbitrarily); METIS-style multilevel partitioning (not in Debian's
 ///   C++ packages we use, and non-deterministic across versions).
@@ -137,8 +142,8 @@ enum class PointClearance : std::uint8_t
 
 /// Owner of every leaf (index as `LeafGraph::leaves()`), deterministic in its inputs (the seats
 /// are sorted by peer id first; their order does not matter). \pre seats non-empty, ids unique.
-/// Of the two candidates in the file comment, the slabs when their busiest participant's
-/// `step_cost` is lower and they meet `clearance`, else the grown shares.
+/// Of the candidates in the file comment (grown shares, plain slabs, turned slabs), the one with
+/// the lowest busiest `step_cost` among those that meet `clearance` (ties: the earlier).
 [[nodiscard]] std::vector<net::PeerId> partition_leaves(
     const core::TetraGrid& grid, const LeafGraph& graph, std::span<const Seat> seats,
     PointClearance clearance = PointClearance::AsGrown);
@@ -153,11 +158,21 @@ enum class PointClearance : std::uint8_t
                                                        const LeafGraph& graph,
                                                        std::span<const Seat> seats);
 
-/// The slabs alone, or nothing when a slab would be empty or farther than `k_slab_balance` from
-/// the mean node count once every point's leaf and its neighbours are inside its own slab.
+/// The slabs alone, cut along the row-major leaf order taken as a cycle from its position
+/// `shift` (0: from the first leaf; otherwise the slab across the end and the start of the order
+/// is a cap at the top and one at the bottom of the grid), or nothing when a slab would be empty
+/// or farther than `k_slab_balance` from the mean node count once every point's leaf and its
+/// neighbours are inside its own slab.
 [[nodiscard]] std::optional<std::vector<net::PeerId>> slab_partition(const core::TetraGrid& grid,
                                                                      const LeafGraph& graph,
-                                                                     std::span<const Seat> seats);
+                                                                     std::span<const Seat> seats,
+                                                                     std::size_t shift = 0);
+
+/// The shift (a position in the row-major leaf order) at which balanced slab cuts fall farthest
+/// from every point of interest: each point's position along the order (its leaf's middle, in
+/// nodes) taken modulo one slab's node count, and the cuts in the middle of the widest gap
+/// between those phases. 0 without points.
+[[nodiscard]] std::size_t centred_slab_shift(const LeafGraph& graph, std::span<const Seat> seats);
 
 /// Per-peer quality of a partition.
 struct PeerShare
