@@ -629,7 +629,8 @@ void steps_suite(bench::Report& report, const std::vector<int>& levels)
 {
     std::printf(
         "# sim step CPU per peer / full step (thread CPU time, best of 5 rounds, 1 "
-        "thread); partition: g grown shares, s slabs\nlevel peers points | fast: max "
+        "thread); partition: g grown shares, s slabs, t turned slabs\nlevel peers points | fast: "
+        "max "
         "mean | exact: max mean | full step us\n");
     for (const int level : levels)
     {
@@ -664,7 +665,11 @@ void steps_suite(bench::Report& report, const std::vector<int>& levels)
                 const auto exact_owners =
                     session::partition_leaves(grid, graph, seats, session::PointClearance::Inside);
                 const auto kind = [&](const std::vector<net::PeerId>& owners)
-                { return owners == session::grown_partition(grid, graph, seats) ? 'g' : 's'; };
+                {
+                    if (owners == session::grown_partition(grid, graph, seats))
+                        return 'g';
+                    return owners == session::slab_partition(grid, graph, seats) ? 's' : 't';
+                };
                 std::vector<std::vector<core::Region>> fast_sets(static_cast<std::size_t>(peers));
                 std::vector<std::vector<core::Region>> exact_sets(static_cast<std::size_t>(peers));
                 for (int p = 0; p < peers; ++p)
