@@ -434,15 +434,15 @@ TEST(Partition, TakesTheSlabsExactlyWhenTheirBusiestStepIsCheaper)
                 }
                 return worst;
             };
-            const auto as_far =
-                [&](const std::vector<net::PeerId>&
-                        owners) {  // no point nearer a border than in the grown shares
-                    for (const Seat& s : seats)
-                        if (s.seed && border_hops(graph, owners, *s.seed) <
-                                          border_hops(graph, grown, *s.seed))
-                            return false;
-                    return true;
-                };
+            // No point nearer a border than in the grown shares.
+            const auto as_far = [&](const std::vector<net::PeerId>& owners)
+            {
+                for (const Seat& s : seats)
+                    if (s.seed &&
+                        border_hops(graph, owners, *s.seed) < border_hops(graph, grown, *s.seed))
+                        return false;
+                return true;
+            };
             // The slabs from the first leaf, then the turned ones if they differ: the first
             // strictly cheaper than the best so far that keeps the clearance wins.
             const std::size_t centred = centred_slab_shift(graph, seats);

@@ -64,9 +64,11 @@ std::function<bool(core::NodeIndex)> owned_by(const Session& s)
     return [owners, g, id](core::NodeIndex n) { return owners[g->leaf_of(n)] == id; };
 }
 
-// Participant k (from 0) declares face first_face + 2500 k as its point of interest.
+// Participant k (from 0) declares face first_face + 2500 k as its point of interest;
+// `inspect_master` (if set) looks at the master after the run.
 void run_exact(int participants, bool late_viewer, bool one_leaves, int level = k_level,
-               std::uint32_t first_face = 600)
+               std::uint32_t first_face = 600,
+               const std::function<void(const Session&)>& inspect_master = {})
 {
     Harness h;
     h.host(level, settings_for(Coupling::Exact, "master"));
@@ -118,20 +120,8 @@ void run_exact(int participants, bool late_viewer, bool one_leaves, int level = 
 
     const sim::MembraneState ref = reference_run(level, k_ticks, sched);
     const core::TetraGrid& g = h.peers[0]->model()->grid();
-    if (level == 6 && participants == 1 && first_face == g.face_count() / 2)
-    {
-        // The participant's point lies on the cut of the plain slabs (mid-height): the turned
-        // slabs hold it in a band about it, and the master gets the two caps.
-        const PartitionQuality q =
-            measure_partition(g, *h.peers[0]->leaf_graph(), h.peers[0]->owners());
-        ASSERT_EQ(q.shares.size(), 2U);
-        EXPECT_EQ(q.shares[0].fragments, 2U);
-        EXPECT_EQ(q.shares[1].fragments, 1U);
-        const PartitionQuality whole = measure_partition(
-            g, *h.peers[0]->leaf_graph(),
-            std::vector<net::PeerId>(h.peers[0]->owners().size(), h.peers[0]->id()));
-        EXPECT_LT(q.busiest_cost, 0.52 * whole.busiest_cost);
-    }
+    if (inspect_master)
+        inspect_master(*h.peers[0]);
     if (one_leaves)
     {
         const auto owners = h.peers[0]->owners();
@@ -181,10 +171,23 @@ TEST(SessionExact, ParticipantLeavingRepartitionsAndStaysExact)
 
 TEST(SessionExact, TurnedSlabsWithACapsShareEqualSingleProcess)
 {
-    // Level 6, the participant's point at mid-height (face F/2, x = 0): the partition is the
-    // turned slabs (a band for the participant, two caps for the master), checked inside.
+    // Level 6, the participant's point at mid-height (face F/2, x = 0), on the cut of the plain
+    // slabs: the partition is the turned slabs, a band about the point for the participant and
+    // the two caps for the master.
+    const auto check = [](const Session& master)
+    {
+        const core::TetraGrid& g = master.model()->grid();
+        const PartitionQuality q = measure_partition(g, *master.leaf_graph(), master.owners());
+        ASSERT_EQ(q.shares.size(), 2U);
+        EXPECT_EQ(q.shares[0].peer, master.id());
+        EXPECT_EQ(q.shares[0].fragments, 2U);
+        EXPECT_EQ(q.shares[1].fragments, 1U);
+        const PartitionQuality whole = measure_partition(
+            g, *master.leaf_graph(), std::vector<net::PeerId>(master.owners().size(), master.id()));
+        EXPECT_LT(q.busiest_cost, 0.52 * whole.busiest_cost);
+    };
     run_exact(1, false, false, 6,
-              static_cast<std::uint32_t>(core::TetraGrid::create(6)->face_count() / 2));
+              static_cast<std::uint32_t>(core::TetraGrid::create(6)->face_count() / 2), check);
 }
 
 // Fast coupling: halos one frame old held as Dirichlet values. Measured error against the
