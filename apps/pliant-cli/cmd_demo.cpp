@@ -478,8 +478,10 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
     double grab_set_at = -1.0, grab_seen_at = -1.0, viewer_ready_at = -1.0;
     const double probe_base = peers[0].session->view_u().at(grabs[0].node.x, grabs[0].node.y);
     std::ofstream energy_csv(opt.out / "timeline.csv");
-    energy_csv << "time,ticks,owner_nodes_master,owner_nodes_A,owner_nodes_B,max_u\n";
-    double max_u = 0.0;
+    // One row per frame: the master's session time and tick, each participant's owned nodes,
+    // the largest |u| in the frame shown (the viewer's once it has joined, else the master's).
+    energy_csv << "time,ticks,owner_nodes_master,owner_nodes_A,owner_nodes_B,max_u,shown_by\n";
+    double max_u = 0.0;  // over every frame shown (the summary's row)
     int painted = 0;
     int frames_run = 0;
     double reached = 0.0;  // session time reached, s
@@ -541,13 +543,16 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
         const bool from_viewer = peers[3].session && peers[3].session->ready();
         const session::Session& shown = *peers[from_viewer ? 3 : 0].session;
         const core::Field<double>& u = shown.view_u();
+        double frame_max_u = 0.0;
         for (int y = 0; y < grid.ny(); ++y)
             for (int x = 0; x < grid.nx(); ++x)
-                max_u = std::max(max_u, std::abs(u.at(x, y)));
-        energy_csv << shown.time() << ',' << peers[0].session->tick();
+                frame_max_u = std::max(frame_max_u, std::abs(u.at(x, y)));
+        max_u = std::max(max_u, frame_max_u);
+        // The master's clock: a viewer simulates nothing, so its own time stays at its join.
+        energy_csv << peers[0].session->time() << ',' << peers[0].session->tick();
         for (std::size_t k = 0; k < 3; ++k)
             energy_csv << ',' << peers[k].session->stats().owned_nodes;
-        energy_csv << ',' << max_u << '\n';
+        energy_csv << ',' << frame_max_u << ',' << (from_viewer ? "viewer" : "master") << '\n';
         if (painter)
         {
             std::array<char, 32> name{};

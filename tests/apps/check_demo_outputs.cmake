@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: MIT
 # SPDX-FileCopyrightText: 2026 pliant contributors
-# Checks what `pliant demo --quick` left in DIR: the grid, 12 frames, the CSV, the recording
-# and the summary.
+# Checks what `pliant demo --quick` left in DIR: the grid, 12 frames, the CSV (its session time
+# increasing frame after frame, the grabs moving the surface), the recording and the summary.
 foreach(f grid.pgrid summary.md timeline.csv session.prec remesh-report.json frame_0001.png frame_0012.png)
     if(NOT EXISTS ${DIR}/${f})
         message(FATAL_ERROR "pliant demo --quick did not write ${DIR}/${f}")
@@ -17,4 +17,27 @@ string(REGEX MATCHALL "\n" lines "${csv}")
 list(LENGTH lines rows)
 if(NOT rows EQUAL 13)
     message(FATAL_ERROR "timeline.csv has ${rows} lines, expected a header and 12 rows")
+endif()
+string(REPLACE "\n" ";" rows_list "${csv}")
+list(REMOVE_AT rows_list 0)
+set(previous -1)
+set(moved FALSE)
+foreach(row ${rows_list})
+    string(REPLACE "," ";" cells "${row}")
+    list(LENGTH cells ncells)
+    if(NOT ncells EQUAL 7)
+        message(FATAL_ERROR "timeline.csv row '${row}' has ${ncells} cells, expected 7")
+    endif()
+    list(GET cells 0 t)
+    list(GET cells 5 u)
+    if(NOT t GREATER previous)
+        message(FATAL_ERROR "timeline.csv: time ${t} does not follow ${previous}")
+    endif()
+    set(previous ${t})
+    if(u GREATER 0)
+        set(moved TRUE)
+    endif()
+endforeach()
+if(NOT moved)
+    message(FATAL_ERROR "timeline.csv: max_u is 0 in every frame")
 endif()
