@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: 2026 pliant contributors
+#include <pliant/core/assert.h>
 #include <pliant/core/tetra_grid.h>
 
 #include <numeric>
@@ -192,6 +193,83 @@ std::vector<LeafId> TetraGrid::leaves(int depth) const
                                      static_cast<std::uint16_t>(ix),
                                      static_cast<std::uint16_t>(iy)});
     return out;
+}
+
+std::array<NodeIndex, 6> grid_neighbours(const TetraGrid& grid, int x, int y)
+{
+    return {grid.image(x + 1, y), grid.image(x - 1, y),     grid.image(x, y + 1),
+            grid.image(x, y - 1), grid.image(x + 1, y + 1), grid.image(x - 1, y - 1)};
+}
+
+std::vector<char> dilate_nodes(const TetraGrid& grid, std::vector<char> mask, int rings)
+{
+    PLIANT_ASSERT(mask.size() == grid.node_count(), "dilate_nodes: mask size");
+    std::vector<std::uint32_t> front;
+    for (std::uint32_t i = 0; i < mask.size(); ++i)
+        if (mask[i] != 0)
+            front.push_back(i);
+    for (int r = 0; r < rings; ++r)
+    {
+        std::vector<std::uint32_t> next;
+        for (const std::uint32_t i : front)
+        {
+            const GridCoord c = grid.coord(NodeIndex{i});
+            for (const NodeIndex m : grid_neighbours(grid, c.x, c.y))
+                if (mask[m.value] == 0)
+                {
+                    mask[m.value] = 1;
+                    next.push_back(m.value);
+                }
+        }
+        front = std::move(next);
+    }
+    return mask;
+}
+
+std::vector<Region> node_runs(const TetraGrid& grid, const std::vector<char>& mask)
+{
+    PLIANT_ASSERT(mask.size() == grid.node_count(), "node_runs: mask size");
+    auto in = [&](int x, int y)
+    {
+        const NodeIndex n = grid.index(x, y);
+        return grid.is_canonical(n) && mask[n.value] != 0;
+    };
+    // Row runs, merged with the run of the same span in the row above into one rectangle: the
+    // restricted step works region by region with a few rows of overhead each, so fewer, taller
+    // regions are cheaper (a union of leaves dilated by rings is mostly such rectangles).
+    std::vector<Region> runs;
+    std::vector<std::size_t> open;  // regions ending at the previous row
+    for (int y = 0; y < grid.ny(); ++y)
+    {
+        std::vector<std::size_t> now;
+        for (int x = 0; x < grid.nx();)
+        {
+            if (!in(x, y))
+            {
+                ++x;
+                continue;
+            }
+            const int x0 = x;
+            while (x < grid.nx() && in(x, y))
+                ++x;
+            bool merged = false;
+            for (const std::size_t k : open)
+                if (runs[k].x0 == x0 && runs[k].x1 == x && runs[k].y1 == y)
+                {
+                    runs[k].y1 = y + 1;
+                    now.push_back(k);
+                    merged = true;
+                    break;
+                }
+            if (!merged)
+            {
+                runs.push_back(Region{x0, y, x, y + 1});
+                now.push_back(runs.size() - 1);
+            }
+        }
+        open = std::move(now);
+    }
+    return runs;
 }
 
 }  // namespace pliant::core

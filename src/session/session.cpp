@@ -453,6 +453,7 @@ struct Session::Impl
     // Cached sets for (prev, next) partition epochs.
     std::uint32_t cache_prev = 0, cache_next = 0;
     std::vector<core::Region> integrate_runs;                      // exact: dilated own set
+    std::vector<core::Region> own_runs;                            // exact: own set
     std::map<std::uint16_t, std::vector<std::uint32_t>> halo_out;  // receiver -> nodes
     std::uint32_t fast_epoch = 0;
     std::vector<char> fast_mine;  // fast: owned_mask of fast_mine_epoch
@@ -781,12 +782,12 @@ struct Session::Impl
 
     std::vector<char> dilate(std::vector<char> mask, int rings) const
     {
-        return dilate_nodes(s.model_->grid(), std::move(mask), rings);
+        return core::dilate_nodes(s.model_->grid(), std::move(mask), rings);
     }
 
     std::vector<core::Region> runs_of(const std::vector<char>& mask) const
     {
-        return node_runs(s.model_->grid(), mask);
+        return core::node_runs(s.model_->grid(), mask);
     }
 
     /// Exact mode sets for publishing tick t / stepping from t.
@@ -798,7 +799,9 @@ struct Session::Impl
             return;
         cache_prev = pe;
         cache_next = ne;
-        integrate_runs = runs_of(dilate(owned_mask(next, s.id_), settings.halo_rings));
+        const std::vector<char> own = owned_mask(next, s.id_);
+        integrate_runs = runs_of(dilate(own, settings.halo_rings));
+        own_runs = runs_of(own);
         halo_out.clear();
         const std::vector<char> mine = owned_mask(prev, s.id_);
         if (next == nullptr)
@@ -1086,6 +1089,7 @@ struct Session::Impl
             counters.active_forces = forces.size();
             sim::StepOptions opt;
             opt.owned = integrate_runs;
+            opt.needed = own_runs;  // each stage pair only where the own nodes read it
             const auto t0 = std::chrono::steady_clock::now();
             const sim::StepReport r = sim::step(*s.model_, s.state_, *ws, forces, opt);
             counters.step_seconds += seconds_since(t0);
@@ -1168,7 +1172,7 @@ struct Session::Impl
             for (const core::NodeIndex n : s.graph_->nodes(l))
             {
                 const core::GridCoord c = g.coord(n);
-                const auto nb = grid_neighbours(g, c.x, c.y);
+                const auto nb = core::grid_neighbours(g, c.x, c.y);
                 const std::size_t first = border_dir.size();
                 for (std::size_t k = 0; k < nb.size(); ++k)
                     if (mine[nb[k].value] == 0)

@@ -163,10 +163,11 @@ struct TrialResult
 };
 
 // One trial step of size h from (state.u, state.v or its masked copy) into ws.u_out / v_out,
-// stage by stage over `regions` (a barrier and a twin/ghost copy between stages).
+// stage by stage over `regions` (a barrier and a twin/ghost copy between stages), the last
+// stage and the update over `last` (StepOptions::needed, or `regions`).
 void stage_trial(const MembraneModel& model, const MembraneState& state, Rkf45Workspace& ws,
-                 std::span<const core::Region> regions, const Coeffs& c,
-                 const detail::StageConstants& k, int threads, bool restricted)
+                 std::span<const core::Region> regions, std::span<const core::Region> last,
+                 const Coeffs& c, const detail::StageConstants& k, int threads, bool restricted)
 {
     Planes p{};
     p.u = state.u.origin();
@@ -203,14 +204,15 @@ void stage_trial(const MembraneModel& model, const MembraneState& state, Rkf45Wo
         run_stage<4>(k, p, c, regions, ws);
 #pragma omp single
         model.sync(ws.kv[4]);
-        run_stage<5>(k, p, c, regions, ws);
+        run_stage<5>(k, p, c, last, ws);
     }
 }
 
 // One trial step: the fused row pipeline, full or restricted (planned by step_prepared), when
 // the grid's copies fit it; else the stage-by-stage pass. Both run the same row kernels.
 TrialResult trial(const MembraneModel& model, const MembraneState& state, Rkf45Workspace& ws,
-                  std::span<const core::Region> regions, double h, int threads, bool restricted)
+                  std::span<const core::Region> regions, std::span<const core::Region> last,
+                  double h, int threads, bool restricted)
 {
     const MembraneSettings& set = model.settings();
     Coeffs c = detail::make_coeffs(h);
@@ -218,11 +220,11 @@ TrialResult trial(const MembraneModel& model, const MembraneState& state, Rkf45W
     for (int s = 0; s < 6; ++s)
         c.ft[s] = (state.time - ws.accel_time) + c.cu[s];
     const detail::StageConstants k{set.beta, set.k_f, set.rtol, set.atol, model.grid().w()};
-    std::size_t parts = regions.size();
+    std::size_t parts = last.size();
     if (ws.pipeline_ok && ws.use_pipeline)
         parts = detail::pipeline_trial(model, state, ws, c, k, threads, restricted);
     else
-        stage_trial(model, state, ws, regions, c, k, threads, restricted);
+        stage_trial(model, state, ws, regions, last, c, k, threads, restricted);
     TrialResult t;
     for (std::size_t i = 0; i < parts; ++i)
     {
@@ -621,20 +623,28 @@ StepReport step_prepared(MembraneModel& model, MembraneState& state, Rkf45Worksp
 
     const bool restricted = !options.owned.empty();
     const std::span<const core::Region> regions = restricted ? options.owned : model.leaf_regions();
-    if (ws.leaf_error.size() < regions.size())
+    // The regions the last stage and the accept cover.
+    const std::span<const core::Region> last =
+        restricted && !options.needed.empty() ? options.needed : regions;
+    if (const std::size_t n = std::max(regions.size(), last.size()); ws.leaf_error.size() < n)
     {
-        ws.leaf_error.resize(regions.size());
-        ws.leaf_probe.resize(regions.size());
+        ws.leaf_error.resize(n);
+        ws.leaf_probe.resize(n);
     }
     if (restricted)
     {
         // Dirichlet nodes: v and every slope zero, so their stage displacements are u.
+        const auto in_grid = [&](const core::Region& r)
+        {
+            return r.x0 >= 0 && r.y0 >= 0 && r.x1 <= model.grid().nx() &&
+                   r.y1 <= model.grid().ny() && r.x0 <= r.x1 && r.y0 <= r.y1;
+        };
         for (const core::Region& r : regions)
-            PLIANT_ASSERT(r.x0 >= 0 && r.y0 >= 0 && r.x1 <= model.grid().nx() &&
-                              r.y1 <= model.grid().ny() && r.x0 <= r.x1 && r.y0 <= r.y1,
-                          "step: owned region outside the grid");
+            PLIANT_ASSERT(in_grid(r), "step: owned region outside the grid");
+        for (const core::Region& r : options.needed)
+            PLIANT_ASSERT(in_grid(r), "step: needed region outside the grid");
         if (ws.pipeline_ok && ws.use_pipeline)
-            detail::plan_restricted(model, regions, ws);  // once per owned set
+            detail::plan_restricted(model, regions, options.needed, ws);  // once per set
         else
         {
             ws.v_src.fill(0.0);
@@ -654,7 +664,7 @@ StepReport step_prepared(MembraneModel& model, MembraneState& state, Rkf45Worksp
     }
     for (int attempt = 0; attempt < 200; ++attempt)
     {
-        const TrialResult t = trial(model, state, ws, regions, h, threads, restricted);
+        const TrialResult t = trial(model, state, ws, regions, last, h, threads, restricted);
         const bool at_min = set.fixed_step || h <= set.dt_min;
         if (!t.finite)
         {
@@ -683,8 +693,8 @@ StepReport step_prepared(MembraneModel& model, MembraneState& state, Rkf45Worksp
             detail::accept_restricted(ws, state);
         else if (restricted)
         {
-            copy_regions(ws.u_out, state.u, regions);
-            copy_regions(ws.v_out, state.v, regions);
+            copy_regions(ws.u_out, state.u, last);
+            copy_regions(ws.v_out, state.v, last);
         }
         else
         {

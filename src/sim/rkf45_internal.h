@@ -241,13 +241,14 @@ inline double stage_row(const StageConstants& k, const Coeffs& c, const StageRow
 // false when a copy of the model's sync table does not fit the pipeline's row rules).
 void plan_pipeline(const MembraneModel& model, Rkf45Workspace& ws);
 
-// Plans restricted steps over `owned` on the pipeline (the per-row segments of `ws`); nothing
-// to do when `owned` equals the regions of the last plan.
+// Plans restricted steps over `owned` (with `needed`, StepOptions::needed) on the pipeline (the
+// per-row segments of `ws`); nothing to do when both equal the regions of the last plan.
 void plan_restricted(const MembraneModel& model, std::span<const core::Region> owned,
-                     Rkf45Workspace& ws);
+                     std::span<const core::Region> needed, Rkf45Workspace& ws);
 
-// Accepts a restricted pipeline trial: u_out and v_out into the state over the planned owned
-// regions (their merged row segments; the nodes copy_regions would copy).
+// Accepts a restricted pipeline trial: u_out and v_out into the state over the planned regions
+// of the last pair (needed, or else owned: their merged row segments; the nodes copy_regions
+// would copy).
 void accept_restricted(const Rkf45Workspace& ws, MembraneState& state) noexcept;
 
 // One trial step with the fused row pipeline (row_pipeline.cpp) into ws.u_out / v_out: a full

@@ -41,11 +41,14 @@
 // 64 x 64), where full-width rows need neither; keeping the kv planes and only reordering the
 // loops: at level 10 the five planes (84 MB) still stream to memory.
 
+#include <pliant/core/assert.h>
+
 #include <omp.h>
 
 #include "sim/rkf45_internal.h"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <cstdint>
@@ -345,11 +348,11 @@ void fill_rows(const Inputs& in, const Coeffs& c, const BandBuffers& b, int yy) 
 {
     if constexpr (Restricted)
     {
-        const Rkf45Workspace& ws = *in.ws;
+        const Rkf45Workspace::PairPlan& plan = in.ws->pair_plans[P / 2];
         const auto r = static_cast<std::size_t>(yy + 1);
-        for (std::size_t i = ws.fill_start[r]; i < ws.fill_start[r + 1]; ++i)
+        for (std::size_t i = plan.fill_start[r]; i < plan.fill_start[r + 1]; ++i)
         {
-            const Rkf45Workspace::RowSegment& seg = ws.fill_segments[i];
+            const Rkf45Workspace::RowSegment& seg = plan.fill_segments[i];
             if (seg.moves)
                 fill_pair<P>(in, c, b, yy, seg.x0, seg.x1);
             else
@@ -376,11 +379,11 @@ double stage_pair(const Inputs& in, const Coeffs& c, const StageConstants& k, co
     const bool forced = in.forced[y] != 0;
     if constexpr (Restricted)
     {
-        const Rkf45Workspace& ws = *in.ws;
+        const Rkf45Workspace::PairPlan& plan = in.ws->pair_plans[P / 2];
         const auto r = static_cast<std::size_t>(y);
-        for (std::size_t i = ws.kernel_start[r]; i < ws.kernel_start[r + 1]; ++i)
+        for (std::size_t i = plan.kernel_start[r]; i < plan.kernel_start[r + 1]; ++i)
         {
-            const Rkf45Workspace::RowSegment& seg = ws.kernel_segments[i];
+            const Rkf45Workspace::RowSegment& seg = plan.kernel_segments[i];
             if (seg.moves)
                 err = std::max(err,
                                forced ? pair_row<P, true>(in, c, k, b, y, seg.x0, seg.x1, probe)
@@ -488,23 +491,16 @@ void plan_pipeline(const MembraneModel& model, Rkf45Workspace& ws)
 }
 
 void plan_restricted(const MembraneModel& model, std::span<const core::Region> owned,
-                     Rkf45Workspace& ws)
+                     std::span<const core::Region> needed, Rkf45Workspace& ws)
 {
-    if (ws.restricted_planned && std::ranges::equal(owned, ws.restricted_key))
+    if (ws.restricted_planned && std::ranges::equal(owned, ws.restricted_key) &&
+        std::ranges::equal(needed, ws.needed_key))
         return;
     const core::TetraGrid& g = model.grid();
+    const int nx = g.nx();
     const int ny = g.ny();
     using Interval = std::pair<int, int>;
-    // The kernel's x-intervals of every row: the owned regions, merged.
-    std::vector<std::vector<Interval>> rows(static_cast<std::size_t>(ny));
-    std::vector<char> inside(g.node_count(), 0);
-    for (const core::Region& r : owned)
-        for (int y = r.y0; y < r.y1 && r.x0 < r.x1; ++y)
-        {
-            rows[static_cast<std::size_t>(y)].emplace_back(r.x0, r.x1);
-            for (int x = r.x0; x < r.x1; ++x)
-                inside[g.index(x, y).value] = 1;
-        }
+    using RowIntervals = std::vector<std::vector<Interval>>;
     const auto merge = [](std::vector<Interval>& iv)
     {
         std::sort(iv.begin(), iv.end());
@@ -518,8 +514,69 @@ void plan_restricted(const MembraneModel& model, std::span<const core::Region> o
         }
         iv.resize(n);
     };
-    for (auto& iv : rows)
-        merge(iv);
+    // The x-intervals of regions, per row, merged; `mark` flags their canonical nodes.
+    const auto region_rows = [&](std::span<const core::Region> regions, std::vector<char>& mark)
+    {
+        RowIntervals rows(static_cast<std::size_t>(ny));
+        for (const core::Region& r : regions)
+            for (int y = r.y0; y < r.y1 && r.x0 < r.x1; ++y)
+            {
+                rows[static_cast<std::size_t>(y)].emplace_back(r.x0, r.x1);
+                for (int x = r.x0; x < r.x1; ++x)
+                    if (const core::NodeIndex n = g.index(x, y); g.is_canonical(n))
+                        mark[n.value] = 1;
+            }
+        for (auto& iv : rows)
+            merge(iv);
+        return rows;
+    };
+    // The runs of canonical positions whose node is flagged, per row.
+    const auto mask_rows = [&](const std::vector<char>& mask)
+    {
+        RowIntervals rows(static_cast<std::size_t>(ny));
+        for (int y = 0; y < ny; ++y)
+            for (int x = 0; x < nx;)
+            {
+                const auto in = [&](int xx)
+                {
+                    const core::NodeIndex n = g.index(xx, y);
+                    return g.is_canonical(n) && mask[n.value] != 0;
+                };
+                if (!in(x))
+                {
+                    ++x;
+                    continue;
+                }
+                const int x0 = x;
+                while (x < nx && in(x))
+                    ++x;
+                rows[static_cast<std::size_t>(y)].emplace_back(x0, x);
+            }
+        return rows;
+    };
+    std::vector<char> inside(g.node_count(), 0);
+    // The kernels' x-intervals of every row, per pair of stages.
+    std::array<RowIntervals, 3> kernels;
+    kernels[0] = region_rows(owned, inside);
+    if (needed.empty())
+        kernels[1] = kernels[2] = kernels[0];
+    else
+    {
+        // Stages 5-6 over the needed nodes; 3-4 and 1-2 over the owned nodes those read, one
+        // and two stencil rings out (a pair reads the previous pairs' slopes at its stencil's
+        // neighbours only, rkf45.h).
+        std::vector<char> want(g.node_count(), 0);
+        kernels[2] = region_rows(needed, want);
+        for (std::size_t i = 0; i < want.size(); ++i)
+            PLIANT_ASSERT(want[i] == 0 || inside[i] != 0, "step: a needed node is not owned");
+        for (const int rings : {1, 2})
+        {
+            std::vector<char> reach = core::dilate_nodes(g, want, rings);
+            for (std::size_t i = 0; i < reach.size(); ++i)
+                reach[i] = static_cast<char>(reach[i] != 0 && inside[i] != 0);
+            kernels[static_cast<std::size_t>(2 - rings)] = mask_rows(reach);
+        }
+    }
     // A position moves iff the canonical node it stands for lies in an owned region.
     const auto moves = [&](int x, int y) { return inside[g.image(x, y).value] != 0; };
     // Splits [x0, x1) of row y into runs of moving and of Dirichlet positions.
@@ -535,22 +592,43 @@ void plan_restricted(const MembraneModel& model, std::span<const core::Region> o
             x = e;
         }
     };
-    ws.kernel_segments.clear();
-    ws.kernel_start.assign(1, 0);
-    ws.fill_segments.clear();
-    ws.fill_start.assign(1, 0);
+    for (std::size_t q = 0; q < 3; ++q)
+    {
+        Rkf45Workspace::PairPlan& plan = ws.pair_plans[q];
+        const RowIntervals& rows = kernels[q];
+        plan.kernel_segments.clear();
+        plan.kernel_start.assign(1, 0);
+        for (int y = 0; y < ny; ++y)
+        {
+            for (const Interval& i : rows[static_cast<std::size_t>(y)])
+                split(plan.kernel_segments, y, i.first, i.second);
+            plan.kernel_start.push_back(plan.kernel_segments.size());
+        }
+        // The fills: the kernel intervals of the row and its two neighbours, one node wider on
+        // each side (the stencil reads x - 1 .. x + 1), over rows -1 .. ny.
+        plan.fill_segments.clear();
+        plan.fill_start.assign(1, 0);
+        for (int y = -1; y <= ny; ++y)
+        {
+            std::vector<Interval> iv;
+            for (int yy = std::max(0, y - 1); yy <= std::min(ny - 1, y + 1); ++yy)
+                for (const Interval& i : rows[static_cast<std::size_t>(yy)])
+                    iv.emplace_back(i.first - 1, i.second + 1);
+            merge(iv);
+            for (const Interval& i : iv)
+                split(plan.fill_segments, y, i.first, i.second);
+            plan.fill_start.push_back(plan.fill_segments.size());
+        }
+    }
+    // The rows of the last pair's kernels, and their work for the band split.
     ws.restricted_work.assign(1, 0);
     ws.restricted_y0 = ny;
     ws.restricted_y1 = 0;
     for (int y = 0; y < ny; ++y)
     {
         std::size_t width = 0;
-        for (const Interval& i : rows[static_cast<std::size_t>(y)])
-        {
-            split(ws.kernel_segments, y, i.first, i.second);
+        for (const Interval& i : kernels[2][static_cast<std::size_t>(y)])
             width += static_cast<std::size_t>(i.second - i.first);
-        }
-        ws.kernel_start.push_back(ws.kernel_segments.size());
         if (width > 0)
         {
             ws.restricted_y0 = std::min(ws.restricted_y0, y);
@@ -558,19 +636,6 @@ void plan_restricted(const MembraneModel& model, std::span<const core::Region> o
         }
         // A row's fills, copies and loop set-up cost about as much as 32 nodes.
         ws.restricted_work.push_back(ws.restricted_work.back() + width + (width > 0 ? 32 : 0));
-    }
-    // The fills: the kernel intervals of the row and its two neighbours, one node wider on each
-    // side (the stencil reads x - 1 .. x + 1), over rows -1 .. ny.
-    for (int y = -1; y <= ny; ++y)
-    {
-        std::vector<Interval> iv;
-        for (int yy = std::max(0, y - 1); yy <= std::min(ny - 1, y + 1); ++yy)
-            for (const Interval& i : rows[static_cast<std::size_t>(yy)])
-                iv.emplace_back(i.first - 1, i.second + 1);
-        merge(iv);
-        for (const Interval& i : iv)
-            split(ws.fill_segments, y, i.first, i.second);
-        ws.fill_start.push_back(ws.fill_segments.size());
     }
     // Rows whose twin and ghost copies read a moving node.
     ws.copies_move.assign(static_cast<std::size_t>(ny), 0);
@@ -593,6 +658,7 @@ void plan_restricted(const MembraneModel& model, std::span<const core::Region> o
     if (ws.restricted_y0 >= ws.restricted_y1)
         ws.restricted_y0 = ws.restricted_y1 = 0;
     ws.restricted_key.assign(owned.begin(), owned.end());
+    ws.needed_key.assign(needed.begin(), needed.end());
     ws.restricted_planned = true;
 }
 
@@ -603,18 +669,19 @@ void accept_restricted(const Rkf45Workspace& ws, MembraneState& state) noexcept
     const double* const vo = ws.v_out.origin();
     double* const u = state.u.origin();
     double* const v = state.v.origin();
+    const Rkf45Workspace::PairPlan& plan = ws.pair_plans[2];
     for (int y = ws.restricted_y0; y < ws.restricted_y1; ++y)
     {
         const auto r = static_cast<std::size_t>(y);
         const std::ptrdiff_t row = static_cast<std::ptrdiff_t>(y) * s;
         // The segments of a row are disjoint and increasing: copy each maximal run at once.
-        std::size_t i = ws.kernel_start[r];
-        while (i < ws.kernel_start[r + 1])
+        std::size_t i = plan.kernel_start[r];
+        while (i < plan.kernel_start[r + 1])
         {
-            const int x0 = ws.kernel_segments[i].x0;
-            int x1 = ws.kernel_segments[i].x1;
-            for (++i; i < ws.kernel_start[r + 1] && ws.kernel_segments[i].x0 == x1; ++i)
-                x1 = ws.kernel_segments[i].x1;
+            const int x0 = plan.kernel_segments[i].x0;
+            int x1 = plan.kernel_segments[i].x1;
+            for (++i; i < plan.kernel_start[r + 1] && plan.kernel_segments[i].x0 == x1; ++i)
+                x1 = plan.kernel_segments[i].x1;
             std::copy(uo + row + x0, uo + row + x1, u + row + x0);
             std::copy(vo + row + x0, vo + row + x1, v + row + x0);
         }

@@ -82,7 +82,7 @@ std::size_t view_mismatches(const Harness& h, bool adopted)
             if (adopted)
             {
                 bool border = false;
-                for (const core::NodeIndex m : grid_neighbours(g, c.x, c.y))
+                for (const core::NodeIndex m : core::grid_neighbours(g, c.x, c.y))
                     border = border || owners[graph.leaf_of(m)] != owners[l];
                 const double su = owner->state().u.at(c.x, c.y);
                 const double sv = owner->state().v.at(c.x, c.y);

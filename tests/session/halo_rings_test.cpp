@@ -23,7 +23,9 @@ namespace pliant::session
 namespace
 {
 
-double restricted_error(int rings)
+// `needed`: the step computes each stage pair only where the share reads it
+// (StepOptions::needed).
+double restricted_error(int rings, bool needed = false)
 {
     const int level = 5;
     const core::TetraGrid g = core::TetraGrid::create(level).value();
@@ -57,11 +59,14 @@ double restricted_error(int rings)
         if (graph.leaves()[l].square == 0 && graph.leaves()[l].iy < 2)
             for (const core::NodeIndex n : graph.nodes(l))
                 share[n.value] = 1;
-    const auto runs = node_runs(g, dilate_nodes(g, share, rings));
+    const auto runs = core::node_runs(g, core::dilate_nodes(g, share, rings));
     sim::MembraneState part = start;
     sim::Rkf45Workspace ws_part(model, 1);
+    const auto own = core::node_runs(g, share);
     sim::StepOptions opt;
     opt.owned = runs;
+    if (needed)
+        opt.needed = own;
     sim::step(model, part, ws_part, {}, opt);
 
     double err = 0.0;
@@ -88,21 +93,34 @@ TEST(HaloRings, ThreeRingsMakeARestrictedStepExactAndTwoDoNot)
         EXPECT_EQ(restricted_error(r), 0.0) << r;
 }
 
+// The same with the stage pairs cut to where the share reads them (as sessions step): the
+// share's error is the plain restricted step's, exact from 3 rings.
+TEST(HaloRings, NeededNodesNeedTheSameThreeRings)
+{
+    for (const int r : {0, 1, 2})
+    {
+        EXPECT_EQ(restricted_error(r, true), restricted_error(r)) << r;
+        EXPECT_GT(restricted_error(r, true), 0.0) << r;
+    }
+    for (const int r : {3, 4, 6})
+        EXPECT_EQ(restricted_error(r, true), 0.0) << r;
+}
+
 TEST(HaloRings, DilationFollowsTheGhostMapAndRunsCoverExactlyTheMask)
 {
     const core::TetraGrid g = core::TetraGrid::create(4).value();
     std::vector<char> one(g.node_count(), 0);
     const core::NodeIndex a = g.corners()[0];
     one[a.value] = 1;
-    const auto d1 = dilate_nodes(g, one, 1);
+    const auto d1 = core::dilate_nodes(g, one, 1);
     // A corner of the tetrahedron has three surface neighbours (and itself).
     std::size_t count = 0;
     for (std::uint32_t i = 0; i < g.node_count(); ++i)
         count += d1[i] != 0 ? 1U : 0U;
     EXPECT_EQ(count, 4U);
-    const auto d3 = dilate_nodes(g, one, 3);
+    const auto d3 = core::dilate_nodes(g, one, 3);
     std::size_t covered = 0;
-    for (const core::Region& r : node_runs(g, d3))
+    for (const core::Region& r : core::node_runs(g, d3))
         for (int y = r.y0; y < r.y1; ++y)
             for (int x = r.x0; x < r.x1; ++x)
             {

@@ -5,6 +5,7 @@
 // tableau: full stage planes U_s, V_s, kv_s, K applied with apply_stiffness, Dirichlet nodes
 // outside the owned regions, the error norm over canonical nodes found by TetraGrid.
 
+#include <pliant/core/tetra_grid.h>
 #include <pliant/sim/rkf45.h>
 
 #include <gtest/gtest.h>
@@ -13,6 +14,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -260,6 +262,107 @@ TEST(Pipeline, RestrictedPlanFollowsTheOwnedSet)
         ASSERT_EQ(a.v, b.v) << "step " << k;
         ASSERT_EQ(ra.dt, rb.dt) << "step " << k;
         ASSERT_EQ(ra.rejections, rb.rejections) << "step " << k;
+    }
+}
+
+// The canonical nodes inside `regions`, as a node mask.
+std::vector<char> region_mask(const core::TetraGrid& g, std::span<const core::Region> regions)
+{
+    std::vector<char> mask(g.node_count(), 0);
+    for (const core::Region& r : regions)
+        for (int y = r.y0; y < r.y1; ++y)
+            for (int x = r.x0; x < r.x1; ++x)
+                if (const core::NodeIndex n = g.index(x, y); g.is_canonical(n))
+                    mask[n.value] = 1;
+    return mask;
+}
+
+// StepOptions::needed: the partition-like sets as needed nodes, owned = them dilated by 0-4
+// rings. The pipeline (1-3 threads) gives the stage pass's bits, step by step, adaptive
+// (the error norm over the needed nodes: same dt, error and rejections) and fixed; one fixed step
+// gives the bits of the restricted step over the owned set on every needed node and leaves the
+// other owned nodes as they were.
+TEST(Pipeline, NeededNodesGetTheRestrictedStepsBits)
+{
+    for (int level = 1; level <= 6; ++level)
+    {
+        const MembraneModel probe = test::sphere_model(level, settings(1, true));
+        const core::TetraGrid& g = probe.grid();
+        const std::vector<std::vector<core::Region>> sets = partition_like_sets(probe);
+        for (std::size_t set = 0; set < sets.size(); ++set)
+            for (const int rings : {0, 1, 2, 3, 4})
+            {
+                const std::vector<char> want = region_mask(g, sets[set]);
+                const std::vector<core::Region> owned =
+                    core::node_runs(g, core::dilate_nodes(g, want, rings));
+                const std::vector<core::Region> needed = core::node_runs(g, want);
+                const std::string where0 = "level " + std::to_string(level) + ", set " +
+                                           std::to_string(set) + ", " + std::to_string(rings) +
+                                           " rings";
+                for (const bool fixed : {false, true})
+                {
+                    const auto steps =
+                        [&](bool pipeline, int threads, std::vector<StepReport>& reports)
+                    {
+                        MembraneModel m = test::sphere_model(level, settings(threads, fixed));
+                        MembraneState s = initial_state(m);
+                        Rkf45Workspace ws(m, threads);
+                        ws.use_pipeline = pipeline;
+                        const std::vector<Force> f = forces_for(m);
+                        StepOptions opt;
+                        opt.owned = owned;
+                        opt.needed = needed;
+                        std::vector<MembraneState> out;
+                        for (int k = 0; k < 6; ++k)
+                        {
+                            reports.push_back(step(m, s, ws, f, opt));
+                            out.push_back(s);
+                        }
+                        return out;
+                    };
+                    std::vector<StepReport> ref_reports;
+                    const std::vector<MembraneState> ref = steps(false, 1, ref_reports);
+                    for (const int threads : {1, 2, 3})
+                    {
+                        std::vector<StepReport> reports;
+                        const std::vector<MembraneState> got = steps(true, threads, reports);
+                        for (std::size_t k = 0; k < ref.size(); ++k)
+                        {
+                            const std::string where =
+                                where0 + (fixed ? ", fixed, " : ", adaptive, ") +
+                                std::to_string(threads) + " threads, step " + std::to_string(k);
+                            ASSERT_EQ(got[k].u, ref[k].u) << where;
+                            ASSERT_EQ(got[k].v, ref[k].v) << where;
+                            ASSERT_EQ(reports[k].dt, ref_reports[k].dt) << where;
+                            ASSERT_EQ(reports[k].error, ref_reports[k].error) << where;
+                            ASSERT_EQ(reports[k].rejections, ref_reports[k].rejections) << where;
+                        }
+                    }
+                }
+                // One fixed step against the restricted step over the owned set.
+                MembraneModel m = test::sphere_model(level, settings(2, true));
+                const std::vector<Force> f = forces_for(m);
+                MembraneState start = initial_state(m);
+                Rkf45Workspace ws(m, 2);
+                (void)step(m, start, ws, f);  // every slope non-zero
+                MembraneState plain = start;
+                MembraneState tiered = start;
+                StepOptions opt;
+                opt.owned = owned;
+                (void)step(m, plain, ws, f, opt);
+                opt.needed = needed;
+                (void)step(m, tiered, ws, f, opt);
+                for (int y = 0; y < g.ny(); ++y)
+                    for (int x = 0; x < g.nx(); ++x)
+                    {
+                        const core::NodeIndex c = g.image(x, y);
+                        const MembraneState& expect = want[c.value] != 0 ? plain : start;
+                        ASSERT_EQ(tiered.u.at(x, y), expect.u.at(x, y))
+                            << where0 << " at (" << x << ", " << y << ")";
+                        ASSERT_EQ(tiered.v.at(x, y), expect.v.at(x, y))
+                            << where0 << " at (" << x << ", " << y << ")";
+                    }
+            }
     }
 }
 

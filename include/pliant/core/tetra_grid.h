@@ -193,4 +193,17 @@ private:
     std::array<std::vector<GhostCopy>, k_max_ghost + 1> ghost_tables_;
 };
 
+/// `mask` (one flag per grid node, set on canonical nodes) grown by `rings` rings of grid
+/// neighbours through the ghost map.
+[[nodiscard]] std::vector<char> dilate_nodes(const TetraGrid& grid, std::vector<char> mask,
+                                             int rings);
+
+/// The canonical nodes whose flag is set as disjoint rectangles (maximal row runs, stacked when
+/// consecutive rows have the same span): the `owned` list of a restricted sim step.
+[[nodiscard]] std::vector<Region> node_runs(const TetraGrid& grid, const std::vector<char>& mask);
+
+/// The six grid neighbours of (x, y) through the ghost map, as canonical nodes (a corner lists
+/// some twice).
+[[nodiscard]] std::array<NodeIndex, 6> grid_neighbours(const TetraGrid& grid, int x, int y);
+
 }  // namespace pliant::core

@@ -206,19 +206,4 @@ struct PartitionQuality
                                                  const LeafGraph& graph,
                                                  std::span<const net::PeerId> owners);
 
-/// `mask` (one flag per grid node, set on canonical nodes) grown by `rings` rings of grid
-/// neighbours through the ghost map.
-[[nodiscard]] std::vector<char> dilate_nodes(const core::TetraGrid& grid, std::vector<char> mask,
-                                             int rings);
-
-/// The canonical nodes whose flag is set as disjoint rectangles (maximal row runs, stacked when
-/// consecutive rows have the same span): the `owned` list of a restricted sim step.
-[[nodiscard]] std::vector<core::Region> node_runs(const core::TetraGrid& grid,
-                                                  const std::vector<char>& mask);
-
-/// The six grid neighbours of (x, y) through the ghost map, as canonical nodes (a corner lists
-/// some twice).
-[[nodiscard]] std::array<core::NodeIndex, 6> grid_neighbours(const core::TetraGrid& grid, int x,
-                                                             int y);
-
 }  // namespace pliant::session

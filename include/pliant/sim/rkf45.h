@@ -44,6 +44,7 @@
 #include <pliant/core/vec3.h>
 #include <pliant/sim/membrane.h>
 
+#include <array>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -122,6 +123,15 @@ struct StepOptions
     /// Restrict the step to the canonical nodes inside these regions (see the file comment);
     /// empty = all nodes. Regions must lie inside the grid.
     std::span<const core::Region> owned{};
+    /// Restricted steps only: the canonical nodes whose result the caller needs, inside the
+    /// owned ones (empty = every owned node). Each pair of stages is then computed only where
+    /// these nodes depend on it: stages 1-2 on `needed` dilated by 2 stencil rings, 3-4 by 1
+    /// ring, 5-6 on `needed` itself (each within `owned`; the error reaches one ring inwards per
+    /// two stages, docs/physics.md §6). Only the needed nodes are updated (the other owned nodes
+    /// keep their state), and the error norm and the non-finite check cover them only. Their
+    /// result is the restricted step's over `owned`, bit for bit; when `owned` holds `needed`
+    /// dilated by 3 rings, it is the full step's (exact coupling's halo, docs/session.md §4.1).
+    std::span<const core::Region> needed{};
     /// Largest step for this call [s] (e.g. to land on a frame time); 0 = no limit.
     double dt_limit = 0.0;
 };
@@ -166,24 +176,31 @@ public:
     std::vector<core::GhostCopy> below_copies;
     std::vector<core::GhostCopy> above_copies;
     bool pipeline_ok = false;  ///< the copies fit the pipeline (always, for TetraGrid's gluing)
-    // Restricted steps on the pipeline (docs/physics.md §8), planned once per owned set
-    // (`restricted_key`, the regions of the last plan): per row, the x-segments [x0, x1) of the
-    // stage-displacement fills (rows -1 .. ny, at fill_start[y + 1]) and of the slope kernels
-    // (rows 0 .. ny - 1, at kernel_start[y]), each marked by whether its nodes move (their
-    // canonical node is owned) or are Dirichlet; the rows [restricted_y0, restricted_y1) that
-    // hold owned nodes and the prefix sums of their kernel widths (band split).
+    // Restricted steps on the pipeline (docs/physics.md §8), planned once per owned and needed
+    // set (`restricted_key`, `needed_key`: the regions of the last plan). Per pair of stages
+    // (1-2, 3-4, 5-6): per row, the x-segments [x0, x1) of the stage-displacement fills (rows
+    // -1 .. ny, at fill_start[y + 1]) and of the slope kernels (rows 0 .. ny - 1, at
+    // kernel_start[y]), each marked by whether its nodes move (their canonical node is owned)
+    // or are Dirichlet. All three pairs run over the owned set, or over `needed` dilated by 2,
+    // 1 and 0 rings (StepOptions::needed). The rows [restricted_y0, restricted_y1) hold the last
+    // pair's kernels, with the prefix sums of their widths (band split).
     struct RowSegment
     {
         int x0 = 0;
         int x1 = 0;
         bool moves = false;
     };
+    struct PairPlan
+    {
+        std::vector<RowSegment> fill_segments;
+        std::vector<std::size_t> fill_start;
+        std::vector<RowSegment> kernel_segments;
+        std::vector<std::size_t> kernel_start;
+    };
     std::vector<core::Region> restricted_key;
+    std::vector<core::Region> needed_key;
     bool restricted_planned = false;
-    std::vector<RowSegment> fill_segments;
-    std::vector<std::size_t> fill_start;
-    std::vector<RowSegment> kernel_segments;
-    std::vector<std::size_t> kernel_start;
+    std::array<PairPlan, 3> pair_plans;
     std::vector<std::size_t> restricted_work;  ///< [y]: work of rows < y (width + a row cost)
     std::vector<char> copies_move;  ///< [y]: a twin/ghost copy of row y reads a moving node
     int restricted_y0 = 0;
