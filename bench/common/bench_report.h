@@ -17,18 +17,130 @@
 // (`--json FILE`: {"suite", "meta": {...}, "rows": [...]}). `--quick` asks for the program's
 // short mode. `Report::parse_args` removes these options from argv so the program's own parser
 // (or Google Benchmark's) sees only its options.
+//
+// Programs with their own arguments also pass a `Usage` (their usage text) to parse_args:
+// `--help`/`-h` then prints the text to stdout and the program exits 0 before running anything,
+// and an argument error prints one line naming the argument, then the text, to stderr, and the
+// program exits 2 (`Usage::error`). `parse_int`/`parse_number` read a whole argument strictly.
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <optional>
 #include <string>
+#include <string_view>
+#include <system_error>
 #include <utility>
 #include <vector>
 
 namespace pliant::bench
 {
+
+/// The whole of `text` as an integer (decimal, optional '-'), or nothing: "", "5x", " 5", "+5"
+/// and values beyond `long long` are refused.
+inline std::optional<long long> parse_int(std::string_view text)
+{
+    long long v = 0;
+    const char* end = text.data() + text.size();
+    const auto [ptr, ec] = std::from_chars(text.data(), end, v);
+    if (text.empty() || ec != std::errc{} || ptr != end)
+        return std::nullopt;
+    return v;
+}
+
+/// The whole of `text` as a finite number ("2", "0.5", "1e-3"), or nothing.
+inline std::optional<double> parse_number(std::string_view text)
+{
+    double v = 0.0;
+    const char* end = text.data() + text.size();
+    const auto [ptr, ec] = std::from_chars(text.data(), end, v);
+    if (text.empty() || ec != std::errc{} || ptr != end || !std::isfinite(v))
+        return std::nullopt;
+    return v;
+}
+
+/// A program's name (argv[0] without its folders) and usage text, for `--help` and for argument
+/// errors.
+class Usage
+{
+public:
+    Usage(const char* argv0, std::string_view text) : text_(text)
+    {
+        const std::string_view path = argv0 != nullptr ? argv0 : "bench";
+        const std::size_t slash = path.find_last_of('/');
+        name_ = std::string(slash == std::string_view::npos ? path : path.substr(slash + 1));
+    }
+
+    [[nodiscard]] const std::string& name() const noexcept { return name_; }
+
+    /// `--help`: the usage text on stdout.
+    void print() const
+    {
+        std::fwrite(text_.data(), 1, text_.size(), stdout);
+        std::fflush(stdout);
+    }
+
+    /// "NAME: MESSAGE" and the usage text on stderr. \return 2, the exit status of an argument
+    /// error.
+    int error(const std::string& message) const
+    {
+        std::fprintf(stderr, "%s: %s\n", name_.c_str(), message.c_str());
+        std::fwrite(text_.data(), 1, text_.size(), stderr);
+        return 2;
+    }
+
+    /// An argument the program does not take: an unknown option (it starts with '-') or an
+    /// extra word. \return 2.
+    int unexpected(std::string_view arg) const
+    {
+        const std::string a(arg);
+        return error(!a.empty() && a[0] == '-' ? "unknown option '" + a + "'"
+                                               : "unexpected argument '" + a + "'");
+    }
+
+    /// `arg` as an integer in [lo, hi] (`what` names it in the error, e.g. "level"). \return
+    /// the value, or nothing after printing the error (the program then exits 2).
+    [[nodiscard]] std::optional<int> int_in(std::string_view what, std::string_view arg, int lo,
+                                            int hi) const
+    {
+        const std::string range =
+            " (expected " + std::to_string(lo) + ".." + std::to_string(hi) + ")";
+        const std::optional<long long> v = parse_int(arg);
+        if (!v || *v < lo || *v > hi)
+        {
+            (void)error(std::string(what) + " '" + std::string(arg) + "' is " +
+                        (v ? "out of range" : "not a whole number") + range);
+            return std::nullopt;
+        }
+        return static_cast<int>(*v);
+    }
+
+    /// `arg` as a finite number in [lo, hi] (above `lo` only, where `lo_open`; `hi` may be
+    /// infinite). \return the value, or nothing after printing the error.
+    [[nodiscard]] std::optional<double> number_in(std::string_view what, std::string_view arg,
+                                                  double lo, double hi, bool lo_open = false) const
+    {
+        char range[64];
+        if (std::isinf(hi))
+            std::snprintf(range, sizeof range, "%s %g", lo_open ? ">" : ">=", lo);
+        else
+            std::snprintf(range, sizeof range, "%s %g and <= %g", lo_open ? ">" : ">=", lo, hi);
+        const std::optional<double> v = parse_number(arg);
+        if (!v || *v < lo || (lo_open && *v == lo) || *v > hi)
+        {
+            (void)error(std::string(what) + " '" + std::string(arg) + "' is not a number " + range);
+            return std::nullopt;
+        }
+        return v;
+    }
+
+private:
+    std::string name_;
+    std::string text_;
+};
 
 /// One measurement.
 struct ReportRow
@@ -52,27 +164,28 @@ public:
     /// the other arguments in order). \return false (after printing why) when a file is missing.
     bool parse_args(int& argc, char** argv)
     {
-        int out = 1;
-        for (int i = 1; i < argc; ++i)
+        std::string error;
+        if (take_args(argc, argv, false, error) == Taken::Error)
         {
-            const char* a = argv[i];
-            if (std::strcmp(a, "--quick") == 0)
-                quick_ = true;
-            else if (std::strcmp(a, "--json") == 0 || std::strcmp(a, "--csv") == 0)
-            {
-                if (i + 1 >= argc)
-                {
-                    std::fprintf(stderr, "%s: %s needs a file name\n", argv[0], a);
-                    return false;
-                }
-                (a[2] == 'j' ? json_path_ : csv_path_) = argv[++i];
-            }
-            else
-                argv[out++] = argv[i];
+            std::fprintf(stderr, "%s: %s\n", argv[0], error.c_str());
+            return false;
         }
-        argc = out;
-        argv[argc] = nullptr;
         return true;
+    }
+
+    /// The same, and `--help`/`-h` anywhere. \return nothing when the program should go on, or
+    /// the status it should exit with: 0 after `--help` (the usage printed to stdout), 2 after
+    /// an error (printed with the usage to stderr).
+    [[nodiscard]] std::optional<int> parse_args(int& argc, char** argv, const Usage& usage)
+    {
+        std::string error;
+        switch (take_args(argc, argv, true, error))
+        {
+        case Taken::Help: usage.print(); return 0;
+        case Taken::Error: return usage.error(error);
+        case Taken::Ok: break;
+        }
+        return std::nullopt;
     }
 
     [[nodiscard]] bool quick() const noexcept { return quick_; }
@@ -147,6 +260,40 @@ public:
     }
 
 private:
+    enum class Taken
+    {
+        Ok,
+        Help,  ///< --help or -h (only where `help` is set); argv is then left half-sorted
+        Error
+    };
+
+    Taken take_args(int& argc, char** argv, bool help, std::string& error)
+    {
+        int out = 1;
+        for (int i = 1; i < argc; ++i)
+        {
+            const char* a = argv[i];
+            if (help && (std::strcmp(a, "--help") == 0 || std::strcmp(a, "-h") == 0))
+                return Taken::Help;
+            if (std::strcmp(a, "--quick") == 0)
+                quick_ = true;
+            else if (std::strcmp(a, "--json") == 0 || std::strcmp(a, "--csv") == 0)
+            {
+                if (i + 1 >= argc)
+                {
+                    error = std::string(a) + " needs a file name";
+                    return Taken::Error;
+                }
+                (a[2] == 'j' ? json_path_ : csv_path_) = argv[++i];
+            }
+            else
+                argv[out++] = argv[i];
+        }
+        argc = out;
+        argv[argc] = nullptr;
+        return Taken::Ok;
+    }
+
     static bool write_file(const std::string& path, const std::string& text)
     {
         std::ofstream f(path, std::ios::binary | std::ios::trunc);

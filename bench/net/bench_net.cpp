@@ -13,6 +13,9 @@
 // them) and, on the wire, + 28 B of UDP/IPv4 and ~10 B of ENet headers per datagram.
 //
 //   bench_net [--quick] [--json FILE] [--csv FILE] [--stream-rate HZ] [Google Benchmark flags]
+//
+// --help prints the usage (k_usage); an unknown argument or a bad rate exits 2 before anything
+// runs.
 
 #include <pliant/net/codec.h>
 #include <pliant/net/enet_transport.h>
@@ -26,8 +29,8 @@
 
 #include <chrono>
 #include <cstdio>
-#include <cstdlib>
-#include <cstring>
+#include <limits>
+#include <string_view>
 
 namespace
 {
@@ -153,6 +156,21 @@ BENCHMARK(BM_EnetLoopbackRoundTrip)->Arg(0)->Arg(1)->UseRealTime();
 constexpr double k_udp_ip_bytes = 28.0;
 constexpr double k_enet_bytes = 10.0;
 
+constexpr const char* k_usage =
+    "usage: bench_net [--quick] [--json FILE] [--csv FILE] [--stream-rate HZ]\n"
+    "                 [Google Benchmark flags]\n"
+    "The state-streaming bandwidth per peer for levels 4..8 (from the encoded LeafState\n"
+    "datagrams, no timing), then codec encode/decode throughput per message type and the "
+    "Ping/Pong\n"
+    "round trip over ENet on 127.0.0.1 (Google Benchmark; compare medians of repetitions).\n"
+    "  --stream-rate HZ  stream rate of the bandwidth table, > 0 (default 60)\n"
+    "  --quick           0.05 s per benchmark\n"
+    "  --json FILE, --csv FILE\n"
+    "                    also write the figures as rows (bench/common/bench_report.h)\n"
+    "  --benchmark_filter=REGEX, --benchmark_repetitions=N, ...\n"
+    "                    passed to Google Benchmark (--benchmark_list_tests=true lists the cases)\n"
+    "  -h, --help        print this and exit\n";
+
 /// Payload bytes and datagrams of one broadcast of every leaf's state at `level`.
 std::pair<double, double> broadcast_bytes(int level, ValueEncoding encoding)
 {
@@ -217,22 +235,36 @@ void streaming_bandwidth(pliant::bench::Report& report, double rate_hz)
 int main(int argc, char** argv)
 {
     pliant::bench::Report report("net");
+    const pliant::bench::Usage usage(argv[0], k_usage);
+    // --help and argument errors before anything runs; run_with_report parses again and finds
+    // the report options already taken out (it keeps --quick and the file names).
+    if (const auto status = report.parse_args(argc, argv, usage))
+        return *status;
     double rate_hz = 60.0;
-    // --stream-rate is ours; everything else goes to Google Benchmark.
-    for (int i = 1; i + 1 < argc; ++i)
-        if (std::strcmp(argv[i], "--stream-rate") == 0)
-        {
-            rate_hz = std::atof(argv[i + 1]);
-            for (int k = i; k + 2 <= argc; ++k)
-                argv[k] = argv[k + 2];
-            argc -= 2;
-            break;
-        }
-    if (!(rate_hz > 0.0))
+    // --stream-rate is ours; Google Benchmark's flags (--benchmark_*, --v=N) go on to it, and
+    // anything else is refused here rather than after the streaming table.
+    int out = 1;
+    for (int i = 1; i < argc; ++i)
     {
-        std::fprintf(stderr, "bench_net: --stream-rate must be > 0\n");
-        return 2;
+        const std::string_view a = argv[i];
+        if (a == "--stream-rate")
+        {
+            if (i + 1 >= argc)
+                return usage.error("--stream-rate needs a rate in Hz");
+            const auto rate = usage.number_in("--stream-rate", argv[++i], 0.0,
+                                              std::numeric_limits<double>::infinity(),
+                                              /*lo_open=*/true);
+            if (!rate)
+                return 2;
+            rate_hz = *rate;
+        }
+        else if (a.starts_with("--benchmark_") || a.starts_with("--v="))
+            argv[out++] = argv[i];
+        else
+            return usage.unexpected(a);
     }
+    argc = out;
+    argv[argc] = nullptr;
     report.meta("stream_rate_hz", std::to_string(rate_hz));
     streaming_bandwidth(report, rate_hz);  // cheap: the same in quick and full runs
     return pliant::bench::run_with_report(

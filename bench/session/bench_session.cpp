@@ -11,6 +11,7 @@
 //   default levels 6 7)
 //   pliant_bench_session --steps [levels...]   (each peer's restricted sim step alone against
 //   the full step, thread CPU time; default levels 6 7 8)
+//   --help prints the usage (k_usage); an unknown option or a level out of range exits 2.
 // --json/--csv rows (bench/common/bench_report.h), sized by the number of peers (1..4): per
 // coupling ("exact", "fast", "fast 1 kHz") the step seconds per simulated second of the busiest
 // peer and the mean peer, their ratio to one process stepping every node, the payload bytes sent
@@ -33,7 +34,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <memory>
 #include <span>
 #include <string>
@@ -44,6 +44,37 @@ using namespace pliant;
 
 namespace
 {
+
+constexpr const char* k_usage =
+    "usage: pliant_bench_session [levels...] [--quick] [--json FILE] [--csv FILE]\n"
+    "       pliant_bench_session --stream [level] [--seconds S]\n"
+    "       pliant_bench_session --coarse [levels...] [--seconds S]\n"
+    "       pliant_bench_session --steps [levels...]\n"
+    "Session numbers for docs/session.md: all peers in one thread over a simulated network (5 ms\n"
+    "one-way latency), one thread per peer.\n"
+    "  levels...    grid levels 1..10 (--coarse: 3..10). Without a mode, per level and peer count\n"
+    "               (1..4): the partition's balance and fragments, the CPU time of each peer's\n"
+    "               steps per simulated second against one process stepping everything, the\n"
+    "               bytes each peer sends per simulated second, and the fast-vs-exact error of a\n"
+    "               scripted pull (default levels 5 6 7; --quick: 5 6 without the 1 kHz-frame\n"
+    "               variant)\n"
+    "  --stream     streaming cost of 2 peers dragging continuously, per encoding, at one level\n"
+    "               (default 6)\n"
+    "  --coarse     coarse streaming to a viewer, k = 0, 1, 2 levels coarser\n"
+    "               (default levels 6 7)\n"
+    "  --steps      each peer's restricted sim step alone against the full step, in thread CPU\n"
+    "               time (default levels 6 7 8)\n"
+    "  --seconds S  seconds measured by --stream and --coarse after 0.5 s of warm-up,\n"
+    "               > 0 and <= 3600 (default 2)\n"
+    "  --quick      the short run of the default suite\n"
+    "  --json FILE, --csv FILE\n"
+    "               also write the figures as rows (bench/common/bench_report.h)\n"
+    "  -h, --help   print this and exit\n";
+
+/// --coarse streams up to this many levels coarser than the grid.
+constexpr int k_coarsest = 2;
+/// The longest --seconds: an hour of simulated streaming.
+constexpr double k_max_seconds = 3600.0;
 
 sim::MembraneSettings material()
 {
@@ -559,7 +590,7 @@ void coarse_suite(bench::Report& report, const std::vector<int>& levels, double 
     for (const int level : levels)
     {
         double full = 0.0;
-        for (int k = 0; k <= 2; ++k)
+        for (int k = 0; k <= k_coarsest; ++k)
         {
             const CoarseResult r = run_coarse(level, k, seconds);
             if (k == 0)
@@ -741,37 +772,83 @@ void steps_suite(bench::Report& report, const std::vector<int>& levels)
 int main(int argc, char** argv)
 {
     bench::Report report("session");
-    if (!report.parse_args(argc, argv))
-        return 2;
-    std::vector<int> levels;
-    bool stream_only = false;
-    bool coarse_only = false;
-    bool steps_only = false;
-    double stream_seconds = 2.0;
+    const bench::Usage usage(argv[0], k_usage);
+    if (const auto status = report.parse_args(argc, argv, usage))
+        return *status;
+    enum class Mode
+    {
+        Sessions,
+        Stream,
+        Coarse,
+        Steps
+    };
+    Mode mode = Mode::Sessions;
+    const char* mode_option = nullptr;
+    std::vector<const char*> level_args;
+    const char* seconds_arg = nullptr;
     for (int k = 1; k < argc; ++k)
     {
-        if (std::string(argv[k]) == "--stream")
-            stream_only = true;
-        else if (std::string(argv[k]) == "--coarse")
-            coarse_only = true;
-        else if (std::string(argv[k]) == "--steps")
-            steps_only = true;
-        else if (std::string(argv[k]) == "--seconds" && k + 1 < argc)
-            stream_seconds = std::atof(argv[++k]);
+        const std::string a = argv[k];
+        const Mode m = a == "--stream"   ? Mode::Stream
+                       : a == "--coarse" ? Mode::Coarse
+                       : a == "--steps"  ? Mode::Steps
+                                         : Mode::Sessions;
+        if (m != Mode::Sessions)
+        {
+            if (mode_option != nullptr && a != mode_option)
+                return usage.error(std::string(mode_option) + " and " + a +
+                                   " are separate runs: give one of them");
+            mode = m;
+            mode_option = argv[k];
+        }
+        else if (a == "--seconds")
+        {
+            if (k + 1 >= argc)
+                return usage.error("--seconds needs a number of seconds");
+            seconds_arg = argv[++k];
+        }
+        else if (!a.empty() && a[0] == '-' && !bench::parse_int(a))
+            return usage.unexpected(a);
         else
-            levels.push_back(std::atoi(argv[k]));
+            level_args.push_back(argv[k]);  // a level (range-checked below, once the mode is known)
     }
-    if (steps_only)
+    // Levels: core::TetraGrid's range; --coarse also streams 1 and 2 levels coarser
+    // (subdiv::make_plans(level - 2, 2) needs level - 2 >= k_min_level).
+    const int lowest = mode == Mode::Coarse ? core::k_min_level + k_coarsest : core::k_min_level;
+    const std::string level_what =
+        mode_option == nullptr ? std::string("level") : std::string(mode_option) + " level";
+    std::vector<int> levels;
+    for (const char* a : level_args)
+    {
+        const auto level = usage.int_in(level_what, a, lowest, core::k_max_level);
+        if (!level)
+            return 2;
+        levels.push_back(*level);
+    }
+    if (mode == Mode::Stream && levels.size() > 1)
+        return usage.error("--stream takes one level, got " + std::to_string(levels.size()));
+    double stream_seconds = 2.0;
+    if (seconds_arg != nullptr)
+    {
+        if (mode != Mode::Stream && mode != Mode::Coarse)
+            return usage.error("--seconds applies to --stream and --coarse only");
+        const auto seconds =
+            usage.number_in("--seconds", seconds_arg, 0.0, k_max_seconds, /*lo_open=*/true);
+        if (!seconds)
+            return 2;
+        stream_seconds = *seconds;
+    }
+    if (mode == Mode::Steps)
     {
         steps_suite(report, levels.empty() ? std::vector<int>{6, 7, 8} : levels);
         return report.write() ? 0 : 1;
     }
-    if (coarse_only)
+    if (mode == Mode::Coarse)
     {
         coarse_suite(report, levels.empty() ? std::vector<int>{6, 7} : levels, stream_seconds);
         return report.write() ? 0 : 1;
     }
-    if (stream_only)
+    if (mode == Mode::Stream)
     {
         stream_suite(report, levels.empty() ? 6 : levels.front(), stream_seconds);
         return report.write() ? 0 : 1;

@@ -14,6 +14,7 @@
 //   The scenario's force is sampled once per frame and held linearly between frames
 //   (sim::ForceHold::Linear, as `pliant simulate` does); "step" holds it constant
 //   over each frame instead (the zero-order hold every run used until 2026-12-02).
+//   --help prints the usage (k_usage); an unknown option or a level out of range exits 2.
 // The moving force slides from (1,0,0) to (0,0,1) along the great circle over 2 s (0.785 m/s),
 // staying on the surface. (Until 2026-12-02 it slid along the chord: from 0.45 s to 1.55 s the
 // point was more than its 0.2 m radius inside the sphere and the whole force fell on the nearest
@@ -39,7 +40,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
+#include <limits>
 #include <numbers>
 #include <string>
 #include <string_view>
@@ -115,31 +116,82 @@ constexpr double k_doubles_per_node_step = 11.0;
 // end with the finger resting, into the focusing of the first waves at the antipode.)
 constexpr int k_scenario_frames = 120;
 
+constexpr const char* k_usage =
+    "usage: pliant_bench_sim [max_level] [realtime_seconds] [min_level] [kernel] [gnomonic]\n"
+    "                        [step] [--quick] [--json FILE] [--csv FILE]\n"
+    "RKF45 ns per node-step at levels min_level..max_level on 1 and 2 threads, a STREAM triad in\n"
+    "the same run, and the largest level that runs the benchmark scenario (a point force sliding\n"
+    "over the unit sphere for 2 s) in real time. Numbers are positional, in this order.\n"
+    "  max_level         finest grid level, 1..10 (default 10; --quick: 8)\n"
+    "  realtime_seconds  wall-time cap of each real-time run, s, >= 0 (default 4; --quick: 0.6);\n"
+    "                    a run simulates the scenario's 2 s or stops at the cap\n"
+    "  min_level         coarsest grid level, 1..max_level (default 6, --quick: 5, or max_level\n"
+    "                    where lower)\n"
+    "  kernel            only the step timing, 1 thread, 10 steps per level (for callgrind)\n"
+    "  gnomonic          the gnomonic sphere instead of the equal-area one\n"
+    "  step              hold the force constant over each frame instead of linearly\n"
+    "  --quick           levels 5..8, real-time runs cut at 0.6 s, 3 repetitions\n"
+    "  --json FILE, --csv FILE\n"
+    "                    also write the figures as rows (bench/common/bench_report.h)\n"
+    "  -h, --help        print this and exit\n";
+
 }  // namespace
 
 int main(int argc, char** argv)
 {
     bench::Report report("sim");
-    if (!report.parse_args(argc, argv))
-        return 2;
+    const bench::Usage usage(argv[0], k_usage);
+    if (const auto status = report.parse_args(argc, argv, usage))
+        return *status;
     const bool quick = report.quick();
-    const int max_level = argc > 1 ? std::atoi(argv[1]) : (quick ? 8 : 10);
-    // Wall-time cap of a real-time run, which otherwise runs the whole scenario.
-    const double rt_seconds = argc > 2 ? std::atof(argv[2]) : (quick ? 0.6 : 4.0);
-    const int min_level = argc > 3 ? std::atoi(argv[3]) : (quick ? 5 : 6);
-    const auto has_word = [&](std::string_view word)
+    bool kernel_only = false;
+    core::SphereMap sphere_map = core::SphereMap::EqualArea;
+    sim::ForceHold hold = sim::ForceHold::Linear;
+    // The positional numbers in order (max_level, realtime_seconds, min_level); the words may
+    // stand anywhere.
+    std::vector<const char*> numbers;
+    for (int i = 1; i < argc; ++i)
     {
-        for (int i = 4; i < argc; ++i)
-            if (argv[i] == word)
-                return true;
-        return false;
-    };
-    const bool kernel_only = has_word("kernel");
-    const core::SphereMap sphere_map =
-        has_word("gnomonic") ? core::SphereMap::Gnomonic : core::SphereMap::EqualArea;
-    const sim::ForceHold hold = has_word(sim::to_string(sim::ForceHold::Step))
-                                    ? sim::ForceHold::Step
-                                    : sim::ForceHold::Linear;
+        const std::string_view a = argv[i];
+        if (a == "kernel")
+            kernel_only = true;
+        else if (a == "gnomonic")
+            sphere_map = core::SphereMap::Gnomonic;
+        else if (a == sim::to_string(sim::ForceHold::Step))
+            hold = sim::ForceHold::Step;
+        else if (numbers.size() == 3 || (a.starts_with('-') && !bench::parse_number(a)))
+            return usage.unexpected(a);
+        else
+            numbers.push_back(argv[i]);
+    }
+    int max_level = quick ? 8 : 10;
+    if (!numbers.empty())
+    {
+        const auto level =
+            usage.int_in("max_level", numbers[0], core::k_min_level, core::k_max_level);
+        if (!level)
+            return 2;
+        max_level = *level;
+    }
+    // Wall-time cap of a real-time run, which otherwise runs the whole scenario.
+    double rt_seconds = quick ? 0.6 : 4.0;
+    if (numbers.size() > 1)
+    {
+        const auto seconds = usage.number_in("realtime_seconds", numbers[1], 0.0,
+                                             std::numeric_limits<double>::infinity());
+        if (!seconds)
+            return 2;
+        rt_seconds = *seconds;
+    }
+    // The default coarsest level stays at or below max_level.
+    int min_level = std::min(quick ? 5 : 6, max_level);
+    if (numbers.size() > 2)
+    {
+        const auto level = usage.int_in("min_level", numbers[2], core::k_min_level, max_level);
+        if (!level)
+            return 2;
+        min_level = *level;
+    }
     const int reps = quick ? 3 : 5;
     const double node_steps_per_rep = quick ? 3e6 : 3e7;
     const double rep_cap_s = quick ? 0.4 : 4.0;  // wall seconds per repetition at most
@@ -167,7 +219,7 @@ int main(int argc, char** argv)
                        threads, "threads", "triad_bandwidth", gbs * 1e9, "B/s");
         }
     // ms per fixed step at 1 thread, per level (for the CPU share estimated from step time).
-    std::vector<double> ms_per_step_1(11, 0.0);
+    std::vector<double> ms_per_step_1(core::k_max_level + 1, 0.0);
 
     for (int level = min_level; level <= max_level; ++level)
     {

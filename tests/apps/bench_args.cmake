@@ -1,0 +1,55 @@
+# SPDX-License-Identifier: MIT
+# SPDX-FileCopyrightText: 2026 pliant contributors
+# The benchmark programs' own arguments (bench/common/bench_report.h's Usage): --help prints the
+# usage to stdout and exits 0, an unknown option or a level out of range exits 2 naming the
+# argument, both before anything is measured. Only where the programs are built (not under the
+# sanitizers: PLIANT_BUILD_BENCH is OFF there; bench/ is configured after tests/, so the option
+# and the folders are checked, and $<TARGET_FILE> resolves once every target exists).
+if(PLIANT_BUILD_BENCH AND EXISTS ${PROJECT_SOURCE_DIR}/bench/CMakeLists.txt)
+    # pliant_bench_args(NAME PROGRAM EXIT STDOUT|STDERR REGEX ARGS...)
+    function(pliant_bench_args name program exit stream regex)
+        list(JOIN ARGN ";" args)
+        add_test(NAME ${name}
+                 COMMAND ${CMAKE_COMMAND} "-DCOMMAND=$<TARGET_FILE:${program}>;${args}"
+                         -DEXIT=${exit} "-D${stream}_REGEX=${regex}"
+                         -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+        set_tests_properties(${name} PROPERTIES TIMEOUT 30 LABELS bench_args)
+    endfunction()
+
+    if(EXISTS ${PROJECT_SOURCE_DIR}/bench/session/CMakeLists.txt)
+        pliant_bench_args(bench_args_session_help pliant_bench_session 0 STDOUT
+                          "^usage: pliant_bench_session .*--steps \\[levels\\.\\.\\.\\]" --help)
+        pliant_bench_args(bench_args_session_steps_level_out_of_range pliant_bench_session 2
+                          STDERR "^pliant_bench_session: --steps level '99' is out of range \\(expected 1\\.\\.10\\)\nusage: "
+                          --steps 99)
+        pliant_bench_args(bench_args_session_unknown_option pliant_bench_session 2 STDERR
+                          "^pliant_bench_session: unknown option '--bogus'\nusage: " --bogus)
+        pliant_bench_args(bench_args_session_level_not_a_number pliant_bench_session 2 STDERR
+                          "^pliant_bench_session: level 'five' is not a whole number \\(expected 1\\.\\.10\\)"
+                          5 five)
+        pliant_bench_args(bench_args_session_coarse_level_too_low pliant_bench_session 2 STDERR
+                          "^pliant_bench_session: --coarse level '2' is out of range \\(expected 3\\.\\.10\\)"
+                          --coarse 2)
+    endif()
+    if(EXISTS ${PROJECT_SOURCE_DIR}/bench/sim/CMakeLists.txt)
+        pliant_bench_args(bench_args_sim_help pliant_bench_sim 0 STDOUT
+                          "^usage: pliant_bench_sim \\[max_level\\].*max_level +finest grid level, 1\\.\\.10"
+                          --help)
+        pliant_bench_args(bench_args_sim_level_out_of_range pliant_bench_sim 2 STDERR
+                          "^pliant_bench_sim: max_level '99' is out of range \\(expected 1\\.\\.10\\)\nusage: "
+                          99)
+        pliant_bench_args(bench_args_sim_min_above_max pliant_bench_sim 2 STDERR
+                          "^pliant_bench_sim: min_level '9' is out of range \\(expected 1\\.\\.8\\)"
+                          8 1 9)
+        pliant_bench_args(bench_args_sim_unknown_option pliant_bench_sim 2 STDERR
+                          "^pliant_bench_sim: unknown option '--levels'" --levels 8)
+    endif()
+    if(EXISTS ${PROJECT_SOURCE_DIR}/bench/net/CMakeLists.txt)
+        pliant_bench_args(bench_args_net_help bench_net 0 STDOUT
+                          "^usage: bench_net .*--stream-rate HZ" --help)
+        pliant_bench_args(bench_args_net_unknown_option bench_net 2 STDERR
+                          "^bench_net: unknown option '--bogus'\nusage: " --bogus)
+        pliant_bench_args(bench_args_net_bad_stream_rate bench_net 2 STDERR
+                          "^bench_net: --stream-rate '0' is not a number > 0" --stream-rate 0)
+    endif()
+endif()
