@@ -11,6 +11,8 @@
 //   default levels 6 7)
 //   pliant_bench_session --steps [levels...]   (each peer's restricted sim step alone against
 //   the full step, thread CPU time; default levels 6 7 8)
+//   pliant_bench_session --latency [levels...]   (from a grab to the change appearing on the
+//   other peers, virtual time; default levels 6 7 8)
 //   --help prints the usage (k_usage); an unknown option or a level out of range exits 2.
 // --json/--csv rows (bench/common/bench_report.h), sized by the number of peers (1..4): per
 // coupling ("exact", "fast", "fast 1 kHz") the step seconds per simulated second of the busiest
@@ -50,6 +52,7 @@ constexpr const char* k_usage =
     "       pliant_bench_session --stream [level] [--seconds S]\n"
     "       pliant_bench_session --coarse [levels...] [--seconds S]\n"
     "       pliant_bench_session --steps [levels...]\n"
+    "       pliant_bench_session --latency [levels...]\n"
     "Session numbers for docs/session.md: all peers in one thread over a simulated network (5 ms\n"
     "one-way latency), one thread per peer.\n"
     "  levels...    grid levels 1..10 (--coarse: 3..10). Without a mode, per level and peer count\n"
@@ -64,6 +67,9 @@ constexpr const char* k_usage =
     "               (default levels 6 7)\n"
     "  --steps      each peer's restricted sim step alone against the full step, in thread CPU\n"
     "               time (default levels 6 7 8)\n"
+    "  --latency    from a grab to the change appearing on the other participants and a viewer,\n"
+    "               2..4 participants, exact and fast coupling, in virtual time (default levels\n"
+    "               6 7 8)\n"
     "  --seconds S  seconds measured by --stream and --coarse after 0.5 s of warm-up,\n"
     "               > 0 and <= 3600 (default 2)\n"
     "  --quick      the short run of the default suite\n"
@@ -767,6 +773,224 @@ void steps_suite(bench::Report& report, const std::vector<int>& levels)
     }
 }
 
+/// When a grab first shows on one peer (virtual seconds after it was given; < 0: not within the
+/// run): the grabbed face's nodes 1 mm from rest, in what the peer holds (display_u: its own leaves
+/// live, the others' newest states) and in what it draws (view_u: the others' leaves interpolated,
+/// docs/session.md §5.3).
+struct GrabSeen
+{
+    double display_mm = -1.0;
+    double view_mm = -1.0;
+};
+
+/// `pliant_bench_session --latency`: `peers` participants (master included, the same points of
+/// interest as `run`) and one viewer over the simulated network (`latency_s` one-way, streams
+/// and frames at 60 Hz); once every participant owns leaves and 0.2 s more, the last participant
+/// pulls the face of its own point of interest (0.5 N along the outward radius), `delay_s` later
+/// still (the grab's phase against the streams). Per peer, when the grab shows (index
+/// 0..peers-1 the participants, the last one the grabber, then the viewer).
+std::vector<GrabSeen> run_latency(int level, int peers, session::Coupling coupling,
+                                  double latency_s, double delay_s)
+{
+    net::SimulatedNetworkSettings net_settings;
+    net_settings.link.latency_s = latency_s;
+    net::SimulatedNetwork network(net_settings);
+    std::vector<std::unique_ptr<net::Transport>> tr;
+    std::vector<std::unique_ptr<session::Session>> s;
+    const core::TetraGrid grid = core::TetraGrid::create(level).value();
+    const auto rest = scenes::sphere_grid(grid, 1.0);
+    session::SessionSettings set;
+    set.coupling = coupling;
+    tr.push_back(network.create_endpoint());
+    const net::Address master = tr.back()->open({}).value();
+    s.push_back(session::Session::host(*tr.back(), grid, rest, material(), set).value());
+    const auto faces = static_cast<std::uint32_t>(grid.face_count());
+    const std::uint32_t grabbed =
+        static_cast<std::uint32_t>(peers - 1) * faces / static_cast<std::uint32_t>(peers);
+    for (int k = 1; k <= peers; ++k)
+    {
+        tr.push_back(network.create_endpoint());
+        (void)tr.back()->open({}).value();
+        const bool viewer = k == peers;
+        s.push_back(session::Session::join(*tr.back(), master,
+                                           viewer ? net::Role::Viewer : net::Role::Participant, set)
+                        .value());
+        if (!viewer)
+            s.back()->set_points_of_interest({net::Target{
+                net::TargetKind::Face,
+                static_cast<std::uint32_t>(k) * faces / static_cast<std::uint32_t>(peers),
+                {0, 0, 0},
+                0.0}});
+    }
+    const double dt = 0.00025;
+    double now = 0.0;
+    const auto pump = [&]
+    {
+        for (auto& p : s)
+            p->poll();
+        for (auto& p : s)
+            p->advance(now);
+        network.advance(dt);
+        now += dt;
+    };
+    const auto partitioned = [&]
+    {
+        for (const auto& p : s)
+            if (!p->ready())
+                return false;
+        const auto owners = s[0]->owners();
+        for (int k = 0; k < peers; ++k)
+            if (std::find(owners.begin(), owners.end(), s[static_cast<std::size_t>(k)]->id()) ==
+                owners.end())
+                return false;
+        return true;
+    };
+    for (int it = 0; it < 400000 && !partitioned(); ++it)
+        pump();
+    const double settle = now + 0.2 + delay_s;  // streams and views settle
+    for (int it = 0; it < 400000 && now < settle; ++it)
+        pump();
+    // The grab: the last participant's own face, along the outward radius.
+    const auto nodes = grid.node_triangles()[grabbed];
+    core::Vec3 centre{};
+    for (const std::uint32_t n : nodes)
+    {
+        const core::GridCoord c = grid.coord(core::NodeIndex{n});
+        centre =
+            centre + core::Vec3{rest[0].at(c.x, c.y), rest[1].at(c.x, c.y), rest[2].at(c.x, c.y)};
+    }
+    const core::Vec3 out = centre * (0.5 / core::norm(centre));
+    net::UserForce f;
+    f.target.kind = net::TargetKind::Face;
+    f.target.face = grabbed;
+    f.force = {out.x, out.y, out.z};
+    s[static_cast<std::size_t>(peers - 1)]->set_forces({f});
+    const double t_grab = now;
+    std::vector<GrabSeen> seen(s.size());
+    const auto largest = [&](const core::Field<double>& u)
+    {
+        double m = 0.0;
+        for (const std::uint32_t n : nodes)
+        {
+            const core::GridCoord c = grid.coord(core::NodeIndex{n});
+            m = std::max(m, std::fabs(u.at(c.x, c.y)));
+        }
+        return m;
+    };
+    const auto done = [&]
+    {
+        for (const GrabSeen& g : seen)
+            if (g.view_mm < 0.0)
+                return false;
+        return true;
+    };
+    // Bounded: at most 1 s of virtual time after the grab.
+    for (int it = 0; it < 4000 && !done(); ++it)
+    {
+        pump();
+        const double t = now - t_grab;
+        for (std::size_t k = 0; k < s.size(); ++k)
+        {
+            const double d = largest(s[k]->display_u());
+            const double v = largest(s[k]->view_u());
+            if (seen[k].display_mm < 0.0 && d >= 1e-3)
+                seen[k].display_mm = t;
+            if (seen[k].view_mm < 0.0 && v >= 1e-3)
+                seen[k].view_mm = t;
+        }
+    }
+    return seen;
+}
+
+/// --latency: from a grab to the change appearing on the other peers, per one-way latency,
+/// level, peer count (2..4 participants plus a viewer) and coupling, in virtual time (compute is
+/// not timed: all peers share one thread); each figure over four grabs a quarter of a stream
+/// period apart. \return false if a grab did not show on some peer within its run.
+bool latency_suite(bench::Report& report, const std::vector<int>& levels)
+{
+    bool all_seen = true;
+    report.meta("network",
+                "SimulatedNetwork, 0.5 and 5 ms one-way latency, all peers in one thread");
+    report.meta("material", "unit sphere, T=1, rho=1, beta=0.5, k_f=1, fixed dt 1 ms");
+    std::printf(
+        "# from a grab to its change on the peers, virtual ms, mean / max of 4 grabs a quarter\n"
+        "# stream period apart (60 Hz streams and frames, f64 leaf states); the last participant\n"
+        "# pulls its own face (0.5 N, outward). grabber: its display (own leaves live) reaches\n"
+        "# 1 mm; others, the latest of the other participants and a viewer: display (newest\n"
+        "# states) 1 mm, view (what is drawn, interpolated) 1 mm\n");
+    std::printf(
+        "latency level peers coupling | grabber 1 mm | others display 1 mm | "
+        "others view 1 mm\n");
+    constexpr int k_phases = 4;
+    for (const double latency : {0.0005, 0.005})
+        for (const int level : levels)
+            for (int peers = 2; peers <= 4; ++peers)
+                for (const session::Coupling coupling :
+                     {session::Coupling::Exact, session::Coupling::Fast})
+                {
+                    // Per figure: mean and max over the phases, in ms; -1 if a peer never saw a
+                    // grab within the run.
+                    struct Figure
+                    {
+                        double sum = 0.0;
+                        double max = 0.0;
+                        bool missed = false;
+                        void add(double t)
+                        {
+                            missed = missed || t < 0.0;
+                            sum += t * 1e3;
+                            max = std::max(max, t * 1e3);
+                        }
+                        [[nodiscard]] double mean() const { return missed ? -1.0 : sum / k_phases; }
+                        [[nodiscard]] double worst() const { return missed ? -1.0 : max; }
+                    };
+                    Figure grabber, display, view;
+                    for (int phase = 0; phase < k_phases; ++phase)
+                    {
+                        const std::vector<GrabSeen> seen =
+                            run_latency(level, peers, coupling, latency,
+                                        static_cast<double>(phase) / (60.0 * k_phases));
+                        const auto g = static_cast<std::size_t>(peers - 1);
+                        grabber.add(seen[g].display_mm);
+                        double d = 0.0;
+                        double v = 0.0;
+                        for (std::size_t k = 0; k < seen.size(); ++k)
+                            if (k != g)
+                            {
+                                const auto later = [](double a, double b)
+                                { return a < 0.0 || b < 0.0 ? -1.0 : std::max(a, b); };
+                                d = later(d, seen[k].display_mm);
+                                v = later(v, seen[k].view_mm);
+                            }
+                        display.add(d);
+                        view.add(v);
+                    }
+                    all_seen = all_seen && !grabber.missed && !display.missed && !view.missed;
+                    const char* name = coupling == session::Coupling::Exact ? "exact" : "fast";
+                    std::printf(
+                        "%5.1f %7d %5d %8s | %5.1f / %4.1f | %9.1f / %5.1f | %8.1f / %5.1f\n",
+                        latency * 1e3, level, peers, name, grabber.mean(), grabber.worst(),
+                        display.mean(), display.worst(), view.mean(), view.worst());
+                    std::fflush(stdout);
+                    const double n = static_cast<double>(peers);
+                    const std::string c = std::string("grab latency, ") + name + ", " +
+                                          (latency < 0.001 ? "0.5 ms" : "5 ms") + " one-way";
+                    report.add(c, level, n, "peers", "grabber_display_1mm_mean_ms", grabber.mean(),
+                               "ms");
+                    report.add(c, level, n, "peers", "others_display_1mm_mean_ms", display.mean(),
+                               "ms");
+                    report.add(c, level, n, "peers", "others_display_1mm_max_ms", display.worst(),
+                               "ms");
+                    report.add(c, level, n, "peers", "others_view_1mm_mean_ms", view.mean(), "ms");
+                    report.add(c, level, n, "peers", "others_view_1mm_max_ms", view.worst(), "ms");
+                }
+    if (!all_seen)
+        std::fprintf(stderr,
+                     "pliant_bench_session: a grab did not show on every peer within 1 s "
+                     "(-1 in the table)\n");
+    return all_seen;
+}
+
 }  // namespace
 
 int main(int argc, char** argv)
@@ -780,7 +1004,8 @@ int main(int argc, char** argv)
         Sessions,
         Stream,
         Coarse,
-        Steps
+        Steps,
+        Latency
     };
     Mode mode = Mode::Sessions;
     const char* mode_option = nullptr;
@@ -789,10 +1014,11 @@ int main(int argc, char** argv)
     for (int k = 1; k < argc; ++k)
     {
         const std::string a = argv[k];
-        const Mode m = a == "--stream"   ? Mode::Stream
-                       : a == "--coarse" ? Mode::Coarse
-                       : a == "--steps"  ? Mode::Steps
-                                         : Mode::Sessions;
+        const Mode m = a == "--stream"    ? Mode::Stream
+                       : a == "--coarse"  ? Mode::Coarse
+                       : a == "--steps"   ? Mode::Steps
+                       : a == "--latency" ? Mode::Latency
+                                          : Mode::Sessions;
         if (m != Mode::Sessions)
         {
             if (mode_option != nullptr && a != mode_option)
@@ -842,6 +1068,12 @@ int main(int argc, char** argv)
     {
         steps_suite(report, levels.empty() ? std::vector<int>{6, 7, 8} : levels);
         return report.write() ? 0 : 1;
+    }
+    if (mode == Mode::Latency)
+    {
+        const bool seen =
+            latency_suite(report, levels.empty() ? std::vector<int>{6, 7, 8} : levels);
+        return report.write() && seen ? 0 : 1;
     }
     if (mode == Mode::Coarse)
     {

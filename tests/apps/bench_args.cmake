@@ -27,6 +27,10 @@ if(PLIANT_BUILD_BENCH AND EXISTS ${PROJECT_SOURCE_DIR}/bench/CMakeLists.txt)
         pliant_bench_args(bench_args_session_level_not_a_number pliant_bench_session 2 STDERR
                           "^pliant_bench_session: level 'five' is not a whole number \\(expected 1\\.\\.10\\)"
                           5 five)
+        # The grab-latency run at level 4 (under a second): every grab shows on every peer
+        # within its run (the program exits 1 otherwise) and the table has its last row.
+        pliant_bench_args(bench_session_latency_level_4 pliant_bench_session 0 STDOUT
+                          "\n +5\\.0 +4 +4 +fast \\| +[0-9.]+ / +[0-9.]+ \\|" --latency 4)
         pliant_bench_args(bench_args_session_coarse_level_too_low pliant_bench_session 2 STDERR
                           "^pliant_bench_session: --coarse level '2' is out of range \\(expected 3\\.\\.10\\)"
                           --coarse 2)
