@@ -55,10 +55,11 @@ struct Suite
     const char* folder;
     const char* program;
     const char* what;
+    const char* mode = nullptr;  ///< the program's mode option, if the suite is one of its modes
 };
 
 // Cheapest first, so that a quick run shows results early.
-constexpr std::array<Suite, 6> k_suites{{
+constexpr std::array<Suite, 8> k_suites{{
     {"subdiv", "subdiv", "bench_subdiv",
      "butterfly refinement 6->7..9->10 vs OpenMesh and a STREAM copy"},
     {"net", "net", "bench_net",
@@ -67,6 +68,12 @@ constexpr std::array<Suite, 6> k_suites{{
      "RKF45 ns per node-step, ms per step, CPU share in real time, 1 and 2 threads"},
     {"session", "session", "pliant_bench_session",
      "per-peer compute and bandwidth for 1..4 peers, with and without partitioning"},
+    {"steps", "session", "pliant_bench_session",
+     "each peer's sim step against one process's, per partition, 2..4 peers, levels 6..8",
+     "--steps"},
+    {"latency", "session", "pliant_bench_session",
+     "grab to change on the other peers (held and drawn), exact and fast, levels 6..8",
+     "--latency"},
     {"render", "render", "bench_render",
      "fps at 1280x720, texture path vs vertex buffers (offscreen OpenGL)"},
     {"remesh", "remesh", "bench_remesh", "PSNR and seconds per phase per mesh and level"},
@@ -332,6 +339,8 @@ int run_bench(const BenchOptions& opt, const GlobalOptions& global)
         fs::remove(json, ec);
         std::vector<std::string> argv{programs[i].string(), "--json", json.string(), "--csv",
                                       csv.string()};
+        if (s.mode != nullptr)
+            argv.emplace_back(s.mode);
         if (opt.quick)
             argv.emplace_back("--quick");
         const std::string label = "[" + std::to_string(i + 1) + "/" +
@@ -436,16 +445,18 @@ void add_bench_command(CLI::App& app, const GlobalOptions& global)
                 s.what + "\n";
     cmd->footer(
         "Suites (default: all):\n" + list +
-        "\nEach suite is a program of the build's bench folder (built by the release preset);\n"
+        "\nEach suite is a program of the build's bench folder, or one of its modes (built by the\n"
+        "release preset);\n"
         "--bench-dir or the PLIANT_BENCH_DIR environment variable point elsewhere. DIR gets\n"
         "<suite>.csv, <suite>.json, <suite>.log, results.json (with the machine and its load)\n"
         "and, when gnuplot is installed, PNG plots. Timings on a shared machine vary by +-20 %.\n\n"
         "Examples:\n"
         "  pliant bench --quick                       # every suite, about 3 minutes on 2 cores\n"
         "  pliant bench sim session --out my-results  # two suites, full length");
-    cmd->add_option("SUITE", opt->suites,
-                    "Suites to run: subdiv net sim session render remesh "
-                    "(default: all)");
+    std::string names;
+    for (const Suite& s : k_suites)
+        names += std::string(s.name) + " ";
+    cmd->add_option("SUITE", opt->suites, "Suites to run: " + names + "(default: all)");
     cmd->add_flag("--quick", opt->quick, "Short runs (fewer levels and repetitions)");
     cmd->add_option("-o,--out", opt->out, "Output folder")->capture_default_str();
     cmd->add_option("--bench-dir", opt->bench_dir,

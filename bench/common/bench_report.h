@@ -190,6 +190,8 @@ public:
 
     [[nodiscard]] bool quick() const noexcept { return quick_; }
     [[nodiscard]] const std::string& suite() const noexcept { return suite_; }
+    /// Names the suite the rows belong to (a program whose modes are separate suites).
+    void set_suite(std::string suite) { suite_ = std::move(suite); }
     [[nodiscard]] const std::vector<ReportRow>& rows() const noexcept { return rows_; }
 
     /// Adds (or replaces) a metadata entry.

@@ -66,13 +66,13 @@ constexpr const char* k_usage =
     "  --coarse     coarse streaming to a viewer, k = 0, 1, 2 levels coarser\n"
     "               (default levels 6 7)\n"
     "  --steps      each peer's restricted sim step alone against the full step, in thread CPU\n"
-    "               time (default levels 6 7 8)\n"
+    "               time (default levels 6 7 8; --quick: 6)\n"
     "  --latency    from a grab to the change appearing on the other participants and a viewer,\n"
     "               2..4 participants, exact and fast coupling, in virtual time (default levels\n"
-    "               6 7 8)\n"
+    "               6 7 8; --quick: 6)\n"
     "  --seconds S  seconds measured by --stream and --coarse after 0.5 s of warm-up,\n"
     "               > 0 and <= 3600 (default 2)\n"
-    "  --quick      the short run of the default suite\n"
+    "  --quick      short runs: the default suite at levels 5 6, --steps and --latency at 6\n"
     "  --json FILE, --csv FILE\n"
     "               also write the figures as rows (bench/common/bench_report.h)\n"
     "  -h, --help   print this and exit\n";
@@ -973,7 +973,7 @@ bool latency_suite(bench::Report& report, const std::vector<int>& levels)
                         display.mean(), display.worst(), view.mean(), view.worst());
                     std::fflush(stdout);
                     const double n = static_cast<double>(peers);
-                    const std::string c = std::string("grab latency, ") + name + ", " +
+                    const std::string c = std::string("grab latency: ") + name + " at " +
                                           (latency < 0.001 ? "0.5 ms" : "5 ms") + " one-way";
                     report.add(c, level, n, "peers", "grabber_display_1mm_mean_ms", grabber.mean(),
                                "ms");
@@ -1066,13 +1066,18 @@ int main(int argc, char** argv)
     }
     if (mode == Mode::Steps)
     {
-        steps_suite(report, levels.empty() ? std::vector<int>{6, 7, 8} : levels);
+        if (levels.empty())
+            levels = report.quick() ? std::vector<int>{6} : std::vector<int>{6, 7, 8};
+        report.set_suite("steps");  // `pliant bench steps`
+        steps_suite(report, levels);
         return report.write() ? 0 : 1;
     }
     if (mode == Mode::Latency)
     {
-        const bool seen =
-            latency_suite(report, levels.empty() ? std::vector<int>{6, 7, 8} : levels);
+        if (levels.empty())
+            levels = report.quick() ? std::vector<int>{6} : std::vector<int>{6, 7, 8};
+        report.set_suite("latency");  // `pliant bench latency`
+        const bool seen = latency_suite(report, levels);
         return report.write() && seen ? 0 : 1;
     }
     if (mode == Mode::Coarse)

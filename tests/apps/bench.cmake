@@ -23,5 +23,16 @@ if(TARGET pliant)
                          -P ${PROJECT_SOURCE_DIR}/apps/pliant-cli/bench/check_bench_outputs.cmake)
         set_tests_properties(cli_bench_net_quick_outputs PROPERTIES
             DEPENDS cli_bench_net_quick)
+        # A suite that is a mode of a program (pliant_bench_session --latency, level 6).
+        add_test(NAME cli_bench_latency_quick
+                 COMMAND pliant bench latency --quick --no-plots
+                         --out ${CMAKE_CURRENT_BINARY_DIR}/bench-latency)
+        set_tests_properties(cli_bench_latency_quick PROPERTIES TIMEOUT 120)
+        add_test(NAME cli_bench_latency_quick_outputs
+                 COMMAND ${CMAKE_COMMAND} -DDIR=${CMAKE_CURRENT_BINARY_DIR}/bench-latency
+                         -DSUITE=latency
+                         -P ${PROJECT_SOURCE_DIR}/apps/pliant-cli/bench/check_bench_outputs.cmake)
+        set_tests_properties(cli_bench_latency_quick_outputs PROPERTIES
+            DEPENDS cli_bench_latency_quick)
     endif()
 endif()
