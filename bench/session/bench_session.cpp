@@ -11,8 +11,9 @@
 //   default levels 6 7)
 //   pliant_bench_session --steps [levels...]   (each peer's restricted sim step alone against
 //   the full step, thread CPU time; default levels 6 7 8)
-//   pliant_bench_session --latency [levels...]   (from a grab to the change appearing on the
-//   other peers, virtual time; default levels 6 7 8)
+//   pliant_bench_session --latency [levels...] [--enet]   (from a grab to the change appearing
+//   on the other peers, virtual time; --enet: real time over ENet on 127.0.0.1; default levels
+//   6 7 8)
 //   --help prints the usage (k_usage); an unknown option or a level out of range exits 2.
 // --json/--csv rows (bench/common/bench_report.h), sized by the number of peers (1..4): per
 // coupling ("exact", "fast", "fast 1 kHz") the step seconds per simulated second of the busiest
@@ -20,6 +21,7 @@
 // per simulated second per peer and the fast-vs-exact error; "no partitioning" is that one
 // process (every peer of an unpartitioned session steps every node); the partition's imbalance,
 // fragments and border edges.
+#include <pliant/net/enet_transport.h>
 #include <pliant/net/simulated_transport.h>
 #include <pliant/session/partition.h>
 #include <pliant/session/session.h>
@@ -33,12 +35,14 @@
 #include "grid_shapes.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <memory>
 #include <span>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -52,7 +56,7 @@ constexpr const char* k_usage =
     "       pliant_bench_session --stream [level] [--seconds S]\n"
     "       pliant_bench_session --coarse [levels...] [--seconds S]\n"
     "       pliant_bench_session --steps [levels...]\n"
-    "       pliant_bench_session --latency [levels...]\n"
+    "       pliant_bench_session --latency [levels...] [--enet]\n"
     "Session numbers for docs/session.md: all peers in one thread over a simulated network (5 ms\n"
     "one-way latency), one thread per peer.\n"
     "  levels...    grid levels 1..10 (--coarse: 3..10). Without a mode, per level and peer count\n"
@@ -70,6 +74,7 @@ constexpr const char* k_usage =
     "  --latency    from a grab to the change appearing on the other participants and a viewer,\n"
     "               2..4 participants, exact and fast coupling, in virtual time (default levels\n"
     "               6 7 8; --quick: 6)\n"
+    "  --enet       with --latency: in real time over ENet on 127.0.0.1, a thread per peer\n"
     "  --seconds S  seconds measured by --stream and --coarse after 0.5 s of warm-up,\n"
     "               > 0 and <= 3600 (default 2)\n"
     "  --quick      short runs: the default suite at levels 5 6, --steps and --latency at 6\n"
@@ -902,27 +907,190 @@ std::vector<GrabSeen> run_latency(int level, int peers, session::Coupling coupli
     return seen;
 }
 
+/// `--latency --enet`: the same grab in real time over ENet on 127.0.0.1, every peer in its own
+/// thread running the CLI's loop (poll, advance to its wall clock, 0.2 ms sleep), so compute,
+/// scheduling and the sockets are in the figures. The grabber pulls once it owns leaves and
+/// 0.3 s more; each peer records when the face first stands 1 mm from rest (wall seconds after
+/// the grab; < 0: not within 2 s). Empty when the session could not be set up.
+std::vector<GrabSeen> run_latency_enet(int level, int peers, session::Coupling coupling)
+{
+    using Clock = std::chrono::steady_clock;
+    struct Peer
+    {
+        std::unique_ptr<net::Transport> transport;
+        std::unique_ptr<session::Session> session;
+        net::Address address;
+    };
+    const core::TetraGrid grid = core::TetraGrid::create(level).value();
+    const auto rest = scenes::sphere_grid(grid, 1.0);
+    std::vector<Peer> ps(static_cast<std::size_t>(peers) + 1);  // participants, then the viewer
+    for (Peer& p : ps)
+    {
+        p.transport = net::make_enet_transport();
+        auto bound = p.transport->open(net::Address{{127, 0, 0, 1}, 0});
+        if (!bound)
+            return {};
+        p.address = *bound;
+    }
+    session::SessionSettings set;
+    set.coupling = coupling;
+    set.threads = 1;
+    const auto settings_for = [&](const Peer& p)
+    {
+        session::SessionSettings one = set;
+        one.listen_port = p.address.port;
+        return one;
+    };
+    auto hosted =
+        session::Session::host(*ps[0].transport, grid, rest, material(), settings_for(ps[0]));
+    if (!hosted)
+        return {};
+    ps[0].session = std::move(*hosted);
+    const auto faces = static_cast<std::uint32_t>(grid.face_count());
+    const std::uint32_t grabbed =
+        static_cast<std::uint32_t>(peers - 1) * faces / static_cast<std::uint32_t>(peers);
+    for (int k = 1; k <= peers; ++k)
+    {
+        Peer& p = ps[static_cast<std::size_t>(k)];
+        const bool viewer = k == peers;
+        auto joined = session::Session::join(*p.transport, ps[0].address,
+                                             viewer ? net::Role::Viewer : net::Role::Participant,
+                                             settings_for(p));
+        if (!joined)
+            return {};
+        p.session = std::move(*joined);
+        if (!viewer)
+            p.session->set_points_of_interest({net::Target{
+                net::TargetKind::Face,
+                static_cast<std::uint32_t>(k) * faces / static_cast<std::uint32_t>(peers),
+                {0, 0, 0},
+                0.0}});
+    }
+    const auto nodes = grid.node_triangles()[grabbed];
+    core::Vec3 centre{};
+    for (const std::uint32_t n : nodes)
+    {
+        const core::GridCoord c = grid.coord(core::NodeIndex{n});
+        centre =
+            centre + core::Vec3{rest[0].at(c.x, c.y), rest[1].at(c.x, c.y), rest[2].at(c.x, c.y)};
+    }
+    const core::Vec3 out = centre * (0.5 / core::norm(centre));
+    net::UserForce f;
+    f.target.kind = net::TargetKind::Face;
+    f.target.face = grabbed;
+    f.force = {out.x, out.y, out.z};
+
+    const auto start = Clock::now();
+    const auto elapsed = [&]
+    { return std::chrono::duration<double>(Clock::now() - start).count(); };
+    std::atomic<double> t_grab{-1.0};
+    std::atomic<bool> stop{false};
+    std::atomic<int> seen_count{0};
+    std::vector<GrabSeen> at(ps.size());  // absolute times; each written by its own thread
+    const auto largest = [&](const core::Field<double>& u)
+    {
+        double m = 0.0;
+        for (const std::uint32_t n : nodes)
+        {
+            const core::GridCoord c = grid.coord(core::NodeIndex{n});
+            m = std::max(m, std::fabs(u.at(c.x, c.y)));
+        }
+        return m;
+    };
+    const std::size_t grabber = static_cast<std::size_t>(peers - 1);
+    std::vector<std::thread> threads;
+    for (std::size_t k = 0; k < ps.size(); ++k)
+        threads.emplace_back(
+            [&, k]
+            {
+                session::Session& p = *ps[k].session;
+                double owned_since = -1.0;
+                // Bounded by the 30 s limit below (the main thread sets `stop`).
+                while (!stop.load())
+                {
+                    p.poll();
+                    const double now = elapsed();
+                    p.advance(now);
+                    if (k == grabber && p.ready() && t_grab.load() < 0.0)
+                    {
+                        const auto owners = p.owners();
+                        if (owned_since < 0.0 &&
+                            std::find(owners.begin(), owners.end(), p.id()) != owners.end())
+                            owned_since = now;
+                        if (owned_since >= 0.0 && now >= owned_since + 0.3)
+                        {
+                            p.set_forces({f});
+                            t_grab.store(elapsed());
+                        }
+                    }
+                    if (p.ready() && at[k].view_mm < 0.0)
+                    {
+                        if (at[k].display_mm < 0.0 && largest(p.display_u()) >= 1e-3)
+                            at[k].display_mm = elapsed();
+                        if (largest(p.view_u()) >= 1e-3)
+                        {
+                            at[k].view_mm = elapsed();
+                            seen_count.fetch_add(1);
+                        }
+                    }
+                    std::this_thread::sleep_for(std::chrono::microseconds(200));
+                }
+            });
+    // Bounded: 30 s for the set-up and the grab, 2 s after the grab for it to show everywhere.
+    while (elapsed() < 30.0)
+    {
+        const double tg = t_grab.load();
+        if (seen_count.load() == static_cast<int>(ps.size()) || (tg >= 0.0 && elapsed() > tg + 2.0))
+            break;
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    stop.store(true);
+    for (std::thread& t : threads)
+        t.join();
+    const double tg = t_grab.load();
+    std::vector<GrabSeen> seen(ps.size());
+    for (std::size_t k = 0; k < ps.size(); ++k)
+    {
+        if (tg >= 0.0 && at[k].display_mm >= 0.0)
+            seen[k].display_mm = at[k].display_mm - tg;
+        if (tg >= 0.0 && at[k].view_mm >= 0.0)
+            seen[k].view_mm = at[k].view_mm - tg;
+    }
+    ps[0].session->shutdown();
+    return seen;
+}
+
 /// --latency: from a grab to the change appearing on the other peers, per one-way latency,
 /// level, peer count (2..4 participants plus a viewer) and coupling, in virtual time (compute is
 /// not timed: all peers share one thread); each figure over four grabs a quarter of a stream
-/// period apart. \return false if a grab did not show on some peer within its run.
-bool latency_suite(bench::Report& report, const std::vector<int>& levels)
+/// period apart. `enet`: in real time over ENet on 127.0.0.1 instead (run_latency_enet; four
+/// grabs at whatever phase they fall). \return false if a grab did not show on some peer within
+/// its run.
+bool latency_suite(bench::Report& report, const std::vector<int>& levels, bool enet)
 {
     bool all_seen = true;
-    report.meta("network",
-                "SimulatedNetwork, 0.5 and 5 ms one-way latency, all peers in one thread");
+    report.meta("network", enet ? "ENet on 127.0.0.1, one thread per peer, real time"
+                                : "SimulatedNetwork, 0.5 and 5 ms one-way latency, all peers in "
+                                  "one thread");
     report.meta("material", "unit sphere, T=1, rho=1, beta=0.5, k_f=1, fixed dt 1 ms");
     std::printf(
-        "# from a grab to its change on the peers, virtual ms, mean / max of 4 grabs a quarter\n"
-        "# stream period apart (60 Hz streams and frames, f64 leaf states); the last participant\n"
+        "# from a grab to its change on the peers, ms (virtual time; wall time with --enet),\n"
+        "# mean / max of 4 grabs (in virtual time a quarter stream period apart; 60 Hz streams\n"
+        "# and frames, f64 leaf states); the last participant\n"
         "# pulls its own face (0.5 N, outward). grabber: its display (own leaves live) reaches\n"
         "# 1 mm; others, the latest of the other participants and a viewer: display (newest\n"
         "# states) 1 mm, view (what is drawn, interpolated) 1 mm\n");
+    if (enet)
+        std::printf(
+            "# --enet: real time over ENet on 127.0.0.1, one thread per peer on this "
+            "machine's cores (latency column 0)\n");
     std::printf(
         "latency level peers coupling | grabber 1 mm | others display 1 mm | "
         "others view 1 mm\n");
     constexpr int k_phases = 4;
-    for (const double latency : {0.0005, 0.005})
+    const std::vector<double> latencies =
+        enet ? std::vector<double>{0.0} : std::vector<double>{0.0005, 0.005};
+    for (const double latency : latencies)
         for (const int level : levels)
             for (int peers = 2; peers <= 4; ++peers)
                 for (const session::Coupling coupling :
@@ -948,8 +1116,16 @@ bool latency_suite(bench::Report& report, const std::vector<int>& levels)
                     for (int phase = 0; phase < k_phases; ++phase)
                     {
                         const std::vector<GrabSeen> seen =
-                            run_latency(level, peers, coupling, latency,
-                                        static_cast<double>(phase) / (60.0 * k_phases));
+                            enet ? run_latency_enet(level, peers, coupling)
+                                 : run_latency(level, peers, coupling, latency,
+                                               static_cast<double>(phase) / (60.0 * k_phases));
+                        if (seen.empty())
+                        {
+                            std::fprintf(stderr,
+                                         "pliant_bench_session: cannot set up a session "
+                                         "over ENet on 127.0.0.1\n");
+                            return false;
+                        }
                         const auto g = static_cast<std::size_t>(peers - 1);
                         grabber.add(seen[g].display_mm);
                         double d = 0.0;
@@ -973,8 +1149,10 @@ bool latency_suite(bench::Report& report, const std::vector<int>& levels)
                         display.mean(), display.worst(), view.mean(), view.worst());
                     std::fflush(stdout);
                     const double n = static_cast<double>(peers);
-                    const std::string c = std::string("grab latency: ") + name + " at " +
-                                          (latency < 0.001 ? "0.5 ms" : "5 ms") + " one-way";
+                    const std::string c = std::string("grab latency: ") + name +
+                                          (enet              ? " over ENet loopback"
+                                           : latency < 0.001 ? " at 0.5 ms one-way"
+                                                             : " at 5 ms one-way");
                     report.add(c, level, n, "peers", "grabber_display_1mm_mean_ms", grabber.mean(),
                                "ms");
                     report.add(c, level, n, "peers", "others_display_1mm_mean_ms", display.mean(),
@@ -986,7 +1164,7 @@ bool latency_suite(bench::Report& report, const std::vector<int>& levels)
                 }
     if (!all_seen)
         std::fprintf(stderr,
-                     "pliant_bench_session: a grab did not show on every peer within 1 s "
+                     "pliant_bench_session: a grab did not show on every peer within its run "
                      "(-1 in the table)\n");
     return all_seen;
 }
@@ -1011,6 +1189,7 @@ int main(int argc, char** argv)
     const char* mode_option = nullptr;
     std::vector<const char*> level_args;
     const char* seconds_arg = nullptr;
+    bool enet = false;
     for (int k = 1; k < argc; ++k)
     {
         const std::string a = argv[k];
@@ -1027,6 +1206,8 @@ int main(int argc, char** argv)
             mode = m;
             mode_option = argv[k];
         }
+        else if (a == "--enet")
+            enet = true;
         else if (a == "--seconds")
         {
             if (k + 1 >= argc)
@@ -1051,6 +1232,8 @@ int main(int argc, char** argv)
             return 2;
         levels.push_back(*level);
     }
+    if (enet && mode != Mode::Latency)
+        return usage.error("--enet applies to --latency only");
     if (mode == Mode::Stream && levels.size() > 1)
         return usage.error("--stream takes one level, got " + std::to_string(levels.size()));
     double stream_seconds = 2.0;
@@ -1077,7 +1260,7 @@ int main(int argc, char** argv)
         if (levels.empty())
             levels = report.quick() ? std::vector<int>{6} : std::vector<int>{6, 7, 8};
         report.set_suite("latency");  // `pliant bench latency`
-        const bool seen = latency_suite(report, levels);
+        const bool seen = latency_suite(report, levels, enet);
         return report.write() && seen ? 0 : 1;
     }
     if (mode == Mode::Coarse)

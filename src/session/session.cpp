@@ -1050,6 +1050,14 @@ struct Session::Impl
 
     void exact_advance()
     {
+        // A peer whose steps cannot keep real time (a lone master stepping the whole object at
+        // a fine level, a loaded machine) would otherwise step here until it caught up, which it
+        // never does, and stop answering the network: joiners were never welcomed. So a call
+        // steps for at most one frame period of wall time and returns; the caller's poll() runs
+        // between calls and the next call goes on. Steps do not depend on how they are spread
+        // over calls (the lockstep fixes the forces and partitions per tick).
+        const auto call_start = std::chrono::steady_clock::now();
+        const double call_budget = 1.0 / settings.frame_rate_hz;
         // Bounded: each pass either steps once or returns.
         for (int guard = 0; guard < 100000; ++guard)
         {
@@ -1081,6 +1089,8 @@ struct Session::Impl
             }
             if (!barrier_ok(t) || !may_step(t))
                 return;
+            if (guard > 0 && seconds_since(call_start) >= call_budget)
+                return;  // tick t is published; the next call steps it
             adopt_orphans(t);
             apply_halos(t);
             const PartitionEntry* prev = t > exact_from ? partition_at(t - 1) : partition_at(t);
@@ -1249,8 +1259,13 @@ struct Session::Impl
             return;
         const core::TetraGrid& g = s.model_->grid();
         const double frame = 1.0 / settings.frame_rate_hz;
+        const auto call_start = std::chrono::steady_clock::now();
         for (int guard = 0; guard < 64 && next_frame <= last_now; ++guard)
         {
+            // A peer behind real time catches up over several calls, so that the caller's
+            // poll() keeps serving the network (see exact_advance).
+            if (guard > 0 && seconds_since(call_start) >= frame)
+                return;
             if (settings.max_ticks != 0 && s.state_.tick >= settings.max_ticks)
                 return;
             // Dirichlet values: the newest displayed state of every node not owned.

@@ -31,6 +31,12 @@ if(PLIANT_BUILD_BENCH AND EXISTS ${PROJECT_SOURCE_DIR}/bench/CMakeLists.txt)
         # within its run (the program exits 1 otherwise) and the table has its last row.
         pliant_bench_args(bench_session_latency_level_4 pliant_bench_session 0 STDOUT
                           "\n +5\\.0 +4 +4 +fast \\| +[0-9.]+ / +[0-9.]+ \\|" --latency 4)
+        # The same over ENet on 127.0.0.1 in real time (a thread per peer; about 10 s): every
+        # grab shows on every peer within 2 s of wall time.
+        pliant_bench_args(bench_session_latency_enet_level_4 pliant_bench_session 0 STDOUT
+                          "\n +0\\.0 +4 +4 +fast \\| +[0-9.]+ / +[0-9.]+ \\|" --latency 4
+                          --enet)
+        set_tests_properties(bench_session_latency_enet_level_4 PROPERTIES TIMEOUT 120)
         pliant_bench_args(bench_args_session_coarse_level_too_low pliant_bench_session 2 STDERR
                           "^pliant_bench_session: --coarse level '2' is out of range \\(expected 3\\.\\.10\\)"
                           --coarse 2)
