@@ -35,6 +35,7 @@
 #include "grid_shapes.h"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -788,6 +789,47 @@ struct GrabSeen
     double view_mm = -1.0;
 };
 
+/// Participant k's point of interest in the latency runs (as `run`): face k F / P.
+net::Target seat_face(std::uint32_t faces, int k, int peers)
+{
+    return net::Target{net::TargetKind::Face,
+                       static_cast<std::uint32_t>(k) * faces / static_cast<std::uint32_t>(peers),
+                       {0, 0, 0},
+                       0.0};
+}
+
+/// The latency runs' grab: `face` pulled with 0.5 N along the outward radius of its centre.
+net::UserForce outward_pull(const core::TetraGrid& grid, const core::Vec3Field<double>& rest,
+                            std::uint32_t face)
+{
+    core::Vec3 centre{};
+    for (const std::uint32_t n : grid.node_triangles()[face])
+    {
+        const core::GridCoord c = grid.coord(core::NodeIndex{n});
+        centre =
+            centre + core::Vec3{rest[0].at(c.x, c.y), rest[1].at(c.x, c.y), rest[2].at(c.x, c.y)};
+    }
+    const core::Vec3 out = centre * (0.5 / core::norm(centre));
+    net::UserForce f;
+    f.target.kind = net::TargetKind::Face;
+    f.target.face = face;
+    f.force = {out.x, out.y, out.z};
+    return f;
+}
+
+/// The largest |u| at a face's nodes.
+double largest_on(const core::TetraGrid& grid, const core::Field<double>& u,
+                  const std::array<std::uint32_t, 3>& nodes)
+{
+    double m = 0.0;
+    for (const std::uint32_t n : nodes)
+    {
+        const core::GridCoord c = grid.coord(core::NodeIndex{n});
+        m = std::max(m, std::fabs(u.at(c.x, c.y)));
+    }
+    return m;
+}
+
 /// `pliant_bench_session --latency`: `peers` participants (master included, the same points of
 /// interest as `run`) and one viewer over the simulated network (`latency_s` one-way, streams
 /// and frames at 60 Hz); once every participant owns leaves and 0.2 s more, the last participant
@@ -810,8 +852,7 @@ std::vector<GrabSeen> run_latency(int level, int peers, session::Coupling coupli
     const net::Address master = tr.back()->open({}).value();
     s.push_back(session::Session::host(*tr.back(), grid, rest, material(), set).value());
     const auto faces = static_cast<std::uint32_t>(grid.face_count());
-    const std::uint32_t grabbed =
-        static_cast<std::uint32_t>(peers - 1) * faces / static_cast<std::uint32_t>(peers);
+    const std::uint32_t grabbed = seat_face(faces, peers - 1, peers).face;
     for (int k = 1; k <= peers; ++k)
     {
         tr.push_back(network.create_endpoint());
@@ -821,11 +862,7 @@ std::vector<GrabSeen> run_latency(int level, int peers, session::Coupling coupli
                                            viewer ? net::Role::Viewer : net::Role::Participant, set)
                         .value());
         if (!viewer)
-            s.back()->set_points_of_interest({net::Target{
-                net::TargetKind::Face,
-                static_cast<std::uint32_t>(k) * faces / static_cast<std::uint32_t>(peers),
-                {0, 0, 0},
-                0.0}});
+            s.back()->set_points_of_interest({seat_face(faces, k, peers)});
     }
     const double dt = 0.00025;
     double now = 0.0;
@@ -857,31 +894,11 @@ std::vector<GrabSeen> run_latency(int level, int peers, session::Coupling coupli
         pump();
     // The grab: the last participant's own face, along the outward radius.
     const auto nodes = grid.node_triangles()[grabbed];
-    core::Vec3 centre{};
-    for (const std::uint32_t n : nodes)
-    {
-        const core::GridCoord c = grid.coord(core::NodeIndex{n});
-        centre =
-            centre + core::Vec3{rest[0].at(c.x, c.y), rest[1].at(c.x, c.y), rest[2].at(c.x, c.y)};
-    }
-    const core::Vec3 out = centre * (0.5 / core::norm(centre));
-    net::UserForce f;
-    f.target.kind = net::TargetKind::Face;
-    f.target.face = grabbed;
-    f.force = {out.x, out.y, out.z};
+    const net::UserForce f = outward_pull(grid, rest, grabbed);
     s[static_cast<std::size_t>(peers - 1)]->set_forces({f});
     const double t_grab = now;
     std::vector<GrabSeen> seen(s.size());
-    const auto largest = [&](const core::Field<double>& u)
-    {
-        double m = 0.0;
-        for (const std::uint32_t n : nodes)
-        {
-            const core::GridCoord c = grid.coord(core::NodeIndex{n});
-            m = std::max(m, std::fabs(u.at(c.x, c.y)));
-        }
-        return m;
-    };
+    const auto largest = [&](const core::Field<double>& u) { return largest_on(grid, u, nodes); };
     const auto done = [&]
     {
         for (const GrabSeen& g : seen)
@@ -947,8 +964,7 @@ std::vector<GrabSeen> run_latency_enet(int level, int peers, session::Coupling c
         return {};
     ps[0].session = std::move(*hosted);
     const auto faces = static_cast<std::uint32_t>(grid.face_count());
-    const std::uint32_t grabbed =
-        static_cast<std::uint32_t>(peers - 1) * faces / static_cast<std::uint32_t>(peers);
+    const std::uint32_t grabbed = seat_face(faces, peers - 1, peers).face;
     for (int k = 1; k <= peers; ++k)
     {
         Peer& p = ps[static_cast<std::size_t>(k)];
@@ -960,25 +976,10 @@ std::vector<GrabSeen> run_latency_enet(int level, int peers, session::Coupling c
             return {};
         p.session = std::move(*joined);
         if (!viewer)
-            p.session->set_points_of_interest({net::Target{
-                net::TargetKind::Face,
-                static_cast<std::uint32_t>(k) * faces / static_cast<std::uint32_t>(peers),
-                {0, 0, 0},
-                0.0}});
+            p.session->set_points_of_interest({seat_face(faces, k, peers)});
     }
     const auto nodes = grid.node_triangles()[grabbed];
-    core::Vec3 centre{};
-    for (const std::uint32_t n : nodes)
-    {
-        const core::GridCoord c = grid.coord(core::NodeIndex{n});
-        centre =
-            centre + core::Vec3{rest[0].at(c.x, c.y), rest[1].at(c.x, c.y), rest[2].at(c.x, c.y)};
-    }
-    const core::Vec3 out = centre * (0.5 / core::norm(centre));
-    net::UserForce f;
-    f.target.kind = net::TargetKind::Face;
-    f.target.face = grabbed;
-    f.force = {out.x, out.y, out.z};
+    const net::UserForce f = outward_pull(grid, rest, grabbed);
 
     const auto start = Clock::now();
     const auto elapsed = [&]
@@ -987,16 +988,7 @@ std::vector<GrabSeen> run_latency_enet(int level, int peers, session::Coupling c
     std::atomic<bool> stop{false};
     std::atomic<int> seen_count{0};
     std::vector<GrabSeen> at(ps.size());  // absolute times; each written by its own thread
-    const auto largest = [&](const core::Field<double>& u)
-    {
-        double m = 0.0;
-        for (const std::uint32_t n : nodes)
-        {
-            const core::GridCoord c = grid.coord(core::NodeIndex{n});
-            m = std::max(m, std::fabs(u.at(c.x, c.y)));
-        }
-        return m;
-    };
+    const auto largest = [&](const core::Field<double>& u) { return largest_on(grid, u, nodes); };
     const std::size_t grabber = static_cast<std::size_t>(peers - 1);
     std::vector<std::thread> threads;
     for (std::size_t k = 0; k < ps.size(); ++k)
