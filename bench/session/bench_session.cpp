@@ -137,6 +137,19 @@ std::vector<session::Seat> session_seats(const core::TetraGrid& grid, int peers,
     return seats;
 }
 
+/// One round of peers sharing one thread over the simulated network: every session polls, then
+/// advances to `now`; then the network and `now` move on by `dt`.
+void pump_sessions(std::vector<std::unique_ptr<session::Session>>& s,
+                   net::SimulatedNetwork& network, double& now, double dt)
+{
+    for (auto& p : s)
+        p->poll();
+    for (auto& p : s)
+        p->advance(now);
+    network.advance(dt);
+    now += dt;
+}
+
 /// One run: `peers` participants (master included), `ticks` steps after everyone is in.
 RunResult run(int level, int peers, session::Coupling coupling, std::uint64_t ticks,
               const sim::MembraneState* reference_state, double rate_hz = 60.0)
@@ -182,14 +195,7 @@ RunResult run(int level, int peers, session::Coupling coupling, std::uint64_t ti
         return true;
     };
     for (int it = 0; it < 4'000'000 && !all_done(); ++it)
-    {
-        for (auto& p : s)
-            p->poll();
-        for (auto& p : s)
-            p->advance(now);
-        network.advance(0.0005);
-        now += 0.0005;
-    }
+        pump_sessions(s, network, now, 0.0005);
     RunResult r;
     for (const auto& p : s)
     {
@@ -275,15 +281,7 @@ StreamResult run_stream(int level, net::ValueEncoding encoding, double seconds, 
     s[1]->set_points_of_interest({net::Target{net::TargetKind::Face, faces / 2, {0, 0, 0}, 0.0}});
     const double dt = 0.0005;
     double now = 0.0;
-    auto pump = [&]
-    {
-        for (auto& p : s)
-            p->poll();
-        for (auto& p : s)
-            p->advance(now);
-        network.advance(dt);
-        now += dt;
-    };
+    const auto pump = [&] { pump_sessions(s, network, now, dt); };
     for (int it = 0; it < 40000; ++it)
     {
         const auto owners = s[0]->owners();
@@ -480,15 +478,7 @@ CoarseResult run_coarse(int level, int k, double seconds)
     s[1]->set_points_of_interest({net::Target{net::TargetKind::Face, faces / 2, {0, 0, 0}, 0.0}});
     const double dt = 0.0005;
     double now = 0.0;
-    auto pump = [&]
-    {
-        for (auto& p : s)
-            p->poll();
-        for (auto& p : s)
-            p->advance(now);
-        network.advance(dt);
-        now += dt;
-    };
+    const auto pump = [&] { pump_sessions(s, network, now, dt); };
     for (int it = 0; it < 40000; ++it)
     {
         const auto owners = s[0]->owners();
@@ -866,15 +856,7 @@ std::vector<GrabSeen> run_latency(int level, int peers, session::Coupling coupli
     }
     const double dt = 0.00025;
     double now = 0.0;
-    const auto pump = [&]
-    {
-        for (auto& p : s)
-            p->poll();
-        for (auto& p : s)
-            p->advance(now);
-        network.advance(dt);
-        now += dt;
-    };
+    const auto pump = [&] { pump_sessions(s, network, now, dt); };
     const auto partitioned = [&]
     {
         for (const auto& p : s)
