@@ -35,6 +35,11 @@
 //   ring values elsewhere are never read. Twins inside an owned rectangle whose canonical node is
 //   not owned are computed at the last pair with zero inputs (dirichlet_row), as the stage pass
 //   does, for the NaN probe.
+// - Needed nodes (StepOptions::needed): each pair has its own plan, its kernels over the needed
+//   nodes dilated by 2, 1 and 0 stencil rings (within the owned set), its fills about them. A
+//   pair's stencil reads the earlier pairs' slopes within one ring of its kernels only, where
+//   those were computed; the fills also compute U at positions no kernel reads (the widened
+//   intervals' corners), from stale ring values, which is harmless.
 //
 // Alternatives rejected: square leaf tiles with a shrinking halo (the first plan): they need a
 // ghost ring of 3 on every model and state plane and redundant halo work on four sides (13 % at
