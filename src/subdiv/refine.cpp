@@ -15,10 +15,13 @@
 // variables; see TESTING-NOTES.md).
 //
 // Output planes larger than the last-level cache can hold beside their input (level 10) are
-// written through an L1-resident row buffer with streaming stores (RowStreamer): without them
-// every output line was first read from memory (write-allocate) and evicted the input, and a
-// 9 -> 10 step of three float planes (25 MB out, 32 MB L3) ran at half the per-node speed of
-// 8 -> 9. Smaller outputs are written directly and stay in cache for their next use.
+// written with streaming stores: without them every output line was first read from memory
+// (write-allocate) and evicted the input, and a 9 -> 10 step of three float planes (25 MB out,
+// 32 MB L3) ran at half the per-node speed of 8 -> 9. With AVX-512 the fused loop is written
+// with intrinsics and streams each fine row straight from the registers (row_pair_streamed: one
+// two-source permute per vector aligns the row, whatever its offset); elsewhere, and for the
+// last coarse row, the rows go through an L1-resident row buffer (RowStreamer). Smaller outputs
+// are written directly and stay in cache for their next use.
 //
 // Invariant: every odd value is computed by `butterfly` with a fixed grouping of the sums and
 // no FMA contraction (-ffp-contract=off), so it depends only on the eight tap values, never on
@@ -32,7 +35,8 @@
 // loop per fine row with the plan's runtime offsets (the previous kernel: the compiler cannot
 // tell which taps coincide; about 20 % slower in cache); streaming a whole row after
 // computing it (the stores then do not overlap the arithmetic: 9 -> 10 took 1.6 ms, against 1.1
-// with chunks of 128 edges).
+// with chunks of 128 edges); software prefetch of row y+2 in the streamed loop (no gain at 64,
+// 256 or 1,024 floats ahead).
 #include <pliant/subdiv/refine.h>
 
 #include <omp.h>
@@ -71,8 +75,8 @@ struct TapValues
     T p2;     // row y+2, dx = 1
 };
 
-template <int Dx, int Dy, typename T>
-inline T tap(const TapValues<T>& t) noexcept
+template <int Dx, int Dy, typename Taps>
+inline auto tap(const Taps& t) noexcept
 {
     if constexpr (Dy == -1 && Dx >= -1 && Dx <= 1)
         return t.m1[Dx + 1];
@@ -328,6 +332,196 @@ inline void do_row_streamed(const RowJob<T>& job, int y, T* __restrict buf_even,
     se.finish();
 }
 
+#if defined(__AVX512F__)
+// The 512-bit vector operations of the direct streamed rows, for float (16 lanes) and double (8).
+template <typename T>
+struct Wide;
+
+template <>
+struct Wide<float>
+{
+    using V = __m512;
+    static constexpr int k_lanes = 16;
+    static V load(const float* p) noexcept { return _mm512_loadu_ps(p); }
+    static V add(V a, V b) noexcept { return _mm512_add_ps(a, b); }
+    static V sub(V a, V b) noexcept { return _mm512_sub_ps(a, b); }
+    static V mul(float w, V a) noexcept { return _mm512_mul_ps(_mm512_set1_ps(w), a); }
+    // Lane j of the result is lane idx[j] of the 2L lanes a:b.
+    static V pick(V a, __m512i idx, V b) noexcept { return _mm512_permutex2var_ps(a, idx, b); }
+    static __m512i index(const int (&i)[k_lanes]) noexcept
+    {
+        return _mm512_loadu_si512(static_cast<const void*>(i));
+    }
+    static void stream(float* p, V v) noexcept { _mm512_stream_ps(p, v); }
+    static void store_first(float* p, int count, V v) noexcept
+    {
+        _mm512_mask_storeu_ps(p, static_cast<__mmask16>((1u << count) - 1u), v);
+    }
+};
+
+template <>
+struct Wide<double>
+{
+    using V = __m512d;
+    static constexpr int k_lanes = 8;
+    static V load(const double* p) noexcept { return _mm512_loadu_pd(p); }
+    static V add(V a, V b) noexcept { return _mm512_add_pd(a, b); }
+    static V sub(V a, V b) noexcept { return _mm512_sub_pd(a, b); }
+    static V mul(double w, V a) noexcept { return _mm512_mul_pd(_mm512_set1_pd(w), a); }
+    static V pick(V a, __m512i idx, V b) noexcept { return _mm512_permutex2var_pd(a, idx, b); }
+    static __m512i index(const int (&i)[k_lanes]) noexcept
+    {
+        return _mm512_set_epi64(i[7], i[6], i[5], i[4], i[3], i[2], i[1], i[0]);
+    }
+    static void stream(double* p, V v) noexcept { _mm512_stream_pd(p, v); }
+    static void store_first(double* p, int count, V v) noexcept
+    {
+        _mm512_mask_storeu_pd(p, static_cast<__mmask8>((1u << count) - 1u), v);
+    }
+};
+
+// `butterfly` on vectors: the same operations in the same order, lane by lane.
+template <typename T>
+struct WideTaps
+{
+    using V = typename Wide<T>::V;
+
+    // TapValues of vectors (a struct of its own: GCC drops a vector type's attributes when it
+    // is a template argument).
+    struct Values
+    {
+        V m1[3];
+        V z0[3];
+        V p1[4];
+        V p2;
+    };
+
+    static V butterfly(V a0, V a1, V b0, V b1, V c0, V c1, V c2, V c3) noexcept
+    {
+        using W = Wide<T>;
+        return W::sub(W::add(W::mul(T(0.5), W::add(a0, a1)), W::mul(T(0.125), W::add(b0, b1))),
+                      W::mul(T(0.0625), W::add(W::add(c0, c1), W::add(c2, c3))));
+    }
+
+    template <const Mask& M>
+    static V apply(const Values& t) noexcept
+    {
+        return butterfly(tap<M[0].dx, M[0].dy>(t), tap<M[1].dx, M[1].dy>(t),
+                         tap<M[2].dx, M[2].dy>(t), tap<M[3].dx, M[3].dy>(t),
+                         tap<M[4].dx, M[4].dy>(t), tap<M[5].dx, M[5].dy>(t),
+                         tap<M[6].dx, M[6].dy>(t), tap<M[7].dx, M[7].dy>(t));
+    }
+};
+
+// One fine row written with streaming stores straight from the registers. The row's vectors
+// R_0, R_1, ... (R_k = row[kL .. kL+L)) arrive in order; `s` is the row's misalignment in
+// lanes, so the aligned vector k of the destination holds row[kL - s .. kL - s + L): the last s
+// lanes of R_{k-1} and the first L - s of R_k, one two-source permute. The first L - s nodes
+// (before the first aligned address) and the last s (after the last) are masked plain stores.
+template <typename T>
+class WideRow
+{
+public:
+    using W = Wide<T>;
+    using V = typename W::V;
+    static constexpr int L = W::k_lanes;
+
+    explicit WideRow(T* row) noexcept
+        : row_(row), s_(static_cast<int>((reinterpret_cast<std::uintptr_t>(row) / sizeof(T)) % L))
+    {
+        int idx[L];
+        for (int j = 0; j < L; ++j)
+            idx[j] = j < s_ ? L - s_ + j : L + j - s_;
+        shift_ = W::index(idx);
+    }
+
+    // R_0.
+    void first(V r) noexcept
+    {
+        if (s_ == 0)
+            W::stream(row_, r);
+        else
+            W::store_first(row_, L - s_, r);
+        prev_ = r;
+    }
+
+    // R_k, for k = 1, 2, ... in order.
+    void put(int k, V r) noexcept
+    {
+        W::stream(row_ + (k * L - s_), W::pick(prev_, shift_, r));
+        prev_ = r;
+    }
+
+    // After R_{m-1}: its last s lanes, at row[mL - s .. mL).
+    void finish(int m) noexcept
+    {
+        if (s_ > 0)
+            W::store_first(row_ + (m * L - s_), s_, W::pick(prev_, shift_, prev_));
+    }
+
+private:
+    T* row_;
+    int s_;
+    __m512i shift_;
+    V prev_{};
+};
+
+// Fine rows 2y and 2y+1 of coarse row y < rows - 1, computed L coarse edges at a time and
+// streamed from the registers (n must be a multiple of L). Same values as row_pair.
+template <typename T>
+void row_pair_streamed(const T* __restrict rm1, const T* __restrict r0, const T* __restrict r1,
+                       const T* __restrict r2, T* even, T* odd, int n) noexcept
+{
+    using W = Wide<T>;
+    using V = typename W::V;
+    using X = WideTaps<T>;
+    constexpr int L = W::k_lanes;
+    int lo_idx[L];
+    int hi_idx[L];
+    for (int j = 0; j < L; ++j)
+    {
+        lo_idx[j] = (j % 2 == 0 ? 0 : L) + j / 2;
+        hi_idx[j] = (j % 2 == 0 ? 0 : L) + L / 2 + j / 2;
+    }
+    const __m512i lo = W::index(lo_idx);
+    const __m512i hi = W::index(hi_idx);
+    WideRow<T> we(even);
+    WideRow<T> wo(odd);
+    const auto taps = [&](int x) noexcept -> typename X::Values
+    {
+        return {{W::load(rm1 + x - 1), W::load(rm1 + x), W::load(rm1 + x + 1)},
+                {W::load(r0 + x - 1), W::load(r0 + x), W::load(r0 + x + 1)},
+                {W::load(r1 + x - 1), W::load(r1 + x), W::load(r1 + x + 1), W::load(r1 + x + 2)},
+                W::load(r2 + x + 1)};
+    };
+    {
+        const typename X::Values t = taps(0);
+        const V h = X::template apply<k_horizontal_mask>(t);
+        const V v = X::template apply<k_vertical_mask>(t);
+        const V d = X::template apply<k_diagonal_mask>(t);
+        we.first(W::pick(t.z0[1], lo, h));
+        we.put(1, W::pick(t.z0[1], hi, h));
+        wo.first(W::pick(v, lo, d));
+        wo.put(1, W::pick(v, hi, d));
+    }
+    for (int x = L, k = 2; x < n; x += L, k += 2)
+    {
+        const typename X::Values t = taps(x);
+        const V h = X::template apply<k_horizontal_mask>(t);
+        const V v = X::template apply<k_vertical_mask>(t);
+        const V d = X::template apply<k_diagonal_mask>(t);
+        we.put(k, W::pick(t.z0[1], lo, h));
+        we.put(k + 1, W::pick(t.z0[1], hi, h));
+        wo.put(k, W::pick(v, lo, d));
+        wo.put(k + 1, W::pick(v, hi, d));
+    }
+    we.finish(2 * n / L);
+    wo.finish(2 * n / L);
+    even[2 * n] = r0[n];
+    odd[2 * n] = vertical_at_end(rm1, r0, r1, r2, n);
+}
+#endif
+
 // Below this many fine nodes per thread, waking a second thread costs more than it saves (a
 // level-6 step takes ~50 us on one core); the result is the same either way.
 constexpr long k_min_nodes_per_thread = 1L << 16;
@@ -351,7 +545,19 @@ void rows_serial(const RowJob<T>& job, int y0, int y1, bool streamed) noexcept
     alignas(64) T buf_even[k_max_fine_row];
     alignas(64) T buf_odd[k_max_fine_row];
     for (int y = y0; y < y1; ++y)
+    {
+#if defined(__AVX512F__)
+        if (y + 1 < job.rows && job.n % Wide<T>::k_lanes == 0)
+        {
+            const T* r0 = job.in + static_cast<std::ptrdiff_t>(y) * job.in_stride;
+            T* even = job.out + static_cast<std::ptrdiff_t>(2 * y) * job.out_stride;
+            row_pair_streamed(r0 - job.in_stride, r0, r0 + job.in_stride, r0 + 2 * job.in_stride,
+                              even, even + job.out_stride, job.n);
+            continue;
+        }
+#endif
         do_row_streamed(job, y, buf_even, buf_odd);
+    }
     stream_fence();
 }
 
