@@ -110,8 +110,8 @@ int run_join(const JoinOptions& opt)
         spdlog::error("join: never received the model from {}", opt.master);
         return k_exit_failure;
     }
-    std::printf("join (id %u): %.1f s, tick %llu, %llu bytes out, %llu bytes in\n",
-                static_cast<unsigned>((*s)->id().value), summary->elapsed_s,
+    std::printf("join (id %u): model in %.2f s; %.1f s, tick %llu, %llu bytes out, %llu bytes in\n",
+                static_cast<unsigned>((*s)->id().value), summary->model_s, summary->elapsed_s,
                 static_cast<unsigned long long>(summary->final_tick),
                 static_cast<unsigned long long>(summary->stats.bytes_sent),
                 static_cast<unsigned long long>(summary->stats.bytes_received));

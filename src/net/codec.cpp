@@ -361,6 +361,10 @@ Err check(const Heartbeat&) noexcept
 {
     return {};
 }
+Err check(const Ready&) noexcept
+{
+    return {};
+}
 Err check(const Ping&) noexcept
 {
     return {};
@@ -492,6 +496,10 @@ std::size_t body_size(const Halo& m) noexcept
 std::size_t body_size(const Heartbeat&) noexcept
 {
     return 4;
+}
+std::size_t body_size(const Ready&) noexcept
+{
+    return 0;
 }
 std::size_t body_size(const Ping&) noexcept
 {
@@ -723,6 +731,7 @@ void write_body(ByteWriter& w, const Heartbeat& m) noexcept
 {
     w.u32(m.epoch);
 }
+void write_body(ByteWriter&, const Ready&) noexcept {}
 void write_body(ByteWriter& w, const Ping& m) noexcept
 {
     w.u32(m.nonce);
@@ -1135,6 +1144,11 @@ Err read_body(ByteReader& r, Heartbeat& m) noexcept
     return {};
 }
 
+Err read_body(ByteReader&, Ready&) noexcept
+{
+    return {};
+}
+
 Err read_body(ByteReader& r, Ping& m) noexcept
 {
     m.nonce = r.u32();
@@ -1266,7 +1280,7 @@ Err read_body(ByteReader& r, Ack& m) noexcept
     return newest_named ? Err{} : DecodeError::BadRange;
 }
 
-/// Default-constructs the body alternative for wire type `type` (1..17).
+/// Default-constructs the body alternative for wire type `type` (1..18).
 template <std::size_t I = 0>
 Body make_body(std::size_t index) noexcept
 {

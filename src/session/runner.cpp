@@ -189,6 +189,8 @@ core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
             break;
         }
         session.poll();
+        if (summary.model_s < 0.0 && session.ready())
+            summary.model_s = now;
         bool forces_changed = false;
         while (next_event < options.script.size() && options.script[next_event].time <= now &&
                session.ready())

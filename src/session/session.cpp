@@ -327,6 +327,9 @@ struct RemotePeer
     std::vector<ForceEntry> forces;
     std::vector<net::Target> points;
     bool ready = false;  ///< sent its points of interest (participants): may be partitioned
+    /// Sent Ready: it holds the model and can show leaf states, so they are streamed to it. A
+    /// joiner still downloading the model gets none (they would only compete with the download).
+    bool has_model = false;
     bool leaving = false;
     bool departed = false;
 };
@@ -1660,7 +1663,7 @@ struct Session::Impl
                              s.state_.time - leaf_sent_time[l] >= settings.quiescent_refresh_s;
         for (const auto& [pid, peer] : peers)
         {
-            if (peer.departed || !peer.handle)
+            if (peer.departed || !peer.handle || !peer.has_model)
                 continue;
             const QuantisedLeaf* base = acked_baseline(pid, l);
             std::vector<double>* prio = capped() ? &priority[pid] : nullptr;
@@ -1807,10 +1810,13 @@ struct Session::Impl
             }
             if (quantised_stream())
                 m.encoding = net::ValueEncoding::F64;
+            const net::Message msg = make(m, s.state_.tick);
             for (const auto& [pid, peer] : peers)
-                if (!peer.departed && peer.handle)
+                if (!peer.departed && peer.handle && peer.has_model)
+                {
                     ++counters.leaf_states_sent;
-            send_all(make(m, s.state_.tick), net::SendMode::Unsequenced);
+                    send_to(pid, msg, net::SendMode::Unsequenced);
+                }
             leaf_sent_time[l] = s.state_.time;
         }
         flush_batches();
@@ -2076,9 +2082,12 @@ struct Session::Impl
         greet_new_peer(m.header.sender.value);
     }
 
-    /// Sends a newly known peer what it needs from us that it cannot have seen: our newest force.
+    /// Sends a newly known peer what it needs from us that it cannot have seen: that we can take
+    /// leaf states, our points of interest, our newest force.
     void greet_new_peer(std::uint16_t id)
     {
+        if (s.model_)
+            send_to(id, make(net::Ready{}, s.state_.tick));
         if (points_sent && s.role_ != SessionRole::Viewer && !leaving)
         {
             net::PointsOfInterest poi;
@@ -2258,6 +2267,10 @@ struct Session::Impl
         next_frame = last_now;
         model_blob.clear();
         state_blob.clear();
+        // Leaf states may come now: to the peers we are connected to, and to the others (queued
+        // until their connection is up) right after our Hello.
+        for (const auto& [pid, p] : peers)
+            send_to(pid, make(net::Ready{}, s.state_.tick));
         // Partitions that arrived with the blobs.
         for (auto& m : early)
             handle(m.first, m.second);
@@ -2567,9 +2580,23 @@ struct Session::Impl
         case net::MessageType::Blob: on_blob(std::get<net::Blob>(m.body)); return;
         default: break;
         }
+        if (!s.model_ &&
+            (m.type() == net::MessageType::LeafState || m.type() == net::MessageType::LeafBatch))
+        {
+            // Cannot be shown yet, and superseded by the next stream period, which resends every
+            // leaf we have not acknowledged. (Peers stream to us only after our Ready; these came
+            // from a peer that does not wait for it.)
+            ++counters.early_states_dropped;
+            return;
+        }
         if (!bound)
             return;
         const std::uint16_t from = idit->second;
+        if (m.type() == net::MessageType::Ready)
+        {
+            peers[from].has_model = true;
+            return;
+        }
         if (!s.model_)
         {
             early.emplace_back(h, m);

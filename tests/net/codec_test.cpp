@@ -115,7 +115,7 @@ TEST(Codec, PingMatchesBytesWrittenFromTheSpecification)
                          .tick = 0x100F0E0D0C0B0A09ULL},
               .body = Ping{.nonce = 0x14131211u, .time_us = 0x201F1E1D1C1B1A19ULL}};
     const auto expected = bytes_of({0x50, 0x4C, 0x4E, 0x54,  // "PLNT"
-                                    4,    14,   0,    0,     // version, type Ping, flags, reserved
+                                    5,    14,   0,    0,     // version, type Ping, flags, reserved
                                     0x01, 0x02, 0x03, 0x04,  // session
                                     0x05, 0x06, 0x07, 0x08,  // sender, sequence
                                     0x09, 0x0A, 0x0B, 0x0C, 0x0D, 0x0E, 0x0F, 0x10,  // tick
@@ -151,7 +151,7 @@ TEST(Codec, LeafBatchMatchesBytesWrittenFromTheSpecification)
     b.leaves.push_back(l);
     Message m{.header = {.session = 7, .sender = PeerId{2}, .sequence = 0, .tick = 9}, .body = b};
     const auto expected =
-        bytes_of({0x50, 0x4C, 0x4E, 0x54, 4, 17, 0,    0,     // "PLNT" v4 LeafBatch
+        bytes_of({0x50, 0x4C, 0x4E, 0x54, 5, 17, 0,    0,     // "PLNT" v5 LeafBatch
                   7,    0,    0,    0,    2, 0,  0,    0,     // session, sender, seq.
                   9,    0,    0,    0,    0, 0,  0,    0,     // tick
                   0x04, 0x03, 0x02, 0x01,                     // epoch
@@ -167,6 +167,27 @@ TEST(Codec, LeafBatchMatchesBytesWrittenFromTheSpecification)
     EXPECT_EQ(*back, m);
 }
 
+TEST(Codec, ReadyMatchesBytesWrittenFromTheSpecification)
+{
+    Message m{.header = {.session = 7, .sender = PeerId{2}, .sequence = 0, .tick = 9},
+              .body = Ready{}};
+    const auto expected = bytes_of({0x50, 0x4C, 0x4E, 0x54, 5, 18, 0, 0,    // "PLNT" v5 Ready
+                                    7,    0,    0,    0,    2, 0,  0, 0,    // session, sender, seq.
+                                    9,    0,    0,    0,    0, 0,  0, 0});  // tick; no body
+    EXPECT_EQ(encode_vec(m), expected);
+    auto back = decode(expected);
+    ASSERT_TRUE(back.has_value());
+    EXPECT_EQ(*back, m);
+    // A control message: refused on the state channel, unlike the types numbered before it.
+    EXPECT_EQ(default_channel(MessageType::Ready), Channel::Control);
+    EXPECT_FALSE(allowed_on(MessageType::Ready, Channel::State));
+    EXPECT_TRUE(allowed_on(MessageType::LeafBatch, Channel::State));
+    // Only members send it: a session id is required.
+    auto d = expected;
+    d[8] = std::byte{0};
+    EXPECT_EQ(decode_error(d), DecodeError::BadSession);
+}
+
 TEST(Codec, AckMatchesBytesWrittenFromTheSpecification)
 {
     // Two leaves at depth 1 (indices (0 * 2 + 1) * 2 + 0 = 2 and (1 * 2 + 0) * 2 + 1 = 5), ticks
@@ -175,7 +196,7 @@ TEST(Codec, AckMatchesBytesWrittenFromTheSpecification)
     a.acks = {LeafAck{.leaf = WireLeafId{0, 1, 0, 1}, .tick = 1000},
               LeafAck{.leaf = WireLeafId{1, 1, 1, 0}, .tick = 800}};
     Message m{.header = {.session = 7, .sender = PeerId{2}, .sequence = 0, .tick = 9}, .body = a};
-    const auto expected = bytes_of({0x50, 0x4C, 0x4E, 0x54, 4, 16, 0, 0,  // "PLNT" v4 Ack
+    const auto expected = bytes_of({0x50, 0x4C, 0x4E, 0x54, 5, 16, 0, 0,  // "PLNT" v5 Ack
                                     7,    0,    0,    0,    2, 0,  0, 0,  // session, sender, seq.
                                     9,    0,    0,    0,    0, 0,  0, 0,  // tick
                                     2,    1,    0,    0,                  // count, depth, reserved
@@ -279,9 +300,11 @@ TEST(Codec, HeaderErrors)
     EXPECT_EQ(decode_error(d), DecodeError::BadVersion);
     d[4] = std::byte{3};  // version 3 (before Rice packing and leaf batches)
     EXPECT_EQ(decode_error(d), DecodeError::BadVersion);
-    d[4] = std::byte{5};
+    d[4] = std::byte{4};  // version 4 (before Ready)
     EXPECT_EQ(decode_error(d), DecodeError::BadVersion);
-    for (int type : {0, 18, 255})
+    d[4] = std::byte{6};
+    EXPECT_EQ(decode_error(d), DecodeError::BadVersion);
+    for (int type : {0, 19, 255})
     {
         d = ping;
         d[5] = static_cast<std::byte>(type);

@@ -221,6 +221,8 @@ inline std::vector<Message> all()
     add(leaf_batch(1, 0, 1));
     add(leaf_batch(5, 3, 72));
     add(leaf_batch(9, 7, 20));
+    // Version 5: a joiner's readiness for leaf states.
+    add(Ready{});
     return out;
 }
 

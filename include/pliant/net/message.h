@@ -27,7 +27,7 @@ namespace pliant::net
 {
 
 inline constexpr std::uint32_t k_protocol_magic = 0x544E4C50;  ///< bytes "PLNT"
-inline constexpr std::uint8_t k_protocol_version = 4;
+inline constexpr std::uint8_t k_protocol_version = 5;
 inline constexpr std::size_t k_header_size = 24;
 /// The largest body of a LeafState or Halo (one leaf per datagram, no IP fragmentation).
 inline constexpr std::size_t k_max_state_payload = 1200;
@@ -89,8 +89,9 @@ enum class MessageType : std::uint8_t
     Pong = 15,
     Ack = 16,
     LeafBatch = 17,
+    Ready = 18,  ///< control (channel 0), although its number follows the state types
 };
-inline constexpr std::uint8_t k_message_type_count = 17;
+inline constexpr std::uint8_t k_message_type_count = 18;
 
 /// How node values are written (docs/protocol.md §5.4).
 enum class ValueEncoding : std::uint8_t
@@ -358,9 +359,16 @@ struct LeafBatch
     friend bool operator==(const LeafBatch&, const LeafBatch&) = default;
 };
 
+/// The sender holds the session's model and state: leaf states may be streamed to it
+/// (docs/protocol.md, Ready). No body.
+struct Ready
+{
+    friend bool operator==(const Ready&, const Ready&) = default;
+};
+
 using Body =
     std::variant<Hello, Welcome, Reject, PeerJoined, PeerLeft, Blob, PointsOfInterest, Partition,
-                 Force, Leave, LeafState, Halo, Heartbeat, Ping, Pong, Ack, LeafBatch>;
+                 Force, Leave, LeafState, Halo, Heartbeat, Ping, Pong, Ack, LeafBatch, Ready>;
 static_assert(std::variant_size_v<Body> == k_message_type_count);
 
 /// Fields every datagram carries besides its type (docs/protocol.md §4).
@@ -388,7 +396,8 @@ struct Message
 /// The channel a message type travels on by default (docs/protocol.md §2).
 [[nodiscard]] constexpr Channel default_channel(MessageType type) noexcept
 {
-    return static_cast<std::uint8_t>(type) >= static_cast<std::uint8_t>(MessageType::LeafState)
+    return type != MessageType::Ready && static_cast<std::uint8_t>(type) >=
+                                             static_cast<std::uint8_t>(MessageType::LeafState)
                ? Channel::State
                : Channel::Control;
 }

@@ -67,6 +67,9 @@ struct RunSummary
     double elapsed_s = 0.0;
     std::uint64_t final_tick = 0;
     bool left = false;  ///< the peer left (script), or the session ended (master shut it down)
+    /// Wall time until the model and state were installed (a joiner's download; 0 for the
+    /// master; -1 if they never arrived), s.
+    double model_s = -1.0;
     SessionStats stats;
 };
 

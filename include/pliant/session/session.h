@@ -197,6 +197,9 @@ struct SessionStats
     // Receiver side: quantised LeafStates dropped (never displayed, never acknowledged).
     std::uint64_t baseline_misses = 0;  ///< the baseline named is not held (lost, late join)
     std::uint64_t state_rejects = 0;    ///< wrong node count, or values leaving the int32 range
+    /// Leaf states that arrived before this joiner had the model: dropped, since the next
+    /// stream period resends every leaf it has not acknowledged.
+    std::uint64_t early_states_dropped = 0;
     /// Exact mode: leaves taken over from a lost peer, started from their last streamed state.
     std::uint64_t adopted_leaves = 0;
     std::uint64_t promotions = 0;  ///< times this peer became master after the master was lost
