@@ -662,7 +662,8 @@ void steps_suite(bench::Report& report, const std::vector<int>& levels)
 {
     std::printf(
         "# sim step CPU per peer / full step (thread CPU time, best of 5 rounds, 1 "
-        "thread); partition: g grown shares, s slabs, t turned slabs\nlevel peers points | fast: "
+        "thread); partition: g grown shares, s slabs, r whole-row slabs, t turned slabs\nlevel "
+        "peers points | fast: "
         "max "
         "mean | exact: max mean | full step us\n");
     for (const int level : levels)
@@ -698,12 +699,16 @@ void steps_suite(bench::Report& report, const std::vector<int>& levels)
                 const std::vector<session::Seat> seats = session_seats(grid, peers, points);
                 const auto fast_owners = session::partition_leaves(grid, graph, seats);
                 const auto exact_owners =
-                    session::partition_leaves(grid, graph, seats, session::PointClearance::Inside);
+                    session::partition_leaves(grid, graph, seats, session::PointClearance::Inside,
+                                              session::k_exact_ring_cost);
                 const auto kind = [&](const std::vector<net::PeerId>& owners)
                 {
                     if (owners == session::grown_partition(grid, graph, seats))
                         return 'g';
-                    return owners == session::slab_partition(grid, graph, seats) ? 's' : 't';
+                    if (owners == session::slab_partition(grid, graph, seats))
+                        return 's';
+                    return owners == session::slab_partition(grid, graph, seats, 0, true) ? 'r'
+                                                                                          : 't';
                 };
                 std::vector<std::vector<core::Region>> fast_sets(static_cast<std::size_t>(peers));
                 // Exact coupling: the own set dilated by the halo, computed where the own nodes

@@ -269,7 +269,8 @@ std::vector<std::uint32_t> row_major_leaves(const LeafGraph& graph)
 std::optional<std::vector<std::uint32_t>> slab_seats(const core::TetraGrid& grid,
                                                      const LeafGraph& graph,
                                                      std::span<const std::uint32_t> row_major,
-                                                     std::span<const Seat> seats, std::size_t shift)
+                                                     std::span<const Seat> seats, std::size_t shift,
+                                                     bool whole_rows)
 {
     const std::size_t p = seats.size();
     const std::size_t n = graph.size();
@@ -300,6 +301,35 @@ std::optional<std::vector<std::uint32_t>> slab_seats(const core::TetraGrid& grid
             goal - static_cast<double>(before[c]) > static_cast<double>(before[c + 1]) - goal)
             ++c;
         cut[k] = c;
+    }
+    // Whether a leaf row starts at position k of `order` (0 < k < n).
+    const auto regions = graph.regions();
+    const auto row_start = [&](std::size_t k)
+    { return regions[order[k]].y0 != regions[order[k - 1]].y0; };
+    if (whole_rows)
+    {
+        // Each cut to the nearest position where a leaf row starts (by nodes), in order.
+        for (std::size_t k = 1; k < p; ++k)
+        {
+            std::size_t down = cut[k];
+            while (down > cut[k - 1] + 1 && !row_start(down))
+                --down;
+            std::size_t up = cut[k];
+            while (up < n - (p - k) && !row_start(up))
+                ++up;
+            const bool down_ok = row_start(down);
+            const bool up_ok = up < n && row_start(up);
+            if (!down_ok && !up_ok)
+                return std::nullopt;
+            const double goal =
+                static_cast<double>(total) * static_cast<double>(k) / static_cast<double>(p);
+            cut[k] = !up_ok || (down_ok && goal - static_cast<double>(before[down]) <=
+                                               static_cast<double>(before[up]) - goal)
+                         ? down
+                         : up;
+            if (cut[k] <= cut[k - 1])
+                return std::nullopt;
+        }
     }
     // Slab positions: seats with a point in the order of their point's leaf (ties: peer id),
     // each at the slab holding its point or the next free one, the rest in peer order.
@@ -344,8 +374,17 @@ std::optional<std::vector<std::uint32_t>> slab_seats(const core::TetraGrid& grid
         span[i] = {rank[leaf], rank[leaf]};
         for (const std::uint32_t b : graph.neighbours(leaf))
             span[i] = {std::min(span[i].first, rank[b]), std::max(span[i].second, rank[b])};
-        cut[pos[i]] = std::min(cut[pos[i]], span[i].first);
-        cut[pos[i] + 1] = std::max(cut[pos[i] + 1], span[i].second + 1);
+        std::size_t lo = std::min(cut[pos[i]], span[i].first);
+        std::size_t hi = std::max(cut[pos[i] + 1], span[i].second + 1);
+        if (whole_rows)  // moved cuts stay between leaf rows
+        {
+            while (lo > 0 && !row_start(lo))
+                --lo;
+            while (hi < n && !row_start(hi))
+                ++hi;
+        }
+        cut[pos[i]] = lo;
+        cut[pos[i] + 1] = hi;
     }
     // Points whose spans overlap pull a cut both ways: the later move wins, so check them all
     // again. A violated span, an empty slab or one out of balance rules the slabs out.
@@ -404,22 +443,58 @@ void count_row_segments(const core::TetraGrid& grid, const LeafGraph& graph,
     }
 }
 
+/// Ring nodes per owner index: the canonical nodes of other owners that are grid neighbours
+/// (through the ghost map) of its own. Only leaves with a neighbouring leaf of another owner
+/// can hold such nodes, so the pass visits those leaves' nodes only.
+void count_ring_nodes(const core::TetraGrid& grid, const LeafGraph& graph,
+                      const std::vector<std::uint32_t>& owner, std::vector<std::size_t>& out)
+{
+    for (std::size_t l = 0; l < graph.size(); ++l)
+    {
+        const std::uint32_t mine = owner[l];
+        const auto nb = graph.neighbours(l);
+        if (std::all_of(nb.begin(), nb.end(), [&](std::uint32_t b) { return owner[b] == mine; }))
+            continue;
+        for (const core::NodeIndex n : graph.nodes(l))
+        {
+            const core::GridCoord c = grid.coord(n);
+            std::array<std::uint32_t, 6> foreign{};
+            std::size_t count = 0;
+            for (const core::NodeIndex m : core::grid_neighbours(grid, c.x, c.y))
+            {
+                const std::uint32_t o = owner[graph.leaf_of(m)];
+                if (o != mine &&
+                    std::find(foreign.begin(), foreign.begin() + static_cast<std::ptrdiff_t>(count),
+                              o) == foreign.begin() + static_cast<std::ptrdiff_t>(count))
+                    foreign[count++] = o;
+            }
+            // n lies in the first ring of every other owner next to it.
+            for (std::size_t i = 0; i < count; ++i)
+                ++out[foreign[i]];
+        }
+    }
+}
+
 /// The largest `step_cost` over the seats of a seat-index table.
 double busiest_cost(const core::TetraGrid& grid, const LeafGraph& graph,
-                    const std::vector<std::uint32_t>& owner, std::size_t seats)
+                    const std::vector<std::uint32_t>& owner, std::size_t seats, double ring_cost)
 {
     std::vector<std::size_t> nodes(seats, 0);
     std::vector<std::size_t> segments(seats, 0);
+    std::vector<std::size_t> ring(seats, 0);
     for (std::size_t l = 0; l < owner.size(); ++l)
         nodes[owner[l]] += graph.node_count(l);
     count_row_segments(grid, graph, owner, segments);
+    if (ring_cost != 0.0)
+        count_ring_nodes(grid, graph, owner, ring);
     double worst = 0.0;
     for (std::size_t s = 0; s < seats; ++s)
     {
         PeerShare share;
         share.nodes = nodes[s];
         share.row_segments = segments[s];
-        worst = std::max(worst, step_cost(share));
+        share.ring_nodes = ring[s];
+        worst = std::max(worst, step_cost(share, ring_cost));
     }
     return worst;
 }
@@ -431,6 +506,25 @@ std::vector<net::PeerId> to_peers(const std::vector<std::uint32_t>& owner,
     for (std::size_t l = 0; l < owner.size(); ++l)
         out[l] = seats[owner[l]].peer;
     return out;
+}
+
+/// The position in `order` (`row_major_leaves`) nearest to `shift` (around the cycle) at which a
+/// leaf row starts.
+std::size_t nearest_row_start(const LeafGraph& graph, std::span<const std::uint32_t> order,
+                              std::size_t shift)
+{
+    const std::size_t n = order.size();
+    const auto regions = graph.regions();
+    const auto starts = [&](std::size_t k)
+    { return k == 0 || regions[order[k]].y0 != regions[order[k - 1]].y0; };
+    for (std::size_t d = 0; d < n; ++d)
+    {
+        if (starts((shift + n - d) % n))
+            return (shift + n - d) % n;
+        if (starts((shift + d) % n))
+            return (shift + d) % n;
+    }
+    return 0;
 }
 
 /// `centred_slab_shift` for seats sorted by peer id (`order`: `row_major_leaves`).
@@ -488,10 +582,10 @@ std::vector<net::PeerId> grown_partition(const core::TetraGrid& grid, const Leaf
 std::optional<std::vector<net::PeerId>> slab_partition(const core::TetraGrid& grid,
                                                        const LeafGraph& graph,
                                                        std::span<const Seat> seats_in,
-                                                       std::size_t shift)
+                                                       std::size_t shift, bool whole_rows)
 {
     const std::vector<Seat> seats = sorted_seats(seats_in);
-    if (auto owner = slab_seats(grid, graph, row_major_leaves(graph), seats, shift))
+    if (auto owner = slab_seats(grid, graph, row_major_leaves(graph), seats, shift, whole_rows))
         return to_peers(*owner, seats);
     return std::nullopt;
 }
@@ -525,7 +619,8 @@ std::uint32_t border_hops(const LeafGraph& graph, std::span<const net::PeerId> o
 }
 
 std::vector<net::PeerId> partition_leaves(const core::TetraGrid& grid, const LeafGraph& graph,
-                                          std::span<const Seat> seats_in, PointClearance clearance)
+                                          std::span<const Seat> seats_in, PointClearance clearance,
+                                          double ring_cost)
 {
     // O(leaves log leaves) for the candidates (one sort of the leaves into row-major order) and
     // O(grid nodes) for their costs, no node masks: a repartition runs on the master between
@@ -533,23 +628,35 @@ std::vector<net::PeerId> partition_leaves(const core::TetraGrid& grid, const Lea
     const std::vector<Seat> seats = sorted_seats(seats_in);
     const std::vector<std::uint32_t> grown = grow_seats(grid, graph, seats);
     std::vector<net::PeerId> best = to_peers(grown, seats);
-    double best_cost = busiest_cost(grid, graph, grown, seats.size());
+    double best_cost = busiest_cost(grid, graph, grown, seats.size(), ring_cost);
     std::vector<std::uint32_t> grown_hops;  // per seat with a point, in the grown shares
     if (clearance == PointClearance::AsGrown)
         for (const Seat& s : seats)
             if (s.seed)
                 grown_hops.push_back(border_hops(graph, best, *s.seed));
     // Candidates: the slabs from the first leaf, and the slabs turned to keep the points
-    // farthest from the cuts; the cheaper one that keeps the clearance, if cheaper than grown.
+    // farthest from the cuts, each with balanced and with whole-row cuts (turned to the leaf
+    // row nearest the centred shift); the cheapest that keeps the clearance, if cheaper than
+    // grown.
     const std::vector<std::uint32_t> row_major = row_major_leaves(graph);
-    const std::array<std::size_t, 2> shifts = {0, centred_shift(graph, row_major, seats)};
-    for (std::size_t c = 0; c < (shifts[1] == 0 ? 1U : 2U); ++c)
+    const std::size_t centred = centred_shift(graph, row_major, seats);
+    const std::size_t centred_row = nearest_row_start(graph, row_major, centred);
+    struct Candidate
     {
-        const std::size_t shift = shifts[c];
-        const auto slabs = slab_seats(grid, graph, row_major, seats, shift);
+        std::size_t shift;
+        bool whole_rows;
+    };
+    std::vector<Candidate> candidates = {{0, false}, {0, true}};
+    if (centred != 0)
+        candidates.push_back({centred, false});
+    if (centred_row != 0)
+        candidates.push_back({centred_row, true});
+    for (const Candidate& cand : candidates)
+    {
+        const auto slabs = slab_seats(grid, graph, row_major, seats, cand.shift, cand.whole_rows);
         if (!slabs)
             continue;
-        const double cost = busiest_cost(grid, graph, *slabs, seats.size());
+        const double cost = busiest_cost(grid, graph, *slabs, seats.size(), ring_cost);
         if (cost >= best_cost)
             continue;
         std::vector<net::PeerId> peers = to_peers(*slabs, seats);
@@ -567,7 +674,7 @@ std::vector<net::PeerId> partition_leaves(const core::TetraGrid& grid, const Lea
 }
 
 PartitionQuality measure_partition(const core::TetraGrid& grid, const LeafGraph& graph,
-                                   std::span<const net::PeerId> owners)
+                                   std::span<const net::PeerId> owners, double ring_cost)
 {
     PLIANT_ASSERT(owners.size() == graph.size(), "measure_partition: table size");
     std::map<net::PeerId, PeerShare> shares;
@@ -622,8 +729,13 @@ PartitionQuality measure_partition(const core::TetraGrid& grid, const LeafGraph&
             owner[l] = index.at(owners[l]);
         std::vector<std::size_t> segments(index.size(), 0);
         count_row_segments(grid, graph, owner, segments);
+        std::vector<std::size_t> ring(index.size(), 0);
+        count_ring_nodes(grid, graph, owner, ring);
         for (auto& [id, share] : shares)
+        {
             share.row_segments = segments[index.at(id)];
+            share.ring_nodes = ring[index.at(id)];
+        }
     }
     PartitionQuality q;
     for (const auto& [a, b] : edges)
@@ -639,7 +751,7 @@ PartitionQuality measure_partition(const core::TetraGrid& grid, const LeafGraph&
     for (const auto& [id, s] : shares)
     {
         q.imbalance = std::max(q.imbalance, std::abs(static_cast<double>(s.nodes) - mean) / mean);
-        q.busiest_cost = std::max(q.busiest_cost, step_cost(s));
+        q.busiest_cost = std::max(q.busiest_cost, step_cost(s, ring_cost));
         q.shares.push_back(s);
     }
     return q;

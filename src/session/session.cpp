@@ -746,9 +746,11 @@ struct Session::Impl
                 seats.push_back(Seat{net::PeerId{id}, seed_of(p.points)});
         // Exact coupling's state does not depend on the borders; fast coupling's errs next to
         // them, so there the points keep the distance the grown shares give them.
-        return partition_leaves(
-            s.model_->grid(), *s.graph_, seats,
-            s.coupling_ == Coupling::Exact ? PointClearance::Inside : PointClearance::AsGrown);
+        // Exact coupling also computes the rings next to each share (§4.1): borders cost there.
+        const bool exact = s.coupling_ == Coupling::Exact;
+        return partition_leaves(s.model_->grid(), *s.graph_, seats,
+                                exact ? PointClearance::Inside : PointClearance::AsGrown,
+                                exact ? k_exact_ring_cost : 0.0);
     }
 
     void master_repartition(std::uint64_t apply)

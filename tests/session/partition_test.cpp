@@ -410,6 +410,107 @@ TEST(Partition, PointsOnTheBalancedCutsTurnTheSlabsInExactCoupling)
     }
 }
 
+// Brute force: the canonical nodes of other owners next to `peer`'s (its share dilated by one
+// ring through the ghost map, minus the share).
+std::size_t brute_ring_nodes(const core::TetraGrid& g, const LeafGraph& graph,
+                             const std::vector<net::PeerId>& owners, net::PeerId peer)
+{
+    std::vector<char> mask(g.node_count(), 0);
+    std::size_t own = 0;
+    for (std::size_t l = 0; l < owners.size(); ++l)
+        if (owners[l] == peer)
+            for (const core::NodeIndex n : graph.nodes(l))
+            {
+                mask[n.value] = 1;
+                ++own;
+            }
+    const auto grown = core::dilate_nodes(g, std::move(mask), 1);
+    return static_cast<std::size_t>(std::count(grown.begin(), grown.end(), char{1})) - own;
+}
+
+// Brute force: the position in the row-major leaf order (by region y0, then x0) nearest to
+// `shift`, around the cycle, at which a leaf row starts (the earlier of two as near).
+std::size_t brute_row_start(const LeafGraph& graph, std::size_t shift)
+{
+    std::vector<std::uint32_t> order(graph.size());
+    for (std::uint32_t l = 0; l < order.size(); ++l)
+        order[l] = l;
+    const auto r = graph.regions();
+    std::sort(order.begin(), order.end(),
+              [&](std::uint32_t a, std::uint32_t b)
+              { return r[a].y0 != r[b].y0 ? r[a].y0 < r[b].y0 : r[a].x0 < r[b].x0; });
+    const std::size_t n = order.size();
+    std::size_t best = 0;
+    std::size_t best_d = n;
+    for (std::size_t k = 0; k < n; ++k)
+        if (k == 0 || r[order[k]].y0 != r[order[k - 1]].y0)
+        {
+            const std::size_t d = std::min((k + n - shift) % n, (shift + n - k) % n);
+            if (d < best_d || (d == best_d && (k + n - shift) % n > (shift + n - k) % n))
+            {
+                best = k;
+                best_d = d;
+            }
+        }
+    return best;
+}
+
+TEST(Partition, RingNodesAgainstADilationByOneRing)
+{
+    for_each_layout(
+        [&](const core::TetraGrid& g, const LeafGraph& graph, int level, int p, bool points,
+            const std::vector<Seat>& seats)
+        {
+            if (level > 7)
+                return;
+            for (const auto& owners :
+                 {grown_partition(g, graph, seats),
+                  slab_partition(g, graph, seats).value_or(grown_partition(g, graph, seats))})
+            {
+                const PartitionQuality q = measure_partition(g, graph, owners);
+                for (const PeerShare& s : q.shares)
+                    EXPECT_EQ(s.ring_nodes, brute_ring_nodes(g, graph, owners, s.peer))
+                        << level << " " << p << " " << points;
+            }
+        });
+}
+
+TEST(Partition, WholeRowSlabsCutBetweenLeafRows)
+{
+    int built = 0;
+    for_each_layout(
+        [&](const core::TetraGrid& g, const LeafGraph& graph, int level, int p, bool points,
+            const std::vector<Seat>& seats)
+        {
+            const std::size_t centred = brute_row_start(graph, centred_slab_shift(graph, seats));
+            for (const std::size_t shift : {std::size_t{0}, centred})
+            {
+                const auto owners = slab_partition(g, graph, seats, shift, true);
+                if (!owners)
+                    continue;
+                ++built;
+                // One owner per leaf row (the turned order starts at a leaf row too).
+                std::map<int, std::set<std::uint16_t>> row_owners;
+                for (std::size_t l = 0; l < owners->size(); ++l)
+                    row_owners[graph.regions()[l].y0].insert((*owners)[l].value);
+                for (const auto& [y0, who] : row_owners)
+                    EXPECT_EQ(who.size(), 1U)
+                        << level << " " << p << " points " << points << " row " << y0;
+                const PartitionQuality q = measure_partition(g, graph, *owners);
+                EXPECT_EQ(q.shares.size(), static_cast<std::size_t>(p));
+                EXPECT_LE(q.imbalance, k_slab_balance + 1e-12);
+                for (const Seat& s : seats)
+                {
+                    if (s.seed)
+                    {
+                        EXPECT_EQ((*owners)[graph.leaf_of(*s.seed)], s.peer);
+                    }
+                }
+            }
+        });
+    EXPECT_GT(built, 10);
+}
+
 TEST(Partition, TakesTheSlabsExactlyWhenTheirBusiestStepIsCheaper)
 {
     for_each_layout(
@@ -419,7 +520,7 @@ TEST(Partition, TakesTheSlabsExactlyWhenTheirBusiestStepIsCheaper)
             const auto grown = grown_partition(g, graph, seats);
             const auto slabs = slab_partition(g, graph, seats);
             // The modelled cost from brute-force counts, not from measure_partition.
-            const auto busiest = [&](const std::vector<net::PeerId>& owners)
+            const auto busiest = [&](const std::vector<net::PeerId>& owners, double ring_cost)
             {
                 double worst = 0.0;
                 for (const Seat& s : seats)
@@ -427,10 +528,15 @@ TEST(Partition, TakesTheSlabsExactlyWhenTheirBusiestStepIsCheaper)
                     std::size_t nodes = 0;
                     for (std::size_t l = 0; l < owners.size(); ++l)
                         nodes += owners[l] == s.peer ? graph.node_count(l) : 0U;
+                    const double ring = ring_cost == 0.0
+                                            ? 0.0
+                                            : ring_cost * static_cast<double>(brute_ring_nodes(
+                                                              g, graph, owners, s.peer));
                     worst = std::max(
                         worst, static_cast<double>(nodes) +
                                    k_row_segment_cost * static_cast<double>(brute_row_segments(
-                                                            g, graph, owners, s.peer)));
+                                                            g, graph, owners, s.peer)) +
+                                   ring);
                 }
                 return worst;
             };
@@ -443,37 +549,79 @@ TEST(Partition, TakesTheSlabsExactlyWhenTheirBusiestStepIsCheaper)
                         return false;
                 return true;
             };
-            // The slabs from the first leaf, then the turned ones if they differ: the first
-            // strictly cheaper than the best so far that keeps the clearance wins.
+            // The slabs from the first leaf with balanced cuts, then with whole-row cuts, then
+            // the turned ones (if they differ) likewise, turned to a leaf row for whole rows:
+            // the first strictly cheaper than the best so far that keeps the clearance wins.
             const std::size_t centred = centred_slab_shift(graph, seats);
-            const auto turned = centred != 0 ? slab_partition(g, graph, seats, centred)
-                                             : std::optional<std::vector<net::PeerId>>{};
-            const auto choose = [&](bool clearance)
+            const std::size_t centred_row = brute_row_start(graph, centred);
+            using Owners = std::optional<std::vector<net::PeerId>>;
+            const Owners rows = slab_partition(g, graph, seats, 0, true);
+            const Owners turned =
+                centred != 0 ? slab_partition(g, graph, seats, centred) : Owners{};
+            const Owners turned_rows =
+                centred_row != 0 ? slab_partition(g, graph, seats, centred_row, true) : Owners{};
+            const auto choose = [&](bool clearance, double ring_cost)
             {
                 std::vector<net::PeerId> best = grown;
-                for (const auto* cand : {&slabs, &turned})
-                    if (cand->has_value() && busiest(**cand) < busiest(best) &&
+                for (const auto* cand : {&slabs, &rows, &turned, &turned_rows})
+                    if (cand->has_value() &&
+                        busiest(**cand, ring_cost) < busiest(best, ring_cost) &&
                         (!clearance || as_far(**cand)))
                         best = **cand;
                 return best;
             };
-            EXPECT_EQ(partition_leaves(g, graph, seats), choose(true));
-            EXPECT_EQ(partition_leaves(g, graph, seats, PointClearance::Inside), choose(false));
-            EXPECT_DOUBLE_EQ(measure_partition(g, graph, grown).busiest_cost, busiest(grown));
+            EXPECT_EQ(partition_leaves(g, graph, seats), choose(true, 0.0));
+            EXPECT_EQ(partition_leaves(g, graph, seats, PointClearance::Inside),
+                      choose(false, 0.0));
+            if (level <= 7)  // the brute-force rings are slow at level 8
+            {
+                EXPECT_EQ(
+                    partition_leaves(g, graph, seats, PointClearance::Inside, k_exact_ring_cost),
+                    choose(false, k_exact_ring_cost));
+                EXPECT_DOUBLE_EQ(measure_partition(g, graph, grown, k_exact_ring_cost).busiest_cost,
+                                 busiest(grown, k_exact_ring_cost));
+            }
+            EXPECT_DOUBLE_EQ(measure_partition(g, graph, grown).busiest_cost, busiest(grown, 0.0));
             if (level >= 6 && !points)  // what the slabs are for: 9-30 % less here
             {
                 ASSERT_TRUE(slabs.has_value());
-                EXPECT_LT(busiest(*slabs), 0.95 * busiest(grown)) << level << " " << p;
-                EXPECT_EQ(partition_leaves(g, graph, seats), *slabs);
+                EXPECT_LT(busiest(*slabs, 0.0), 0.95 * busiest(grown, 0.0)) << level << " " << p;
+                EXPECT_LE(busiest(partition_leaves(g, graph, seats), 0.0), busiest(*slabs, 0.0));
             }
             std::printf(
                 "level %d peers %d points %d: busiest modelled step, grown %.0f, "
-                "slabs %.0f%s, turned %.0f%s\n",
-                level, p, points ? 1 : 0, busiest(grown), slabs ? busiest(*slabs) : 0.0,
+                "slabs %.0f%s, whole rows %.0f, turned %.0f%s, turned whole rows %.0f\n",
+                level, p, points ? 1 : 0, busiest(grown, 0.0), slabs ? busiest(*slabs, 0.0) : 0.0,
                 slabs && !as_far(*slabs) ? " (a point nearer a border)" : "",
-                turned ? busiest(*turned) : 0.0,
-                turned && !as_far(*turned) ? " (a point nearer a border)" : "");
+                rows ? busiest(*rows, 0.0) : 0.0, turned ? busiest(*turned, 0.0) : 0.0,
+                turned && !as_far(*turned) ? " (a point nearer a border)" : "",
+                turned_rows ? busiest(*turned_rows, 0.0) : 0.0);
         });
+}
+
+TEST(Partition, ExactCouplingCountsTheRingsItComputes)
+{
+    // Four participants without points at level 7: by nodes and row segments the balanced slabs
+    // win; counting the ring an exact peer computes next to each border (the middle slabs have
+    // two), the whole-row slabs, whose borders are one grid row each, win.
+    const auto g = grid_of(7);
+    const LeafGraph graph(g, leaf_depth_for(g, net::ValueEncoding::F64));
+    const std::vector<Seat> seats = seats_of(g, 4, false);
+    const auto slabs = slab_partition(g, graph, seats);
+    const auto rows = slab_partition(g, graph, seats, 0, true);
+    ASSERT_TRUE(slabs.has_value() && rows.has_value());
+    EXPECT_EQ(partition_leaves(g, graph, seats, PointClearance::Inside), *slabs);
+    EXPECT_EQ(partition_leaves(g, graph, seats, PointClearance::Inside, k_exact_ring_cost), *rows);
+    const PartitionQuality q_slabs = measure_partition(g, graph, *slabs, k_exact_ring_cost);
+    const PartitionQuality q_rows = measure_partition(g, graph, *rows, k_exact_ring_cost);
+    EXPECT_LT(q_rows.busiest_cost, q_slabs.busiest_cost);
+    EXPECT_GT(measure_partition(g, graph, *rows).busiest_cost,
+              measure_partition(g, graph, *slabs).busiest_cost);
+    // A middle whole-row slab borders two grid rows of 256 nodes.
+    std::size_t most = 0;
+    for (const PeerShare& s : q_rows.shares)
+        most = std::max(most, s.ring_nodes);
+    EXPECT_EQ(most, 512U);
 }
 
 TEST(Partition, BorderHopsEqualTheHopsFromTheOnlyForeignLeaf)

@@ -43,6 +43,16 @@
 ///   slabs never bring a border nearer a user's grab (`PointClearance`). So the grown shares
 ///   stay for points in the same rows or too close together for bands of their own, and in
 ///   fast coupling wherever a band is thinner about a point than its grown share.
+/// - Whole-row slabs: the same cuts moved to the nearest leaf-row boundary (each cut one grid
+///   row loop, no step of a leaf's width), taken when still within `k_slab_balance`. A cut
+///   inside a leaf row adds a row segment per grid row of that leaf row and lengthens the
+///   border by two leaf sides; at level 6 with 2 participants without points the straight cut's
+///   busiest step costs 0.55 of a full step against 0.57 for the exactly balanced one.
+/// - The halo: an exact-coupling peer also computes its neighbours' nearest rings (stages 1-2
+///   two rings out, 3-4 one, docs/session.md §4.1), about one ring of the nodes next to its
+///   share per step: `step_cost` counts those `ring_nodes` at `k_exact_ring_cost` in exact
+///   coupling, so that a share with two borders (a band, or the two caps) costs more than one
+///   with one. Fast coupling steps its own nodes only (weight 0).
 /// - Rejected: recursive coordinate bisection (balanced but ignores the points of interest and
 ///   cuts across the seams arbitrarily); METIS-style multilevel partitioning (not in Debian's
 ///   C++ packages we use, and non-deterministic across versions).
@@ -128,6 +138,9 @@ inline constexpr double k_row_segment_cost = 16.0;
 /// the points in their seats' slabs (the balance the partition tests require of every share;
 /// the cost comparison in `partition_leaves` counts the extra nodes of the busiest).
 inline constexpr double k_slab_balance = 0.10;
+/// What an exact-coupling peer pays per node of the ring just outside its share, in nodes (the
+/// 2 + 1 + 0 rings of its three stage pairs, about one ring per step; see the file comment).
+inline constexpr double k_exact_ring_cost = 1.0;
 
 /// What the slabs must leave around the points of interest to be taken.
 enum class PointClearance : std::uint8_t
@@ -142,11 +155,13 @@ enum class PointClearance : std::uint8_t
 
 /// Owner of every leaf (index as `LeafGraph::leaves()`), deterministic in its inputs (the seats
 /// are sorted by peer id first; their order does not matter). \pre seats non-empty, ids unique.
-/// Of the candidates in the file comment (grown shares, plain slabs, turned slabs), the one with
-/// the lowest busiest `step_cost` among those that meet `clearance` (ties: the earlier).
+/// Of the candidates in the file comment (grown shares, plain and turned slabs, each also with
+/// whole-row cuts), the one with the lowest busiest `step_cost` (with `ring_cost`: 0 for fast
+/// coupling, `k_exact_ring_cost` for exact) among those that meet `clearance` (ties: the
+/// earlier).
 [[nodiscard]] std::vector<net::PeerId> partition_leaves(
     const core::TetraGrid& grid, const LeafGraph& graph, std::span<const Seat> seats,
-    PointClearance clearance = PointClearance::AsGrown);
+    PointClearance clearance = PointClearance::AsGrown, double ring_cost = 0.0);
 
 /// Hops in the leaf graph from the leaf of `point` to the nearest leaf of another owner
 /// (UINT32_MAX when one owner holds every leaf).
@@ -162,11 +177,13 @@ enum class PointClearance : std::uint8_t
 /// `shift` (0: from the first leaf; otherwise the slab across the end and the start of the order
 /// is a cap at the top and one at the bottom of the grid), or nothing when a slab would be empty
 /// or farther than `k_slab_balance` from the mean node count once every point's leaf and its
-/// neighbours are inside its own slab.
+/// neighbours are inside its own slab. `whole_rows`: every balanced cut first moves to the
+/// nearest leaf-row boundary (by nodes; `shift` should then be a leaf row's first leaf).
 [[nodiscard]] std::optional<std::vector<net::PeerId>> slab_partition(const core::TetraGrid& grid,
                                                                      const LeafGraph& graph,
                                                                      std::span<const Seat> seats,
-                                                                     std::size_t shift = 0);
+                                                                     std::size_t shift = 0,
+                                                                     bool whole_rows = false);
 
 /// The shift (a position in the row-major leaf order) at which balanced slab cuts fall farthest
 /// from every point of interest: each point's position along the order (its leaf's middle, in
@@ -183,12 +200,15 @@ struct PeerShare
     std::size_t fragments = 0;     ///< connected components of its leaves in the leaf graph
     std::size_t border_edges = 0;  ///< surface edges with one end owned by it, one by another
     std::size_t row_segments = 0;  ///< x-runs of its canonical nodes, one per grid row
+    /// Canonical nodes of other owners that are grid neighbours of its own (its first ring).
+    std::size_t ring_nodes = 0;
 };
 
 /// The modelled cost of one restricted sim step over a share, in nodes.
-[[nodiscard]] constexpr double step_cost(const PeerShare& s) noexcept
+[[nodiscard]] constexpr double step_cost(const PeerShare& s, double ring_cost = 0.0) noexcept
 {
-    return static_cast<double>(s.nodes) + k_row_segment_cost * static_cast<double>(s.row_segments);
+    return static_cast<double>(s.nodes) + k_row_segment_cost * static_cast<double>(s.row_segments) +
+           ring_cost * static_cast<double>(s.ring_nodes);
 }
 
 struct PartitionQuality
@@ -197,13 +217,14 @@ struct PartitionQuality
     std::size_t border_edges = 0;   ///< surface edges whose ends have different owners
     /// max |nodes - mean| / mean over the peers.
     double imbalance = 0.0;
-    /// The largest `step_cost` of a share.
+    /// The largest `step_cost` of a share (at the `ring_cost` given to measure_partition).
     double busiest_cost = 0.0;
 };
 
 /// Measures a leaf -> owner table (every distinct owner gets a share).
 [[nodiscard]] PartitionQuality measure_partition(const core::TetraGrid& grid,
                                                  const LeafGraph& graph,
-                                                 std::span<const net::PeerId> owners);
+                                                 std::span<const net::PeerId> owners,
+                                                 double ring_cost = 0.0);
 
 }  // namespace pliant::session
