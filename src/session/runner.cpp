@@ -228,7 +228,7 @@ core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
             write_row(next_row);
             next_row += 1.0;
         }
-        if (options.idle_sleep_s > 0.0)
+        if (options.idle_sleep_s > 0.0 && !session.behind())
             std::this_thread::sleep_for(std::chrono::duration<double>(options.idle_sleep_s));
     }
     // Wind down: a participant or viewer leaves (and waits, bounded, for the hand-over); the

@@ -28,6 +28,11 @@ namespace
 constexpr std::uint32_t k_model_magic = 0x4D534C50;  // "PLSM"
 constexpr std::uint8_t k_model_version = 1;
 constexpr double k_leave_timeout_s = 5.0;
+/// The most wall time one advance() call spends stepping in exact coupling before it returns to
+/// let the caller poll() (s). ENet moves at most its window (64 KiB) of reliable data per
+/// service, so a master behind real time that served the network once per frame period (16.7
+/// ms) sent a level-8 model of 3 MB at about 4 MB/s; ticks of a level-8 lockstep take ~1.4 ms.
+constexpr double k_step_slice_s = 0.002;
 /// Quantised streaming: an owner codes against a baseline only among its last 16 states sent of
 /// a leaf, and a receiver holds its last 16 received, so an acknowledged baseline the owner still
 /// has is one the receiver still holds (docs/protocol.md §5.5).
@@ -1058,11 +1063,11 @@ struct Session::Impl
         // A peer whose steps cannot keep real time (a lone master stepping the whole object at
         // a fine level, a loaded machine) would otherwise step here until it caught up, which it
         // never does, and stop answering the network: joiners were never welcomed. So a call
-        // steps for at most one frame period of wall time and returns; the caller's poll() runs
+        // steps for at most k_step_slice_s of wall time and returns; the caller's poll() runs
         // between calls and the next call goes on. Steps do not depend on how they are spread
         // over calls (the lockstep fixes the forces and partitions per tick).
         const auto call_start = std::chrono::steady_clock::now();
-        const double call_budget = 1.0 / settings.frame_rate_hz;
+        const double call_budget = std::min(1.0 / settings.frame_rate_hz, k_step_slice_s);
         // Bounded: each pass either steps once or returns.
         for (int guard = 0; guard < 100000; ++guard)
         {
@@ -1095,7 +1100,10 @@ struct Session::Impl
             if (!barrier_ok(t) || !may_step(t))
                 return;
             if (guard > 0 && seconds_since(call_start) >= call_budget)
+            {
+                behind = true;
                 return;  // tick t is published; the next call steps it
+            }
             adopt_orphans(t);
             apply_halos(t);
             const PartitionEntry* prev = t > exact_from ? partition_at(t - 1) : partition_at(t);
@@ -1270,7 +1278,10 @@ struct Session::Impl
             // A peer behind real time catches up over several calls, so that the caller's
             // poll() keeps serving the network (see exact_advance).
             if (guard > 0 && seconds_since(call_start) >= frame)
+            {
+                behind = true;
                 return;
+            }
             if (settings.max_ticks != 0 && s.state_.tick >= settings.max_ticks)
                 return;
             // Dirichlet values: the newest displayed state of every node not owned.
@@ -2568,6 +2579,7 @@ struct Session::Impl
         }
     }
     bool display_dirty = false;
+    bool behind = false;  ///< the last advance() returned on its wall-time budget (Session::behind)
     std::string refusal;  // why this joiner left on its own (settings refused by the session)
 
     void handle(net::PeerHandle h, const net::Message& m)
@@ -2893,6 +2905,7 @@ struct Session::Impl
     void advance(double now)
     {
         last_now = now;
+        behind = false;
         if (!s.model_ || s.left_)
             return;
         if (!clock_set)
@@ -3018,6 +3031,11 @@ void Session::poll()
 void Session::advance(double now_s)
 {
     impl_->advance(now_s);
+}
+
+bool Session::behind() const noexcept
+{
+    return impl_->behind;
 }
 
 void Session::set_points_of_interest(std::vector<net::Target> points)

@@ -56,7 +56,7 @@ struct RunOptions
     double duration_s = 10.0;  ///< the loop ends after this (wall clock), > 0
     std::vector<ScriptEvent> script;
     std::filesystem::path stats_csv;  ///< empty: none
-    double idle_sleep_s = 0.0002;     ///< sleep per loop iteration (keeps a core free)
+    double idle_sleep_s = 0.0002;  ///< sleep per loop iteration unless the peer is behind real time
     /// When set and non-zero (a signal handler's flag: Ctrl-C), the loop ends early and winds
     /// down as at the end of the duration.
     const volatile std::sig_atomic_t* stop = nullptr;

@@ -240,8 +240,14 @@ public:
 
     /// Handles every pending network event (never waits).
     void poll();
-    /// Steps and streams up to the caller's clock `now_s` (monotonic, s; any origin).
+    /// Steps and streams up to the caller's clock `now_s` (monotonic, s; any origin). A peer
+    /// behind real time steps for a bounded slice of wall time per call (2 ms in exact coupling,
+    /// a frame period in fast coupling) and goes on at the next call, so that poll() keeps
+    /// serving the network.
     void advance(double now_s);
+    /// Whether the last advance() stopped on its slice with steps still due: the caller should
+    /// poll() and advance() again at once rather than sleep.
+    [[nodiscard]] bool behind() const noexcept;
 
     /// This peer's points of interest (participants): sent to the master, which re-partitions.
     void set_points_of_interest(std::vector<net::Target> points);
