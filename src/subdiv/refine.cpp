@@ -17,11 +17,12 @@
 // Output planes larger than the last-level cache can hold beside their input (level 10) are
 // written with streaming stores: without them every output line was first read from memory
 // (write-allocate) and evicted the input, and a 9 -> 10 step of three float planes (25 MB out,
-// 32 MB L3) ran at half the per-node speed of 8 -> 9. With AVX-512 the fused loop is written
-// with intrinsics and streams each fine row straight from the registers (row_pair_streamed: one
-// two-source permute per vector aligns the row, whatever its offset); elsewhere, and for the
-// last coarse row, the rows go through an L1-resident row buffer (RowStreamer). Smaller outputs
-// are written directly and stay in cache for their next use.
+// 32 MB L3) ran at half the per-node speed of 8 -> 9. Float rows go through an L1-resident row
+// buffer (RowStreamer); double rows, with AVX-512, are computed by the fused loop written with
+// intrinsics and streamed straight from the registers (row_pair_streamed: one two-source permute
+// per vector aligns the row, whatever its offset): 20 % faster in double at 9 -> 10, but 15 %
+// slower in float, where the row buffer stays (docs/subdivision.md, "Streaming from the
+// registers"). Smaller outputs are written directly and stay in cache for their next use.
 //
 // Invariant: every odd value is computed by `butterfly` with a fixed grouping of the sums and
 // no FMA contraction (-ffp-contract=off), so it depends only on the eight tap values, never on
@@ -333,31 +334,10 @@ inline void do_row_streamed(const RowJob<T>& job, int y, T* __restrict buf_even,
 }
 
 #if defined(__AVX512F__)
-// The 512-bit vector operations of the direct streamed rows, for float (16 lanes) and double (8).
+// The 512-bit vector operations of the direct streamed rows: double only (8 lanes). In float the
+// row buffer is faster (see the file comment).
 template <typename T>
 struct Wide;
-
-template <>
-struct Wide<float>
-{
-    using V = __m512;
-    static constexpr int k_lanes = 16;
-    static V load(const float* p) noexcept { return _mm512_loadu_ps(p); }
-    static V add(V a, V b) noexcept { return _mm512_add_ps(a, b); }
-    static V sub(V a, V b) noexcept { return _mm512_sub_ps(a, b); }
-    static V mul(float w, V a) noexcept { return _mm512_mul_ps(_mm512_set1_ps(w), a); }
-    // Lane j of the result is lane idx[j] of the 2L lanes a:b.
-    static V pick(V a, __m512i idx, V b) noexcept { return _mm512_permutex2var_ps(a, idx, b); }
-    static __m512i index(const int (&i)[k_lanes]) noexcept
-    {
-        return _mm512_loadu_si512(static_cast<const void*>(i));
-    }
-    static void stream(float* p, V v) noexcept { _mm512_stream_ps(p, v); }
-    static void store_first(float* p, int count, V v) noexcept
-    {
-        _mm512_mask_storeu_ps(p, static_cast<__mmask16>((1u << count) - 1u), v);
-    }
-};
 
 template <>
 struct Wide<double>
@@ -368,6 +348,7 @@ struct Wide<double>
     static V add(V a, V b) noexcept { return _mm512_add_pd(a, b); }
     static V sub(V a, V b) noexcept { return _mm512_sub_pd(a, b); }
     static V mul(double w, V a) noexcept { return _mm512_mul_pd(_mm512_set1_pd(w), a); }
+    // Lane j of the result is lane idx[j] of the 2L lanes a:b.
     static V pick(V a, __m512i idx, V b) noexcept { return _mm512_permutex2var_pd(a, idx, b); }
     static __m512i index(const int (&i)[k_lanes]) noexcept
     {
@@ -547,13 +528,16 @@ void rows_serial(const RowJob<T>& job, int y0, int y1, bool streamed) noexcept
     for (int y = y0; y < y1; ++y)
     {
 #if defined(__AVX512F__)
-        if (y + 1 < job.rows && job.n % Wide<T>::k_lanes == 0)
+        if constexpr (std::is_same_v<T, double>)
         {
-            const T* r0 = job.in + static_cast<std::ptrdiff_t>(y) * job.in_stride;
-            T* even = job.out + static_cast<std::ptrdiff_t>(2 * y) * job.out_stride;
-            row_pair_streamed(r0 - job.in_stride, r0, r0 + job.in_stride, r0 + 2 * job.in_stride,
-                              even, even + job.out_stride, job.n);
-            continue;
+            if (y + 1 < job.rows && job.n % Wide<T>::k_lanes == 0)
+            {
+                const T* r0 = job.in + static_cast<std::ptrdiff_t>(y) * job.in_stride;
+                T* even = job.out + static_cast<std::ptrdiff_t>(2 * y) * job.out_stride;
+                row_pair_streamed(r0 - job.in_stride, r0, r0 + job.in_stride,
+                                  r0 + 2 * job.in_stride, even, even + job.out_stride, job.n);
+                continue;
+            }
         }
 #endif
         do_row_streamed(job, y, buf_even, buf_odd);
@@ -607,7 +591,10 @@ void refine(const ConvolutionPlan& plan, const core::Field<T>& in, core::Field<T
     PLIANT_ASSERT(2 * job.n + 1 <= k_max_fine_row, "refine: fine row longer than the row buffer");
     run_rows(job, threads);
 
-    core::sync_twins(plan.fine_grid(), out);
+    // No sync_twins: the kernel writes every twin with the bits of its canonical node (the
+    // gluing maps only swap the members of commutative pairs in `butterfly`'s grouping, and
+    // the input's twins are equal), which RefinedTwinsAgreeAndGhostsAreFilled checks at levels
+    // 1..9. At level 10 the copy cost 0.03 ms per plane once the output had left the cache.
     core::fill_ghosts(plan.fine_grid(), out);
 }
 

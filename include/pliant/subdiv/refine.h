@@ -14,10 +14,10 @@
 ///   several threads.
 /// - `out` is a level-(n+1) field of any ghost width (0..4), allocated by the caller. `refine`
 ///   writes every in-range node: even nodes (2x, 2y) are copies of in(x, y) bit for bit, odd nodes
-///   get the mask of their edge direction; then it copies canonical odd nodes onto their twins
-///   and, if `out` has a ghost ring, fills it. So `out` is ready to be refined again. (The sums
-///   are grouped so that the gluing maps only permute commutative pairs, which makes twins equal
-///   already; the copy keeps that a guarantee of the contract rather than of the sum order.)
+///   get the mask of their edge direction; if `out` has a ghost ring, it fills it. So `out` is
+///   ready to be refined again. Twins of `out` are equal bit for bit: the sums are grouped so
+///   that the gluing maps only permute commutative pairs, and the input's twins are equal
+///   (tests/subdiv/refine_test.cpp checks every twin at levels 1..10; no copy pass is made).
 /// - No allocation, no logging, no exceptions. `threads` > 1 splits the rows between OpenMP
 ///   threads (at most one per 65,536 fine nodes: smaller grids run on one thread); every node is
 ///   computed by the same code whatever the thread count, so results are bit-identical for any
