@@ -44,7 +44,7 @@ Messenger::Messenger(Transport& transport, const MessengerSettings& settings)
 core::Result<void> Messenger::send_encoded(PeerHandle peer, MessageType type, std::size_t size,
                                            SendMode mode) noexcept
 {
-    const bool reliable = mode == SendMode::Reliable || default_channel(type) == Channel::Control;
+    const bool reliable = sent_reliably(type, mode);
     const Channel channel = reliable ? Channel::Control : Channel::State;
     const Delivery delivery = reliable                        ? Delivery::Reliable
                               : mode == SendMode::Unsequenced ? Delivery::Unsequenced

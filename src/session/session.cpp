@@ -33,6 +33,12 @@ constexpr double k_leave_timeout_s = 5.0;
 /// service, so a master behind real time that served the network once per frame period (16.7
 /// ms) sent a level-8 model of 3 MB at about 4 MB/s; ticks of a level-8 lockstep take ~1.4 ms.
 constexpr double k_step_slice_s = 0.002;
+/// Ready goes reliably, and is repeated unreliably once per stream period until the peer's first
+/// leaf state arrives, for at most this long (s). The stream to a joiner starts on its Ready, and a
+/// lost reliable datagram waits for a retransmission timeout, which on a young ENet connection
+/// (500 ms initial round-trip estimate) is a second or more: a fast-coupled neighbour held its
+/// clock all that time waiting for the joiner's border states, and the others waited on it.
+constexpr double k_ready_repeat_s = 5.0;
 /// Quantised streaming: an owner codes against a baseline only among its last 16 states sent of
 /// a leaf, and a receiver holds its last 16 received, so an acknowledged baseline the owner still
 /// has is one the receiver still holds (docs/protocol.md §5.5).
@@ -335,6 +341,9 @@ struct RemotePeer
     /// Sent Ready: it holds the model and can show leaf states, so they are streamed to it. A
     /// joiner still downloading the model gets none (they would only compete with the download).
     bool has_model = false;
+    /// Until when (our clock) our Ready to it is repeated unreliably (k_ready_repeat_s).
+    double ready_repeat_until = -1.0;
+    bool streams_to_us = false;  ///< a LeafState or LeafBatch came from it: our Ready arrived
     bool leaving = false;
     bool departed = false;
 };
@@ -497,6 +506,7 @@ struct Session::Impl
     double clock_offset = 0.0;  // sim time = now + clock_offset
     double last_now = 0.0;
     double next_stream = 0.0;
+    double next_ready_repeat = 0.0;
     double next_frame = 0.0;
     double next_view = 0.0;  // view_u/v are refreshed at frame_rate_hz
     bool leaving = false;
@@ -528,17 +538,32 @@ struct Session::Impl
         if (it == peers.end() || it->second.departed)
             return;
         RemotePeer& p = it->second;
-        const bool reliable = mode == net::SendMode::Reliable ||
-                              net::default_channel(m.type()) == net::Channel::Control;
         if (!p.handle)
         {
-            if (reliable)
+            if (net::sent_reliably(m.type(), mode))
                 p.queued.emplace_back(m, mode);
             return;
         }
         auto r = messenger.send(*p.handle, m, mode);
         if (!r)
             spdlog::debug("session: send to {} failed: {}", id, r.error().message);
+    }
+
+    /// Tells peer `id` that we hold the model: reliably, and unreliably every stream period until
+    /// it streams to us (k_ready_repeat_s, repeat_ready).
+    void send_ready(std::uint16_t id)
+    {
+        send_to(id, make(net::Ready{}, s.state_.tick));
+        auto it = peers.find(id);
+        if (it != peers.end() && !it->second.streams_to_us)
+            it->second.ready_repeat_until = last_now + k_ready_repeat_s;
+    }
+
+    void repeat_ready()
+    {
+        for (auto& [id, p] : peers)
+            if (p.ready_repeat_until > last_now && !p.streams_to_us && p.handle && !p.departed)
+                send_to(id, make(net::Ready{}, s.state_.tick), net::SendMode::Unsequenced);
     }
 
     void send_all(const net::Message& m, net::SendMode mode = net::SendMode::Default)
@@ -2100,7 +2125,7 @@ struct Session::Impl
     void greet_new_peer(std::uint16_t id)
     {
         if (s.model_)
-            send_to(id, make(net::Ready{}, s.state_.tick));
+            send_ready(id);
         if (points_sent && s.role_ != SessionRole::Viewer && !leaving)
         {
             net::PointsOfInterest poi;
@@ -2283,7 +2308,7 @@ struct Session::Impl
         // Leaf states may come now: to the peers we are connected to, and to the others (queued
         // until their connection is up) right after our Hello.
         for (const auto& [pid, p] : peers)
-            send_to(pid, make(net::Ready{}, s.state_.tick));
+            send_ready(pid);
         // Partitions that arrived with the blobs.
         for (auto& m : early)
             handle(m.first, m.second);
@@ -2703,9 +2728,11 @@ struct Session::Impl
             }
             return;
         case net::MessageType::LeafBatch:
+            p.streams_to_us = true;
             on_leaf_batch(from, m, std::get<net::LeafBatch>(m.body));
             return;
         case net::MessageType::LeafState:
+            p.streams_to_us = true;
             on_leaf_state(from, m, std::get<net::LeafState>(m.body));
             return;
         case net::MessageType::Ack: on_ack(from, std::get<net::Ack>(m.body)); return;
@@ -2943,6 +2970,12 @@ struct Session::Impl
             stream();
             next_stream = std::max(next_stream + 1.0 / settings.stream_rate_hz,
                                    now - 1.0 / settings.stream_rate_hz);
+        }
+        if (now >= next_ready_repeat && !s.left_)
+        {
+            repeat_ready();
+            next_ready_repeat = std::max(next_ready_repeat + 1.0 / settings.stream_rate_hz,
+                                         now - 1.0 / settings.stream_rate_hz);
         }
         if (s.model_ && !s.left_ && now >= next_view)
         {

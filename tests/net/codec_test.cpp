@@ -178,9 +178,11 @@ TEST(Codec, ReadyMatchesBytesWrittenFromTheSpecification)
     auto back = decode(expected);
     ASSERT_TRUE(back.has_value());
     EXPECT_EQ(*back, m);
-    // A control message: refused on the state channel, unlike the types numbered before it.
+    // Reliable on the control channel by default; its repeats may come on the state channel, the
+    // only control type allowed there.
     EXPECT_EQ(default_channel(MessageType::Ready), Channel::Control);
-    EXPECT_FALSE(allowed_on(MessageType::Ready, Channel::State));
+    EXPECT_TRUE(allowed_on(MessageType::Ready, Channel::State));
+    EXPECT_FALSE(allowed_on(MessageType::Partition, Channel::State));
     EXPECT_TRUE(allowed_on(MessageType::LeafBatch, Channel::State));
     // Only members send it: a session id is required.
     auto d = expected;

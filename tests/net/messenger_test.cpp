@@ -146,6 +146,22 @@ TEST(Messenger, DeliversTypedMessagesOnTheirChannels)
     ASSERT_EQ(again.size(), 1u);
     EXPECT_EQ(again[0].channel, Channel::Control);
 
+    // SendMode::Unsequenced moves Ready, alone of the control types, to the state channel (its
+    // repeats); a Partition stays reliable.
+    Message ready{samples::header(), Ready{}};
+    EXPECT_TRUE(sent_reliably(MessageType::Ready, SendMode::Default));
+    EXPECT_FALSE(sent_reliably(MessageType::Ready, SendMode::Unsequenced));
+    EXPECT_TRUE(sent_reliably(MessageType::Partition, SendMode::Unsequenced));
+    EXPECT_FALSE(sent_reliably(MessageType::LeafState, SendMode::Default));
+    ASSERT_TRUE(n.a.send(n.a_to_b, ready, SendMode::Unsequenced));
+    ASSERT_TRUE(n.a.send(n.a_to_b, ready));
+    const auto readies = n.drain_b();
+    ASSERT_EQ(readies.size(), 2u);
+    EXPECT_NE(readies[0].channel, readies[1].channel) << "one on each channel";
+    for (const auto& ev : readies)
+        EXPECT_EQ(ev.message, ready);
+    EXPECT_EQ(n.b.dropped(), 0u);
+
     // An invalid message is refused at the sender, not sent.
     Message bad = ping();
     bad.header.session = 0;

@@ -295,6 +295,67 @@ TEST(SessionLoss, AJoinerIsSentNoLeafStateUntilItHasTheModel)
     EXPECT_GT(moved, 0.0);
 }
 
+TEST(SessionLoss, ALostReadyCostsAStreamPeriodNotARetransmission)
+{
+    // The stream to a joiner starts on its Ready. Sent only reliably, a lost Ready waited for a
+    // retransmission, which on a young ENet connection takes a second or more (its round-trip
+    // estimate starts at 500 ms); fast-coupled neighbours held their clocks all that time. So a
+    // Ready is repeated unreliably every stream period until the peer streams to us. Here the
+    // viewer's link to the master loses half its datagrams and retransmits after 2 s; for each
+    // seed the viewer's display must move within 0.25 s of its model arriving.
+    constexpr int level = 4;
+    constexpr double retransmit_s = 2.0;
+    int lost_readies = 0;  // seeds where the reliable Ready needed a retransmission
+    for (std::uint64_t seed = 1; seed <= 6; ++seed)
+    {
+        net::SimulatedNetworkSettings ns;
+        ns.seed = seed;
+        ns.link.latency_s = 0.020;
+        ns.retransmit_s = retransmit_s;
+        Harness h(ns);
+        SessionSettings set;
+        set.coupling = Coupling::Fast;
+        set.name = "master";
+        Session& master = h.host(level, set);
+        master.set_forces({face_pull(50, 0.5)});  // the state moves: every stream carries news
+        set.name = "viewer";
+        Session& viewer = h.join(net::Role::Viewer, set);
+        net::LinkSettings lossy = ns.link;
+        lossy.loss = 0.5;
+        h.net.set_link(h.addresses[1], h.master_address, lossy);
+        // Retransmissions are drawn when a packet is sent: count those up to the poll in which
+        // the model arrives and the viewer sends its Ready.
+        std::uint64_t resent = 0;
+        ASSERT_TRUE(h.pump_until(
+            [&]
+            {
+                if (!viewer.ready())
+                    resent = h.net.totals().retransmitted;
+                return viewer.ready();
+            },
+            200000))
+            << "seed " << seed;
+        const double ready_at = h.now;
+        const core::Field<double> first = viewer.display_u();
+        const core::TetraGrid& g = viewer.model()->grid();
+        auto moved = [&]
+        {
+            for (int y = 0; y < g.ny(); ++y)
+                for (int x = 0; x < g.nx(); ++x)
+                    if (viewer.display_u().at(x, y) != first.at(x, y))
+                        return true;
+            return false;
+        };
+        ASSERT_TRUE(h.pump_until(moved, 20000)) << "seed " << seed;
+        EXPECT_LT(h.now - ready_at, 0.25) << "seed " << seed;
+        // With its model the viewer sends the master nothing reliable but its Ready (a viewer has
+        // no points or forces), and the master's link is clean: a retransmission drawn since is
+        // the Ready's.
+        lost_readies += h.net.totals().retransmitted > resent ? 1 : 0;
+    }
+    EXPECT_GT(lost_readies, 0) << "the seeds must include a lost reliable Ready";
+}
+
 TEST(SessionLoss, ExactLockstepUnderLossAndLatencyStaysEqualToASingleProcess)
 {
     // The lockstep's halos and heartbeats are reliable: loss costs retransmissions and latency

@@ -89,7 +89,7 @@ enum class MessageType : std::uint8_t
     Pong = 15,
     Ack = 16,
     LeafBatch = 17,
-    Ready = 18,  ///< control (channel 0), although its number follows the state types
+    Ready = 18,  ///< control (channel 0) by default; its repeats go on channel 1
 };
 inline constexpr std::uint8_t k_message_type_count = 18;
 
@@ -402,11 +402,13 @@ struct Message
                : Channel::Control;
 }
 
-/// Whether a message of this type may arrive on `channel`: control types only on channel 0, state
-/// types on either (the exact coupling mode sends halos reliably).
+/// Whether a message of this type may arrive on `channel`: control types only on channel 0, except
+/// Ready, whose unreliable repeats travel on channel 1; state types on either (the exact coupling
+/// mode sends halos reliably).
 [[nodiscard]] constexpr bool allowed_on(MessageType type, Channel channel) noexcept
 {
-    return channel == Channel::Control || default_channel(type) == Channel::State;
+    return channel == Channel::Control || type == MessageType::Ready ||
+           default_channel(type) == Channel::State;
 }
 
 /// Short stable name, e.g. "leaf-state".

@@ -112,9 +112,17 @@ enum class SendMode : std::uint8_t
     Reliable,  ///< state types too, reliably on channel 0 (exact coupling mode)
     /// State types on channel 1 without ENet's sequencing: lost, duplicated or reordered as the
     /// network does, so that a late datagram of one leaf does not drop a newer one of another
-    /// (the receiver orders states per leaf by tick). Control types stay reliable.
+    /// (the receiver orders states per leaf by tick). Likewise Ready's repeats; the other control
+    /// types stay reliable.
     Unsequenced,
 };
+
+/// Whether `mode` sends a message of this type reliably on channel 0 (else unreliably on 1).
+[[nodiscard]] constexpr bool sent_reliably(MessageType type, SendMode mode) noexcept
+{
+    return mode == SendMode::Reliable || !allowed_on(type, Channel::State) ||
+           (mode == SendMode::Default && default_channel(type) == Channel::Control);
+}
 
 class Messenger
 {
