@@ -559,6 +559,12 @@ struct Session::Impl
             it->second.ready_repeat_until = last_now + k_ready_repeat_s;
     }
 
+    [[nodiscard]] bool streamed_to_us(net::PeerId id) const
+    {
+        const auto it = peers.find(id.value);
+        return it != peers.end() && it->second.streams_to_us;
+    }
+
     void repeat_ready()
     {
         for (auto& [id, p] : peers)
@@ -1330,11 +1336,17 @@ struct Session::Impl
             }
             const std::vector<char>& mine = fast_mine;
             refresh_border(p, mine);
-            // Bounded staleness: hold the clock while a neighbour's state is too old.
+            // Bounded staleness: hold the clock while a neighbour's state is too old. Only for
+            // neighbours that have streamed to us: one that has not is still connecting (ENet's
+            // handshake, our Hello and Ready reach it; a lost datagram there costs a
+            // retransmission timeout, a second or more on a young connection), so no state of it
+            // can come sooner, and holding for it held every peer that waits on us as well. Its
+            // leaves keep the values we hold (the Welcome's state, or their previous owner's).
             const double frame_end = next_frame + clock_offset;
             double oldest = 0.0;
             for (const std::uint32_t l : border_leaf)
-                oldest = std::max(oldest, frame_end - leaf_time[l]);
+                if (streamed_to_us(p->owners[l]))
+                    oldest = std::max(oldest, frame_end - leaf_time[l]);
             if (settings.max_halo_age_s > 0.0 && oldest > settings.max_halo_age_s)
             {
                 if (stall_since < 0.0)

@@ -142,7 +142,8 @@ struct SessionSettings
     double frame_rate_hz = 60.0;
     /// Fast mode: the bound on halo staleness, s (0: none). A frame steps only if every streamed
     /// state that holds a Dirichlet value next to an owned node is at most this old at the
-    /// frame's end; otherwise the peer holds its clock (up to max_stall_s) and catches
+    /// frame's end (neighbours that have not streamed to this peer yet, still connecting, are
+    /// not waited for); otherwise the peer holds its clock (up to max_stall_s) and catches
     /// up, frame by frame, once fresher states arrive (docs/session.md §4.3;
     /// SessionStats::stalled_s).
     double max_halo_age_s = 0.5;
@@ -205,7 +206,8 @@ struct SessionStats
     std::uint64_t promotions = 0;  ///< times this peer became master after the master was lost
     // Loss and latency (docs/session.md §4.3, §5.3).
     /// Fast mode: age of the oldest Dirichlet value next to an owned node at the last frame
-    /// stepped, and the largest such age of any frame stepped, s (<= max_halo_age_s when set).
+    /// stepped, and the largest such age of any frame stepped, s (<= max_halo_age_s when set);
+    /// only values of neighbours that have streamed to this peer count (docs/session.md §4.3).
     double border_age_s = 0.0;
     double max_border_age_s = 0.0;
     double stalled_s = 0.0;          ///< fast mode: time the clock was held by max_halo_age_s, s
