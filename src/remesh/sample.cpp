@@ -158,7 +158,8 @@ core::Result<core::Vec3Field<double>> sample_surface(const core::TetraGrid& grid
                                                      const core::Vec3Field<double>& domain,
                                                      const mesh::TriMesh& mesh,
                                                      std::span<const core::Vec3> sphere,
-                                                     SampleStats* stats)
+                                                     SampleStats* stats,
+                                                     std::span<const std::uint32_t> start_faces)
 {
     if (sphere.size() != mesh.positions.size() || mesh.faces.empty())
         return core::fail(core::ErrorCode::InvalidArgument,
@@ -167,6 +168,25 @@ core::Result<core::Vec3Field<double>> sample_surface(const core::TetraGrid& grid
     if (domain[0].level() != grid.level())
         return core::fail(core::ErrorCode::InvalidArgument,
                           "sample_surface: domain map of another level");
+    if (!start_faces.empty())
+    {
+        if (start_faces.size() != grid.node_count())
+            return core::fail(core::ErrorCode::InvalidArgument,
+                              "sample_surface: " + std::to_string(start_faces.size()) +
+                                  " start faces for " + std::to_string(grid.node_count()) +
+                                  " grid nodes");
+        for (std::size_t n = 0; n < start_faces.size(); ++n)
+            if (start_faces[n] >= mesh.faces.size())
+            {
+                const core::GridCoord c =
+                    grid.coord(core::NodeIndex{static_cast<std::uint32_t>(n)});
+                return core::fail(core::ErrorCode::InvalidArgument,
+                                  "sample_surface: start face " + std::to_string(start_faces[n]) +
+                                      " of node (" + std::to_string(c.x) + ", " +
+                                      std::to_string(c.y) + ") is out of range (" +
+                                      std::to_string(mesh.faces.size()) + " faces)");
+            }
+    }
     const Locator locator(mesh.faces, sphere);
     core::Vec3Field<double> out{core::Field<double>(grid), core::Field<double>(grid),
                                 core::Field<double>(grid)};
@@ -184,7 +204,8 @@ core::Result<core::Vec3Field<double>> sample_surface(const core::TetraGrid& grid
             if (!grid.is_canonical(n))
                 continue;
             const Vec3 p{domain[0][n], domain[1][n], domain[2][n]};
-            const Location loc = locator.locate(p, hint, local);
+            const Location loc =
+                locator.locate(p, start_faces.empty() ? hint : start_faces[n.value], local);
             hint = loc.face;
             // barycentric weights of the central projection onto the chord triangle; a
             // slightly negative weight (a point on an edge, within the tolerance) is clamped

@@ -8,9 +8,13 @@
 // - the CPU sampler (remesh::sample_surface) on a real mesh (spot) with its real sphere map,
 //   levels 4-6: the two must agree within k_tolerance of the bounding-box diagonal.
 // Also: every node gets a sample and twins are equal; a hole (a missing triangle) is reported
-// as an error, never left as zero; a domain map other than the tetrahedron's is refused; the
-// remesh() sampler hook runs the GPU sampler and the report says so.
+// as an error, never left as zero; a domain map other than the tetrahedron's is refused by the
+// colour look-up; the remesh() sampler hook runs the GPU sampler and the report says so.
+// GPU point location (render::locate_on_gpu) on both domain maps: the triangle it reads under
+// each node contains the node's sphere point (checked with the edge functions here, in double),
+// and remesh::sample_surface started from those triangles gives the CPU sampler's positions.
 
+#include <pliant/core/sphere_domain.h>
 #include <pliant/mesh/io.h>
 #include <pliant/mesh/validate.h>
 #include <pliant/remesh/remesh.h>
@@ -208,6 +212,87 @@ TEST_F(GpuSamplerTest, SpotMatchesTheCpuSamplerAtLevels4To6)
     }
 }
 
+/// Canonical nodes whose sphere point lies in face `faces[n]` of the chord mesh (all three edge
+/// functions p·(b×c) >= -1e-14, the CPU sampler's rule).
+std::size_t nodes_inside(const core::TetraGrid& grid, const core::Vec3Field<double>& domain,
+                         const mesh::TriMesh& m, std::span<const Vec3> sphere,
+                         const std::vector<std::uint32_t>& faces)
+{
+    std::size_t inside = 0;
+    for (const core::NodeIndex n : grid.node_of_unique())
+    {
+        const Vec3 p = at(domain, n);
+        const auto& f = m.faces[faces[n.value]];
+        const Vec3 &a = sphere[f[0]], &b = sphere[f[1]], &c = sphere[f[2]];
+        if (core::dot(p, core::cross(b, c)) >= -1e-14 &&
+            core::dot(p, core::cross(c, a)) >= -1e-14 && core::dot(p, core::cross(a, b)) >= -1e-14)
+            ++inside;
+    }
+    return inside;
+}
+
+TEST_F(GpuSamplerTest, GpuLocationOnEitherDomainMapGivesTheCpuSamples)
+{
+    auto m =
+        mesh::import_mesh(source_dir() / "tests" / "data" / "meshes" / "spot_triangulated.obj");
+    ASSERT_TRUE(m) << m.error().message;
+    auto map = remesh::map_to_sphere(*m);
+    ASSERT_TRUE(map) << map.error().message;
+    const double diag = diagonal(*m);
+    for (const core::SphereMap dm : {core::SphereMap::EqualArea, core::SphereMap::Gnomonic})
+        for (const int level : {4, 5, 6})
+        {
+            auto grid = core::TetraGrid::create(level);
+            ASSERT_TRUE(grid);
+            const auto domain = core::sphere_domain(*grid, dm);
+            auto cpu = remesh::sample_surface(*grid, domain, *m, map->points);
+            ASSERT_TRUE(cpu);
+            for (const int k : {1, 0})
+            {
+                render::GpuSamplerSettings settings;
+                settings.pixels_per_cell = k;
+                render::GpuSampleStats stats;
+                auto faces =
+                    render::locate_on_gpu(*grid, domain, map->points, m->faces, settings, &stats);
+                ASSERT_TRUE(faces) << faces.error().message;
+                ASSERT_EQ(faces->size(), grid->node_count());
+                EXPECT_EQ(stats.samples, grid->unique_count());
+                const std::size_t inside = nodes_inside(*grid, domain, *m, map->points, *faces);
+                remesh::SampleStats walk;
+                auto located =
+                    remesh::sample_surface(*grid, domain, *m, map->points, &walk, *faces);
+                ASSERT_TRUE(located) << located.error().message;
+                expect_twins_equal(*grid, *located);
+                const double rel = max_difference(*grid, *located, *cpu) / diag;
+                std::printf(
+                    "spot level %d, %s map, %d px per cell: %zu of %zu nodes inside the "
+                    "GPU's triangle, %zu walk steps, max |located - cpu| = %.3g of the "
+                    "diagonal\n",
+                    level, dm == core::SphereMap::EqualArea ? "equal-area" : "gnomonic",
+                    stats.pixels_per_cell, inside, grid->unique_count(), walk.walk_steps, rel);
+                // A point on an edge shared by two triangles may be interpolated in either: the
+                // same position up to rounding.
+                EXPECT_LT(rel, 1e-14) << "level " << level << ", k " << stats.pixels_per_cell;
+                EXPECT_EQ(walk.brute_force, 0U);
+                if (k == 1)
+                    continue;  // a poor location (pixel centres up to half a cell away) still
+                               // gives the same samples, only longer walks
+                // The GPU did the point location. On the gnomonic map every node lies on a
+                // pixel centre: its triangle is the one under it. On the equal-area map the
+                // pixel centre is up to half a pixel away, and with spot's triangles about 25
+                // pixels across in views of ~1025 px, about 5 % of the nodes have an edge in
+                // between (measured 4.5-5.3 %): their walk takes one more step.
+                const double share =
+                    static_cast<double>(inside) / static_cast<double>(grid->unique_count());
+                EXPECT_GT(share, dm == core::SphereMap::Gnomonic ? 0.999 : 0.9)
+                    << "level " << level;
+                EXPECT_LT(static_cast<double>(walk.walk_steps),
+                          1.1 * static_cast<double>(grid->unique_count()))
+                    << "level " << level;
+            }
+        }
+}
+
 TEST_F(GpuSamplerTest, AMissingTriangleIsAHoleAndAnError)
 {
     mesh::TriMesh ball = scenes::icosphere(1);
@@ -221,6 +306,42 @@ TEST_F(GpuSamplerTest, AMissingTriangleIsAHoleAndAnError)
     EXPECT_EQ(gpu.error().code, core::ErrorCode::GraphicsError);
     EXPECT_NE(gpu.error().message.find("no triangle covered"), std::string::npos)
         << gpu.error().message;
+    // GPU location reports it the same way, on either domain map
+    for (const core::SphereMap dm : {core::SphereMap::EqualArea, core::SphereMap::Gnomonic})
+    {
+        auto faces =
+            render::locate_on_gpu(*grid, core::sphere_domain(*grid, dm), sphere, ball.faces);
+        ASSERT_FALSE(faces);
+        EXPECT_EQ(faces.error().code, core::ErrorCode::GraphicsError);
+        EXPECT_NE(faces.error().message.find("no triangle covered"), std::string::npos)
+            << faces.error().message;
+    }
+}
+
+TEST(SampleStartFaces, BadStartFacesAreRefusedNamingTheNode)
+{
+    const mesh::TriMesh ball = scenes::icosphere(1);
+    const std::vector<Vec3> sphere = unit_points(ball);
+    auto grid = core::TetraGrid::create(3);
+    ASSERT_TRUE(grid);
+    const auto domain = remesh::domain_sphere(*grid);
+    std::vector<std::uint32_t> faces(grid->node_count() - 1, 0);
+    auto short_list = remesh::sample_surface(*grid, domain, ball, sphere, nullptr, faces);
+    ASSERT_FALSE(short_list);
+    EXPECT_EQ(short_list.error().code, core::ErrorCode::InvalidArgument);
+    faces.assign(grid->node_count(), 0);
+    faces[grid->index(3, 2).value] = static_cast<std::uint32_t>(ball.faces.size());
+    auto out_of_range = remesh::sample_surface(*grid, domain, ball, sphere, nullptr, faces);
+    ASSERT_FALSE(out_of_range);
+    EXPECT_EQ(out_of_range.error().code, core::ErrorCode::InvalidArgument);
+    EXPECT_NE(out_of_range.error().message.find("node (3, 2)"), std::string::npos)
+        << out_of_range.error().message;
+    // any start face in range gives the same samples as the walk from the previous node
+    faces[grid->index(3, 2).value] = 5;
+    auto from_zero = remesh::sample_surface(*grid, domain, ball, sphere, nullptr, faces);
+    auto walked = remesh::sample_surface(*grid, domain, ball, sphere);
+    ASSERT_TRUE(from_zero && walked);
+    EXPECT_LT(max_difference(*grid, *from_zero, *walked), 1e-14);
 }
 
 TEST_F(GpuSamplerTest, RefusesADomainMapThatIsNotTheTetrahedron)

@@ -28,9 +28,9 @@ namespace pliant::remesh
 /// A replacement for the sampling phase, called by remesh() with exactly the inputs of
 /// sample_surface (the grid, the domain map's sphere points, the outward-facing input mesh and its
 /// fold-free sphere map) and held to its contract: every node's 3D position, twins equal, ghost
-/// width 0; an error aborts remesh() and is returned as is. The GPU sampler
-/// (render::sample_on_gpu, `pliant remesh --gpu`) plugs in here; remesh itself stays free of
-/// any GPU dependency.
+/// width 0; an error aborts remesh() and is returned as is. The GPU samplers
+/// (render::sample_on_gpu, or render::locate_on_gpu feeding sample_surface's start faces;
+/// `pliant remesh --gpu`) plug in here; remesh itself stays free of any GPU dependency.
 using Sampler = std::function<core::Result<core::Vec3Field<double>>(
     const core::TetraGrid& grid, const core::Vec3Field<double>& domain, const mesh::TriMesh& mesh,
     std::span<const core::Vec3> sphere)>;
@@ -41,8 +41,9 @@ struct RemeshSettings
     SphereMapSettings sphere;
     /// Where the grid's nodes lie on the sphere (core::sphere_domain). Equal-area samples the
     /// surface more evenly (docs/remesh.md §2: on spot at level 7, area cv 0.32 instead of 0.75,
-    /// PSNR +1.5 dB); the GPU sampler needs the gnomonic map (its views are perspective
-    /// projections).
+    /// PSNR +1.5 dB). On the GPU (`pliant remesh --gpu`), the gnomonic map gets the paper's
+    /// colour look-up (render::sample_on_gpu) and any other map GPU point location with exact
+    /// CPU interpolation (render::locate_on_gpu, docs/remesh.md §3.1).
     core::SphereMap domain_map = core::SphereMap::EqualArea;
     bool measure = true;  ///< compute the distance part of the report (takes about as long as
                           ///< the remeshing itself)

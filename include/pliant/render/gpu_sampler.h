@@ -25,6 +25,13 @@
 /// rounding and the rasteriser's sub-pixel snapping of vertices (docs/remesh.md, "GPU
 /// sampling"). A node whose sphere point is not at a lattice point of some face (a domain map
 /// other than the gnomonic tetrahedron) is refused, never approximated.
+///
+/// Any other domain map (the equal-area one, remesh's default) puts nodes between pixel
+/// centres, where a colour would be the neighbouring ray's. For those, locate_on_gpu does the
+/// GPU's share only: the same views with the triangle id in alpha give, for every node, the
+/// triangle that covers the pixel its ray passes through, and the CPU sampler starts its walk
+/// there and interpolates exactly (remesh::sample_surface with start faces): the same result
+/// as the CPU alone, with the point location done by the rasteriser.
 
 #include <pliant/core/field.h>
 #include <pliant/core/result.h>
@@ -35,6 +42,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <span>
+#include <vector>
 
 namespace pliant::render
 {
@@ -58,7 +66,8 @@ struct GpuSampleStats
     int viewport = 0;             ///< side of each view in pixels
     int pixels_per_cell = 0;      ///< k actually used
     std::size_t samples = 0;      ///< canonical nodes read back
-    std::size_t overlaps = 0;     ///< nodes covered by two triangles (0 for a fold-free map)
+    std::size_t overlaps = 0;     ///< nodes covered by two triangles (0 for a fold-free map;
+                                  ///< sample_on_gpu only)
     double seconds_render = 0.0;  ///< drawing and read-back, wall clock
 };
 
@@ -79,6 +88,22 @@ struct GpuSampleStats
 core::Result<core::Vec3Field<double>> sample_on_gpu(
     const core::TetraGrid& grid, const core::Vec3Field<double>& domain_sphere,
     std::span<const core::Vec3> sphere_vertices, std::span<const core::Vec3> original_positions,
+    std::span<const std::array<std::uint32_t, 3>> faces, const GpuSamplerSettings& settings = {},
+    GpuSampleStats* stats = nullptr);
+
+/// GPU point location for any fold-free domain map: for every grid node, the input triangle
+/// that covers the pixel its sphere point's ray passes through, in the view of the domain
+/// tetrahedron's face whose cone holds the point most centrally. The pixel's centre ray is
+/// within half a pixel (1/(2k) of a grid cell, before the sphere's curvature) of the node's, so
+/// the triangle is the node's own or one near it; remesh::sample_surface, given these as start
+/// faces, walks the rest and interpolates in double, so the result does not depend on the GPU's
+/// precision. Same inputs and preconditions as sample_on_gpu, without the positions.
+/// \return per node index (grid.node_count() entries, twins as their canonical node) a face
+/// index; InvalidArgument for bad sizes or a non-finite sphere point, GraphicsError as
+/// sample_on_gpu (a node whose pixel no triangle covered is reported).
+core::Result<std::vector<std::uint32_t>> locate_on_gpu(
+    const core::TetraGrid& grid, const core::Vec3Field<double>& domain_sphere,
+    std::span<const core::Vec3> sphere_vertices,
     std::span<const std::array<std::uint32_t, 3>> faces, const GpuSamplerSettings& settings = {},
     GpuSampleStats* stats = nullptr);
 
