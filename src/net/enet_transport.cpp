@@ -347,7 +347,14 @@ public:
                                    ENET_PROTOCOL_HEADER_SESSION_MASK) &
             0xFFFFu;
         if (peer_id != ENET_PROTOCOL_MAXIMUM_PEER_ID)
+        {
+            const unsigned session =
+                (((static_cast<unsigned>(host->receivedData[0]) << 8) | host->receivedData[1]) &
+                 ENET_PROTOCOL_HEADER_SESSION_MASK) >>
+                ENET_PROTOCOL_HEADER_SESSION_SHIFT;
+            self->note_answer(peer_id, session, host->receivedAddress);
             return 0;
+        }
         return self->admit(host->receivedAddress) ? 0 : 1;  // 1: consumed, never answered
     }
 
@@ -394,8 +401,28 @@ private:
         return ok;
     }
 
+    // A datagram addressed to one of our peers, before ENet reads it. If that peer is a half-open
+    // incoming connection and the datagram comes from its address with its session bits, the
+    // dialer has received our VERIFY_CONNECT (only that tells it our peer id) and is connected
+    // on its side: its acknowledgement was lost. Such a peer is kept past half_open_timeout_ms,
+    // so that ENet's next VERIFY_CONNECT is acknowledged and the connection completes here too;
+    // resetting it would leave the dialer sending into a connection we no longer have until its
+    // own timeout (5-30 s). A spoofed CONNECT's source never sees VERIFY_CONNECT, so it cannot
+    // send this.
+    void note_answer(unsigned peer_id, unsigned session, const ENetAddress& from) noexcept
+    {
+        if (peer_id >= host_->peerCount)
+            return;
+        ENetPeer* p = &host_->peers[peer_id];
+        if (p->state == ENET_PEER_STATE_ACKNOWLEDGING_CONNECT && p->address.host == from.host &&
+            p->address.port == from.port && session == p->incomingSessionID)
+            answered_[p] = p->connectID;
+    }
+
     // Resets incoming handshakes that were never acknowledged (spoofed or dead sources), so ENet
-    // stops retransmitting VERIFY_CONNECT to them. Scans the peer array at most every 100 ms.
+    // stops retransmitting VERIFY_CONNECT to them, unless the dialer has answered (note_answer):
+    // those are left to ENet, whose VERIFY_CONNECT retransmissions (500 ms, then doubling) go on
+    // until acknowledged or until ENet's own timeout. Scans the peer array at most every 100 ms.
     void reset_half_open()
     {
         const auto now = Clock::now();
@@ -409,15 +436,26 @@ private:
             if (p->state != ENET_PEER_STATE_ACKNOWLEDGING_CONNECT)
             {
                 half_open_.erase(p);
+                answered_.erase(p);
                 continue;
             }
-            auto [it, fresh] = half_open_.try_emplace(p, now);
-            if (!fresh && now - it->second > limit)
+            auto [it, fresh] = half_open_.try_emplace(p, HalfOpen{now, p->connectID, false});
+            if (!fresh && it->second.connect_id != p->connectID)
+                it->second = HalfOpen{now, p->connectID, false};  // the slot holds a new attempt
+            if (fresh || now - it->second.since <= limit)
+                continue;
+            const auto a = answered_.find(p);
+            if (a != answered_.end() && a->second == p->connectID)
             {
-                enet_peer_reset(p);
-                half_open_.erase(it);
-                ++counters_.half_open_reset;
+                if (!it->second.kept)
+                    ++counters_.half_open_kept;
+                it->second.kept = true;
+                continue;
             }
+            enet_peer_reset(p);
+            half_open_.erase(it);
+            answered_.erase(p);
+            ++counters_.half_open_reset;
         }
     }
 
@@ -477,7 +515,14 @@ private:
     std::deque<TransportEvent> pending_;
     std::map<enet_uint32, Bucket> sources_;
     Bucket total_;
-    std::map<const ENetPeer*, Clock::time_point> half_open_;
+    struct HalfOpen
+    {
+        Clock::time_point since;  // first seen half-open
+        enet_uint32 connect_id = 0;
+        bool kept = false;  // answered and kept past the timeout (counted once)
+    };
+    std::map<const ENetPeer*, HalfOpen> half_open_;
+    std::map<const ENetPeer*, enet_uint32> answered_;  // half-open, the dialer answered: connect id
     Clock::time_point last_scan_{};
     Clock::time_point last_warning_{};
     EnetCounters counters_;

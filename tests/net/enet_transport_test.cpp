@@ -2,7 +2,8 @@
 // SPDX-FileCopyrightText: 2026 pliant contributors
 // EnetTransport on 127.0.0.1 with ephemeral ports: two hosts connect, exchange reliable and
 // unreliable messages and disconnect with a reason; bad bytes sent through ENet are dropped and
-// counted and finally cut the sender off; raw UDP junk at the port does not disturb a connection.
+// counted and finally cut the sender off; raw UDP junk at the port does not disturb a connection;
+// a handshake whose acknowledgement is lost still completes on the acceptor's side.
 // Every wait is a bounded loop with a wall-clock deadline that keeps servicing both hosts
 // (TESTING-NOTES: an unserviced ENet peer times out). Skipped with a reason if no socket binds.
 
@@ -17,8 +18,11 @@
 
 #include "net/sample_messages.h"
 
+#include <array>
 #include <chrono>
 #include <functional>
+#include <optional>
+#include <vector>
 
 namespace pliant::net
 {
@@ -263,6 +267,108 @@ TEST(EnetTransport, ConnectingToAClosedPortTimesOut)
     EXPECT_EQ(ev->kind, TransportEvent::Kind::Disconnected);
     EXPECT_EQ(ev->peer, h);
     EXPECT_EQ(ev->reason, DisconnectReason::TimedOut);
+}
+
+// A lost acknowledgement of VERIFY_CONNECT. ENet's handshake: the dialer's CONNECT, the
+// acceptor's VERIFY_CONNECT (retransmitted at 0.5 s, 1.5 s, ... until acknowledged), the
+// dialer's acknowledgement. The dialer is connected once VERIFY_CONNECT arrives; the acceptor
+// only once the acknowledgement does. A relay between them drops the dialer's first two
+// datagrams that lead with an acknowledgement (those of VERIFY_CONNECT and its first
+// retransmission), so the acceptor is still half-open when half_open_timeout_ms (1.2 s) passes,
+// while the dialer is already sending. The acceptor must keep the connection (the dialer's
+// datagrams prove it received VERIFY_CONNECT) so that the retransmission at 1.5 s completes it;
+// resetting it, as for a spoofed CONNECT, would leave the dialer sending into nothing.
+TEST(EnetTransport, AHandshakeWhoseAcknowledgementIsLostCompletes)
+{
+    auto acceptor = make_enet_transport();
+    auto dialer = make_enet_transport();
+    auto ra = acceptor->open(Address{{127, 0, 0, 1}, 0});
+    auto rd = dialer->open(Address{{127, 0, 0, 1}, 0});
+    const int front = ::socket(AF_INET, SOCK_DGRAM | SOCK_NONBLOCK, 0);  // the dialer's side
+    const int back = ::socket(AF_INET, SOCK_DGRAM | SOCK_NONBLOCK, 0);   // the acceptor's side
+    sockaddr_in any{};
+    any.sin_family = AF_INET;
+    any.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    if (!ra || !rd || front < 0 || back < 0 ||
+        ::bind(front, reinterpret_cast<sockaddr*>(&any), sizeof(any)) != 0 ||
+        ::bind(back, reinterpret_cast<sockaddr*>(&any), sizeof(any)) != 0)
+    {
+        ::close(front);
+        ::close(back);
+        GTEST_SKIP() << "cannot bind UDP on 127.0.0.1";
+    }
+    sockaddr_in front_addr{};
+    socklen_t len = sizeof(front_addr);
+    ::getsockname(front, reinterpret_cast<sockaddr*>(&front_addr), &len);
+    sockaddr_in to_acceptor = any;
+    to_acceptor.sin_port = htons(ra->port);
+    sockaddr_in to_dialer = any;
+    to_dialer.sin_port = htons(rd->port);
+
+    int acks_dropped = 0;
+    std::array<std::uint8_t, 4096> buf{};
+    // Moves what waits on the relay's sockets; drops the dialer's first two acknowledgements.
+    const auto relay = [&]
+    {
+        for (int k = 0; k < 64; ++k)
+        {
+            const ssize_t n = ::recv(front, buf.data(), buf.size(), 0);
+            if (n <= 0)
+                break;
+            // ENet header: 2 bytes (peer id and flags), 2 more with the sent-time flag; then
+            // commands, acknowledgements first (command number 1 in the low nibble).
+            const std::size_t at = (buf[0] & 0x80) != 0 ? 4 : 2;
+            if (static_cast<std::size_t>(n) > at && (buf[at] & 0x0F) == 1 && acks_dropped < 2)
+            {
+                ++acks_dropped;
+                continue;
+            }
+            (void)::sendto(back, buf.data(), static_cast<std::size_t>(n), 0,
+                           reinterpret_cast<const sockaddr*>(&to_acceptor), sizeof(to_acceptor));
+        }
+        for (int k = 0; k < 64; ++k)
+        {
+            const ssize_t n = ::recv(back, buf.data(), buf.size(), 0);
+            if (n <= 0)
+                break;
+            (void)::sendto(front, buf.data(), static_cast<std::size_t>(n), 0,
+                           reinterpret_cast<const sockaddr*>(&to_dialer), sizeof(to_dialer));
+        }
+    };
+
+    const PeerHandle h =
+        dialer->connect(Address{{127, 0, 0, 1}, ntohs(front_addr.sin_port)}).value();
+    bool dialer_connected = false;
+    bool sent = false;
+    std::optional<PeerHandle> accepted;
+    std::vector<std::byte> got;
+    const std::vector<std::byte> hello{std::byte{1}, std::byte{2}, std::byte{3}};
+    const auto end = Clock::now() + k_deadline;
+    while (Clock::now() < end && got.empty())
+    {
+        relay();
+        while (auto e = dialer->poll(0))
+            dialer_connected =
+                dialer_connected || (e->kind == TransportEvent::Kind::Connected && e->peer == h);
+        if (dialer_connected && !sent)
+            sent = static_cast<bool>(dialer->send(h, Channel::Control, hello, Delivery::Reliable));
+        while (auto e = acceptor->poll(1))
+        {
+            if (e->kind == TransportEvent::Kind::Connected)
+                accepted = e->peer;
+            else if (e->kind == TransportEvent::Kind::Received)
+                got = e->data;
+        }
+    }
+    ::close(front);
+    ::close(back);
+    EXPECT_EQ(acks_dropped, 2);
+    EXPECT_TRUE(dialer_connected);
+    EXPECT_TRUE(accepted.has_value()) << "the acceptor reset a handshake the dialer had completed";
+    EXPECT_EQ(got, hello);
+    const EnetCounters c = enet_counters(*acceptor).value();
+    EXPECT_EQ(c.half_open_reset, 0u);
+    EXPECT_EQ(c.half_open_kept, 1u);
 }
 
 }  // namespace

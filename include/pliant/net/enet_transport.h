@@ -20,7 +20,11 @@
 /// so a flood of spoofed CONNECTs cannot make this host reflect its handshake replies at a victim
 /// faster than `connect_rate_total` (docs/protocol.md §10.5). A half-open incoming connection
 /// (VERIFY_CONNECT sent, no acknowledgement) is reset after `half_open_timeout_ms`, which bounds
-/// ENet's retransmissions of VERIFY_CONNECT.
+/// ENet's retransmissions of VERIFY_CONNECT to a spoofed source; unless the dialer has sent us a
+/// datagram addressed to that connection, which only VERIFY_CONNECT can have told it: then it is
+/// connected on its side and only its acknowledgement was lost, and the connection is left to
+/// ENet's retransmissions (resetting it would leave the dialer sending into nothing until its
+/// own timeout).
 ///
 /// Threading: single-threaded (ENet's FAQ: an ENetHost must not be used from two threads).
 /// Keep calling poll() while waiting: an unserviced host stops acknowledging, and its peers time
@@ -50,7 +54,8 @@ struct EnetSettings
     /// New connection attempts accepted per second over all sources; <= 0: no limit.
     double connect_rate_total = 20.0;
     double connect_burst_total = 40.0;
-    /// An incoming connection still unacknowledged after this is reset silently, ms.
+    /// An incoming connection still unacknowledged after this is reset silently, ms, unless the
+    /// dialer has answered (see above).
     std::uint32_t half_open_timeout_ms = 1200;
     /// ENet's packet throttle drops unreliable (and unsequenced) packets at the sender, at random,
     /// whenever a round trip is slower than its recent mean: on a jittery link it thins the
@@ -66,6 +71,9 @@ struct EnetCounters
     std::uint64_t connect_attempts = 0;       ///< datagrams addressed to no peer (CONNECTs)
     std::uint64_t connects_rate_limited = 0;  ///< of those, dropped by the rate limit
     std::uint64_t half_open_reset = 0;        ///< incoming handshakes reset unacknowledged
+    /// Incoming handshakes unacknowledged past half_open_timeout_ms but kept, because the dialer
+    /// answered (its acknowledgement was lost; ENet's next VERIFY_CONNECT completes them).
+    std::uint64_t half_open_kept = 0;
 };
 
 /// The counters of a transport made by make_enet_transport(); nothing for another transport.
