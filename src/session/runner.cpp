@@ -137,7 +137,7 @@ core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
                               "cannot write stats file " + options.stats_csv.string());
         csv << "time_s,bytes_in,bytes_out,packets_in,packets_out,drops,steps,step_ms,"
                "owned_nodes,halo_age_s,tick,peers,border_age_s,stalled_s,view_delay_s,"
-               "stale_states,stale_frames\n";
+               "stale_states,stale_frames,peers_connected\n";
     }
     using clock = std::chrono::steady_clock;
     const auto t0 = clock::now();
@@ -170,7 +170,7 @@ core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
                 << s.halo_age_s << ',' << session.tick() << ',' << session.peers().size() << ','
                 << s.border_age_s << ',' << s.stalled_s - last.stalled_s << ',' << s.view_delay_s
                 << ',' << s.stale_states - last.stale_states << ','
-                << s.stale_frames - last.stale_frames << '\n';
+                << s.stale_frames - last.stale_frames << ',' << s.peers_connected << '\n';
             csv.flush();
         }
         last = s;

@@ -33,12 +33,15 @@ constexpr double k_leave_timeout_s = 5.0;
 /// service, so a master behind real time that served the network once per frame period (16.7
 /// ms) sent a level-8 model of 3 MB at about 4 MB/s; ticks of a level-8 lockstep take ~1.4 ms.
 constexpr double k_step_slice_s = 0.002;
-/// Ready goes reliably, and is repeated unreliably once per stream period until the peer's first
-/// leaf state arrives, for at most this long (s). The stream to a joiner starts on its Ready, and a
-/// lost reliable datagram waits for a retransmission timeout, which on a young ENet connection
-/// (500 ms initial round-trip estimate) is a second or more: a fast-coupled neighbour held its
-/// clock all that time waiting for the joiner's border states, and the others waited on it.
-constexpr double k_ready_repeat_s = 5.0;
+/// The greetings go reliably, and are repeated unreliably once per stream period for at most this
+/// long (s): Ready until the peer's first leaf state arrives, a dialler's Hello until anything
+/// arrives from the peer. The stream to a joiner starts on its Ready, and a peer knows a dialler
+/// only from its Hello; a lost reliable datagram waits for a retransmission timeout, which on a
+/// young ENet connection (500 ms initial round-trip estimate, doubling) is a second or more, and
+/// ENet drops what a dialler sends before the acceptor's side of the handshake completes (its
+/// acknowledgement lost). Meanwhile a fast-coupled neighbour held its clock waiting for the
+/// joiner's border states, and the others waited on it; a viewer saw the joiner's leaves frozen.
+constexpr double k_greeting_repeat_s = 5.0;
 /// Quantised streaming: an owner codes against a baseline only among its last 16 states sent of
 /// a leaf, and a receiver holds its last 16 received, so an acknowledged baseline the owner still
 /// has is one the receiver still holds (docs/protocol.md §5.5).
@@ -341,9 +344,12 @@ struct RemotePeer
     /// Sent Ready: it holds the model and can show leaf states, so they are streamed to it. A
     /// joiner still downloading the model gets none (they would only compete with the download).
     bool has_model = false;
-    /// Until when (our clock) our Ready to it is repeated unreliably (k_ready_repeat_s).
+    /// Until when (our clock) our Ready to it is repeated unreliably (k_greeting_repeat_s).
     double ready_repeat_until = -1.0;
     bool streams_to_us = false;  ///< a LeafState or LeafBatch came from it: our Ready arrived
+    /// We dialled it: until when (our clock) our Hello is repeated unreliably, unless `heard`.
+    double hello_repeat_until = -1.0;
+    bool heard = false;  ///< a message came from it on a bound connection: it knows us
     bool leaving = false;
     bool departed = false;
 };
@@ -506,7 +512,7 @@ struct Session::Impl
     double clock_offset = 0.0;  // sim time = now + clock_offset
     double last_now = 0.0;
     double next_stream = 0.0;
-    double next_ready_repeat = 0.0;
+    double next_greeting_repeat = 0.0;
     double next_frame = 0.0;
     double next_view = 0.0;  // view_u/v are refreshed at frame_rate_hz
     bool leaving = false;
@@ -550,13 +556,13 @@ struct Session::Impl
     }
 
     /// Tells peer `id` that we hold the model: reliably, and unreliably every stream period until
-    /// it streams to us (k_ready_repeat_s, repeat_ready).
+    /// it streams to us (k_greeting_repeat_s, repeat_greetings).
     void send_ready(std::uint16_t id)
     {
         send_to(id, make(net::Ready{}, s.state_.tick));
         auto it = peers.find(id);
         if (it != peers.end() && !it->second.streams_to_us)
-            it->second.ready_repeat_until = last_now + k_ready_repeat_s;
+            it->second.ready_repeat_until = last_now + k_greeting_repeat_s;
     }
 
     [[nodiscard]] bool streamed_to_us(net::PeerId id) const
@@ -565,11 +571,28 @@ struct Session::Impl
         return it != peers.end() && it->second.streams_to_us;
     }
 
-    void repeat_ready()
+    /// The unreliable repeats of our greetings (k_greeting_repeat_s): Ready, and Hello to the
+    /// peers we dialled.
+    void repeat_greetings()
     {
         for (auto& [id, p] : peers)
-            if (p.ready_repeat_until > last_now && !p.streams_to_us && p.handle && !p.departed)
+        {
+            if (!p.handle || p.departed)
+                continue;
+            if (p.hello_repeat_until > last_now && !p.heard)
+                send_to(id, make(make_hello(), s.state_.tick), net::SendMode::Unsequenced);
+            if (p.ready_repeat_until > last_now && !p.streams_to_us)
                 send_to(id, make(net::Ready{}, s.state_.tick), net::SendMode::Unsequenced);
+        }
+    }
+
+    [[nodiscard]] net::Hello make_hello() const
+    {
+        net::Hello hello;
+        hello.role = s.role_ == SessionRole::Viewer ? net::Role::Viewer : net::Role::Participant;
+        hello.listen_port = settings.listen_port;
+        hello.name = settings.name;
+        return hello;
     }
 
     void send_all(const net::Message& m, net::SendMode mode = net::SendMode::Default)
@@ -1908,28 +1931,23 @@ struct Session::Impl
     {
         if (master_handle && h == *master_handle && !welcomed)
         {
-            net::Hello hello;
-            hello.role =
-                s.role_ == SessionRole::Viewer ? net::Role::Viewer : net::Role::Participant;
-            hello.listen_port = settings.listen_port;
-            hello.name = settings.name;
+            // Asking to be admitted: reliable only (a repeat would be a second joiner).
             net::Message m;
             m.header.sender = net::k_no_peer;
-            m.body = hello;
+            m.body = make_hello();
             (void)messenger.send(h, m);
             return;
         }
         auto it = dialing.find(h);
         if (it != dialing.end())
         {
-            net::Hello hello;
-            hello.role =
-                s.role_ == SessionRole::Viewer ? net::Role::Viewer : net::Role::Participant;
-            hello.listen_port = settings.listen_port;
-            hello.name = settings.name;
-            (void)messenger.send(h, make(hello, s.state_.tick));
-            bind(h, it->second);
+            (void)messenger.send(h, make(make_hello(), s.state_.tick));
+            const std::uint16_t id = it->second;
+            bind(h, id);
             dialing.erase(it);
+            RemotePeer& p = peers[id];
+            if (!p.heard)
+                p.hello_repeat_until = last_now + k_greeting_repeat_s;
         }
     }
 
@@ -2643,6 +2661,7 @@ struct Session::Impl
         if (!bound)
             return;
         const std::uint16_t from = idit->second;
+        peers[from].heard = true;
         if (m.type() == net::MessageType::Ready)
         {
             peers[from].has_model = true;
@@ -2983,11 +3002,11 @@ struct Session::Impl
             next_stream = std::max(next_stream + 1.0 / settings.stream_rate_hz,
                                    now - 1.0 / settings.stream_rate_hz);
         }
-        if (now >= next_ready_repeat && !s.left_)
+        if (now >= next_greeting_repeat && !s.left_)
         {
-            repeat_ready();
-            next_ready_repeat = std::max(next_ready_repeat + 1.0 / settings.stream_rate_hz,
-                                         now - 1.0 / settings.stream_rate_hz);
+            repeat_greetings();
+            next_greeting_repeat = std::max(next_greeting_repeat + 1.0 / settings.stream_rate_hz,
+                                            now - 1.0 / settings.stream_rate_hz);
         }
         if (s.model_ && !s.left_ && now >= next_view)
         {
@@ -3211,6 +3230,8 @@ SessionStats Session::stats() const
     st.packets_sent = sum.packets_sent;
     st.packets_received = sum.packets_received;
     st.bad_datagrams = sum.bad_datagrams;
+    for (const auto& [id, p] : impl_->peers)
+        st.peers_connected += p.handle && !p.departed ? 1 : 0;
     if (model_)
     {
         // Age of the oldest leaf shown that this peer does not compute, against its own time

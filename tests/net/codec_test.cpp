@@ -178,11 +178,16 @@ TEST(Codec, ReadyMatchesBytesWrittenFromTheSpecification)
     auto back = decode(expected);
     ASSERT_TRUE(back.has_value());
     EXPECT_EQ(*back, m);
-    // Reliable on the control channel by default; its repeats may come on the state channel, the
-    // only control type allowed there.
+    // Reliable on the control channel by default; its repeats may come on the state channel, as
+    // a dialler's Hello repeats do: the only control types allowed there.
     EXPECT_EQ(default_channel(MessageType::Ready), Channel::Control);
     EXPECT_TRUE(allowed_on(MessageType::Ready, Channel::State));
-    EXPECT_FALSE(allowed_on(MessageType::Partition, Channel::State));
+    EXPECT_EQ(default_channel(MessageType::Hello), Channel::Control);
+    EXPECT_TRUE(allowed_on(MessageType::Hello, Channel::State));
+    for (const MessageType t :
+         {MessageType::Welcome, MessageType::Reject, MessageType::PeerJoined, MessageType::PeerLeft,
+          MessageType::Blob, MessageType::Partition, MessageType::Force, MessageType::Leave})
+        EXPECT_FALSE(allowed_on(t, Channel::State)) << to_string(t);
     EXPECT_TRUE(allowed_on(MessageType::LeafBatch, Channel::State));
     // Only members send it: a session id is required.
     auto d = expected;

@@ -146,11 +146,13 @@ TEST(Messenger, DeliversTypedMessagesOnTheirChannels)
     ASSERT_EQ(again.size(), 1u);
     EXPECT_EQ(again[0].channel, Channel::Control);
 
-    // SendMode::Unsequenced moves Ready, alone of the control types, to the state channel (its
-    // repeats); a Partition stays reliable.
+    // SendMode::Unsequenced moves Ready and Hello, alone of the control types, to the state
+    // channel (their repeats); a Partition stays reliable.
     Message ready{samples::header(), Ready{}};
     EXPECT_TRUE(sent_reliably(MessageType::Ready, SendMode::Default));
     EXPECT_FALSE(sent_reliably(MessageType::Ready, SendMode::Unsequenced));
+    EXPECT_TRUE(sent_reliably(MessageType::Hello, SendMode::Default));
+    EXPECT_FALSE(sent_reliably(MessageType::Hello, SendMode::Unsequenced));
     EXPECT_TRUE(sent_reliably(MessageType::Partition, SendMode::Unsequenced));
     EXPECT_FALSE(sent_reliably(MessageType::LeafState, SendMode::Default));
     ASSERT_TRUE(n.a.send(n.a_to_b, ready, SendMode::Unsequenced));

@@ -90,13 +90,18 @@ TEST(SessionCli, KillingAParticipantThenTheMasterLeavesTheOthersRunning)
     const auto v = rows(dir / "v.csv");
     ASSERT_GE(a.size(), 16U);
     ASSERT_GE(v.size(), 12U);  // its process may start late on a loaded machine
+    // The two left are connected to each other only (the killed ones departed).
     for (std::size_t k = a.size() - 4; k < a.size() - 1; ++k)
     {
         EXPECT_EQ(value(a[k], "owned_nodes"), 514.0) << "row " << k;
         EXPECT_GT(value(a[k], "steps"), 0.0) << "row " << k;
+        EXPECT_EQ(value(a[k], "peers_connected"), 1.0) << "row " << k;
     }
     for (std::size_t k = v.size() - 4; k < v.size() - 1; ++k)
+    {
         EXPECT_GT(value(v[k], "bytes_in"), 1000.0) << "row " << k;
+        EXPECT_EQ(value(v[k], "peers_connected"), 1.0) << "row " << k;
+    }
 }
 
 // Ctrl-C (SIGINT) or SIGTERM ends `pliant join` and `pliant host` cleanly long before their

@@ -431,6 +431,64 @@ TEST(SessionLoss, ANeighbourStillConnectingHoldsNobodysClock)
         << "the seeds must include a greeting that needed a retransmission";
 }
 
+TEST(SessionLoss, ALostHelloCostsAStreamPeriodNotARetransmission)
+{
+    // A joiner dials every peer it is told of and greets it with a Hello, the only way that peer
+    // learns who the new connection is; until then it sends the joiner nothing and takes nothing
+    // from it (no Ready, no leaf states: a viewer shows the joiner's leaves frozen). Sent only
+    // reliably, a lost Hello waited for a retransmission (on ENet also a Hello sent before the
+    // acceptor's side of the handshake completed), so the dialler repeats it unreliably every
+    // stream period until the peer answers. Here the link between the two participants loses
+    // half its datagrams and retransmits after 2 s; once the second participant has its
+    // connection to the first, the first must have it too within 0.25 s.
+    constexpr int level = 4;
+    int lost_hellos = 0;  // seeds where a greeting between them needed a retransmission
+    for (std::uint64_t seed = 1; seed <= 8; ++seed)
+    {
+        net::SimulatedNetworkSettings ns;
+        ns.seed = seed;
+        ns.link.latency_s = 0.020;
+        ns.retransmit_s = 2.0;
+        Harness h(ns);
+        SessionSettings set;
+        set.coupling = Coupling::Fast;
+        set.name = "master";
+        h.host(level, set);
+        set.name = "first";
+        Session& first = h.join(net::Role::Participant, set);
+        ASSERT_TRUE(h.pump_until([&] { return first.ready(); }, 200000)) << "seed " << seed;
+        set.name = "second";
+        Session& second = h.join(net::Role::Participant, set);
+        net::LinkSettings lossy = ns.link;
+        lossy.loss = 0.5;
+        h.net.set_link(h.addresses[1], h.addresses[2], lossy);
+        h.net.set_link(h.addresses[2], h.addresses[1], lossy);
+        // The second dials the first once the Welcome lists it; its connection is up when the
+        // first accepts (the simulated handshake is reliable, so it may take a retransmission).
+        // Retransmissions are drawn when a packet is sent. The second's greetings to the first
+        // (Hello, Ready, its points) leave in the poll in which its connection comes up, and the
+        // first sends it nothing reliable before it knows it: a retransmission drawn in that
+        // poll is a lost greeting (the other links are clean).
+        std::uint64_t resent = 0;
+        ASSERT_TRUE(h.pump_until(
+            [&]
+            {
+                if (second.stats().peers_connected == 2)
+                    return true;
+                resent = h.net.totals().retransmitted;
+                return false;
+            },
+            200000))
+            << "seed " << seed;
+        lost_hellos += h.net.totals().retransmitted > resent ? 1 : 0;
+        const double dialled_at = h.now;
+        ASSERT_TRUE(h.pump_until([&] { return first.stats().peers_connected == 2; }, 20000))
+            << "seed " << seed;
+        EXPECT_LT(h.now - dialled_at, 0.25) << "seed " << seed;
+    }
+    EXPECT_GT(lost_hellos, 0) << "the seeds must include a lost greeting";
+}
+
 TEST(SessionLoss, ExactLockstepUnderLossAndLatencyStaysEqualToASingleProcess)
 {
     // The lockstep's halos and heartbeats are reliable: loss costs retransmissions and latency

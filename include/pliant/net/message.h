@@ -72,7 +72,7 @@ inline constexpr std::size_t k_max_batch_leaves = 128;
 /// Wire message types (docs/protocol.md §6); the order matches `Body`.
 enum class MessageType : std::uint8_t
 {
-    Hello = 1,
+    Hello = 1,  ///< control (channel 0); a dialler's repeats go on channel 1
     Welcome = 2,
     Reject = 3,
     PeerJoined = 4,
@@ -403,12 +403,12 @@ struct Message
 }
 
 /// Whether a message of this type may arrive on `channel`: control types only on channel 0, except
-/// Ready, whose unreliable repeats travel on channel 1; state types on either (the exact coupling
-/// mode sends halos reliably).
+/// the greetings Ready and Hello, whose unreliable repeats travel on channel 1; state types on
+/// either (the exact coupling mode sends halos reliably).
 [[nodiscard]] constexpr bool allowed_on(MessageType type, Channel channel) noexcept
 {
     return channel == Channel::Control || type == MessageType::Ready ||
-           default_channel(type) == Channel::State;
+           type == MessageType::Hello || default_channel(type) == Channel::State;
 }
 
 /// Short stable name, e.g. "leaf-state".

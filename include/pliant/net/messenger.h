@@ -112,8 +112,8 @@ enum class SendMode : std::uint8_t
     Reliable,  ///< state types too, reliably on channel 0 (exact coupling mode)
     /// State types on channel 1 without ENet's sequencing: lost, duplicated or reordered as the
     /// network does, so that a late datagram of one leaf does not drop a newer one of another
-    /// (the receiver orders states per leaf by tick). Likewise Ready's repeats; the other control
-    /// types stay reliable.
+    /// (the receiver orders states per leaf by tick). Likewise the repeats of Ready and Hello; the
+    /// other control types stay reliable.
     Unsequenced,
 };
 

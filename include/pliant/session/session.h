@@ -189,6 +189,9 @@ struct SessionStats
     std::uint64_t steps = 0;          ///< accepted steps of this peer
     double step_seconds = 0.0;        ///< wall time spent in steps, s
     std::size_t owned_nodes = 0;
+    /// Peers this one has a greeted connection to (a dialler's Hello received, or ours sent on
+    /// a connection we dialled), not departed: the full mesh is every other peer.
+    std::size_t peers_connected = 0;
     double halo_age_s = 0.0;  ///< oldest streamed leaf shown, relative to the own time, s
     // Leaf-state streaming (sender side counts per receiver).
     std::uint64_t leaf_states_sent = 0;  ///< LeafState datagrams sent
