@@ -2147,6 +2147,8 @@ struct Session::Impl
         bind(h, m.header.sender.value);
         RemotePeer& p = peers[m.header.sender.value];
         p.info.role = hello.role;
+        if (p.info.name.empty())
+            p.info.name = hello.name;  // its PeerJoined may still be on its way
         greet_new_peer(m.header.sender.value);
     }
 
@@ -3210,6 +3212,17 @@ std::vector<net::PeerId> Session::peers() const
     for (const auto& [id, p] : impl_->peers)
         if (!p.departed)
             out.push_back(net::PeerId{id});
+    return out;
+}
+
+std::vector<PeerStatus> Session::peer_status() const
+{
+    std::vector<PeerStatus> out;
+    for (const auto& [id, p] : impl_->peers)
+        if (!p.departed)
+            out.push_back(PeerStatus{net::PeerId{id}, p.info.role, p.info.name,
+                                     net::PeerId{id} == impl_->master_id, p.handle.has_value(),
+                                     p.has_model, p.streams_to_us});
     return out;
 }
 

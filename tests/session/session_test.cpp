@@ -7,6 +7,7 @@
 #include "session_harness.h"
 
 #include <cstdio>
+#include <optional>
 
 namespace pliant::session::test
 {
@@ -255,6 +256,71 @@ TEST(SessionFast, TwoPeersStayWithinTheDocumentedError)
                 static_cast<unsigned long long>(k_ticks), worst);
     EXPECT_LE(worst, 1e-3);  // docs/session.md §4.2: measured 1.6e-4
     EXPECT_GT(worst, 0.0);   // fast mode is not exact: the test can tell the two apart
+}
+
+TEST(SessionPeers, EveryPeerListsTheOthersWithRolesNamesAndLinks)
+{
+    Harness h;
+    Session& master = h.host(k_level, settings_for(Coupling::Fast, "master"));
+    Session& part = h.join(net::Role::Participant, settings_for(Coupling::Fast, "part"));
+    part.set_points_of_interest({net::Target{net::TargetKind::Face, 600, {0, 0, 0}, 0.0}});
+    Session& viewer = h.join(net::Role::Viewer, settings_for(Coupling::Fast, "viewer"));
+    // Everyone connected to everyone, and the participant's leaves reached the others.
+    const auto status_of = [](const Session& s, net::PeerId id)
+    {
+        for (const PeerStatus& p : s.peer_status())
+            if (p.id == id)
+                return std::optional<PeerStatus>(p);
+        return std::optional<PeerStatus>();
+    };
+    ASSERT_TRUE(h.pump_until(
+        [&]
+        {
+            const auto a = status_of(master, part.id());
+            const auto b = status_of(viewer, part.id());
+            return a && a->streams_to_us && b && b->streams_to_us &&
+                   viewer.stats().peers_connected == 2 && part.stats().peers_connected == 2;
+        },
+        40000));
+    struct Expect
+    {
+        const Session* at;
+        const Session* of;
+        net::Role role;
+        const char* name;
+        bool master;
+        bool streams;  // a viewer streams nothing
+    };
+    const std::vector<Expect> expected{
+        {&master, &part, net::Role::Participant, "part", false, true},
+        {&master, &viewer, net::Role::Viewer, "viewer", false, false},
+        {&part, &master, net::Role::Participant, "master", true, true},
+        {&part, &viewer, net::Role::Viewer, "viewer", false, false},
+        {&viewer, &master, net::Role::Participant, "master", true, true},
+        {&viewer, &part, net::Role::Participant, "part", false, true},
+    };
+    for (const Expect& e : expected)
+    {
+        const auto st = status_of(*e.at, e.of->id());
+        ASSERT_TRUE(st.has_value()) << e.name;
+        EXPECT_EQ(st->role, e.role) << e.name;
+        EXPECT_EQ(st->name, e.name);
+        EXPECT_EQ(st->master, e.master) << e.name;
+        EXPECT_TRUE(st->connected) << e.name;
+        EXPECT_TRUE(st->has_model) << e.name;
+        EXPECT_EQ(st->streams_to_us, e.streams) << e.name;
+    }
+    for (const Session* s : {&master, &part, &viewer})
+    {
+        EXPECT_EQ(s->peer_status().size(), 2U);
+        EXPECT_EQ(s->stats().peers_connected, 2U);
+    }
+    // The participant leaves: the others drop it from their lists.
+    part.leave();
+    ASSERT_TRUE(h.pump_until(
+        [&] { return !status_of(master, part.id()) && !status_of(viewer, part.id()); }, 40000));
+    EXPECT_EQ(master.stats().peers_connected, 1U);
+    EXPECT_EQ(viewer.stats().peers_connected, 1U);
 }
 
 }  // namespace

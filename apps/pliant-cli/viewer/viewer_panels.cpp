@@ -209,31 +209,47 @@ void Viewer::draw_panels()
             if (const session::LeafGraph* g = session_->leaf_graph(); g != nullptr)
                 for (std::size_t l = 0; l < owners.size() && l < g->size(); ++l)
                     owned[owners[l].value] += g->node_count(l);
-            std::vector<net::PeerId> ids = session_->peers();
-            ids.push_back(session_->id());
-            std::sort(ids.begin(), ids.end());
-            if (ImGui::BeginTable("peers", 3))
+            // This peer first, then the others by id: role and name as they announced them,
+            // and the link (connecting: no greeted connection yet; joining: no Ready yet, it is
+            // still loading the model; streaming: its leaf states arrive).
+            std::vector<session::PeerStatus> rows;
+            session::PeerStatus me;
+            me.id = session_->id();
+            me.master = session_->role() == session::SessionRole::Master;
+            me.role = session_->role() == session::SessionRole::Viewer ? net::Role::Viewer
+                                                                       : net::Role::Participant;
+            rows.push_back(me);
+            for (const session::PeerStatus& p : session_->peer_status())
+                rows.push_back(p);
+            if (ImGui::BeginTable("peers", 4))
             {
                 ImGui::TableSetupColumn("peer");
                 ImGui::TableSetupColumn("role");
+                ImGui::TableSetupColumn("link");
                 ImGui::TableSetupColumn("nodes");
                 ImGui::TableHeadersRow();
-                for (const net::PeerId id : ids)
+                for (const session::PeerStatus& p : rows)
                 {
-                    const auto it = owned.find(id.value);
+                    const bool self = p.id == session_->id();
+                    const auto it = owned.find(p.id.value);
                     const std::size_t nodes = it != owned.end() ? it->second : 0;
                     ImGui::TableNextRow();
                     ImGui::TableNextColumn();
-                    ImGui::ColorButton("##c", to_imvec(render::owner_color(id.value)),
+                    ImGui::ColorButton("##c", to_imvec(render::owner_color(p.id.value)),
                                        ImGuiColorEditFlags_NoTooltip, ImVec2(12.0F, 12.0F));
                     ImGui::SameLine();
-                    ImGui::Text("%u%s", static_cast<unsigned>(id.value),
-                                id == session_->id() ? " (me)" : "");
+                    ImGui::Text("%u %s%s", static_cast<unsigned>(p.id.value), p.name.c_str(),
+                                self ? " (me)" : "");
                     ImGui::TableNextColumn();
-                    // Session knows its own role; another peer that owns nodes simulates.
-                    ImGui::TextUnformatted(id == session_->id() ? role_name(session_->role())
-                                           : nodes > 0          ? "simulates"
-                                                                : "viewer/joining");
+                    ImGui::TextUnformatted(p.master                      ? "master"
+                                           : p.role == net::Role::Viewer ? "viewer"
+                                                                         : "participant");
+                    ImGui::TableNextColumn();
+                    ImGui::TextUnformatted(self              ? "-"
+                                           : !p.connected    ? "connecting"
+                                           : !p.has_model    ? "joining"
+                                           : p.streams_to_us ? "streaming"
+                                                             : "connected");
                     ImGui::TableNextColumn();
                     ImGui::Text("%zu", nodes);
                 }

@@ -224,6 +224,18 @@ struct SessionStats
     std::size_t active_forces = 0;
 };
 
+/// What a peer knows of another one (Session::peer_status), for a peer list.
+struct PeerStatus
+{
+    net::PeerId id{0};
+    net::Role role = net::Role::Participant;  ///< as it announced itself (a master: participant)
+    std::string name;                         ///< as it announced itself; empty until known
+    bool master = false;                      ///< the peer this one follows as master
+    bool connected = false;      ///< a greeted connection (SessionStats::peers_connected)
+    bool has_model = false;      ///< it sent Ready: it holds the model, leaf states go to it
+    bool streams_to_us = false;  ///< its leaf states have arrived here
+};
+
 class Session
 {
 public:
@@ -310,6 +322,8 @@ public:
     [[nodiscard]] std::span<const double> view_time() const noexcept;
     /// Ids of the other peers this one knows (connected or not yet).
     [[nodiscard]] std::vector<net::PeerId> peers() const;
+    /// The same peers (not departed), by id, with their roles, names and the state of the link.
+    [[nodiscard]] std::vector<PeerStatus> peer_status() const;
     [[nodiscard]] SessionStats stats() const;
     /// Why this peer left on its own when the session refused its settings (empty otherwise):
     /// a joiner learns the level and coupling only from the model (e.g. stream_coarsen in a fast
