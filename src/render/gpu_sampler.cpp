@@ -283,11 +283,37 @@ core::Error hole(const core::TetraGrid& grid, const Entry& en, std::size_t view,
                 "): no triangle covered its ray"};
 }
 
-/// Pixels per cell: the setting, or automatic (views of about 1025 pixels, where the snapping
-/// error falls to float32's; docs/remesh.md, measured on spot).
-int pixels_per_cell(const GpuSamplerSettings& settings, int w)
+/// The four views and their size: k pixels per cell (the setting, or automatic: views of about
+/// 1025 pixels, where the snapping error falls to float32's; docs/remesh.md, measured on spot),
+/// n_px = k·W + 1 pixels square.
+struct Views
 {
-    return settings.pixels_per_cell > 0 ? settings.pixels_per_cell : std::clamp(1024 / w, 1, 64);
+    int k = 1;
+    int n_px = 1;
+    std::array<View, 4> views;
+};
+
+Views views_of(const core::TetraGrid& grid, const core::Vec3Field<double>& domain_sphere,
+               const GpuSamplerSettings& settings)
+{
+    const int w = grid.w();
+    const int k =
+        settings.pixels_per_cell > 0 ? settings.pixels_per_cell : std::clamp(1024 / w, 1, 64);
+    return {k, k * w + 1, domain_views(grid, domain_sphere)};
+}
+
+void report(GpuSampleStats* stats, const Views& vs, std::size_t samples, std::size_t overlaps,
+            std::chrono::steady_clock::time_point start)
+{
+    if (stats == nullptr)
+        return;
+    stats->views = static_cast<int>(vs.views.size());
+    stats->viewport = vs.n_px;
+    stats->pixels_per_cell = vs.k;
+    stats->samples = samples;
+    stats->overlaps = overlaps;
+    stats->seconds_render =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 }  // namespace
@@ -303,10 +329,10 @@ core::Result<core::Vec3Field<double>> sample_on_gpu(
                                faces, "sample_on_gpu");
         !ok)
         return ok.error();
+    const Views vs = views_of(grid, domain_sphere, settings);
     const int w = grid.w();
-    const int k = pixels_per_cell(settings, w);
-    const int n_px = k * w + 1;
-    const std::array<View, 4> views = domain_views(grid, domain_sphere);
+    const int k = vs.k;
+    const std::array<View, 4>& views = vs.views;
 
     // Each canonical node goes to the face whose cone holds it most centrally; its lattice
     // coordinates there must be integers (the gnomonic tetrahedron map), else it is refused.
@@ -388,16 +414,7 @@ core::Result<core::Vec3Field<double>> sample_on_gpu(
     scene->reset();
     for (auto& f : out)
         core::sync_twins(grid, f);
-    if (stats != nullptr)
-    {
-        stats->views = static_cast<int>(views.size());
-        stats->viewport = n_px;
-        stats->pixels_per_cell = k;
-        stats->samples = samples;
-        stats->overlaps = overlaps;
-        stats->seconds_render =
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    }
+    report(stats, vs, samples, overlaps, start);
     return out;
 }
 
@@ -412,10 +429,11 @@ core::Result<std::vector<std::uint32_t>> locate_on_gpu(
                                "locate_on_gpu");
         !ok)
         return ok.error();
+    const Views vs = views_of(grid, domain_sphere, settings);
     const int w = grid.w();
-    const int k = pixels_per_cell(settings, w);
-    const int n_px = k * w + 1;
-    const std::array<View, 4> views = domain_views(grid, domain_sphere);
+    const int k = vs.k;
+    const int n_px = vs.n_px;
+    const std::array<View, 4>& views = vs.views;
 
     // Each canonical node reads the pixel its ray passes through (window coordinates k·W·s + ½,
     // k·W·t + ½), in the view whose cone holds it most centrally.
@@ -462,16 +480,7 @@ core::Result<std::vector<std::uint32_t>> locate_on_gpu(
     scene->reset();
     for (const core::TwinPair& t : grid.twins())
         out[t.twin.value] = out[t.canonical.value];
-    if (stats != nullptr)
-    {
-        stats->views = static_cast<int>(views.size());
-        stats->viewport = n_px;
-        stats->pixels_per_cell = k;
-        stats->samples = samples;
-        stats->overlaps = 0;
-        stats->seconds_render =
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    }
+    report(stats, vs, samples, 0, start);
     return out;
 }
 
