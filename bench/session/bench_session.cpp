@@ -56,7 +56,7 @@ constexpr const char* k_usage =
     "usage: pliant_bench_session [levels...] [--quick] [--json FILE] [--csv FILE]\n"
     "       pliant_bench_session --stream [level] [--seconds S]\n"
     "       pliant_bench_session --coarse [levels...] [--seconds S]\n"
-    "       pliant_bench_session --steps [levels...]\n"
+    "       pliant_bench_session --steps [levels...] [--copy-accept]\n"
     "       pliant_bench_session --latency [levels...] [--enet]\n"
     "Session numbers for docs/session.md: all peers in one thread over a simulated network (5 ms\n"
     "one-way latency), one thread per peer.\n"
@@ -72,6 +72,10 @@ constexpr const char* k_usage =
     "               (default levels 6 7)\n"
     "  --steps      each peer's restricted sim step alone against the full step, in thread CPU\n"
     "               time (default levels 6 7 8; --quick: 6)\n"
+    "  --copy-accept\n"
+    "               with --steps: restricted steps copy their result back into the state\n"
+    "               (sim::StepOptions::keep_outside) instead of swapping planes as the\n"
+    "               session's peers do: the cost of that copy, against a run without it\n"
     "  --latency    from a grab to the change appearing on the other participants and a viewer,\n"
     "               2..4 participants, exact and fast coupling, in virtual time (default levels\n"
     "               6 7 8; --quick: 6)\n"
@@ -654,11 +658,13 @@ double thread_cpu_s()
 /// restricted step over its fast set (its leaves) and over its exact set (its leaves dilated by
 /// the default halo_rings, as node runs) against the full step of one process; fixed dt 1 ms,
 /// the two pulls of the session runs held on, one thread. Best of 5 interleaved rounds.
+/// Accepted steps swap planes as the session's do, or, with `keep_outside` (--copy-accept),
+/// copy their result back (sim::StepOptions::keep_outside).
 /// Two seat layouts: no points of interest, and the session runs' (participant k declares face
 /// k F / P, the master none). Each coupling gets the partition a session of it computes
 /// (session::PointClearance: AsGrown for fast, Inside for exact), named g (grown shares) or s
 /// (slabs).
-void steps_suite(bench::Report& report, const std::vector<int>& levels)
+void steps_suite(bench::Report& report, const std::vector<int>& levels, bool keep_outside)
 {
     std::printf(
         "# sim step CPU per peer / full step (thread CPU time, best of 5 rounds, 1 "
@@ -684,6 +690,7 @@ void steps_suite(bench::Report& report, const std::vector<int>& levels)
             sim::StepOptions opt;
             opt.owned = owned;
             opt.needed = needed;
+            opt.keep_outside = keep_outside;  // the session's peers: false
             for (int k = 0; k < 3; ++k)
                 (void)sim::step(model, st, ws, forces, opt);
             const double t0 = thread_cpu_s();
@@ -1170,6 +1177,7 @@ int main(int argc, char** argv)
     std::vector<const char*> level_args;
     const char* seconds_arg = nullptr;
     bool enet = false;
+    bool copy_accept = false;
     for (int k = 1; k < argc; ++k)
     {
         const std::string a = argv[k];
@@ -1188,6 +1196,8 @@ int main(int argc, char** argv)
         }
         else if (a == "--enet")
             enet = true;
+        else if (a == "--copy-accept")
+            copy_accept = true;
         else if (a == "--seconds")
         {
             if (k + 1 >= argc)
@@ -1214,6 +1224,8 @@ int main(int argc, char** argv)
     }
     if (enet && mode != Mode::Latency)
         return usage.error("--enet applies to --latency only");
+    if (copy_accept && mode != Mode::Steps)
+        return usage.error("--copy-accept applies to --steps only");
     if (mode == Mode::Stream && levels.size() > 1)
         return usage.error("--stream takes one level, got " + std::to_string(levels.size()));
     double stream_seconds = 2.0;
@@ -1232,7 +1244,7 @@ int main(int argc, char** argv)
         if (levels.empty())
             levels = report.quick() ? std::vector<int>{6} : std::vector<int>{6, 7, 8};
         report.set_suite("steps");  // `pliant bench steps`
-        steps_suite(report, levels);
+        steps_suite(report, levels, /*keep_outside=*/copy_accept);
         return report.write() ? 0 : 1;
     }
     if (mode == Mode::Latency)

@@ -1166,7 +1166,8 @@ struct Session::Impl
             counters.active_forces = forces.size();
             sim::StepOptions opt;
             opt.owned = integrate_runs;
-            opt.needed = own_runs;  // each stage pair only where the own nodes read it
+            opt.needed = own_runs;     // each stage pair only where the own nodes read it
+            opt.keep_outside = false;  // the halos and the display rewrite the nodes beyond
             const auto t0 = std::chrono::steady_clock::now();
             const sim::StepReport r = sim::step(*s.model_, s.state_, *ws, forces, opt);
             counters.step_seconds += seconds_since(t0);
@@ -1397,6 +1398,7 @@ struct Session::Impl
             const double target = next_frame + clock_offset;
             sim::StepOptions opt;
             opt.owned = owned_regions;
+            opt.keep_outside = false;  // every node not owned is rewritten before each frame
             const auto t0 = std::chrono::steady_clock::now();
             // sim::advance_to's loop, with the interface damping after every accepted step.
             const auto forces = forces_at(s.state_.tick);

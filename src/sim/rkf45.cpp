@@ -611,16 +611,6 @@ StepReport step_prepared(MembraneModel& model, MembraneState& state, Rkf45Worksp
     const int threads =
         std::min(ws.max_threads, set.threads > 0 ? set.threads : omp_get_max_threads());
 
-    model.sync(state.u);
-    model.sync(state.v);
-    if (set.reassemble_every > 0 && state.tick > 0 &&
-        state.tick % static_cast<std::uint64_t>(set.reassemble_every) == 0 &&
-        model.assembled_tick() != state.tick)
-    {
-        report.reassembled = model.reassemble(state.u).has_value();
-        model.set_assembled_tick(state.tick);
-    }
-
     const bool restricted = !options.owned.empty();
     const std::span<const core::Region> regions = restricted ? options.owned : model.leaf_regions();
     // The regions the last stage and the accept cover.
@@ -654,6 +644,32 @@ StepReport step_prepared(MembraneModel& model, MembraneState& state, Rkf45Worksp
                 k.fill(0.0);
         }
     }
+    // A swapping step (StepOptions::keep_outside false) syncs only the copies of the nodes it
+    // reads or keeps: the others are the caller's to rewrite.
+    const bool swapping = restricted && ws.pipeline_ok && ws.use_pipeline && !options.keep_outside;
+    const auto sync_state = [&]
+    {
+        if (swapping)
+        {
+            detail::sync_live(ws, state.u);
+            detail::sync_live(ws, state.v);
+        }
+        else
+        {
+            model.sync(state.u);
+            model.sync(state.v);
+        }
+    };
+    const bool reassemble = set.reassemble_every > 0 && state.tick > 0 &&
+                            state.tick % static_cast<std::uint64_t>(set.reassemble_every) == 0 &&
+                            model.assembled_tick() != state.tick;
+    if (reassemble)
+    {
+        model.sync(state.u);  // the whole surface
+        report.reassembled = model.reassemble(state.u).has_value();
+        model.set_assembled_tick(state.tick);
+    }
+    sync_state();
 
     double h = set.fixed_step ? set.fixed_dt : std::clamp(ws.next_dt(), set.dt_min, set.dt_max);
     bool limited = false;
@@ -689,7 +705,9 @@ StepReport step_prepared(MembraneModel& model, MembraneState& state, Rkf45Worksp
         if (t.error > 1.0 && !set.fixed_step)
             report.status = report.status | StepStatus::MinStepReached;
         // Accept.
-        if (restricted && ws.pipeline_ok && ws.use_pipeline)
+        if (swapping)
+            detail::accept_swapping(ws, state);
+        else if (restricted && ws.pipeline_ok && ws.use_pipeline)
             detail::accept_restricted(ws, state);
         else if (restricted)
         {
@@ -701,8 +719,7 @@ StepReport step_prepared(MembraneModel& model, MembraneState& state, Rkf45Worksp
             std::swap(state.u, ws.u_out);
             std::swap(state.v, ws.v_out);
         }
-        model.sync(state.u);
-        model.sync(state.v);
+        sync_state();
         state.time += h;
         ++state.tick;
         report.dt = h;

@@ -251,6 +251,14 @@ void plan_restricted(const MembraneModel& model, std::span<const core::Region> o
 // would copy).
 void accept_restricted(const Rkf45Workspace& ws, MembraneState& state) noexcept;
 
+// Accepts a restricted pipeline trial by swapping planes (StepOptions::keep_outside false):
+// copies ws.keep_runs from the state into u_out and v_out, then swaps them with the state's.
+void accept_swapping(Rkf45Workspace& ws, MembraneState& state) noexcept;
+
+// The twin and ghost copies of a swapping step (ws.live_sync: those whose node the step reads
+// or keeps) applied to a plane of the state.
+void sync_live(const Rkf45Workspace& ws, core::Field<double>& f) noexcept;
+
 // One trial step with the fused row pipeline (row_pipeline.cpp) into ws.u_out / v_out: a full
 // one, or a restricted one over the owned set of the last plan_restricted (only its rows and
 // segments are computed and written). \return the number of bands: their error norms and NaN

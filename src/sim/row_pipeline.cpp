@@ -662,6 +662,34 @@ void plan_restricted(const MembraneModel& model, std::span<const core::Region> o
     }
     if (ws.restricted_y0 >= ws.restricted_y1)
         ws.restricted_y0 = ws.restricted_y1 = 0;
+    // The nodes a step reads or keeps (StepOptions::keep_outside false): the owned nodes, their
+    // first ring (through the ghost map) and the images of every position the fills read.
+    std::vector<char> live = core::dilate_nodes(g, inside, 1);
+    for (const Rkf45Workspace::PairPlan& plan : ws.pair_plans)
+        for (int y = -1; y <= ny; ++y)
+            for (std::size_t i = plan.fill_start[static_cast<std::size_t>(y + 1)];
+                 i < plan.fill_start[static_cast<std::size_t>(y + 2)]; ++i)
+                for (int x = plan.fill_segments[i].x0; x < plan.fill_segments[i].x1; ++x)
+                    live[g.image(x, y).value] = 1;
+    // Their twin and ghost copies: the syncs of a swapping step.
+    const std::ptrdiff_t stride = ws.u_out.stride();
+    ws.live_sync.clear();
+    for (const core::GhostCopy& cp : model.sync_table())
+    {
+        const auto dst = static_cast<std::ptrdiff_t>(cp.dst);
+        const int x = static_cast<int>(dst % stride) - 1;  // ghost ring 1
+        const int y = static_cast<int>(dst / stride) - 1;
+        if (live[g.image(x, y).value] != 0)
+            ws.live_sync.push_back(cp);
+    }
+    // What a swapping accept carries over: those nodes less the canonical positions the last
+    // pair writes (twins and ghosts follow from the sync after the accept).
+    for (int y = 0; y < ny; ++y)
+        for (const Interval& i : kernels[2][static_cast<std::size_t>(y)])
+            for (int x = i.first; x < i.second; ++x)
+                if (const core::NodeIndex n = g.index(x, y); g.is_canonical(n))
+                    live[n.value] = 0;
+    ws.keep_runs = core::node_runs(g, live);
     ws.restricted_key.assign(owned.begin(), owned.end());
     ws.needed_key.assign(needed.begin(), needed.end());
     ws.restricted_planned = true;
@@ -691,6 +719,32 @@ void accept_restricted(const Rkf45Workspace& ws, MembraneState& state) noexcept
             std::copy(vo + row + x0, vo + row + x1, v + row + x0);
         }
     }
+}
+
+void sync_live(const Rkf45Workspace& ws, core::Field<double>& f) noexcept
+{
+    double* const d = f.padded().data();
+    for (const core::GhostCopy& c : ws.live_sync)
+        d[c.dst] = d[c.src];
+}
+
+void accept_swapping(Rkf45Workspace& ws, MembraneState& state) noexcept
+{
+    const std::ptrdiff_t s = state.u.stride();
+    const double* const u = state.u.origin();
+    const double* const v = state.v.origin();
+    double* const uo = ws.u_out.origin();
+    double* const vo = ws.v_out.origin();
+    for (const core::Region& r : ws.keep_runs)
+        for (int y = r.y0; y < r.y1; ++y)
+        {
+            const std::ptrdiff_t a = static_cast<std::ptrdiff_t>(y) * s + r.x0;
+            const std::ptrdiff_t b = static_cast<std::ptrdiff_t>(y) * s + r.x1;
+            std::copy(u + a, u + b, uo + a);
+            std::copy(v + a, v + b, vo + a);
+        }
+    std::swap(state.u, ws.u_out);
+    std::swap(state.v, ws.v_out);
 }
 
 std::size_t pipeline_trial(const MembraneModel& model, const MembraneState& state,

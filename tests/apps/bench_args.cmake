@@ -37,6 +37,9 @@ if(PLIANT_BUILD_BENCH AND EXISTS ${PROJECT_SOURCE_DIR}/bench/CMakeLists.txt)
                           "\n +0\\.0 +4 +4 +fast \\| +[0-9.]+ / +[0-9.]+ \\|" --latency 4
                           --enet)
         set_tests_properties(bench_session_latency_enet_level_4 PROPERTIES TIMEOUT 120)
+        pliant_bench_args(bench_args_session_copy_accept_without_steps pliant_bench_session 2
+                          STDERR "^pliant_bench_session: --copy-accept applies to --steps only\nusage: "
+                          --latency 4 --copy-accept)
         pliant_bench_args(bench_args_session_coarse_level_too_low pliant_bench_session 2 STDERR
                           "^pliant_bench_session: --coarse level '2' is out of range \\(expected 3\\.\\.10\\)"
                           --coarse 2)

@@ -366,6 +366,94 @@ TEST(Pipeline, NeededNodesGetTheRestrictedStepsBits)
     }
 }
 
+// StepOptions::keep_outside = false, the swapping step: the partition-like sets as needed
+// nodes, owned = them dilated by 0 rings (fast coupling's shape: needed = owned) or 3 (exact
+// coupling's), levels 1-6, adaptive and fixed, 1-2 threads, and a caller that writes new values
+// into every node beyond the owned ones (canonical positions and twins, not the ghosts) before
+// every other step, as the session's fast peers do once per frame of several steps. After every
+// step each owned node and each node of the first ring around them holds the copying step's
+// bits, and dt, error and rejections are the same. The state has structure everywhere and the
+// workspace's trial planes start at zero, so a node or a twin or ghost copy left out of what
+// the swap carries over or syncs would show: in the kept nodes at once, and in the steps the
+// caller does not prepare.
+TEST(Pipeline, SwappingAcceptKeepsWhatTheNextStepReads)
+{
+    for (int level = 1; level <= 6; ++level)
+    {
+        const MembraneModel probe = test::sphere_model(level, settings(1, true));
+        const core::TetraGrid& g = probe.grid();
+        const std::vector<std::vector<core::Region>> sets = partition_like_sets(probe);
+        for (std::size_t set = 0; set < sets.size(); ++set)
+            for (const int rings : {0, 3})
+            {
+                const std::vector<char> want = region_mask(g, sets[set]);
+                const std::vector<char> own = core::dilate_nodes(g, want, rings);
+                const std::vector<char> kept = core::dilate_nodes(g, own, 1);
+                const std::vector<core::Region> owned = core::node_runs(g, own);
+                const std::vector<core::Region> needed =
+                    rings > 0 ? core::node_runs(g, want) : std::vector<core::Region>{};
+                for (const bool fixed : {false, true})
+                    for (const int threads : {1, 2})
+                    {
+                        const auto steps = [&](bool keep_outside, std::vector<StepReport>& reports)
+                        {
+                            MembraneModel m = test::sphere_model(level, settings(threads, fixed));
+                            MembraneState s = initial_state(m);
+                            Rkf45Workspace ws(m, threads);
+                            const std::vector<Force> f = forces_for(m);
+                            StepOptions opt;
+                            opt.owned = owned;
+                            opt.needed = needed;
+                            opt.keep_outside = keep_outside;
+                            std::vector<MembraneState> out;
+                            for (int k = 0; k < 6; ++k)
+                            {
+                                // The caller's boundary values, new before every other step
+                                // (from the canonical node's coordinates, so twins agree).
+                                for (int y = 0; y < g.ny() && k % 2 == 0; ++y)
+                                    for (int x = 0; x < g.nx(); ++x)
+                                        if (const core::NodeIndex n = g.image(x, y);
+                                            own[n.value] == 0)
+                                        {
+                                            const core::GridCoord c = g.coord(n);
+                                            s.u.at(x, y) =
+                                                1e-3 * (k + 1) * std::sin(0.37 * c.x + 0.11 * c.y);
+                                            s.v.at(x, y) = 2e-3 * std::cos(0.23 * c.x - 0.5 * k);
+                                        }
+                                reports.push_back(step(m, s, ws, f, opt));
+                                out.push_back(s);
+                            }
+                            return out;
+                        };
+                        std::vector<StepReport> ref_reports;
+                        const std::vector<MembraneState> ref = steps(true, ref_reports);
+                        std::vector<StepReport> reports;
+                        const std::vector<MembraneState> got = steps(false, reports);
+                        for (std::size_t k = 0; k < ref.size(); ++k)
+                        {
+                            const std::string where =
+                                "level " + std::to_string(level) + ", set " + std::to_string(set) +
+                                ", " + std::to_string(rings) + " rings" +
+                                (fixed ? ", fixed, " : ", adaptive, ") + std::to_string(threads) +
+                                " threads, step " + std::to_string(k);
+                            ASSERT_EQ(reports[k].dt, ref_reports[k].dt) << where;
+                            ASSERT_EQ(reports[k].error, ref_reports[k].error) << where;
+                            ASSERT_EQ(reports[k].rejections, ref_reports[k].rejections) << where;
+                            for (int y = 0; y < g.ny(); ++y)
+                                for (int x = 0; x < g.nx(); ++x)
+                                    if (kept[g.image(x, y).value] != 0)
+                                    {
+                                        ASSERT_EQ(got[k].u.at(x, y), ref[k].u.at(x, y))
+                                            << where << " at (" << x << ", " << y << ")";
+                                        ASSERT_EQ(got[k].v.at(x, y), ref[k].v.at(x, y))
+                                            << where << " at (" << x << ", " << y << ")";
+                                    }
+                        }
+                    }
+            }
+    }
+}
+
 // The slow reference: one RKF45 step of size h with the classic tableau on full planes.
 struct ReferenceStep
 {

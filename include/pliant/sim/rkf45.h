@@ -30,7 +30,8 @@
 ///   nodes after each slope row (pipeline) or stage (stage pass).
 /// - Restricted steps: only the canonical nodes inside `owned` regions are integrated; all
 ///   others are Dirichlet values held fixed at their step-start u during the step (their v and
-///   slopes are taken as zero) and are left untouched. Restricting to all leaves gives the full
+///   slopes are taken as zero) and are left untouched (or, with StepOptions::keep_outside false,
+///   untouched as far as the stencils' first ring). Restricting to all leaves gives the full
 ///   step bit for bit.
 /// - Forces enter as dense acceleration planes built from the force list (see `Force` for how
 ///   they are spread over nodes): the acceleration `accel` at time `accel_time` and its rate
@@ -132,6 +133,17 @@ struct StepOptions
     /// result is the restricted step's over `owned`, bit for bit; when `owned` holds `needed`
     /// dilated by 3 rings, it is the full step's (exact coupling's halo, docs/session.md §4.1).
     std::span<const core::Region> needed{};
+    /// Restricted steps: whether the nodes beyond the owned ones and their first stencil ring
+    /// keep their values. true: an accepted step copies its result into the state, and every
+    /// node outside `needed` keeps its value. false: an accepted step on the pipeline swaps
+    /// planes with the workspace as a full step does, after copying over only the owned nodes
+    /// outside `needed` and the first ring around the owned ones (the Dirichlet values the
+    /// stencils read): every node a following step reads or is asked to keep holds what it
+    /// would hold with `true`, and the nodes beyond hold values of an earlier step. For callers
+    /// that rewrite those nodes before they read them (the session's peers do: halos and other
+    /// owners' states). Saves copying the result back, a few per cent of a half-grid step
+    /// (docs/physics.md §8). Full steps and the stage-by-stage pass ignore it.
+    bool keep_outside = true;
     /// Largest step for this call [s] (e.g. to land on a frame time); 0 = no limit.
     double dt_limit = 0.0;
 };
@@ -205,6 +217,12 @@ public:
     std::vector<char> copies_move;  ///< [y]: a twin/ghost copy of row y reads a moving node
     int restricted_y0 = 0;
     int restricted_y1 = 0;
+    /// Steps with StepOptions::keep_outside false: the canonical nodes a swapping accept copies
+    /// from the state into the trial planes before the swap (the owned nodes, their first ring
+    /// and the nodes any fill reads, less those the last pair writes), and the twin and ghost
+    /// copies such a step syncs (those whose node it reads or keeps).
+    std::vector<core::Region> keep_runs;
+    std::vector<core::GhostCopy> live_sync;
     bool use_pipeline = true;           ///< false: all steps run stage by stage (tests, benchmarks)
     std::vector<std::int64_t> touched;  ///< accel offsets written by the last force set
     std::vector<std::int64_t> end_touched;   ///< accel_end offsets written (linear hold)
