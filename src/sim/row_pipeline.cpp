@@ -789,30 +789,41 @@ std::size_t pipeline_trial(const MembraneModel& model, const MembraneState& stat
         return static_cast<int>(it - ws.restricted_work.begin());
     };
     double* const rows = aligned_rows(ws);
+    // Band `band` on the thread whose buffers start at `thread`.
+    const auto run = [&](int band, int thread)
+    {
+        const BandBuffers b{rows + static_cast<std::size_t>(thread) * ws.pipeline_buffer_len,
+                            ws.pipeline_row_len, in.ny};
+        const int y0 = band_start(band);
+        const int y1 = band_start(band + 1);
+        double err = 0.0;
+        double probe = 0.0;
+        if (restricted)
+        {
+            if (y0 < y1)
+                run_band<true>(in, c, k, b, y0, y1, err, probe);
+        }
+        else
+            run_band<false>(in, c, k, b, y0, y1, err, probe);
+        ws.leaf_error[static_cast<std::size_t>(band)] = err;
+        ws.leaf_probe[static_cast<std::size_t>(band)] = probe;
+    };
+    if (bands == 1)
+    {
+        // One band on the calling thread: an OpenMP region of one thread still costs libgomp
+        // two futex calls (about 2 us on this VM, 3 % of a level-6 step, 10 % of a quarter of
+        // it; docs/physics.md §8).
+        const FlushDenormals flush;
+        run(0, 0);
+        return 1;
+    }
 #pragma omp parallel num_threads(threads)
     {
         // Denormals flushed on every thread (see FlushDenormals): the same mode everywhere.
         const FlushDenormals flush;
 #pragma omp for schedule(static)
         for (int band = 0; band < bands; ++band)
-        {
-            const BandBuffers b{
-                rows + static_cast<std::size_t>(omp_get_thread_num()) * ws.pipeline_buffer_len,
-                ws.pipeline_row_len, in.ny};
-            const int y0 = band_start(band);
-            const int y1 = band_start(band + 1);
-            double err = 0.0;
-            double probe = 0.0;
-            if (restricted)
-            {
-                if (y0 < y1)
-                    run_band<true>(in, c, k, b, y0, y1, err, probe);
-            }
-            else
-                run_band<false>(in, c, k, b, y0, y1, err, probe);
-            ws.leaf_error[static_cast<std::size_t>(band)] = err;
-            ws.leaf_probe[static_cast<std::size_t>(band)] = probe;
-        }
+            run(band, omp_get_thread_num());
     }
     return static_cast<std::size_t>(bands);
 }
