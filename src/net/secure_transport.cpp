@@ -8,6 +8,10 @@
 //   Data    (25 + n):   u8 type (2 unreliable, 3 reliable) | u64 counter | ciphertext[n] | tag[16]
 //   Confirm (25 bytes): u8 type 4 | u64 counter 0 | tag[16] (an empty plaintext)
 //
+// The Hello and the Confirm go reliably on channel 0; until a datagram from the peer opens, the
+// Hello is repeated unsequenced on channel 1 every SecureSettings::hello_repeat_s, and a repeat
+// of the peer's verified Hello is answered with the (identical) Confirm, unsequenced on channel 1.
+//
 // The associated data of Data and Confirm is their first 9 bytes; the 12-byte ChaCha20-Poly1305
 // nonce is (u64 counter, u8 stream, 3 zero bytes), stream = 2 * channel + reliable (0..3), or 4
 // for Confirm. Keys are per connection and direction, so (key, nonce) never repeats: a sender
@@ -144,6 +148,7 @@ struct Conn
     bool closing = false;
     bool confirm_seen = false;
     std::int64_t since_us = 0;
+    std::int64_t hello_us = 0;  // the last Hello sent
     Random mine{};
     Random theirs{};
     Key tx{};
@@ -270,7 +275,8 @@ struct SecureTransport::Impl
             refuse(h, c, DisconnectReason::TooManyBadDatagrams);
     }
 
-    void send_hello(PeerHandle h, Conn& c) noexcept
+    // The Hello: reliable on channel 0 first, then unsequenced repeats on channel 1.
+    void send_hello(PeerHandle h, Conn& c, bool repeat = false) noexcept
     {
         std::array<std::uint8_t, k_hello_size> hello{};
         hello[0] = k_type_hello;
@@ -278,7 +284,19 @@ struct SecureTransport::Impl
         std::memcpy(hello.data() + 4, c.mine.data(), k_random_size);
         crypto_generichash(hello.data() + k_hello_signed, k_mac_size, hello.data(), k_hello_signed,
                            hello_key.data(), hello_key.size());
-        (void)inner->send(h, Channel::Control, std::as_bytes(std::span(hello)), Delivery::Reliable);
+        (void)inner->send(h, repeat ? Channel::State : Channel::Control,
+                          std::as_bytes(std::span(hello)),
+                          repeat ? Delivery::Unsequenced : Delivery::Reliable);
+        c.hello_us = now_us();
+    }
+
+    // The Confirm (counter 0 on its own stream: the same bytes every time it is sealed).
+    void send_confirm(PeerHandle h, const Conn& c, bool repeat) noexcept
+    {
+        const std::size_t n = seal(c, k_type_confirm, k_confirm_stream, 0, {});
+        (void)inner->send(h, repeat ? Channel::State : Channel::Control,
+                          std::as_bytes(std::span(buffer.data(), n)),
+                          repeat ? Delivery::Unsequenced : Delivery::Reliable);
     }
 
     // Seals `plain` into `buffer`. \return the datagram's size.
@@ -322,17 +340,26 @@ struct SecureTransport::Impl
 
     void on_hello(PeerHandle h, Conn& c, std::span<const std::uint8_t> d) noexcept
     {
-        if (d.size() != k_hello_size || d[1] != k_hello_version || d[2] != 0 || d[3] != 0 ||
-            c.have_keys)
+        if (d.size() != k_hello_size || d[1] != k_hello_version || d[2] != 0 || d[3] != 0)
             return failure(h, c, &SecureStats::malformed);
         std::array<std::uint8_t, k_mac_size> mac{};
         crypto_generichash(mac.data(), mac.size(), d.data(), k_hello_signed, hello_key.data(),
                            hello_key.size());
         if (sodium_memcmp(mac.data(), d.data() + k_hello_signed, k_mac_size) != 0)
         {
-            // Not a network accident (ENet's reliable channel): the peer has another key.
+            // Not a network accident (the MAC covers what the network could not change by
+            // chance): the peer has another key.
             count(c, &SecureStats::auth_failures);
             return refuse(h, c, DisconnectReason::Refused);
+        }
+        if (c.have_keys)
+        {
+            // The peer's Hello again (a repeat, or the reliable copy after a repeat): it has not
+            // opened our Confirm yet, so send that again. Any other second Hello is malformed.
+            if (sodium_memcmp(c.theirs.data(), d.data() + 4, k_random_size) != 0)
+                return failure(h, c, &SecureStats::malformed);
+            count(c, &SecureStats::hello_repeats);
+            return send_confirm(h, c, true);
         }
         std::memcpy(c.theirs.data(), d.data() + 4, k_random_size);
         // A Hello that is one of ours, reflected back on this or another live connection, would
@@ -354,9 +381,7 @@ struct SecureTransport::Impl
         crypto_generichash(c.rx.data(), c.rx.size(), both.data(), both.size(), datagram_key.data(),
                            datagram_key.size());
         c.have_keys = true;
-        const std::size_t n = seal(c, k_type_confirm, k_confirm_stream, 0, {});
-        (void)inner->send(h, Channel::Control, std::as_bytes(std::span(buffer.data(), n)),
-                          Delivery::Reliable);
+        send_confirm(h, c, false);
     }
 
     void on_received(TransportEvent& ev)
@@ -436,13 +461,21 @@ struct SecureTransport::Impl
         pending.push_back(std::move(ev));
     }
 
-    void expire_handshakes() noexcept
+    // Drops handshakes past their timeout and repeats the Hello of the others that are due.
+    void service_handshakes() noexcept
     {
         const std::int64_t now = now_us();
         const auto limit = static_cast<std::int64_t>(settings.handshake_timeout_s * 1e6);
+        const auto repeat = static_cast<std::int64_t>(settings.hello_repeat_s * 1e6);
         for (auto& [h, c] : conns)
-            if (c.inner_connected && !c.ready && !c.closing && now - c.since_us > limit)
+        {
+            if (!c.inner_connected || c.ready || c.closing)
+                continue;
+            if (now - c.since_us > limit)
                 refuse(PeerHandle{h}, c, DisconnectReason::TimedOut);
+            else if (repeat > 0 && now - c.hello_us >= repeat)
+                send_hello(PeerHandle{h}, c, true);
+        }
     }
 };
 
@@ -513,7 +546,7 @@ std::optional<TransportEvent> SecureTransport::poll(int timeout_ms) noexcept
     Impl& s = *impl_;
     if (s.pending.empty())
     {
-        s.expire_handshakes();
+        s.service_handshakes();
         // Bounded, like Messenger::poll: a flood of bad datagrams cannot hold the caller.
         constexpr int k_max_inner_events = 256;
         int wait = timeout_ms;

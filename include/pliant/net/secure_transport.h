@@ -19,6 +19,10 @@
 ///   Confirm; the outer `Connected` event is reported only once a datagram from the peer opened
 ///   under its key (key confirmation). A Hello with a bad MAC (wrong passphrase) refuses the
 ///   connection at once; no authenticated datagram within `handshake_timeout_s` drops it.
+///   Until a datagram from the peer opens, the Hello is also repeated unreliably every
+///   `hello_repeat_s` on channel 1, and a repeat of the peer's verified Hello is answered with the
+///   Confirm again, unreliably: a lost handshake datagram costs a repeat period instead of the
+///   inner transport's retransmission timeout (ENet's is a second or more on a young connection).
 /// - Data: ChaCha20-Poly1305 (IETF) with the nonce (64-bit counter, stream, zeros), where the
 ///   stream is (channel, reliable or not); the counter travels in the clear and is authenticated
 ///   as associated data with the type byte. 25 bytes per datagram (1 type, 8 counter, 16 tag).
@@ -87,6 +91,8 @@ struct SecureSettings
     /// A connection with no authenticated datagram from the peer this long after the inner
     /// transport connected is dropped, s.
     double handshake_timeout_s = 5.0;
+    /// The Hello's unreliable repeats until the peer is authenticated, s (<= 0: none).
+    double hello_repeat_s = 0.05;
     /// The clock for that timeout, µs; empty: std::chrono::steady_clock. Tests over a
     /// SimulatedNetwork pass its virtual clock.
     std::function<std::int64_t()> clock;
@@ -101,6 +107,8 @@ struct SecureStats
     std::uint64_t replayed = 0;       ///< counter already seen within the window
     std::uint64_t too_old = 0;        ///< counter older than the window
     std::uint64_t early = 0;          ///< data before the peer's Hello (unreliable only; dropped)
+    std::uint64_t hello_repeats = 0;  ///< repeats of the peer's verified Hello, answered with the
+                                      ///< Confirm again (a lost handshake datagram, not a failure)
     std::uint64_t refused = 0;        ///< totals only: connections dropped for failures/timeouts
 };
 
