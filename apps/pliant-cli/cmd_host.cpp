@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: 2026 pliant contributors
-// `pliant host [GRID] [--port P] [--mode exact|fast] [--duration S] [--script F] [--stats F.csv]`:
+// `pliant host [GRID] [--port P] [--mode exact|fast] [--point-clearance auto|grown|inside]
+// [--duration S] [--script F] [--stats F.csv]`:
 // starts a collaborative session as its master over ENet (docs/session.md).
 #include <pliant/core/grid_io.h>
 #include <pliant/core/sphere_domain.h>
@@ -64,6 +65,7 @@ struct HostOptions
     std::string sphere_map = "equal-area";
     std::uint16_t port = 7777;
     std::string mode = "exact";
+    std::string clearance = "auto";
     double duration = 60.0;
     std::string script;
     std::string stats;
@@ -123,13 +125,20 @@ int run_host(const HostOptions& opt)
     material.fixed_step = opt.mode == "exact";
     session::SessionSettings settings;
     settings.coupling = opt.mode == "exact" ? session::Coupling::Exact : session::Coupling::Fast;
+    if (opt.clearance == "grown")
+        settings.point_clearance = session::PointClearance::AsGrown;
+    else if (opt.clearance == "inside")
+        settings.point_clearance = session::PointClearance::Inside;
     settings.name = opt.name;
     settings.listen_port = bound->port;
     apply_stream_options(opt.stream, settings);
     auto s = session::Session::host(*transport, *grid, rest, material, settings);
     if (!s)
         return report(s.error());
-    spdlog::info("hosting level {} ({} mode) on port {}", grid->level(), opt.mode, bound->port);
+    spdlog::info("hosting level {} ({} mode, point clearance {}) on port {}", grid->level(),
+                 opt.mode,
+                 (*s)->point_clearance() == session::PointClearance::Inside ? "inside" : "grown",
+                 bound->port);
     std::printf("hosting on port %u\n", static_cast<unsigned>(bound->port));
     std::fflush(stdout);
     run.stop = install_interrupt_flag();  // Ctrl-C: leave or end cleanly
@@ -173,6 +182,14 @@ void add_host_command(CLI::App& app, const GlobalOptions& global)
     cmd->add_option("-p,--port", opt->port, "UDP port to listen on")->capture_default_str();
     cmd->add_option("--mode", opt->mode, "Coupling: exact or fast")
         ->check(CLI::IsMember({"exact", "fast"}))
+        ->capture_default_str();
+    cmd->add_option("--point-clearance", opt->clearance,
+                    "Room the partition leaves around each participant's point of interest: "
+                    "grown (no border nearer a grab than a share grown around it: the most "
+                    "accurate fast mode), inside (the point's leaf and its neighbours in the "
+                    "participant's own band: bands cost less to step), auto (fast: grown, "
+                    "exact: inside; exact mode's state does not depend on the borders)")
+        ->check(CLI::IsMember({"auto", "grown", "inside"}))
         ->capture_default_str();
     cmd->add_option("--duration", opt->duration, "Run time [s]")
         ->check(CLI::PositiveNumber)

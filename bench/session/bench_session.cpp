@@ -41,6 +41,7 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <thread>
@@ -64,14 +65,16 @@ constexpr const char* k_usage =
     "               (1..4): the partition's balance and fragments, the CPU time of each peer's\n"
     "               steps per simulated second against one process stepping everything, the\n"
     "               bytes each peer sends per simulated second, and the fast-vs-exact error of a\n"
-    "               scripted pull (default levels 5 6 7; --quick: 5 6 without the 1 kHz-frame\n"
-    "               variant)\n"
+    "               scripted pull, also in fast coupling with exact coupling's point clearance\n"
+    "               (SessionSettings::point_clearance) (default levels 5 6 7; --quick: 5 6\n"
+    "               without the 1 kHz-frame variant)\n"
     "  --stream     streaming cost of 2 peers dragging continuously, per encoding, at one level\n"
     "               (default 6)\n"
     "  --coarse     coarse streaming to a viewer, k = 0, 1, 2 levels coarser\n"
     "               (default levels 6 7)\n"
     "  --steps      each peer's restricted sim step alone against the full step, in thread CPU\n"
-    "               time (default levels 6 7 8; --quick: 6)\n"
+    "               time, per coupling's partition and for fast coupling under point clearance\n"
+    "               inside (default levels 6 7 8; --quick: 6)\n"
     "  --copy-accept\n"
     "               with --steps: restricted steps copy their result back into the state\n"
     "               (sim::StepOptions::keep_outside) instead of swapping planes as the\n"
@@ -156,7 +159,8 @@ void pump_sessions(std::vector<std::unique_ptr<session::Session>>& s,
 
 /// One run: `peers` participants (master included), `ticks` steps after everyone is in.
 RunResult run(int level, int peers, session::Coupling coupling, std::uint64_t ticks,
-              const sim::MembraneState* reference_state, double rate_hz = 60.0)
+              const sim::MembraneState* reference_state, double rate_hz = 60.0,
+              std::optional<session::PointClearance> clearance = std::nullopt)
 {
     net::SimulatedNetwork network;
     std::vector<std::unique_ptr<net::Transport>> tr;
@@ -164,6 +168,7 @@ RunResult run(int level, int peers, session::Coupling coupling, std::uint64_t ti
     const core::TetraGrid grid = core::TetraGrid::create(level).value();
     session::SessionSettings set;
     set.coupling = coupling;
+    set.point_clearance = clearance;
     set.max_ticks = ticks;
     set.frame_rate_hz = rate_hz;
     set.stream_rate_hz = rate_hz;
@@ -663,15 +668,15 @@ double thread_cpu_s()
 /// Two seat layouts: no points of interest, and the session runs' (participant k declares face
 /// k F / P, the master none). Each coupling gets the partition a session of it computes
 /// (session::PointClearance: AsGrown for fast, Inside for exact), named g (grown shares) or s
-/// (slabs).
+/// (slabs); a last column steps fast coupling's own sets under Inside, the partition of
+/// SessionSettings::point_clearance = Inside.
 void steps_suite(bench::Report& report, const std::vector<int>& levels, bool keep_outside)
 {
     std::printf(
         "# sim step CPU per peer / full step (thread CPU time, best of 5 rounds, 1 "
         "thread); partition: g grown shares, s slabs, r whole-row slabs, t turned slabs\nlevel "
-        "peers points | fast: "
-        "max "
-        "mean | exact: max mean | full step us\n");
+        "peers points | fast: max mean | exact: max mean | full step us | fast, clearance "
+        "inside: max mean\n");
     for (const int level : levels)
     {
         const core::TetraGrid grid = core::TetraGrid::create(level).value();
@@ -705,6 +710,9 @@ void steps_suite(bench::Report& report, const std::vector<int>& levels, bool kee
             {
                 const std::vector<session::Seat> seats = session_seats(grid, peers, points);
                 const auto fast_owners = session::partition_leaves(grid, graph, seats);
+                // Fast coupling under SessionSettings::point_clearance = Inside.
+                const auto inside_owners =
+                    session::partition_leaves(grid, graph, seats, session::PointClearance::Inside);
                 const auto exact_owners =
                     session::partition_leaves(grid, graph, seats, session::PointClearance::Inside,
                                               session::k_exact_ring_cost);
@@ -718,6 +726,7 @@ void steps_suite(bench::Report& report, const std::vector<int>& levels, bool kee
                                                                                           : 't';
                 };
                 std::vector<std::vector<core::Region>> fast_sets(static_cast<std::size_t>(peers));
+                std::vector<std::vector<core::Region>> inside_sets(static_cast<std::size_t>(peers));
                 // Exact coupling: the own set dilated by the halo, computed where the own nodes
                 // read it (StepOptions::needed), as the session steps.
                 std::vector<std::vector<core::Region>> exact_sets(static_cast<std::size_t>(peers));
@@ -729,6 +738,8 @@ void steps_suite(bench::Report& report, const std::vector<int>& levels, bool kee
                     {
                         if (fast_owners[l].value == p)
                             fast_sets[static_cast<std::size_t>(p)].push_back(graph.regions()[l]);
+                        if (inside_owners[l].value == p)
+                            inside_sets[static_cast<std::size_t>(p)].push_back(graph.regions()[l]);
                         if (exact_owners[l].value == p)
                             for (const core::NodeIndex n : graph.nodes(l))
                                 mask[n.value] = 1;
@@ -741,6 +752,8 @@ void steps_suite(bench::Report& report, const std::vector<int>& levels, bool kee
                 double full = 1e30;
                 std::vector<double> fast(static_cast<std::size_t>(peers), 1e30);
                 std::vector<double> exact(static_cast<std::size_t>(peers), 1e30);
+                std::vector<double> inside(static_cast<std::size_t>(peers), 1e30);
+                const bool same = inside_owners == fast_owners;
                 for (int round = 0; round < 5; ++round)
                 {
                     full = std::min(full, time_steps({}));
@@ -748,8 +761,12 @@ void steps_suite(bench::Report& report, const std::vector<int>& levels, bool kee
                     {
                         fast[p] = std::min(fast[p], time_steps(fast_sets[p]));
                         exact[p] = std::min(exact[p], time_steps(exact_sets[p], exact_own[p]));
+                        if (!same)
+                            inside[p] = std::min(inside[p], time_steps(inside_sets[p]));
                     }
                 }
+                if (same)
+                    inside = fast;
                 const auto max_mean = [&](const std::vector<double>& t)
                 {
                     double worst = 0.0;
@@ -764,9 +781,11 @@ void steps_suite(bench::Report& report, const std::vector<int>& levels, bool kee
                 };
                 const auto [fmax, fmean] = max_mean(fast);
                 const auto [emax, emean] = max_mean(exact);
-                std::printf("%5d %5d %6s | %c %.2f %.2f | %c %.2f %.2f | %.0f\n", level, peers,
-                            points ? "yes" : "none", kind(fast_owners), fmax, fmean,
-                            kind(exact_owners), emax, emean, full * 1e6);
+                const auto [imax, imean] = max_mean(inside);
+                std::printf("%5d %5d %6s | %c %.2f %.2f | %c %.2f %.2f | %12.0f | %c %.2f %.2f\n",
+                            level, peers, points ? "yes" : "none", kind(fast_owners), fmax, fmean,
+                            kind(exact_owners), emax, emean, full * 1e6, kind(inside_owners), imax,
+                            imean);
                 std::fflush(stdout);
                 const double n = static_cast<double>(peers);
                 const std::string fast_name =
@@ -777,6 +796,9 @@ void steps_suite(bench::Report& report, const std::vector<int>& levels, bool kee
                 report.add(fast_name, level, n, "peers", "step_cpu_vs_full_mean", fmean, "1");
                 report.add(exact_name, level, n, "peers", "step_cpu_vs_full_max", emax, "1");
                 report.add(exact_name, level, n, "peers", "step_cpu_vs_full_mean", emean, "1");
+                const std::string inside_name = fast_name + ", clearance inside";
+                report.add(inside_name, level, n, "peers", "step_cpu_vs_full_max", imax, "1");
+                report.add(inside_name, level, n, "peers", "step_cpu_vs_full_mean", imean, "1");
             }
     }
 }
@@ -1357,6 +1379,24 @@ int main(int argc, char** argv)
                 "| %7.2f (fast)\n",
                 level, peers, fworst / single_s,
                 fbytes / static_cast<double>(peers) / sim_seconds / 1e6);
+            // Fast coupling with exact coupling's clearance (SessionSettings::point_clearance
+            // = Inside): the bands' lower step cost against the grown shares' accuracy.
+            const RunResult inside = run(level, peers, session::Coupling::Fast, ticks, &ref, 60.0,
+                                         session::PointClearance::Inside);
+            add_rows(report, "fast, clearance inside", level, peers, inside, single_s, sim_seconds);
+            double iworst = 0.0;
+            double ibytes = 0.0;
+            for (std::size_t k = 0; k < inside.step_s.size(); ++k)
+            {
+                iworst = std::max(iworst, inside.step_s[k]);
+                ibytes += inside.bytes_out[k];
+            }
+            std::printf(
+                "%5d %5d |                            | %.2f (fast, clearance inside)     "
+                "| %7.2f (fast inside)     | %.2e\n",
+                level, peers, iworst / single_s,
+                ibytes / static_cast<double>(peers) / sim_seconds / 1e6,
+                inside.max_u > 0.0 ? inside.max_u_diff / inside.max_u : 0.0);
             if (report.quick())
             {
                 std::fflush(stdout);

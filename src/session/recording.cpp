@@ -187,7 +187,7 @@ core::Result<ReplayResult> replay(const Recording& recording, int threads, std::
     auto decoded = decode_model(recording.model);
     if (!decoded)
         return core::fail(decoded.error().code, decoded.error().message);
-    auto [model, coupling] = std::move(decoded).value();
+    auto [model, coupling, clearance] = std::move(decoded).value();
     if (!model.settings().fixed_step)
         return core::fail(core::ErrorCode::InvalidArgument,
                           "replay: the recorded model is not fixed-step");

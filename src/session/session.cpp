@@ -26,7 +26,9 @@ namespace
 {
 
 constexpr std::uint32_t k_model_magic = 0x4D534C50;  // "PLSM"
-constexpr std::uint8_t k_model_version = 1;
+/// Version 2 adds the point clearance byte after the coupling; version 1 blobs (recordings
+/// made before it) still decode, with the coupling's rule.
+constexpr std::uint8_t k_model_version = 2;
 constexpr double k_leave_timeout_s = 5.0;
 /// The most wall time one advance() call spends stepping in exact coupling before it returns to
 /// let the caller poll() (s). ENet moves at most its window (64 KiB) of reliable data per
@@ -176,9 +178,18 @@ double seconds_since(std::chrono::steady_clock::time_point t0)
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
+/// The clearance byte of a version-2 model blob: 0 the coupling's rule, 1 AsGrown, 2 Inside.
+std::uint8_t clearance_byte(std::optional<PointClearance> c)
+{
+    if (!c)
+        return 0;
+    return *c == PointClearance::AsGrown ? 1 : 2;
+}
+
 }  // namespace
 
-std::vector<std::byte> encode_model(const sim::MembraneModel& model, Coupling coupling)
+std::vector<std::byte> encode_model(const sim::MembraneModel& model, Coupling coupling,
+                                    std::optional<PointClearance> clearance)
 {
     const core::TetraGrid& g = model.grid();
     const sim::MembraneSettings& s = model.settings();
@@ -187,6 +198,7 @@ std::vector<std::byte> encode_model(const sim::MembraneModel& model, Coupling co
     w.u8(k_model_version);
     w.u8(static_cast<std::uint8_t>(g.level()));
     w.u8(static_cast<std::uint8_t>(coupling));
+    w.u8(clearance_byte(clearance));
     w.u8(s.fixed_step ? 1 : 0);
     w.u32(static_cast<std::uint32_t>(std::max(0, s.reassemble_every)));
     for (const double v : {s.T, s.rho, s.beta, s.k_f, s.rtol, s.atol, s.dt_min, s.dt_max,
@@ -199,16 +211,19 @@ std::vector<std::byte> encode_model(const sim::MembraneModel& model, Coupling co
     return std::move(w.out);
 }
 
-core::Result<std::pair<sim::MembraneModel, Coupling>> decode_model(std::span<const std::byte> blob)
+core::Result<DecodedModel> decode_model(std::span<const std::byte> blob)
 {
     Reader r{blob};
-    if (r.u32() != k_model_magic || r.u8() != k_model_version)
+    const bool magic = r.u32() == k_model_magic;
+    const std::uint8_t version = r.u8();
+    if (!magic || version < 1 || version > k_model_version)
         return core::fail(core::ErrorCode::InvalidArgument, "model blob: bad magic or version");
     const int level = r.u8();
     const std::uint8_t coupling = r.u8();
+    const std::uint8_t clearance = version >= 2 ? r.u8() : 0;
     const std::uint8_t fixed = r.u8();
     if (level < core::k_min_level || level > core::k_max_level || coupling < 1 || coupling > 2 ||
-        fixed > 1)
+        clearance > 2 || fixed > 1)
         return core::fail(core::ErrorCode::InvalidArgument, "model blob: bad header");
     sim::MembraneSettings s;
     s.fixed_step = fixed == 1;
@@ -217,7 +232,7 @@ core::Result<std::pair<sim::MembraneModel, Coupling>> decode_model(std::span<con
                       &s.dt_initial, &s.safety, &s.max_growth, &s.min_shrink, &s.fixed_dt})
         *v = r.f64();
     const core::TetraGrid g = core::TetraGrid::create(level).value();
-    const std::size_t expect = 12 + 13 * 8 + g.node_count() * 24;
+    const std::size_t expect = (version >= 2 ? 13 : 12) + 13 * 8 + g.node_count() * 24;
     if (!r.ok || blob.size() != expect)
         return core::fail(core::ErrorCode::InvalidArgument, "model blob: bad length or value");
     core::Vec3Field<double> rest{core::Field<double>(g), core::Field<double>(g),
@@ -231,8 +246,10 @@ core::Result<std::pair<sim::MembraneModel, Coupling>> decode_model(std::span<con
     auto model = sim::MembraneModel::create(g, rest, s);
     if (!model)
         return core::fail(model.error().code, "model blob: " + model.error().message);
-    return std::pair<sim::MembraneModel, Coupling>{std::move(model).value(),
-                                                   static_cast<Coupling>(coupling)};
+    std::optional<PointClearance> clear;
+    if (clearance != 0)
+        clear = clearance == 1 ? PointClearance::AsGrown : PointClearance::Inside;
+    return DecodedModel{std::move(model).value(), static_cast<Coupling>(coupling), clear};
 }
 
 sim::Force to_sim_force(const net::UserForce& f)
@@ -804,11 +821,11 @@ struct Session::Impl
             if (p.ready && !p.leaving && !p.departed && p.info.role == net::Role::Participant)
                 seats.push_back(Seat{net::PeerId{id}, seed_of(p.points)});
         // Exact coupling's state does not depend on the borders; fast coupling's errs next to
-        // them, so there the points keep the distance the grown shares give them.
+        // them, so there the points keep the distance the grown shares give them, unless the
+        // session says otherwise (SessionSettings::point_clearance).
         // Exact coupling also computes the rings next to each share (§4.1): borders cost there.
         const bool exact = s.coupling_ == Coupling::Exact;
-        return partition_leaves(s.model_->grid(), *s.graph_, seats,
-                                exact ? PointClearance::Inside : PointClearance::AsGrown,
+        return partition_leaves(s.model_->grid(), *s.graph_, seats, s.point_clearance(),
                                 exact ? k_exact_ring_cost : 0.0);
     }
 
@@ -2177,7 +2194,7 @@ struct Session::Impl
     void send_welcome(std::uint16_t id)
     {
         const core::TetraGrid& g = s.model_->grid();
-        const auto model = encode_model(*s.model_, s.coupling_);
+        const auto model = encode_model(*s.model_, s.coupling_, s.clearance_);
         const auto state =
             encode_state(g, s.display_u_, s.display_v_, s.state_.tick, s.state_.time);
         net::Welcome w;
@@ -2289,8 +2306,9 @@ struct Session::Impl
             close_all(net::DisconnectReason::ProtocolMismatch);
             return;
         }
-        s.coupling_ = decoded->second;
-        install_model(std::move(decoded->first));
+        s.coupling_ = decoded->coupling;
+        s.clearance_ = decoded->clearance;
+        install_model(std::move(decoded->model));
         const core::TetraGrid& g = s.model_->grid();
         if (s.role_ != SessionRole::Viewer)
             if (auto r =
@@ -3054,6 +3072,7 @@ core::Result<std::unique_ptr<Session>> Session::host(net::Transport& transport,
     s->role_ = SessionRole::Master;
     s->id_ = net::PeerId{0};
     s->coupling_ = settings.coupling;
+    s->clearance_ = settings.point_clearance;
     im.session_id = settings.session_id != 0 ? settings.session_id : 0x5E55u;
     im.messenger.set_session(im.session_id);
     im.master_id = s->id_;
@@ -3165,7 +3184,7 @@ Recording Session::recording() const
 {
     Recording r;
     if (model_ != nullptr)
-        r.model = encode_model(*model_, coupling_);
+        r.model = encode_model(*model_, coupling_, clearance_);
     r.final_tick = state_.tick;
     r.forces = impl_->force_log;
     return r;

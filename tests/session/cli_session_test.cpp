@@ -55,6 +55,38 @@ TEST(SessionCli, HostAndTwoJoinsAsProcessesExchangeTraffic)
     EXPECT_EQ(column_sum(dir / "v.csv", "steps"), 0.0);  // a viewer simulates nothing
 }
 
+// `--point-clearance` reaches the session (the host says which rule it partitions with; auto
+// resolves by the coupling) and an unknown value is refused naming the allowed ones.
+TEST(SessionCli, HostTakesAPointClearanceAndRefusesAnUnknownOne)
+{
+    const auto dir = pliant::test::scratch_dir("session_cli_clearance");
+    const int port = 20000 + static_cast<int>((getpid() + 7) % 20000);
+    const std::string exe = PLIANT_EXE;
+    const auto host = [&](const std::string& args, const char* log)
+    {
+        const std::string cmd = "cd '" + dir.string() + "' && '" + exe +
+                                "' host --level 3 --port " + std::to_string(port) +
+                                " --duration 0.3 " + args + " > " + log + " 2>&1";
+        return std::system(cmd.c_str());
+    };
+    const int inside = host("--mode fast --point-clearance inside", "inside.log");
+    const std::string inside_log = read(dir / "inside.log");
+    if (inside != 0 && inside_log.find("bind") != std::string::npos)
+        GTEST_SKIP() << "cannot bind UDP port " << port << ": " << inside_log;
+    EXPECT_EQ(inside, 0) << inside_log;
+    EXPECT_NE(inside_log.find("fast mode, point clearance inside"), std::string::npos)
+        << inside_log;
+    EXPECT_EQ(host("--mode fast", "auto_fast.log"), 0);
+    EXPECT_NE(read(dir / "auto_fast.log").find("fast mode, point clearance grown"),
+              std::string::npos);
+    EXPECT_EQ(host("--mode exact", "auto_exact.log"), 0);
+    EXPECT_NE(read(dir / "auto_exact.log").find("exact mode, point clearance inside"),
+              std::string::npos);
+    EXPECT_NE(host("--point-clearance wide", "bad.log"), 0);
+    EXPECT_NE(read(dir / "bad.log").find("wide not in {auto,grown,inside}"), std::string::npos)
+        << read(dir / "bad.log");
+}
+
 // Kill -9 a participant, then the master, mid-session (fast coupling, so that the others keep
 // running while ENet's timeout, at least 5 s, runs out): the remaining participant takes over as
 // master, owns every node and keeps stepping, and the viewer keeps receiving. Bounded by the

@@ -191,6 +191,93 @@ TEST(SessionExact, TurnedSlabsWithACapsShareEqualSingleProcess)
               static_cast<std::uint32_t>(core::TetraGrid::create(6)->face_count() / 2), check);
 }
 
+// SessionSettings::point_clearance: in fast coupling the default keeps a point as far from a
+// border as its grown share would (level 6, the participant's point at mid-height on the plain
+// slabs' cut: the grown shares, one piece each); Inside, the master's choice, gives the turned
+// slabs (a band about the point, the two caps for the master) at about half the busiest step.
+// The joiner asks for AsGrown and still partitions, should it become master, with the
+// master's Inside, which the model blob carried.
+TEST(SessionFast, PointClearanceInsideGivesBandsAndJoinersTakeTheMastersChoice)
+{
+    const auto shares = [](std::optional<PointClearance> master_choice)
+    {
+        Harness h;
+        SessionSettings set = settings_for(Coupling::Fast, "master");
+        set.point_clearance = master_choice;
+        Session& master = h.host(6, set);
+        set.name = "part";
+        set.point_clearance = PointClearance::AsGrown;
+        Session& p = h.join(net::Role::Participant, set);
+        const auto faces = static_cast<std::uint32_t>(core::TetraGrid::create(6)->face_count());
+        p.set_points_of_interest({net::Target{net::TargetKind::Face, faces / 2, {0, 0, 0}, 0.0}});
+        EXPECT_TRUE(h.pump_until(
+            [&]
+            {
+                const auto owners = master.owners();
+                return p.ready() &&
+                       std::find(owners.begin(), owners.end(), p.id()) != owners.end() &&
+                       p.owners() == owners;  // the participant holds the same partition
+            },
+            8000));
+        EXPECT_EQ(p.point_clearance(), master.point_clearance());
+        const core::TetraGrid& g = master.model()->grid();
+        const PartitionQuality whole = measure_partition(
+            g, *master.leaf_graph(), std::vector<net::PeerId>(master.owners().size(), master.id()));
+        PartitionQuality q = measure_partition(g, *master.leaf_graph(), master.owners());
+        q.busiest_cost /= whole.busiest_cost;
+        return std::pair{q, p.point_clearance()};
+    };
+    const auto [grown, grown_rule] = shares(std::nullopt);
+    EXPECT_EQ(grown_rule, PointClearance::AsGrown);
+    ASSERT_EQ(grown.shares.size(), 2U);
+    EXPECT_EQ(grown.shares[0].fragments, 1U);
+    EXPECT_EQ(grown.shares[1].fragments, 1U);
+    EXPECT_GT(grown.busiest_cost, 0.6);
+    const auto [bands, bands_rule] = shares(PointClearance::Inside);
+    EXPECT_EQ(bands_rule, PointClearance::Inside);
+    ASSERT_EQ(bands.shares.size(), 2U);
+    EXPECT_EQ(bands.shares[0].fragments, 2U);  // the master's two caps
+    EXPECT_EQ(bands.shares[1].fragments, 1U);  // the participant's band
+    EXPECT_LT(bands.busiest_cost, 0.52);
+}
+
+// The model blob carries the clearance (version 2); a version-1 blob, as recordings made
+// before it hold, still decodes with the coupling's rule; an unknown clearance is refused.
+TEST(SessionModelBlob, CarriesThePointClearanceAndReadsVersionOne)
+{
+    const core::TetraGrid g = core::TetraGrid::create(3).value();
+    const auto model = sim::MembraneModel::create(g, scenes::sphere_grid(g, 1.0), material());
+    ASSERT_TRUE(model);
+    for (const std::optional<PointClearance> c :
+         {std::optional<PointClearance>{}, std::optional{PointClearance::AsGrown},
+          std::optional{PointClearance::Inside}})
+    {
+        const auto blob = encode_model(*model, Coupling::Fast, c);
+        const auto back = decode_model(blob);
+        ASSERT_TRUE(back) << back.error().message;
+        EXPECT_EQ(back->coupling, Coupling::Fast);
+        EXPECT_EQ(back->clearance, c);
+    }
+    auto blob = encode_model(*model, Coupling::Exact, PointClearance::AsGrown);
+    constexpr std::size_t k_clearance_at = 7;  // magic (4), version, level, coupling
+    ASSERT_EQ(std::to_integer<int>(blob[4]), 2);
+    ASSERT_EQ(std::to_integer<int>(blob[k_clearance_at]), 1);
+    auto bad = blob;
+    bad[k_clearance_at] = std::byte{3};
+    EXPECT_FALSE(decode_model(bad));
+    auto v1 = blob;
+    v1.erase(v1.begin() + k_clearance_at);
+    v1[4] = std::byte{1};
+    const auto old = decode_model(v1);
+    ASSERT_TRUE(old) << old.error().message;
+    EXPECT_EQ(old->coupling, Coupling::Exact);
+    EXPECT_FALSE(old->clearance.has_value());
+    EXPECT_EQ(old->model.rest_positions()[0].at(3, 2), model->rest_positions()[0].at(3, 2));
+    EXPECT_FALSE(decode_model(std::span(v1).first(v1.size() - 1)));  // exact lengths
+    v1[4] = std::byte{3};
+    EXPECT_FALSE(decode_model(v1));  // a version from the future
+}
+
 // A master far behind real time (its clock 10 s ahead of its ticks: a lone master whose steps
 // cannot keep 1 kHz, as at level 8 on this machine) steps in slices of 2 ms of wall time per
 // advance() call instead of catching up in one call, so poll() keeps serving the network and a

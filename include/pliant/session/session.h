@@ -98,7 +98,15 @@ enum class Coupling : std::uint8_t
 struct SessionSettings
 {
     Coupling coupling = Coupling::Exact;  ///< master's choice; joiners take the master's
-    double stream_rate_hz = 60.0;         ///< LeafState rate per owned leaf, > 0
+    /// What the partition's slabs must leave around the points of interest (docs/session.md
+    /// §3): unset takes the coupling's rule, AsGrown in fast coupling (no border nearer a grab
+    /// than its grown share puts it: fast coupling errs most next to borders) and Inside in
+    /// exact coupling (the point's leaf and its neighbours in its own slab: the state does not
+    /// depend on the borders). Inside in fast coupling trades accuracy near a new grab for the
+    /// bands' lower step cost (measured in docs/session.md §3). The master's choice, carried in
+    /// the model blob: joiners, and a master's successor, take it.
+    std::optional<PointClearance> point_clearance;
+    double stream_rate_hz = 60.0;  ///< LeafState rate per owned leaf, > 0
     /// LeafState values: F64, F32, or QuantisedDelta (compressed, see the file comment).
     net::ValueEncoding stream_encoding = net::ValueEncoding::F64;
     /// QuantisedDelta steps: u to 2^u_step_exponent m, v to 2^v_step_exponent m/s, each in
@@ -290,6 +298,14 @@ public:
     /// The peer this one follows as master (itself when master; changes on failover).
     [[nodiscard]] net::PeerId master() const noexcept;
     [[nodiscard]] Coupling coupling() const noexcept { return coupling_; }
+    /// The point clearance this peer partitions with if it is (or becomes) the master: the
+    /// master's SessionSettings::point_clearance (a joiner's own is not used), resolved by the
+    /// coupling when unset. A joiner knows it once welcomed.
+    [[nodiscard]] PointClearance point_clearance() const noexcept
+    {
+        return clearance_.value_or(coupling_ == Coupling::Exact ? PointClearance::Inside
+                                                                : PointClearance::AsGrown);
+    }
     /// The model arrived (or was given) and the peer displays the object.
     [[nodiscard]] bool ready() const noexcept { return model_ != nullptr; }
     /// Left the session (after leave()), or the session ended (the master shut it down, or it was
@@ -338,6 +354,7 @@ private:
     SessionRole role_ = SessionRole::Participant;
     net::PeerId id_ = net::k_no_peer;
     Coupling coupling_ = Coupling::Exact;
+    std::optional<PointClearance> clearance_;  ///< the master's SessionSettings::point_clearance
     bool left_ = false;
     std::unique_ptr<sim::MembraneModel> model_;
     std::unique_ptr<LeafGraph> graph_;
@@ -346,11 +363,22 @@ private:
     core::Field<double> display_v_;
 };
 
-/// Encodes a model (level, material, rest positions) as the Welcome's model blob.
-[[nodiscard]] std::vector<std::byte> encode_model(const sim::MembraneModel& model,
-                                                  Coupling coupling);
-/// Decodes a model blob. \return InvalidArgument for a malformed blob; the model's errors.
-core::Result<std::pair<sim::MembraneModel, Coupling>> decode_model(std::span<const std::byte> blob);
+/// Encodes a model (level, material, rest positions) and the master's session-wide choices
+/// (coupling, point clearance; unset: the coupling's rule) as the Welcome's model blob.
+[[nodiscard]] std::vector<std::byte> encode_model(
+    const sim::MembraneModel& model, Coupling coupling,
+    std::optional<PointClearance> clearance = std::nullopt);
+
+/// A decoded model blob.
+struct DecodedModel
+{
+    sim::MembraneModel model;
+    Coupling coupling = Coupling::Exact;
+    std::optional<PointClearance> clearance;  ///< unset: the coupling's rule (and version 1)
+};
+/// Decodes a model blob (version 2, or version 1, which has no clearance byte). \return
+/// InvalidArgument for a malformed blob; the model's errors.
+core::Result<DecodedModel> decode_model(std::span<const std::byte> blob);
 
 /// The sim force of a wire force (face or point + radius).
 [[nodiscard]] sim::Force to_sim_force(const net::UserForce& force);
