@@ -153,7 +153,8 @@ TEST(Partition, EveryNodeOwnedOnceBalancedAndDeterministic)
 // Points anywhere, in either coupling's clearance: growth from seeds walled in by their
 // neighbours' shares used to end up to 90 % off the mean (level 5, 4 participants; 26 % at
 // level 6, 12 % at level 8, in 1-10 % of random layouts); the shares are rebalanced across
-// their borders. Every share stays one piece and keeps its point's leaf.
+// their borders. Every share stays one piece and keeps its point's leaf; the result does not
+// depend on the seats' order.
 TEST(Partition, RandomPointsStayBalancedConnectedAndOwnTheirLeaves)
 {
     std::mt19937 rng(20261204);
@@ -176,6 +177,9 @@ TEST(Partition, RandomPointsStayBalancedConnectedAndOwnTheirLeaves)
                 for (const PointClearance c : {PointClearance::AsGrown, PointClearance::Inside})
                 {
                     const auto owners = partition_leaves(g, graph, seats, c);
+                    auto reversed = seats;  // the order of the input does not matter
+                    std::reverse(reversed.begin(), reversed.end());
+                    EXPECT_EQ(owners, partition_leaves(g, graph, reversed, c));
                     const auto q = measure_partition(g, graph, owners);
                     ASSERT_EQ(q.shares.size(), static_cast<std::size_t>(p));
                     EXPECT_LE(q.imbalance, 0.10)
