@@ -7,7 +7,10 @@
 #include "session_harness.h"
 
 #include <cstdio>
+#include <cstdlib>
 #include <optional>
+#include <random>
+#include <string>
 
 namespace pliant::session::test
 {
@@ -296,6 +299,31 @@ TEST(SessionExact, RebalancedSharesEqualSingleProcess)
             EXPECT_EQ(sh.fragments, 1U);
     };
     run_exact(3, false, false, 5, faces / 4, check, faces / 4);
+}
+
+// Points anywhere, close together or far apart, 2-4 members at levels 5 and 6: whatever shapes
+// the partition takes (grown, rebalanced, slabs, turned slabs), the lockstep equals one process
+// on every owned node. Layouts from a fixed seed; PLIANT_RANDOM_LAYOUTS runs more of them.
+TEST(SessionExact, RandomPointsEqualSingleProcess)
+{
+    std::mt19937 rng(4242);
+    const char* more = std::getenv("PLIANT_RANDOM_LAYOUTS");
+    const int layouts = more != nullptr ? std::atoi(more) : 6;
+    for (int k = 0; k < layouts; ++k)
+    {
+        const int level = k % 3 == 2 ? 6 : 5;
+        const auto faces = static_cast<std::uint32_t>(core::TetraGrid::create(level)->face_count());
+        const int participants = 1 + static_cast<int>(rng() % 3);
+        // Steps from neighbouring faces to a third of the faces: close points wall seeds in.
+        const std::uint32_t step = k % 2 == 0 ? 1 + static_cast<std::uint32_t>(rng() % 64)
+                                              : 1 + static_cast<std::uint32_t>(rng() % (faces / 3));
+        const std::uint32_t first = static_cast<std::uint32_t>(
+            rng() % (faces - step * static_cast<std::uint32_t>(participants)));
+        SCOPED_TRACE("layout " + std::to_string(k) + ": level " + std::to_string(level) + ", " +
+                     std::to_string(participants) + " participants from face " +
+                     std::to_string(first) + " every " + std::to_string(step));
+        run_exact(participants, false, false, level, first, {}, step);
+    }
 }
 
 // A master far behind real time (its clock 10 s ahead of its ticks: a lone master whose steps
