@@ -423,6 +423,37 @@ Err check(const LeafBatch& m) noexcept
     return check_time(m.time);
 }
 
+std::size_t body_size(const ValueBatch& m) noexcept;
+
+Err check(const ValueBatch& m) noexcept
+{
+    if (m.leaves.empty() || m.leaves.size() > k_max_batch_leaves)
+        return DecodeError::BadCount;
+    if (!valid_encoding(static_cast<std::uint8_t>(m.encoding)))
+        return DecodeError::BadEnum;
+    if (m.coarsen > k_max_leaf_coarsen)
+        return DecodeError::BadRange;
+    const std::uint8_t depth = m.leaves.front().leaf.depth;
+    if (depth > k_max_partition_depth)
+        return DecodeError::BadRange;
+    for (const ValueLeaf& l : m.leaves)
+    {
+        if (auto err = check_leaf(l.leaf))
+            return err;
+        if (l.leaf.depth != depth)
+            return DecodeError::BadRange;
+        if (l.u.empty() || l.u.size() != l.v.size() || l.u.size() > max_leaf_nodes(m.encoding))
+            return DecodeError::BadCount;
+        if (auto err = check_values(l.u, m.encoding))
+            return err;
+        if (auto err = check_values(l.v, m.encoding))
+            return err;
+    }
+    if (body_size(m) > k_max_state_payload)
+        return DecodeError::BadCount;
+    return check_time(m.time);
+}
+
 Err check_header(const Header& h, MessageType type) noexcept
 {
     if (h.session == 0 && type != MessageType::Hello && type != MessageType::Reject)
@@ -540,6 +571,13 @@ std::size_t body_size(const LeafBatch& m) noexcept
     std::size_t n = k_leaf_batch_fixed;
     for (const BatchLeaf& l : m.leaves)
         n += batch_leaf_size(l);
+    return n;
+}
+std::size_t body_size(const ValueBatch& m) noexcept
+{
+    std::size_t n = k_value_batch_fixed;
+    for (const ValueLeaf& l : m.leaves)
+        n += value_leaf_size(l, m.encoding);
     return n;
 }
 
@@ -774,6 +812,22 @@ void write_body(ByteWriter& w, const LeafBatch& m) noexcept
         w.u16(packed_word(q));
         write_varint(w, q.baseline);
         w.bytes(q.packed.data(), q.packed.size());
+    }
+}
+void write_body(ByteWriter& w, const ValueBatch& m) noexcept
+{
+    w.u32(m.epoch);
+    w.f64(m.time);
+    w.u8(static_cast<std::uint8_t>(m.encoding));
+    w.u8(m.coarsen);
+    w.u8(m.leaves.front().leaf.depth);
+    w.u8(static_cast<std::uint8_t>(m.leaves.size()));
+    for (const ValueLeaf& l : m.leaves)
+    {
+        w.u16(leaf_index(l.leaf));
+        w.u8(static_cast<std::uint8_t>(l.u.size()));
+        write_values(w, l.u, m.encoding);
+        write_values(w, l.v, m.encoding);
     }
 }
 void write_body(ByteWriter& w, const Ack& m) noexcept
@@ -1246,6 +1300,47 @@ Err read_body(ByteReader& r, LeafBatch& m) noexcept
     return {};
 }
 
+Err read_body(ByteReader& r, ValueBatch& m) noexcept
+{
+    m.epoch = r.u32();
+    m.time = r.f64();
+    const std::uint8_t encoding = r.u8();
+    m.coarsen = r.u8();
+    const std::uint8_t depth = r.u8();
+    const std::uint8_t count = r.u8();
+    if (r.short_read())
+        return {};
+    if (!valid_encoding(encoding))
+        return DecodeError::BadEnum;
+    m.encoding = static_cast<ValueEncoding>(encoding);
+    if (m.coarsen > k_max_leaf_coarsen || depth > k_max_partition_depth)
+        return DecodeError::BadRange;
+    if (count == 0 || count > k_max_batch_leaves)
+        return DecodeError::BadCount;
+    const std::uint32_t side = 1u << depth;
+    m.leaves.resize(count);
+    for (ValueLeaf& l : m.leaves)
+    {
+        const std::uint16_t index = r.u16();
+        const std::uint8_t n = r.u8();
+        if (r.short_read())
+            return {};
+        if (index >= 2 * side * side)
+            return DecodeError::BadRange;
+        l.leaf = leaf_of_index(index, depth);
+        if (n == 0 || n > max_leaf_nodes(m.encoding))
+            return DecodeError::BadCount;
+        if (2 * std::size_t{n} * value_size(m.encoding) > r.remaining())
+        {
+            r.skip(r.remaining() + 1);
+            return {};
+        }
+        read_values(r, l.u, n, m.encoding);
+        read_values(r, l.v, n, m.encoding);
+    }
+    return {};
+}
+
 Err read_body(ByteReader& r, Ack& m) noexcept
 {
     const std::uint8_t count = r.u8();
@@ -1280,7 +1375,7 @@ Err read_body(ByteReader& r, Ack& m) noexcept
     return newest_named ? Err{} : DecodeError::BadRange;
 }
 
-/// Default-constructs the body alternative for wire type `type` (1..18).
+/// Default-constructs the body alternative for wire type `type` (1..19).
 template <std::size_t I = 0>
 Body make_body(std::size_t index) noexcept
 {
@@ -1308,6 +1403,11 @@ std::optional<DecodeError> validate(const Message& message) noexcept
             if (auto err = check_packed(l.quantised))
                 return err;
     return {};
+}
+
+std::size_t value_leaf_size(const ValueLeaf& leaf, ValueEncoding encoding) noexcept
+{
+    return k_value_leaf_fixed + (leaf.u.size() + leaf.v.size()) * value_size(encoding);
 }
 
 std::size_t batch_leaf_size(const BatchLeaf& leaf) noexcept

@@ -47,6 +47,7 @@ std::string_view to_string(MessageType type) noexcept
     case MessageType::Pong: return "pong";
     case MessageType::Ack: return "ack";
     case MessageType::LeafBatch: return "leaf-batch";
+    case MessageType::ValueBatch: return "value-batch";
     case MessageType::Ready: return "ready";
     }
     return "unknown";

@@ -115,7 +115,7 @@ TEST(Codec, PingMatchesBytesWrittenFromTheSpecification)
                          .tick = 0x100F0E0D0C0B0A09ULL},
               .body = Ping{.nonce = 0x14131211u, .time_us = 0x201F1E1D1C1B1A19ULL}};
     const auto expected = bytes_of({0x50, 0x4C, 0x4E, 0x54,  // "PLNT"
-                                    5,    14,   0,    0,     // version, type Ping, flags, reserved
+                                    6,    14,   0,    0,     // version, type Ping, flags, reserved
                                     0x01, 0x02, 0x03, 0x04,  // session
                                     0x05, 0x06, 0x07, 0x08,  // sender, sequence
                                     0x09, 0x0A, 0x0B, 0x0C, 0x0D, 0x0E, 0x0F, 0x10,  // tick
@@ -151,7 +151,7 @@ TEST(Codec, LeafBatchMatchesBytesWrittenFromTheSpecification)
     b.leaves.push_back(l);
     Message m{.header = {.session = 7, .sender = PeerId{2}, .sequence = 0, .tick = 9}, .body = b};
     const auto expected =
-        bytes_of({0x50, 0x4C, 0x4E, 0x54, 5, 17, 0,    0,     // "PLNT" v5 LeafBatch
+        bytes_of({0x50, 0x4C, 0x4E, 0x54, 6, 17, 0,    0,     // "PLNT" v6 LeafBatch
                   7,    0,    0,    0,    2, 0,  0,    0,     // session, sender, seq.
                   9,    0,    0,    0,    0, 0,  0,    0,     // tick
                   0x04, 0x03, 0x02, 0x01,                     // epoch
@@ -167,11 +167,78 @@ TEST(Codec, LeafBatchMatchesBytesWrittenFromTheSpecification)
     EXPECT_EQ(*back, m);
 }
 
+TEST(Codec, ValueBatchMatchesBytesWrittenFromTheSpecification)
+{
+    // Two leaves at depth 1 (indices (0 * 2 + 1) * 2 + 1 = 3 and (1 * 2 + 0) * 2 + 0 = 4), f32,
+    // coarsened once: one node (u 1.0, v -2.0), then two (u 0.5, 0.25; v 0, 4).
+    ValueBatch b;
+    b.epoch = 0x01020304u;
+    b.time = 0.5;
+    b.encoding = ValueEncoding::F32;
+    b.coarsen = 1;
+    b.leaves = {ValueLeaf{.leaf = WireLeafId{0, 1, 1, 1}, .u = {1.0}, .v = {-2.0}},
+                ValueLeaf{.leaf = WireLeafId{1, 1, 0, 0}, .u = {0.5, 0.25}, .v = {0.0, 4.0}}};
+    Message m{.header = {.session = 7, .sender = PeerId{2}, .sequence = 0, .tick = 9}, .body = b};
+    const auto expected =
+        bytes_of({0x50, 0x4C, 0x4E, 0x54, 6, 19, 0,    0,       // "PLNT" v6 ValueBatch
+                  7,    0,    0,    0,    2, 0,  0,    0,       // session, sender, seq.
+                  9,    0,    0,    0,    0, 0,  0,    0,       // tick
+                  0x04, 0x03, 0x02, 0x01,                       // epoch
+                  0,    0,    0,    0,    0, 0,  0xE0, 0x3F,    // time 0.5
+                  1,    1,    1,    2,                          // f32, coarsen 1, depth 1, count 2
+                  3,    0,    1,                                // index 3, one node
+                  0,    0,    0x80, 0x3F,                       // u 1.0f
+                  0,    0,    0,    0xC0,                       // v -2.0f
+                  4,    0,    2,                                // index 4, two nodes
+                  0,    0,    0,    0x3F, 0, 0,  0x80, 0x3E,    // u 0.5f, 0.25f
+                  0,    0,    0,    0,    0, 0,  0x80, 0x40});  // v 0.0f, 4.0f
+    EXPECT_EQ(encode_vec(m), expected);
+    auto back = decode(expected);
+    ASSERT_TRUE(back.has_value());
+    EXPECT_EQ(*back, m);
+    EXPECT_TRUE(allowed_on(MessageType::ValueBatch, Channel::State));
+    EXPECT_EQ(to_string(MessageType::ValueBatch), "value-batch");
+
+    // Every field validated, on decode as on encode.
+    const auto bad = [&](std::size_t at, std::uint8_t value)
+    {
+        auto d = expected;
+        d[at] = std::byte{value};
+        return decode_error(d);
+    };
+    EXPECT_EQ(bad(36, 3), DecodeError::BadEnum);  // encoding 3: quantised deltas go in LeafBatch
+    EXPECT_EQ(bad(36, 0), DecodeError::BadEnum);
+    EXPECT_EQ(bad(37, 4), DecodeError::BadRange);  // coarsen > 3
+    EXPECT_EQ(bad(38, 8), DecodeError::BadRange);  // depth > 7
+    EXPECT_EQ(bad(39, 0), DecodeError::BadCount);
+    EXPECT_EQ(bad(40, 8), DecodeError::BadRange);      // index >= 2 * 4^1
+    EXPECT_EQ(bad(42, 0), DecodeError::BadCount);      // a leaf of no nodes
+    EXPECT_EQ(bad(46, 0xFF), DecodeError::NonFinite);  // u = NaN (0x7FC00000 | sign bit)
+    auto shorter = expected;
+    shorter.pop_back();
+    EXPECT_EQ(decode_error(shorter), DecodeError::BadLength);
+    auto longer = expected;
+    longer.push_back(std::byte{0});
+    EXPECT_EQ(decode_error(longer), DecodeError::BadLength);
+    ValueBatch mixed = b;  // every leaf at the batch's depth
+    mixed.leaves[1].leaf.depth = 2;
+    EXPECT_TRUE(validate(Message{m.header, mixed}).has_value());
+    ValueBatch uneven = b;
+    uneven.leaves[0].v.push_back(1.0);
+    EXPECT_EQ(validate(Message{m.header, uneven}), DecodeError::BadCount);
+    ValueBatch over = b;  // more than one datagram: 16 + 10 * (3 + 2 * 73 * 8) > 1,200
+    over.encoding = ValueEncoding::F64;
+    over.leaves.assign(2, ValueLeaf{.leaf = WireLeafId{0, 1, 0, 0},
+                                    .u = std::vector<double>(73, 0.0),
+                                    .v = std::vector<double>(73, 0.0)});
+    EXPECT_EQ(validate(Message{m.header, over}), DecodeError::BadCount);
+}
+
 TEST(Codec, ReadyMatchesBytesWrittenFromTheSpecification)
 {
     Message m{.header = {.session = 7, .sender = PeerId{2}, .sequence = 0, .tick = 9},
               .body = Ready{}};
-    const auto expected = bytes_of({0x50, 0x4C, 0x4E, 0x54, 5, 18, 0, 0,    // "PLNT" v5 Ready
+    const auto expected = bytes_of({0x50, 0x4C, 0x4E, 0x54, 6, 18, 0, 0,    // "PLNT" v6 Ready
                                     7,    0,    0,    0,    2, 0,  0, 0,    // session, sender, seq.
                                     9,    0,    0,    0,    0, 0,  0, 0});  // tick; no body
     EXPECT_EQ(encode_vec(m), expected);
@@ -203,7 +270,7 @@ TEST(Codec, AckMatchesBytesWrittenFromTheSpecification)
     a.acks = {LeafAck{.leaf = WireLeafId{0, 1, 0, 1}, .tick = 1000},
               LeafAck{.leaf = WireLeafId{1, 1, 1, 0}, .tick = 800}};
     Message m{.header = {.session = 7, .sender = PeerId{2}, .sequence = 0, .tick = 9}, .body = a};
-    const auto expected = bytes_of({0x50, 0x4C, 0x4E, 0x54, 5, 16, 0, 0,  // "PLNT" v5 Ack
+    const auto expected = bytes_of({0x50, 0x4C, 0x4E, 0x54, 6, 16, 0, 0,  // "PLNT" v6 Ack
                                     7,    0,    0,    0,    2, 0,  0, 0,  // session, sender, seq.
                                     9,    0,    0,    0,    0, 0,  0, 0,  // tick
                                     2,    1,    0,    0,                  // count, depth, reserved
@@ -309,9 +376,11 @@ TEST(Codec, HeaderErrors)
     EXPECT_EQ(decode_error(d), DecodeError::BadVersion);
     d[4] = std::byte{4};  // version 4 (before Ready)
     EXPECT_EQ(decode_error(d), DecodeError::BadVersion);
-    d[4] = std::byte{6};
+    d[4] = std::byte{5};  // version 5 (before ValueBatch)
     EXPECT_EQ(decode_error(d), DecodeError::BadVersion);
-    for (int type : {0, 19, 255})
+    d[4] = std::byte{7};
+    EXPECT_EQ(decode_error(d), DecodeError::BadVersion);
+    for (int type : {0, 20, 255})
     {
         d = ping;
         d[5] = static_cast<std::byte>(type);

@@ -109,6 +109,34 @@ inline LeafBatch leaf_batch(std::size_t count, std::uint8_t depth, std::size_t n
     return b;
 }
 
+/// A ValueBatch of `count` leaves of `n` nodes at depth `depth` (indices spread over both
+/// squares), coarsened `coarsen` levels.
+inline ValueBatch value_batch(ValueEncoding encoding, std::uint8_t coarsen, std::uint8_t depth,
+                              std::size_t count, std::size_t n)
+{
+    ValueBatch b;
+    b.epoch = 21;
+    b.time = 1.75;
+    b.encoding = encoding;
+    b.coarsen = coarsen;
+    const std::uint32_t side = 1u << depth;
+    for (std::size_t k = 0; k < count; ++k)
+    {
+        const std::uint32_t index = static_cast<std::uint32_t>((k * 7919) % (2 * side * side));
+        ValueLeaf l;
+        l.leaf = WireLeafId{static_cast<std::uint8_t>(index / (side * side)), depth,
+                            static_cast<std::uint16_t>(index % side),
+                            static_cast<std::uint16_t>((index / side) % side)};
+        for (std::size_t i = 0; i < n; ++i)
+        {
+            l.u.push_back(0.125 * static_cast<double>(i + k));
+            l.v.push_back(-0.5 * static_cast<double>(i));
+        }
+        b.leaves.push_back(l);
+    }
+    return b;
+}
+
 inline Halo halo(ValueEncoding encoding, bool has_u, bool has_v)
 {
     Halo h;
@@ -223,6 +251,10 @@ inline std::vector<Message> all()
     add(leaf_batch(9, 7, 20));
     // Version 5: a joiner's readiness for leaf states.
     add(Ready{});
+    // Version 6: f32 / f64 states of several whole leaves (coarse streaming).
+    add(value_batch(ValueEncoding::F64, 2, 1, 4, 4));
+    add(value_batch(ValueEncoding::F32, 1, 7, 1, 1));
+    add(value_batch(ValueEncoding::F32, 0, 3, 8, 16));
     return out;
 }
 

@@ -68,6 +68,8 @@ enum class EncodeError : std::uint8_t
 
 /// Bytes one leaf adds to a LeafBatch body (docs/protocol.md §6 LeafBatch).
 [[nodiscard]] std::size_t batch_leaf_size(const BatchLeaf& leaf) noexcept;
+/// Bytes one leaf adds to a ValueBatch body of `encoding` (docs/protocol.md §6 ValueBatch).
+[[nodiscard]] std::size_t value_leaf_size(const ValueLeaf& leaf, ValueEncoding encoding) noexcept;
 
 /// Writes `message` to the front of `out`. \return the number of bytes written;
 /// EncodeError::InvalidMessage if validate() fails; EncodeError::BufferTooSmall if `out` is shorter

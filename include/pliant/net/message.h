@@ -27,7 +27,7 @@ namespace pliant::net
 {
 
 inline constexpr std::uint32_t k_protocol_magic = 0x544E4C50;  ///< bytes "PLNT"
-inline constexpr std::uint8_t k_protocol_version = 5;
+inline constexpr std::uint8_t k_protocol_version = 6;
 inline constexpr std::size_t k_header_size = 24;
 /// The largest body of a LeafState or Halo (one leaf per datagram, no IP fragmentation).
 inline constexpr std::size_t k_max_state_payload = 1200;
@@ -68,6 +68,11 @@ inline constexpr std::size_t k_leaf_batch_fixed = 16;
 inline constexpr std::size_t k_batch_leaf_fixed = 5;
 /// Leaves of one LeafBatch at most.
 inline constexpr std::size_t k_max_batch_leaves = 128;
+/// Fixed bytes of a ValueBatch body, and of each of its leaves before the values (docs/protocol.md
+/// §6 ValueBatch); a leaf of n nodes adds 3 + 2 n s bytes (s = 4 or 8), at most
+/// k_max_batch_leaves leaves.
+inline constexpr std::size_t k_value_batch_fixed = 16;
+inline constexpr std::size_t k_value_leaf_fixed = 3;
 
 /// Wire message types (docs/protocol.md §6); the order matches `Body`.
 enum class MessageType : std::uint8_t
@@ -90,8 +95,9 @@ enum class MessageType : std::uint8_t
     Ack = 16,
     LeafBatch = 17,
     Ready = 18,  ///< control (channel 0) by default; its repeats go on channel 1
+    ValueBatch = 19,
 };
-inline constexpr std::uint8_t k_message_type_count = 18;
+inline constexpr std::uint8_t k_message_type_count = 19;
 
 /// How node values are written (docs/protocol.md §5.4).
 enum class ValueEncoding : std::uint8_t
@@ -359,6 +365,29 @@ struct LeafBatch
     friend bool operator==(const LeafBatch&, const LeafBatch&) = default;
 };
 
+/// One leaf of a ValueBatch: its u and v, as many of each (the batch's encoding and coarsening).
+struct ValueLeaf
+{
+    WireLeafId leaf;        ///< at the batch's depth
+    std::vector<double> u;  ///< m
+    std::vector<double> v;  ///< m/s
+    friend bool operator==(const ValueLeaf&, const ValueLeaf&) = default;
+};
+
+/// f32 or f64 states of several whole leaves of one sender at one tick and time, in one datagram
+/// (docs/protocol.md §6 ValueBatch, version 6): what a LeafState of encoding 1 or 2 and node
+/// offset 0 carries, with its 48 fixed bytes paid once per datagram. Coarse streaming sends its
+/// few nodes per leaf this way (docs/session.md §5.2). Every leaf has the batch's depth.
+struct ValueBatch
+{
+    std::uint32_t epoch = 0;
+    double time = 0.0;                            ///< s
+    ValueEncoding encoding = ValueEncoding::F64;  ///< F32 or F64
+    std::uint8_t coarsen = 0;                     ///< 0..3, as LeafState::coarsen
+    std::vector<ValueLeaf> leaves;  ///< 1..k_max_batch_leaves, body at most 1,200 bytes
+    friend bool operator==(const ValueBatch&, const ValueBatch&) = default;
+};
+
 /// The sender holds the session's model and state: leaf states may be streamed to it
 /// (docs/protocol.md, Ready). No body.
 struct Ready
@@ -366,9 +395,9 @@ struct Ready
     friend bool operator==(const Ready&, const Ready&) = default;
 };
 
-using Body =
-    std::variant<Hello, Welcome, Reject, PeerJoined, PeerLeft, Blob, PointsOfInterest, Partition,
-                 Force, Leave, LeafState, Halo, Heartbeat, Ping, Pong, Ack, LeafBatch, Ready>;
+using Body = std::variant<Hello, Welcome, Reject, PeerJoined, PeerLeft, Blob, PointsOfInterest,
+                          Partition, Force, Leave, LeafState, Halo, Heartbeat, Ping, Pong, Ack,
+                          LeafBatch, Ready, ValueBatch>;
 static_assert(std::variant_size_v<Body> == k_message_type_count);
 
 /// Fields every datagram carries besides its type (docs/protocol.md §4).
