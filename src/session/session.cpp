@@ -480,7 +480,8 @@ struct Session::Impl
     // Bandwidth cap (settings.bandwidth_cap_mbit_s): per peer, a byte budget and leaf priorities.
     std::map<std::uint16_t, double> budget;
     std::map<std::uint16_t, std::vector<double>> priority;
-    // Batched streaming (settings.batch_leaves): per peer, the LeafBatch being filled this period.
+    // Batched streaming (settings.batch_leaves): per peer, the LeafBatch (quantised leaves) or
+    // ValueBatch (coarse leaves) being filled this period.
     std::map<std::uint16_t, net::Message> batch;
     std::vector<core::Vec3> leaf_centre;  // rest positions, m
     std::vector<double> leaf_radius;      // m
@@ -1729,7 +1730,38 @@ struct Session::Impl
         return net::k_header_size + net::k_leaf_batch_fixed + record;
     }
 
-    /// Sends every LeafBatch being filled (the end of a stream period).
+    /// Adds f32 / f64 leaf state `m` (whole leaf) to the ValueBatch being filled for `pid`,
+    /// first sending that batch if `m` would take it over one datagram.
+    void batch_values(std::uint16_t pid, const net::LeafState& m, std::uint64_t tick)
+    {
+        net::ValueLeaf leaf{m.leaf, m.u, m.v};
+        const std::size_t record = net::value_leaf_size(leaf, m.encoding);
+        auto it = batch.find(pid);
+        if (it != batch.end())
+        {
+            auto* b = std::get_if<net::ValueBatch>(&it->second.body);
+            if (b != nullptr && b->encoding == m.encoding && b->coarsen == m.coarsen &&
+                b->leaves.front().leaf.depth == leaf.leaf.depth &&
+                b->leaves.size() < net::k_max_batch_leaves &&
+                net::encoded_size(it->second) + record <=
+                    net::k_header_size + net::k_max_state_payload)
+            {
+                b->leaves.push_back(std::move(leaf));
+                return;
+            }
+            send_to(pid, it->second, net::SendMode::Unsequenced);
+            batch.erase(it);
+        }
+        net::ValueBatch b;
+        b.epoch = m.epoch;
+        b.time = m.time;
+        b.encoding = m.encoding;
+        b.coarsen = m.coarsen;
+        b.leaves.push_back(std::move(leaf));
+        batch.emplace(pid, make(b, tick));
+    }
+
+    /// Sends every LeafBatch or ValueBatch being filled (the end of a stream period).
     void flush_batches()
     {
         for (const auto& [pid, m] : batch)
@@ -1902,12 +1934,18 @@ struct Session::Impl
             }
             if (quantised_stream())
                 m.encoding = net::ValueEncoding::F64;
-            const net::Message msg = make(m, s.state_.tick);
+            // Coarse leaves are a few nodes each: they go several to a datagram (ValueBatch,
+            // docs/protocol.md §6) rather than each with a LeafState's 48 fixed bytes.
+            const bool batched = settings.batch_leaves && m.coarsen > 0;
+            const net::Message msg = batched ? net::Message{} : make(m, s.state_.tick);
             for (const auto& [pid, peer] : peers)
                 if (!peer.departed && peer.handle && peer.has_model)
                 {
                     ++counters.leaf_states_sent;
-                    send_to(pid, msg, net::SendMode::Unsequenced);
+                    if (batched)
+                        batch_values(pid, m, s.state_.tick);
+                    else
+                        send_to(pid, msg, net::SendMode::Unsequenced);
                 }
             leaf_sent_time[l] = s.state_.time;
         }
@@ -2655,6 +2693,22 @@ struct Session::Impl
             on_leaf_state(from, m, ls);
         }
     }
+    /// A ValueBatch: each of its leaves as the f32 / f64 LeafState it stands for.
+    void on_value_batch(std::uint16_t from, const net::Message& m, const net::ValueBatch& b)
+    {
+        net::LeafState ls;
+        ls.epoch = b.epoch;
+        ls.encoding = b.encoding;
+        ls.coarsen = b.coarsen;
+        ls.time = b.time;
+        for (const net::ValueLeaf& leaf : b.leaves)
+        {
+            ls.leaf = leaf.leaf;
+            ls.u = leaf.u;
+            ls.v = leaf.v;
+            on_leaf_state(from, m, ls);
+        }
+    }
     bool display_dirty = false;
     bool behind = false;  ///< the last advance() returned on its wall-time budget (Session::behind)
     std::string refusal;  // why this joiner left on its own (settings refused by the session)
@@ -2672,7 +2726,8 @@ struct Session::Impl
         default: break;
         }
         if (!s.model_ &&
-            (m.type() == net::MessageType::LeafState || m.type() == net::MessageType::LeafBatch))
+            (m.type() == net::MessageType::LeafState || m.type() == net::MessageType::LeafBatch ||
+             m.type() == net::MessageType::ValueBatch))
         {
             // Cannot be shown yet, and superseded by the next stream period, which resends every
             // leaf we have not acknowledged. (Peers stream to us only after our Ready; these came
@@ -2787,6 +2842,10 @@ struct Session::Impl
         case net::MessageType::LeafState:
             p.streams_to_us = true;
             on_leaf_state(from, m, std::get<net::LeafState>(m.body));
+            return;
+        case net::MessageType::ValueBatch:
+            p.streams_to_us = true;
+            on_value_batch(from, m, std::get<net::ValueBatch>(m.body));
             return;
         case net::MessageType::Ack: on_ack(from, std::get<net::Ack>(m.body)); return;
         case net::MessageType::Halo: on_halo(m, std::get<net::Halo>(m.body)); return;

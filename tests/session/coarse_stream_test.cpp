@@ -261,12 +261,15 @@ TEST(SessionCoarseStreamF32, RoundedCoarseNodesAreRefinedAsReceived)
 }
 
 /// Bytes a viewer receives from a master that owns everything, over `pumps` pumps of a frozen
-/// exact session (only the 60 Hz leaf-state stream is left).
-std::uint64_t viewer_bytes(int k, int pumps)
+/// exact session (only the 60 Hz leaf-state stream is left); `shown`, if given, gets the
+/// viewer's display at the end.
+std::uint64_t viewer_bytes(int k, int pumps, bool batch = true,
+                           core::Field<double>* shown = nullptr)
 {
     Harness h;
     SessionSettings m = coarse(k, "master");
     m.max_ticks = 20;
+    m.batch_leaves = batch;
     h.host(k_level, m);
     Session& v = h.join(net::Role::Viewer, coarse(0, "viewer"));
     EXPECT_TRUE(h.pump_until([&] { return v.ready() && h.peers[0]->tick() >= 20; }, 20000));
@@ -277,6 +280,8 @@ std::uint64_t viewer_bytes(int k, int pumps)
     for (int i = 0; i < pumps; ++i)
         h.pump_once(0.0005);
     EXPECT_GT(h.peers[0]->stats().leaf_states_sent, states);
+    if (shown != nullptr)
+        *shown = v.display_u();
     return v.stats().bytes_received - before;
 }
 
@@ -288,6 +293,31 @@ TEST(SessionCoarseStreamBandwidth, OneLevelCoarserCostsAtLeastThreeTimesFewerByt
     ASSERT_GT(one, 0u);
     EXPECT_GE(static_cast<double>(full), 3.0 * static_cast<double>(one)) << full << " " << one;
     EXPECT_LT(two, one);
+}
+
+// Coarse leaves go several to a datagram (ValueBatch) instead of one LeafState each, whose 48
+// fixed bytes outweighed a two-levels-coarser leaf's 4-6 nodes; the viewer shows the same bits.
+TEST(SessionCoarseStreamBandwidth, BatchedCoarseLeavesCostFewerBytesAndShowTheSame)
+{
+    core::Field<double> batched_view;
+    core::Field<double> single_view;
+    const std::uint64_t full = viewer_bytes(0, 2000);
+    const std::uint64_t batched = viewer_bytes(2, 2000, true, &batched_view);
+    const std::uint64_t single = viewer_bytes(2, 2000, false, &single_view);
+    const std::uint64_t one_batched = viewer_bytes(1, 2000, true);
+    const std::uint64_t one_single = viewer_bytes(1, 2000, false);
+    std::printf(
+        "viewer bytes: k = 0 %llu; k = 1 %llu batched, %llu in LeafStates; k = 2 %llu "
+        "batched, %llu in LeafStates\n",
+        static_cast<unsigned long long>(full), static_cast<unsigned long long>(one_batched),
+        static_cast<unsigned long long>(one_single), static_cast<unsigned long long>(batched),
+        static_cast<unsigned long long>(single));
+    ASSERT_GT(batched, 0u);
+    EXPECT_LT(static_cast<double>(batched), 0.75 * static_cast<double>(single));
+    EXPECT_LT(one_batched, one_single);
+    EXPECT_GE(static_cast<double>(full), 12.0 * static_cast<double>(batched));
+    const core::TetraGrid g = core::TetraGrid::create(k_level).value();
+    EXPECT_EQ(mismatches(g, batched_view, single_view, {}), 0u);
 }
 
 TEST(SessionCoarseStreamRefusals, BadCombinationsSayWhy)

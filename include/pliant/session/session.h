@@ -118,7 +118,8 @@ struct SessionSettings
     /// (the default since protocol version 4) or zigzag varints in a zstd frame.
     net::Packing stream_packing = net::Packing::Rice;
     /// QuantisedDelta: a peer's leaves for one receiver go out as LeafBatch datagrams (several
-    /// leaves, one header, up to 1,200 bytes) instead of one LeafState per leaf.
+    /// leaves, one header, up to 1,200 bytes) instead of one LeafState per leaf; coarse leaves
+    /// (stream_coarsen > 0) likewise as ValueBatch datagrams.
     bool batch_leaves = true;
     /// QuantisedDelta: how often a receiver acknowledges the leaf states it got, Hz, > 0. At the
     /// stream rate (the default) baselines are a frame or two old, which halves the residuals'
