@@ -112,6 +112,20 @@ struct RunResult
     std::vector<double> bytes_out;
     double max_u_diff = 0.0;
     double max_u = 0.0;
+
+    /// The busiest peer's step time, s.
+    [[nodiscard]] double worst_step() const
+    {
+        return step_s.empty() ? 0.0 : *std::max_element(step_s.begin(), step_s.end());
+    }
+    /// Bytes sent by all peers.
+    [[nodiscard]] double total_bytes() const
+    {
+        double sum = 0.0;
+        for (const double b : bytes_out)
+            sum += b;
+        return sum;
+    }
 };
 
 net::UserForce pull(std::uint32_t face)
@@ -1353,13 +1367,8 @@ int main(int argc, char** argv)
                        "1");
             report.add("partition", level, n, "peers", "border_edges",
                        static_cast<double>(q.border_edges), "1");
-            double worst = 0.0;
-            double bytes = 0.0;
-            for (std::size_t k = 0; k < exact.step_s.size(); ++k)
-            {
-                worst = std::max(worst, exact.step_s[k]);
-                bytes += exact.bytes_out[k];
-            }
+            const double worst = exact.worst_step();
+            const double bytes = exact.total_bytes();
             std::printf(
                 "%5d %5d | %9.3f %9zu %6zu | %.2f (exact)                      | %7.2f "
                 "(exact)            | %.2e (exact: %.1e)\n",
@@ -1367,13 +1376,8 @@ int main(int argc, char** argv)
                 bytes / static_cast<double>(peers) / sim_seconds / 1e6,
                 fast.max_u > 0.0 ? fast.max_u_diff / fast.max_u : 0.0,
                 exact.max_u > 0.0 ? exact.max_u_diff / exact.max_u : 0.0);
-            double fworst = 0.0;
-            double fbytes = 0.0;
-            for (std::size_t k = 0; k < fast.step_s.size(); ++k)
-            {
-                fworst = std::max(fworst, fast.step_s[k]);
-                fbytes += fast.bytes_out[k];
-            }
+            const double fworst = fast.worst_step();
+            const double fbytes = fast.total_bytes();
             std::printf(
                 "%5d %5d |                            | %.2f (fast)                       "
                 "| %7.2f (fast)\n",
@@ -1384,13 +1388,8 @@ int main(int argc, char** argv)
             const RunResult inside = run(level, peers, session::Coupling::Fast, ticks, &ref, 60.0,
                                          session::PointClearance::Inside);
             add_rows(report, "fast, clearance inside", level, peers, inside, single_s, sim_seconds);
-            double iworst = 0.0;
-            double ibytes = 0.0;
-            for (std::size_t k = 0; k < inside.step_s.size(); ++k)
-            {
-                iworst = std::max(iworst, inside.step_s[k]);
-                ibytes += inside.bytes_out[k];
-            }
+            const double iworst = inside.worst_step();
+            const double ibytes = inside.total_bytes();
             std::printf(
                 "%5d %5d |                            | %.2f (fast, clearance inside)     "
                 "| %7.2f (fast inside)     | %.2e\n",
@@ -1405,13 +1404,8 @@ int main(int argc, char** argv)
             const RunResult fast1k =
                 run(level, peers, session::Coupling::Fast, ticks, &ref, 1000.0);
             add_rows(report, "fast 1 kHz", level, peers, fast1k, single_s, sim_seconds);
-            double kworst = 0.0;
-            double kbytes = 0.0;
-            for (std::size_t k = 0; k < fast1k.step_s.size(); ++k)
-            {
-                kworst = std::max(kworst, fast1k.step_s[k]);
-                kbytes += fast1k.bytes_out[k];
-            }
+            const double kworst = fast1k.worst_step();
+            const double kbytes = fast1k.total_bytes();
             std::printf(
                 "%5d %5d |                            | %.2f (fast, 1 kHz frames)           "
                 "| %7.2f (fast 1 kHz)      | %.2e\n",
