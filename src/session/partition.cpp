@@ -153,8 +153,6 @@ std::uint32_t nearest_free(const LeafGraph& g, std::uint32_t start,
     return k_unowned;
 }
 
-/// The balanced BFS growth from the seats' leaves (the file comment of partition.h), as a seat
-/// index per leaf. \pre seats sorted by peer id, non-empty.
 /// max |count - mean| / mean.
 double imbalance_of(std::span<const std::size_t> count)
 {
@@ -255,11 +253,9 @@ void rebalance(const LeafGraph& graph, std::span<const std::uint32_t> seed,
                       return a.leaf != b.leaf ? a.leaf < b.leaf : a.to < b.to;
                   });
         bool moved = false;
-        for (const Move& m : moves)
+        for (const Move& m : moves)  // the first that keeps its giver in one piece
         {
             const std::uint32_t from = owner[m.leaf];
-            if (m.to == from)
-                continue;  // the same leaf listed for another taker (already moved: not here)
             std::uint32_t start = k_unowned;  // any other leaf of the giving share
             for (const std::uint32_t b : graph.neighbours(m.leaf))
                 if (owner[b] == from)
@@ -283,6 +279,9 @@ void rebalance(const LeafGraph& graph, std::span<const std::uint32_t> seed,
     }
 }
 
+/// The balanced BFS growth from the seats' leaves (the file comment of partition.h), rebalanced
+/// where a front closed early, as a seat index per leaf. \pre seats sorted by peer id,
+/// non-empty.
 std::vector<std::uint32_t> grow_seats(const core::TetraGrid& grid, const LeafGraph& graph,
                                       std::span<const Seat> seats)
 {
