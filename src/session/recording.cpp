@@ -19,6 +19,12 @@ namespace
 
 constexpr std::array<char, 8> k_magic{'P', 'L', 'I', 'A', 'N', 'T', 'R', '\0'};
 constexpr std::uint32_t k_version = 1;
+/// Force's layout has not changed since protocol version 1 (docs/protocol.md, the versions'
+/// history), so a recording made by an earlier build, whose force entries carry its protocol
+/// version, is read as if they carried this build's.
+constexpr std::uint8_t k_force_layout_since = 1;
+constexpr std::size_t k_version_byte = 4;  // of a datagram (docs/protocol.md §4)
+constexpr std::size_t k_type_byte = 5;
 
 void put(std::vector<std::byte>& out, std::uint64_t value, int bytes)
 {
@@ -138,7 +144,19 @@ core::Result<Recording> load_recording(const std::filesystem::path& path)
         const auto datagram = r.take(size);
         if (!r.ok)
             return bad_file(path, at, "truncated force entry " + std::to_string(i));
-        auto m = net::decode(datagram);
+        std::array<std::byte, net::k_max_datagram_size> current{};
+        std::span<const std::byte> entry = datagram;
+        if (datagram.size() > k_type_byte &&
+            datagram[k_type_byte] == static_cast<std::byte>(net::MessageType::Force) &&
+            std::to_integer<std::uint8_t>(datagram[k_version_byte]) >= k_force_layout_since &&
+            std::to_integer<std::uint8_t>(datagram[k_version_byte]) < net::k_protocol_version &&
+            datagram.size() <= current.size())
+        {
+            std::copy(datagram.begin(), datagram.end(), current.begin());
+            current[k_version_byte] = static_cast<std::byte>(net::k_protocol_version);
+            entry = std::span<const std::byte>(current.data(), datagram.size());
+        }
+        auto m = net::decode(entry);
         if (!m)
             return bad_file(
                 path, at,

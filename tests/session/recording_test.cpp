@@ -3,6 +3,7 @@
 // Recording and replay: a recorded exact-mode session replays bit for bit on one process; the
 // file round-trips exactly and refuses corruption; the replay's force rule equals the obvious
 // reference schedule.
+#include <pliant/core/hash.h>
 #include <pliant/session/recording.h>
 
 #include <gtest/gtest.h>
@@ -182,6 +183,61 @@ TEST(Recording, FileRoundTripsExactlyAndRefusesCorruption)
     expect_refused(magic, "wrong magic");
     expect_refused({}, "empty file");
     EXPECT_EQ(load_recording(dir / "missing.prec").error().code, core::ErrorCode::IoError);
+}
+
+// A recording made by a build of an earlier protocol version (Force's layout is the same since
+// version 1) still loads; a force entry of an unknown version does not.
+TEST(Recording, ForceEntriesOfEarlierProtocolVersionsStillLoad)
+{
+    const core::TetraGrid grid = core::TetraGrid::create(3).value();
+    auto model =
+        sim::MembraneModel::create(grid, scenes::sphere_grid(grid, 1.0), material()).value();
+    Recording rec;
+    rec.model = encode_model(model, Coupling::Exact);
+    rec.final_tick = 10;
+    rec.forces.push_back(ForceRecord{0, 5, {point_push(0.1, 0.2, 0.9, 0.25, 0.5)}});
+    rec.forces.push_back(ForceRecord{3, 7, {face_pull(12, 0.25)}});
+    const auto dir = pliant::test::scratch_dir("recording_versions");
+    ASSERT_TRUE(save_recording(dir / "now.prec", rec));
+    std::vector<char> bytes = read_all(dir / "now.prec");
+    // The force entries: after magic (8), version (4), final tick (8), hash (8), model size (4),
+    // the model and the count (4), each a u16 size then the datagram.
+    const auto as_version = [&](std::uint8_t version)
+    {
+        std::vector<char> b = bytes;
+        std::size_t at = 8 + 4 + 8 + 8 + 4 + rec.model.size() + 4;
+        for (std::size_t i = 0; i < rec.forces.size(); ++i)
+        {
+            const std::size_t size =
+                static_cast<unsigned char>(b[at]) |
+                (static_cast<std::size_t>(static_cast<unsigned char>(b[at + 1])) << 8);
+            EXPECT_EQ(static_cast<unsigned char>(b[at + 2 + 4]), net::k_protocol_version);
+            b[at + 2 + 4] = static_cast<char>(version);
+            at += 2 + size;
+        }
+        const std::uint64_t h =
+            core::hash_bytes(std::as_bytes(std::span<const char>(b.data(), b.size() - 8)));
+        for (int k = 0; k < 8; ++k)
+            b[b.size() - 8 + static_cast<std::size_t>(k)] =
+                static_cast<char>((h >> (8 * k)) & 0xFF);
+        const auto path = dir / ("v" + std::to_string(version) + ".prec");
+        write_all(path, b);
+        return load_recording(path);
+    };
+    for (std::uint8_t v = 1; v < net::k_protocol_version; ++v)
+    {
+        auto back = as_version(v);
+        ASSERT_TRUE(back) << "version " << int{v} << ": " << back.error().message;
+        EXPECT_EQ(back->forces, rec.forces);
+    }
+    for (const std::uint8_t v :
+         {std::uint8_t{0}, static_cast<std::uint8_t>(net::k_protocol_version + 1)})
+    {
+        auto back = as_version(v);
+        ASSERT_FALSE(back);
+        EXPECT_NE(back.error().message.find("bad-version"), std::string::npos)
+            << back.error().message;
+    }
 }
 
 TEST(Recording, OnlyTheMasterOfAnExactSessionRecordsFromTheStart)
