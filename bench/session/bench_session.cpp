@@ -40,8 +40,10 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <memory>
 #include <optional>
+#include <random>
 #include <span>
 #include <string>
 #include <thread>
@@ -57,7 +59,7 @@ constexpr const char* k_usage =
     "usage: pliant_bench_session [levels...] [--quick] [--json FILE] [--csv FILE]\n"
     "       pliant_bench_session --stream [level] [--seconds S]\n"
     "       pliant_bench_session --coarse [levels...] [--seconds S]\n"
-    "       pliant_bench_session --steps [levels...] [--copy-accept]\n"
+    "       pliant_bench_session --steps [levels...] [--copy-accept] [--random-points N]\n"
     "       pliant_bench_session --latency [levels...] [--enet]\n"
     "Session numbers for docs/session.md: all peers in one thread over a simulated network (5 ms\n"
     "one-way latency), one thread per peer.\n"
@@ -79,6 +81,11 @@ constexpr const char* k_usage =
     "               with --steps: restricted steps copy their result back into the state\n"
     "               (sim::StepOptions::keep_outside) instead of swapping planes as the\n"
     "               session's peers do: the cost of that copy, against a run without it\n"
+    "  --random-points N\n"
+    "               with --steps: instead of the two fixed seat layouts, N layouts per level and\n"
+    "               peer count in which every member declares a uniformly drawn face (fixed\n"
+    "               seeds); the busiest peer's median and worst, and how many layouts meet the\n"
+    "               compute target (55 % with 2 peers, 30 % with 4), 1..1000\n"
     "  --latency    from a grab to the change appearing on the other participants and a viewer,\n"
     "               2..4 participants, exact and fast coupling, in virtual time (default levels\n"
     "               6 7 8; --quick: 6)\n"
@@ -92,6 +99,8 @@ constexpr const char* k_usage =
 
 /// --coarse streams up to this many levels coarser than the grid.
 constexpr int k_coarsest = 2;
+/// The most --random-points layouts per level and peer count.
+constexpr int k_max_random_layouts = 1000;
 /// The longest --seconds: an hour of simulated streaming.
 constexpr double k_max_seconds = 3600.0;
 
@@ -672,6 +681,153 @@ double thread_cpu_s()
     return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
 }
 
+/// One seat layout's steps (steps_suite): each peer's restricted step against the full step, per
+/// partition, and the partitions' kinds (g grown shares, s slabs, r whole-row slabs, t turned
+/// slabs).
+struct LayoutSteps
+{
+    char fast_kind = 'g';
+    char exact_kind = 'g';
+    char inside_kind = 'g';
+    std::vector<double> fast;    // per peer, / full
+    std::vector<double> exact;   // per peer, / full
+    std::vector<double> inside;  // per peer, / full: fast coupling under clearance Inside
+    double full_s = 0.0;         // one process's full step, seconds
+};
+
+/// The steps of one level (steps_suite): its model, leaf graph and the session runs' two pulls.
+class LevelSteps
+{
+public:
+    LevelSteps(int level, bool keep_outside)
+        : grid_(core::TetraGrid::create(level).value()),
+          model_(sim::MembraneModel::create(grid_, scenes::sphere_grid(grid_, 1.0), material())
+                     .value()),
+          graph_(grid_, session::leaf_depth_for(grid_, net::ValueEncoding::F64)),
+          keep_outside_(keep_outside)
+    {
+        const auto faces = static_cast<std::uint32_t>(grid_.face_count());
+        forces_ = {session::to_sim_force(pull(faces / 7)),
+                   session::to_sim_force(pull(faces / 2 + 5))};
+        steps_ = std::max(20, static_cast<int>(4e6 / static_cast<double>(grid_.node_count())));
+    }
+
+    [[nodiscard]] const core::TetraGrid& grid() const noexcept { return grid_; }
+
+    /// Each coupling's partition of `seats` (session::PointClearance: AsGrown for fast, Inside for
+    /// exact, and fast under Inside, the partition of SessionSettings::point_clearance = Inside),
+    /// stepped: best of `rounds` interleaved rounds.
+    [[nodiscard]] LayoutSteps measure(std::span<const session::Seat> seats, int rounds)
+    {
+        const std::size_t peers = seats.size();
+        const auto fast_owners = session::partition_leaves(grid_, graph_, seats);
+        const auto inside_owners =
+            session::partition_leaves(grid_, graph_, seats, session::PointClearance::Inside);
+        const auto exact_owners = session::partition_leaves(
+            grid_, graph_, seats, session::PointClearance::Inside, session::k_exact_ring_cost);
+        std::vector<std::vector<core::Region>> fast_sets(peers);
+        std::vector<std::vector<core::Region>> inside_sets(peers);
+        // Exact coupling: the own set dilated by the halo, computed where the own nodes read it
+        // (StepOptions::needed), as the session steps.
+        std::vector<std::vector<core::Region>> exact_sets(peers);
+        std::vector<std::vector<core::Region>> exact_own(peers);
+        for (std::size_t p = 0; p < peers; ++p)
+        {
+            const net::PeerId id = seats[p].peer;
+            std::vector<char> mask(grid_.node_count(), 0);
+            for (std::size_t l = 0; l < fast_owners.size(); ++l)
+            {
+                if (fast_owners[l] == id)
+                    fast_sets[p].push_back(graph_.regions()[l]);
+                if (inside_owners[l] == id)
+                    inside_sets[p].push_back(graph_.regions()[l]);
+                if (exact_owners[l] == id)
+                    for (const core::NodeIndex n : graph_.nodes(l))
+                        mask[n.value] = 1;
+            }
+            exact_own[p] = core::node_runs(grid_, mask);
+            exact_sets[p] = core::node_runs(
+                grid_,
+                core::dilate_nodes(grid_, std::move(mask), session::SessionSettings{}.halo_rings));
+        }
+        LayoutSteps out;
+        out.fast_kind = kind(seats, fast_owners);
+        out.exact_kind = kind(seats, exact_owners);
+        out.inside_kind = kind(seats, inside_owners);
+        double full = 1e30;
+        out.fast.assign(peers, 1e30);
+        out.exact.assign(peers, 1e30);
+        out.inside.assign(peers, 1e30);
+        const bool same = inside_owners == fast_owners;
+        for (int round = 0; round < rounds; ++round)
+        {
+            full = std::min(full, time_steps({}));
+            for (std::size_t p = 0; p < peers; ++p)
+            {
+                out.fast[p] = std::min(out.fast[p], time_steps(fast_sets[p]));
+                out.exact[p] = std::min(out.exact[p], time_steps(exact_sets[p], exact_own[p]));
+                if (!same)
+                    out.inside[p] = std::min(out.inside[p], time_steps(inside_sets[p]));
+            }
+        }
+        if (same)
+            out.inside = out.fast;
+        for (std::vector<double>* t : {&out.fast, &out.exact, &out.inside})
+            for (double& x : *t)
+                x /= full;
+        out.full_s = full;
+        return out;
+    }
+
+private:
+    /// The seconds of one step over `owned` (thread CPU time, the mean of steps_ steps after 3).
+    double time_steps(std::span<const core::Region> owned,
+                      std::span<const core::Region> needed = {})
+    {
+        sim::MembraneState st = sim::MembraneState::at_rest(grid_);
+        sim::Rkf45Workspace ws(model_, 1);
+        sim::StepOptions opt;
+        opt.owned = owned;
+        opt.needed = needed;
+        opt.keep_outside = keep_outside_;  // the session's peers: false
+        for (int k = 0; k < 3; ++k)
+            (void)sim::step(model_, st, ws, forces_, opt);
+        const double t0 = thread_cpu_s();
+        for (int k = 0; k < steps_; ++k)
+            (void)sim::step(model_, st, ws, forces_, opt);
+        return (thread_cpu_s() - t0) / steps_;
+    }
+
+    char kind(std::span<const session::Seat> seats, const std::vector<net::PeerId>& owners) const
+    {
+        if (owners == session::grown_partition(grid_, graph_, seats))
+            return 'g';
+        if (owners == session::slab_partition(grid_, graph_, seats))
+            return 's';
+        return owners == session::slab_partition(grid_, graph_, seats, 0, true) ? 'r' : 't';
+    }
+
+    core::TetraGrid grid_;
+    sim::MembraneModel model_;
+    session::LeafGraph graph_;
+    std::vector<sim::Force> forces_;
+    int steps_ = 20;
+    bool keep_outside_ = false;
+};
+
+/// The largest and the mean of per-peer ratios.
+std::pair<double, double> max_mean(const std::vector<double>& t)
+{
+    double worst = 0.0;
+    double sum = 0.0;
+    for (const double x : t)
+    {
+        worst = std::max(worst, x);
+        sum += x;
+    }
+    return {worst, sum / static_cast<double>(t.size())};
+}
+
 /// --steps: the sim step alone, in thread CPU time (which the load of a shared machine inflates
 /// far less than the wall time the session counters use): per level and peer count, each peer's
 /// restricted step over its fast set (its leaves) and over its exact set (its leaves dilated by
@@ -693,113 +849,19 @@ void steps_suite(bench::Report& report, const std::vector<int>& levels, bool kee
         "inside: max mean\n");
     for (const int level : levels)
     {
-        const core::TetraGrid grid = core::TetraGrid::create(level).value();
-        auto model =
-            sim::MembraneModel::create(grid, scenes::sphere_grid(grid, 1.0), material()).value();
-        const auto faces = static_cast<std::uint32_t>(grid.face_count());
-        const std::vector<sim::Force> forces = {session::to_sim_force(pull(faces / 7)),
-                                                session::to_sim_force(pull(faces / 2 + 5))};
-        const int steps =
-            std::max(20, static_cast<int>(4e6 / static_cast<double>(grid.node_count())));
-        const auto time_steps =
-            [&](std::span<const core::Region> owned, std::span<const core::Region> needed = {})
-        {
-            sim::MembraneState st = sim::MembraneState::at_rest(grid);
-            sim::Rkf45Workspace ws(model, 1);
-            sim::StepOptions opt;
-            opt.owned = owned;
-            opt.needed = needed;
-            opt.keep_outside = keep_outside;  // the session's peers: false
-            for (int k = 0; k < 3; ++k)
-                (void)sim::step(model, st, ws, forces, opt);
-            const double t0 = thread_cpu_s();
-            for (int k = 0; k < steps; ++k)
-                (void)sim::step(model, st, ws, forces, opt);
-            return (thread_cpu_s() - t0) / steps;
-        };
-        const session::LeafGraph graph(grid,
-                                       session::leaf_depth_for(grid, net::ValueEncoding::F64));
+        LevelSteps steps(level, keep_outside);
         for (int peers = 2; peers <= 4; ++peers)
             for (const bool points : {false, true})
             {
-                const std::vector<session::Seat> seats = session_seats(grid, peers, points);
-                const auto fast_owners = session::partition_leaves(grid, graph, seats);
-                // Fast coupling under SessionSettings::point_clearance = Inside.
-                const auto inside_owners =
-                    session::partition_leaves(grid, graph, seats, session::PointClearance::Inside);
-                const auto exact_owners =
-                    session::partition_leaves(grid, graph, seats, session::PointClearance::Inside,
-                                              session::k_exact_ring_cost);
-                const auto kind = [&](const std::vector<net::PeerId>& owners)
-                {
-                    if (owners == session::grown_partition(grid, graph, seats))
-                        return 'g';
-                    if (owners == session::slab_partition(grid, graph, seats))
-                        return 's';
-                    return owners == session::slab_partition(grid, graph, seats, 0, true) ? 'r'
-                                                                                          : 't';
-                };
-                std::vector<std::vector<core::Region>> fast_sets(static_cast<std::size_t>(peers));
-                std::vector<std::vector<core::Region>> inside_sets(static_cast<std::size_t>(peers));
-                // Exact coupling: the own set dilated by the halo, computed where the own nodes
-                // read it (StepOptions::needed), as the session steps.
-                std::vector<std::vector<core::Region>> exact_sets(static_cast<std::size_t>(peers));
-                std::vector<std::vector<core::Region>> exact_own(static_cast<std::size_t>(peers));
-                for (int p = 0; p < peers; ++p)
-                {
-                    std::vector<char> mask(grid.node_count(), 0);
-                    for (std::size_t l = 0; l < fast_owners.size(); ++l)
-                    {
-                        if (fast_owners[l].value == p)
-                            fast_sets[static_cast<std::size_t>(p)].push_back(graph.regions()[l]);
-                        if (inside_owners[l].value == p)
-                            inside_sets[static_cast<std::size_t>(p)].push_back(graph.regions()[l]);
-                        if (exact_owners[l].value == p)
-                            for (const core::NodeIndex n : graph.nodes(l))
-                                mask[n.value] = 1;
-                    }
-                    exact_own[static_cast<std::size_t>(p)] = core::node_runs(grid, mask);
-                    exact_sets[static_cast<std::size_t>(p)] = core::node_runs(
-                        grid, core::dilate_nodes(grid, std::move(mask),
-                                                 session::SessionSettings{}.halo_rings));
-                }
-                double full = 1e30;
-                std::vector<double> fast(static_cast<std::size_t>(peers), 1e30);
-                std::vector<double> exact(static_cast<std::size_t>(peers), 1e30);
-                std::vector<double> inside(static_cast<std::size_t>(peers), 1e30);
-                const bool same = inside_owners == fast_owners;
-                for (int round = 0; round < 5; ++round)
-                {
-                    full = std::min(full, time_steps({}));
-                    for (std::size_t p = 0; p < fast.size(); ++p)
-                    {
-                        fast[p] = std::min(fast[p], time_steps(fast_sets[p]));
-                        exact[p] = std::min(exact[p], time_steps(exact_sets[p], exact_own[p]));
-                        if (!same)
-                            inside[p] = std::min(inside[p], time_steps(inside_sets[p]));
-                    }
-                }
-                if (same)
-                    inside = fast;
-                const auto max_mean = [&](const std::vector<double>& t)
-                {
-                    double worst = 0.0;
-                    double sum = 0.0;
-                    for (const double x : t)
-                    {
-                        worst = std::max(worst, x);
-                        sum += x;
-                    }
-                    return std::pair<double, double>{worst / full,
-                                                     sum / static_cast<double>(t.size()) / full};
-                };
-                const auto [fmax, fmean] = max_mean(fast);
-                const auto [emax, emean] = max_mean(exact);
-                const auto [imax, imean] = max_mean(inside);
+                const std::vector<session::Seat> seats =
+                    session_seats(steps.grid(), peers, points);
+                const LayoutSteps m = steps.measure(seats, 5);
+                const auto [fmax, fmean] = max_mean(m.fast);
+                const auto [emax, emean] = max_mean(m.exact);
+                const auto [imax, imean] = max_mean(m.inside);
                 std::printf("%5d %5d %6s | %c %.2f %.2f | %c %.2f %.2f | %12.0f | %c %.2f %.2f\n",
-                            level, peers, points ? "yes" : "none", kind(fast_owners), fmax, fmean,
-                            kind(exact_owners), emax, emean, full * 1e6, kind(inside_owners), imax,
-                            imean);
+                            level, peers, points ? "yes" : "none", m.fast_kind, fmax, fmean,
+                            m.exact_kind, emax, emean, m.full_s * 1e6, m.inside_kind, imax, imean);
                 std::fflush(stdout);
                 const double n = static_cast<double>(peers);
                 const std::string fast_name =
@@ -814,6 +876,100 @@ void steps_suite(bench::Report& report, const std::vector<int>& levels, bool kee
                 report.add(inside_name, level, n, "peers", "step_cpu_vs_full_max", imax, "1");
                 report.add(inside_name, level, n, "peers", "step_cpu_vs_full_mean", imean, "1");
             }
+    }
+}
+
+/// The compute target for the busiest peer against one process (docs/session.md §8): 55 %
+/// with 2 peers, 30 % with 4; none given for 3 (NaN).
+double compute_target(int peers)
+{
+    return peers == 2 ? 0.55 : peers == 4 ? 0.30 : std::numeric_limits<double>::quiet_NaN();
+}
+
+/// --steps --random-points N: as steps_suite, over N seat layouts per level and peer count in
+/// which every member (the master too) declares a face drawn uniformly (a fixed seed per level
+/// and peer count, so a rerun draws the same layouts): per coupling's partition, the median and
+/// the largest busiest-peer ratio over the layouts, how many meet compute_target, and how many
+/// layouts took each kind of partition. Best of 3 rounds per layout.
+void random_steps_suite(bench::Report& report, const std::vector<int>& levels, int layouts,
+                        bool keep_outside)
+{
+    std::printf("# sim step CPU of the busiest peer / full step over %d random point layouts "
+                "(every member declares a uniformly drawn face; thread CPU time, best of 3 "
+                "rounds, 1 thread): median, worst, layouts within the target (55 %% with 2 "
+                "peers, 30 %% with 4), partitions taken (g grown, s slabs, r whole-row, t turned)\n"
+                "level peers | fast: median worst met kinds | exact: median worst met kinds | "
+                "fast, clearance inside: median worst met kinds\n",
+                layouts);
+    for (const int level : levels)
+    {
+        LevelSteps steps(level, keep_outside);
+        const core::TetraGrid& grid = steps.grid();
+        const auto faces = static_cast<std::uint64_t>(grid.face_count());
+        const auto w2 = static_cast<std::uint64_t>(2 * grid.w());
+        for (int peers = 2; peers <= 4; ++peers)
+        {
+            std::mt19937_64 rng(static_cast<std::uint64_t>(1000 * level + peers));
+            std::uniform_int_distribution<std::uint64_t> draw(0, faces - 1);
+            struct Column
+            {
+                std::vector<double> busiest;
+                std::string kinds;
+            };
+            std::array<Column, 3> cols;  // fast, exact, fast under Inside
+            for (int k = 0; k < layouts; ++k)
+            {
+                std::vector<session::Seat> seats;
+                for (int p = 0; p < peers; ++p)
+                {
+                    const std::uint64_t cell = draw(rng) / 2;  // two faces per cell
+                    seats.push_back(
+                        {net::PeerId{static_cast<std::uint16_t>(p)},
+                         grid.canonical(grid.index(static_cast<int>(cell % w2),
+                                                   static_cast<int>(cell / w2)))});
+                }
+                const LayoutSteps m = steps.measure(seats, 3);
+                cols[0].busiest.push_back(max_mean(m.fast).first);
+                cols[0].kinds += m.fast_kind;
+                cols[1].busiest.push_back(max_mean(m.exact).first);
+                cols[1].kinds += m.exact_kind;
+                cols[2].busiest.push_back(max_mean(m.inside).first);
+                cols[2].kinds += m.inside_kind;
+            }
+            const double target = compute_target(peers);
+            std::printf("%5d %5d", level, peers);
+            const std::array<const char*, 3> names = {"random points, fast",
+                                                      "random points, exact",
+                                                      "random points, fast, clearance inside"};
+            for (std::size_t c = 0; c < cols.size(); ++c)
+            {
+                std::vector<double> b = cols[c].busiest;
+                std::sort(b.begin(), b.end());
+                const double median = b.size() % 2 == 1
+                                          ? b[b.size() / 2]
+                                          : 0.5 * (b[b.size() / 2 - 1] + b[b.size() / 2]);
+                const auto met = std::count_if(b.begin(), b.end(),
+                                               [&](double x) { return x <= target; });
+                std::string kinds;
+                for (const char kc : {'g', 's', 'r', 't'})
+                    if (const auto n = std::count(cols[c].kinds.begin(), cols[c].kinds.end(), kc))
+                        kinds += std::to_string(n) + kc;
+                if (std::isnan(target))
+                    std::printf(" | %.2f %.2f   - %s", median, b.back(), kinds.c_str());
+                else
+                    std::printf(" | %.2f %.2f %3ld %s", median, b.back(),
+                                static_cast<long>(met), kinds.c_str());
+                const double n = static_cast<double>(peers);
+                report.add(names[c], level, n, "peers", "busiest_step_vs_full_median", median, "1");
+                report.add(names[c], level, n, "peers", "busiest_step_vs_full_worst", b.back(),
+                           "1");
+                if (!std::isnan(target))
+                    report.add(names[c], level, n, "peers", "layouts_within_target",
+                               static_cast<double>(met) / static_cast<double>(b.size()), "1");
+            }
+            std::printf("\n");
+            std::fflush(stdout);
+        }
     }
 }
 
@@ -1214,6 +1370,7 @@ int main(int argc, char** argv)
     const char* seconds_arg = nullptr;
     bool enet = false;
     bool copy_accept = false;
+    const char* random_arg = nullptr;
     for (int k = 1; k < argc; ++k)
     {
         const std::string a = argv[k];
@@ -1234,6 +1391,12 @@ int main(int argc, char** argv)
             enet = true;
         else if (a == "--copy-accept")
             copy_accept = true;
+        else if (a == "--random-points")
+        {
+            if (k + 1 >= argc)
+                return usage.error("--random-points needs a number of layouts");
+            random_arg = argv[++k];
+        }
         else if (a == "--seconds")
         {
             if (k + 1 >= argc)
@@ -1262,6 +1425,16 @@ int main(int argc, char** argv)
         return usage.error("--enet applies to --latency only");
     if (copy_accept && mode != Mode::Steps)
         return usage.error("--copy-accept applies to --steps only");
+    int random_layouts = 0;
+    if (random_arg != nullptr)
+    {
+        if (mode != Mode::Steps)
+            return usage.error("--random-points applies to --steps only");
+        const auto n = usage.int_in("--random-points", random_arg, 1, k_max_random_layouts);
+        if (!n)
+            return 2;
+        random_layouts = *n;
+    }
     if (mode == Mode::Stream && levels.size() > 1)
         return usage.error("--stream takes one level, got " + std::to_string(levels.size()));
     double stream_seconds = 2.0;
@@ -1280,7 +1453,10 @@ int main(int argc, char** argv)
         if (levels.empty())
             levels = report.quick() ? std::vector<int>{6} : std::vector<int>{6, 7, 8};
         report.set_suite("steps");  // `pliant bench steps`
-        steps_suite(report, levels, /*keep_outside=*/copy_accept);
+        if (random_layouts > 0)
+            random_steps_suite(report, levels, random_layouts, /*keep_outside=*/copy_accept);
+        else
+            steps_suite(report, levels, /*keep_outside=*/copy_accept);
         return report.write() ? 0 : 1;
     }
     if (mode == Mode::Latency)

@@ -40,6 +40,17 @@ if(PLIANT_BUILD_BENCH AND EXISTS ${PROJECT_SOURCE_DIR}/bench/CMakeLists.txt)
         pliant_bench_args(bench_args_session_copy_accept_without_steps pliant_bench_session 2
                           STDERR "^pliant_bench_session: --copy-accept applies to --steps only\nusage: "
                           --latency 4 --copy-accept)
+        pliant_bench_args(bench_args_session_random_points_without_steps pliant_bench_session 2
+                          STDERR "^pliant_bench_session: --random-points applies to --steps only\nusage: "
+                          --latency 4 --random-points 3)
+        pliant_bench_args(bench_args_session_random_points_out_of_range pliant_bench_session 2
+                          STDERR "^pliant_bench_session: --random-points '0' is out of range \\(expected 1\\.\\.1000\\)"
+                          --steps 4 --random-points 0)
+        # Random point layouts at level 4 (a few seconds): the 4-peer row closes the table, with
+        # a median, a worst, the count within the target and the partitions' kinds per column.
+        pliant_bench_args(bench_session_steps_random_points_level_4 pliant_bench_session 0 STDOUT
+                          "\n +4 +4 \\| [0-9.]+ [0-9.]+ +[0-9]+ [0-9gsrt]+ \\| [0-9.]+ [0-9.]+ +[0-9]+ [0-9gsrt]+ \\| [0-9.]+ [0-9.]+ +[0-9]+ [0-9gsrt]+\n"
+                          --steps 4 --random-points 1)
         pliant_bench_args(bench_args_session_coarse_level_too_low pliant_bench_session 2 STDERR
                           "^pliant_bench_session: --coarse level '2' is out of range \\(expected 3\\.\\.10\\)"
                           --coarse 2)
