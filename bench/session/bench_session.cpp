@@ -853,8 +853,7 @@ void steps_suite(bench::Report& report, const std::vector<int>& levels, bool kee
         for (int peers = 2; peers <= 4; ++peers)
             for (const bool points : {false, true})
             {
-                const std::vector<session::Seat> seats =
-                    session_seats(steps.grid(), peers, points);
+                const std::vector<session::Seat> seats = session_seats(steps.grid(), peers, points);
                 const LayoutSteps m = steps.measure(seats, 5);
                 const auto [fmax, fmean] = max_mean(m.fast);
                 const auto [emax, emean] = max_mean(m.exact);
@@ -894,13 +893,14 @@ double compute_target(int peers)
 void random_steps_suite(bench::Report& report, const std::vector<int>& levels, int layouts,
                         bool keep_outside)
 {
-    std::printf("# sim step CPU of the busiest peer / full step over %d random point layouts "
-                "(every member declares a uniformly drawn face; thread CPU time, best of 3 "
-                "rounds, 1 thread): median, worst, layouts within the target (55 %% with 2 "
-                "peers, 30 %% with 4), partitions taken (g grown, s slabs, r whole-row, t turned)\n"
-                "level peers | fast: median worst met kinds | exact: median worst met kinds | "
-                "fast, clearance inside: median worst met kinds\n",
-                layouts);
+    std::printf(
+        "# sim step CPU of the busiest peer / full step over %d random point layouts "
+        "(every member declares a uniformly drawn face; thread CPU time, best of 3 "
+        "rounds, 1 thread): median, worst, layouts within the target (55 %% with 2 "
+        "peers, 30 %% with 4), partitions taken (g grown, s slabs, r whole-row, t turned)\n"
+        "level peers | fast: median worst met kinds | exact: median worst met kinds | "
+        "fast, clearance inside: median worst met kinds\n",
+        layouts);
     for (const int level : levels)
     {
         LevelSteps steps(level, keep_outside);
@@ -923,10 +923,9 @@ void random_steps_suite(bench::Report& report, const std::vector<int>& levels, i
                 for (int p = 0; p < peers; ++p)
                 {
                     const std::uint64_t cell = draw(rng) / 2;  // two faces per cell
-                    seats.push_back(
-                        {net::PeerId{static_cast<std::uint16_t>(p)},
-                         grid.canonical(grid.index(static_cast<int>(cell % w2),
-                                                   static_cast<int>(cell / w2)))});
+                    seats.push_back({net::PeerId{static_cast<std::uint16_t>(p)},
+                                     grid.canonical(grid.index(static_cast<int>(cell % w2),
+                                                               static_cast<int>(cell / w2)))});
                 }
                 const LayoutSteps m = steps.measure(seats, 3);
                 cols[0].busiest.push_back(max_mean(m.fast).first);
@@ -938,8 +937,7 @@ void random_steps_suite(bench::Report& report, const std::vector<int>& levels, i
             }
             const double target = compute_target(peers);
             std::printf("%5d %5d", level, peers);
-            const std::array<const char*, 3> names = {"random points, fast",
-                                                      "random points, exact",
+            const std::array<const char*, 3> names = {"random points, fast", "random points, exact",
                                                       "random points, fast, clearance inside"};
             for (std::size_t c = 0; c < cols.size(); ++c)
             {
@@ -948,8 +946,8 @@ void random_steps_suite(bench::Report& report, const std::vector<int>& levels, i
                 const double median = b.size() % 2 == 1
                                           ? b[b.size() / 2]
                                           : 0.5 * (b[b.size() / 2 - 1] + b[b.size() / 2]);
-                const auto met = std::count_if(b.begin(), b.end(),
-                                               [&](double x) { return x <= target; });
+                const auto met =
+                    std::count_if(b.begin(), b.end(), [&](double x) { return x <= target; });
                 std::string kinds;
                 for (const char kc : {'g', 's', 'r', 't'})
                     if (const auto n = std::count(cols[c].kinds.begin(), cols[c].kinds.end(), kc))
@@ -957,8 +955,8 @@ void random_steps_suite(bench::Report& report, const std::vector<int>& levels, i
                 if (std::isnan(target))
                     std::printf(" | %.2f %.2f   - %s", median, b.back(), kinds.c_str());
                 else
-                    std::printf(" | %.2f %.2f %3ld %s", median, b.back(),
-                                static_cast<long>(met), kinds.c_str());
+                    std::printf(" | %.2f %.2f %3ld %s", median, b.back(), static_cast<long>(met),
+                                kinds.c_str());
                 const double n = static_cast<double>(peers);
                 report.add(names[c], level, n, "peers", "busiest_step_vs_full_median", median, "1");
                 report.add(names[c], level, n, "peers", "busiest_step_vs_full_worst", b.back(),
