@@ -535,6 +535,230 @@ std::optional<std::vector<std::uint32_t>> slab_seats(const core::TetraGrid& grid
     return owner;
 }
 
+/// Blocks: bands of whole leaf rows, one per part of `parts` (a composition of the seat count,
+/// top to bottom), each cut into as many runs of whole leaf columns as its part (x is periodic:
+/// the runs start at a shift, and the run across x = 0 then wraps), so that every share is a
+/// rectangle of leaves: one x-run per grid row, over 1/B of the rows. Each band cut starts at the
+/// leaf-row boundary nearest to its share of the nodes and moves, nearest first, off any point's
+/// leaf row (a cut next to a point's row would put its neighbours across it); the column runs
+/// are balanced within their band, from the first shift (0, 1, C - 1, 2, ...) at which no run
+/// boundary is next to a point's column and no run holds two points. Seats with a point take the
+/// block of their point; the others the rest, in peer order, band by band. A seat index per
+/// leaf, or nothing when a band holds more points than seats, no shift works, a point's leaf or
+/// one of its neighbours lies in another seat's block, or a seat is farther than
+/// `k_slab_balance` from the mean node count. \pre seats sorted by peer id; parts sum to
+/// seats.size(), none 0.
+std::optional<std::vector<std::uint32_t>> block_seats(const core::TetraGrid& grid,
+                                                      const LeafGraph& graph,
+                                                      std::span<const Seat> seats,
+                                                      std::span<const std::size_t> parts)
+{
+    const std::size_t p = seats.size();
+    const std::size_t n = graph.size();
+    const int side = grid.w() >> graph.depth();  // a leaf's width in cells
+    const auto rows = std::size_t{1} << graph.depth();
+    const std::size_t cols = 2 * rows;
+    if (p > n || parts.size() > rows)
+        return std::nullopt;
+    // The leaf at (row, col).
+    std::vector<std::uint32_t> at(rows * cols, k_unowned);
+    const auto regions = graph.regions();
+    for (std::uint32_t l = 0; l < n; ++l)
+        at[static_cast<std::size_t>(regions[l].y0 / side) * cols +
+           static_cast<std::size_t>(regions[l].x0 / side)] = l;
+    const auto row_of = [&](std::uint32_t l)
+    { return static_cast<std::size_t>(regions[l].y0 / side); };
+    const auto col_of = [&](std::uint32_t l)
+    { return static_cast<std::size_t>(regions[l].x0 / side); };
+    std::vector<std::uint32_t> point_leaf(p, k_unowned);
+    std::vector<bool> point_row(rows, false);
+    for (std::size_t s = 0; s < p; ++s)
+        if (seats[s].seed)
+        {
+            PLIANT_ASSERT(seats[s].seed->value < grid.node_count(), "partition_leaves: bad seed");
+            point_leaf[s] = graph.leaf_of(*seats[s].seed);
+            point_row[row_of(point_leaf[s])] = true;
+        }
+    // Band cuts: band k holds the leaf rows [cut[k], cut[k + 1]).
+    std::vector<std::size_t> before(rows + 1, 0);  // nodes of the leaf rows [0, r)
+    for (std::size_t r = 0; r < rows; ++r)
+    {
+        before[r + 1] = before[r];
+        for (std::size_t c = 0; c < cols; ++c)
+            before[r + 1] += graph.node_count(at[r * cols + c]);
+    }
+    const std::size_t bands = parts.size();
+    std::vector<std::size_t> cut(bands + 1, 0);
+    cut[bands] = rows;
+    std::size_t seats_above = 0;
+    for (std::size_t k = 1; k < bands; ++k)
+    {
+        seats_above += parts[k - 1];
+        const double goal = static_cast<double>(before[rows]) * static_cast<double>(seats_above) /
+                            static_cast<double>(p);
+        std::size_t nearest = cut[k - 1] + 1;
+        for (std::size_t r = nearest; r < rows; ++r)
+            if (std::abs(static_cast<double>(before[r]) - goal) <
+                std::abs(static_cast<double>(before[nearest]) - goal))
+                nearest = r;
+        // Off the points' rows: a cut at r lies between rows r - 1 and r.
+        const auto clear = [&](std::size_t r) {
+            return r > cut[k - 1] && r + (bands - k) <= rows - 1 && !point_row[r - 1] &&
+                   !point_row[r];
+        };
+        std::size_t chosen = 0;
+        for (std::size_t d = 0; d < rows && chosen == 0; ++d)
+        {
+            if (nearest >= d && clear(nearest - d))
+                chosen = nearest - d;
+            else if (clear(nearest + d))
+                chosen = nearest + d;
+        }
+        if (chosen == 0)
+            return std::nullopt;
+        cut[k] = chosen;
+    }
+    // The blocks, band by band: owner[l] is a block number until the seats are placed.
+    std::vector<std::uint32_t> owner(n, k_unowned);
+    std::vector<std::uint32_t> block_seat;  // per block: the seat with its point, or k_unowned
+    for (std::size_t k = 0; k < bands; ++k)
+    {
+        const std::size_t r0 = cut[k];
+        const std::size_t r1 = cut[k + 1];
+        std::vector<std::size_t> col_nodes(cols, 0);
+        for (std::size_t r = r0; r < r1; ++r)
+            for (std::size_t c = 0; c < cols; ++c)
+                col_nodes[c] += graph.node_count(at[r * cols + c]);
+        std::vector<std::size_t> band_points;  // seats whose point lies in this band
+        for (std::size_t s = 0; s < p; ++s)
+            if (point_leaf[s] != k_unowned && row_of(point_leaf[s]) >= r0 &&
+                row_of(point_leaf[s]) < r1)
+                band_points.push_back(s);
+        const std::size_t m = parts[k];
+        if (band_points.size() > m || m > cols)
+            return std::nullopt;
+        // Column run of every column for one shift (the runs' boundaries are the shift and the
+        // balanced cuts after it), or nothing when a boundary is next to a point's column or a
+        // run holds two points.
+        const auto runs_for = [&](std::size_t shift) -> std::optional<std::vector<std::size_t>>
+        {
+            std::vector<std::size_t> run(cols, 0);
+            std::vector<bool> boundary(cols, false);  // a run starts at this column
+            boundary[shift] = true;
+            std::size_t total = 0;
+            for (const std::size_t c : col_nodes)
+                total += c;
+            std::size_t sum = 0;
+            std::size_t index = 0;
+            for (std::size_t i = 0; i < cols; ++i)
+            {
+                const std::size_t c = (shift + i) % cols;
+                // A new run starts here when the running count is nearer the next goal before
+                // this column than after it.
+                if (i > 0 && index + 1 < m)
+                {
+                    const double goal = static_cast<double>(total) *
+                                        static_cast<double>(index + 1) / static_cast<double>(m);
+                    if (std::abs(static_cast<double>(sum) - goal) <=
+                            std::abs(static_cast<double>(sum + col_nodes[c]) - goal) ||
+                        cols - i == m - index - 1)
+                    {
+                        ++index;
+                        boundary[c] = true;
+                    }
+                }
+                run[c] = index;
+                sum += col_nodes[c];
+            }
+            if (index + 1 != m)
+                return std::nullopt;
+            std::vector<std::size_t> points_in(m, 0);
+            for (const std::size_t s : band_points)
+            {
+                const std::size_t c = col_of(point_leaf[s]);
+                if (m > 1 && (boundary[c] || boundary[(c + 1) % cols]))
+                    return std::nullopt;
+                if (++points_in[run[c]] > 1)
+                    return std::nullopt;
+            }
+            return run;
+        };
+        std::optional<std::vector<std::size_t>> run;
+        if (m == 1)
+            run = std::vector<std::size_t>(cols, 0);
+        for (std::size_t d = 0; d <= cols / 2 && !run; ++d)
+        {
+            run = runs_for(d);
+            if (!run && d > 0 && d < cols - d)
+                run = runs_for(cols - d);
+        }
+        if (!run)
+            return std::nullopt;
+        const std::size_t first = block_seat.size();
+        block_seat.resize(first + m, k_unowned);
+        for (std::size_t r = r0; r < r1; ++r)
+            for (std::size_t c = 0; c < cols; ++c)
+                owner[at[r * cols + c]] = static_cast<std::uint32_t>(first + (*run)[c]);
+        for (const std::size_t s : band_points)
+            block_seat[first + (*run)[col_of(point_leaf[s])]] = static_cast<std::uint32_t>(s);
+    }
+    // Seats without a point take the blocks without one, in peer order.
+    std::size_t next = 0;
+    for (std::size_t s = 0; s < p; ++s)
+        if (!seats[s].seed)
+        {
+            while (next < block_seat.size() && block_seat[next] != k_unowned)
+                ++next;
+            PLIANT_ASSERT(next < block_seat.size(), "block_seats: more seats than blocks");
+            block_seat[next] = static_cast<std::uint32_t>(s);
+        }
+    std::vector<std::size_t> count(p, 0);
+    for (std::size_t l = 0; l < n; ++l)
+    {
+        owner[l] = block_seat[owner[l]];
+        count[owner[l]] += graph.node_count(l);
+    }
+    for (std::size_t s = 0; s < p; ++s)
+        if (point_leaf[s] != k_unowned)
+        {
+            if (owner[point_leaf[s]] != s)
+                return std::nullopt;
+            for (const std::uint32_t b : graph.neighbours(point_leaf[s]))
+                if (owner[b] != s)
+                    return std::nullopt;
+        }
+    const double mean = static_cast<double>(before[rows]) / static_cast<double>(p);
+    for (const std::size_t c : count)
+        if (std::abs(static_cast<double>(c) - mean) > k_slab_balance * mean)
+            return std::nullopt;
+    return owner;
+}
+
+/// The compositions of `p` (ordered parts, each >= 1) into 1 .. p - 1 parts: the band layouts
+/// of `block_seats` (p parts of one seat each are the whole-row slabs), in lexicographic order.
+std::vector<std::vector<std::size_t>> block_layouts(std::size_t p)
+{
+    std::vector<std::vector<std::size_t>> out;
+    std::vector<std::size_t> parts;
+    const auto extend = [&](const auto& self, std::size_t left) -> void
+    {
+        if (left == 0)
+        {
+            if (parts.size() < p)
+                out.push_back(parts);
+            return;
+        }
+        for (std::size_t k = 1; k <= left; ++k)
+        {
+            parts.push_back(k);
+            self(self, left - k);
+            parts.pop_back();
+        }
+    };
+    extend(extend, p);
+    return out;
+}
+
 std::vector<Seat> sorted_seats(std::span<const Seat> seats_in)
 {
     PLIANT_ASSERT(!seats_in.empty(), "partition_leaves: no participant");
@@ -718,6 +942,24 @@ std::optional<std::vector<net::PeerId>> slab_partition(const core::TetraGrid& gr
     return std::nullopt;
 }
 
+std::optional<std::vector<net::PeerId>> block_partition(const core::TetraGrid& grid,
+                                                        const LeafGraph& graph,
+                                                        std::span<const Seat> seats_in,
+                                                        std::span<const std::size_t> parts)
+{
+    const std::vector<Seat> seats = sorted_seats(seats_in);
+    std::size_t sum = 0;
+    for (const std::size_t k : parts)
+    {
+        PLIANT_ASSERT(k > 0, "block_partition: an empty band");
+        sum += k;
+    }
+    PLIANT_ASSERT(sum == seats.size(), "block_partition: the bands' seats are not the seats");
+    if (auto owner = block_seats(grid, graph, seats, parts))
+        return to_peers(*owner, seats);
+    return std::nullopt;
+}
+
 std::size_t centred_slab_shift(const LeafGraph& graph, std::span<const Seat> seats)
 {
     return centred_shift(graph, row_major_leaves(graph), sorted_seats(seats));
@@ -779,25 +1021,55 @@ std::vector<net::PeerId> partition_leaves(const core::TetraGrid& grid, const Lea
         candidates.push_back({centred, false});
     if (centred_row != 0)
         candidates.push_back({centred_row, true});
-    for (const Candidate& cand : candidates)
+    // Takes `owner` if its busiest step is cheaper and it keeps the clearance.
+    const auto consider = [&](const std::optional<std::vector<std::uint32_t>>& owner)
     {
-        const auto slabs = slab_seats(grid, graph, row_major, seats, cand.shift, cand.whole_rows);
-        if (!slabs)
-            continue;
-        const double cost = busiest_cost(grid, graph, *slabs, seats.size(), ring_cost);
+        if (!owner)
+            return;
+        const double cost = busiest_cost(grid, graph, *owner, seats.size(), ring_cost);
         if (cost >= best_cost)
-            continue;
-        std::vector<net::PeerId> peers = to_peers(*slabs, seats);
-        bool clear = true;
+            return;
+        std::vector<net::PeerId> peers = to_peers(*owner, seats);
         if (clearance == PointClearance::AsGrown)
             for (std::size_t s = 0, i = 0; s < seats.size(); ++s)
-                if (seats[s].seed)
-                    clear = clear && border_hops(graph, peers, *seats[s].seed) >= grown_hops[i++];
-        if (!clear)
-            continue;
+                if (seats[s].seed && border_hops(graph, peers, *seats[s].seed) < grown_hops[i++])
+                    return;
         best = std::move(peers);
         best_cost = cost;
-    }
+    };
+    for (const Candidate& cand : candidates)
+        consider(slab_seats(grid, graph, row_major, seats, cand.shift, cand.whole_rows));
+    // Then the blocks, for every band layout (up to k_max_block_seats participants). A block is
+    // a rectangle of leaves, so its step costs at least its nodes and a row segment for every
+    // grid row it spans but the two folded ones (where half the positions are twins): the
+    // layouts that cannot win by that bound skip the grid passes of `busiest_cost`.
+    const auto regions = graph.regions();
+    const auto block_bound = [&](const std::vector<std::uint32_t>& owner)
+    {
+        std::vector<std::size_t> nodes(seats.size(), 0);
+        std::vector<int> y0(seats.size(), grid.ny());
+        std::vector<int> y1(seats.size(), 0);
+        for (std::size_t l = 0; l < owner.size(); ++l)
+        {
+            nodes[owner[l]] += graph.node_count(l);
+            y0[owner[l]] = std::min(y0[owner[l]], regions[l].y0);
+            y1[owner[l]] = std::max(y1[owner[l]], regions[l].y1);
+        }
+        double bound = 0.0;
+        for (std::size_t s = 0; s < seats.size(); ++s)
+            bound = std::max(bound, static_cast<double>(nodes[s]) +
+                                        k_row_segment_cost * std::max(0, y1[s] - y0[s] - 2));
+        return bound;
+    };
+    // Without points the slabs hold every seat in a band of its own, which no block undercuts
+    // (twice the rows for the same nodes and border), so the blocks are for seats with points.
+    const bool any_point =
+        std::any_of(seats.begin(), seats.end(), [](const Seat& s) { return s.seed.has_value(); });
+    if (any_point && seats.size() <= k_max_block_seats)
+        for (const std::vector<std::size_t>& parts : block_layouts(seats.size()))
+            if (auto blocks = block_seats(grid, graph, seats, parts);
+                blocks && block_bound(*blocks) < best_cost)
+                consider(blocks);
     return best;
 }
 

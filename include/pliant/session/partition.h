@@ -53,9 +53,16 @@
 ///   share per step: `step_cost` counts those `ring_nodes` at `k_exact_ring_cost` in exact
 ///   coupling, so that a share with two borders (a band, or the two caps) costs more than one
 ///   with one. Fast coupling steps its own nodes only (weight 0).
-/// - Rejected: recursive coordinate bisection (balanced but ignores the points of interest and
-///   cuts across the seams arbitrarily); METIS-style multilevel partitioning (not in Debian's
-///   C++ packages we use, and non-deterministic across versions).
+/// - Blocks (`block_partition`): bands of whole leaf rows holding several seats each, every
+///   band cut into runs of whole leaf columns, so that each share is a rectangle of leaves (one
+///   x-run per grid row over a fraction of the rows) holding its point and the point's
+///   neighbours. For points that share rows, where no band per seat can hold them; tried for
+///   every band layout (composition of the seat count) with points and up to
+///   `k_max_block_seats` participants.
+/// - Rejected: plain recursive coordinate bisection (balanced but ignores the points of
+///   interest and cuts across the seams arbitrarily; the blocks are its point-aware two-level
+///   form); METIS-style multilevel partitioning (not in Debian's C++ packages we use, and
+///   non-deterministic across versions).
 
 #include <pliant/core/tetra_grid.h>
 #include <pliant/net/message.h>
@@ -134,6 +141,10 @@ struct Seat
 /// owned nodes in one grid row), in nodes: 0.11-0.13 us per segment against 7.4 ns per node,
 /// measured on the development machine (docs/session.md §3).
 inline constexpr double k_row_segment_cost = 16.0;
+/// The most participants for which `partition_leaves` tries the blocks: their band layouts (the
+/// compositions of the participant count) double with every participant, and with 8 the
+/// repartition took up to 77 ms at level 10 (docs/session.md §3).
+inline constexpr std::size_t k_max_block_seats = 4;
 /// How far from the mean node count a slab may be, as a fraction, after its cuts moved to put
 /// the points in their seats' slabs (the balance the partition tests require of every share;
 /// the cost comparison in `partition_leaves` counts the extra nodes of the busiest).
@@ -156,9 +167,9 @@ enum class PointClearance : std::uint8_t
 /// Owner of every leaf (index as `LeafGraph::leaves()`), deterministic in its inputs (the seats
 /// are sorted by peer id first; their order does not matter). \pre seats non-empty, ids unique.
 /// Of the candidates in the file comment (grown shares, plain and turned slabs, each also with
-/// whole-row cuts), the one with the lowest busiest `step_cost` (with `ring_cost`: 0 for fast
-/// coupling, `k_exact_ring_cost` for exact) among those that meet `clearance` (ties: the
-/// earlier).
+/// whole-row cuts, then the blocks of each band layout), the one with the lowest busiest
+/// `step_cost` (with `ring_cost`: 0 for fast coupling, `k_exact_ring_cost` for exact) among
+/// those that meet `clearance` (ties: the earlier).
 [[nodiscard]] std::vector<net::PeerId> partition_leaves(
     const core::TetraGrid& grid, const LeafGraph& graph, std::span<const Seat> seats,
     PointClearance clearance = PointClearance::AsGrown, double ring_cost = 0.0);
@@ -184,6 +195,16 @@ enum class PointClearance : std::uint8_t
                                                                      std::span<const Seat> seats,
                                                                      std::size_t shift = 0,
                                                                      bool whole_rows = false);
+
+/// The blocks alone: bands of whole leaf rows, band k holding `parts[k]` seats (top to bottom),
+/// each band cut into `parts[k]` runs of whole leaf columns (one wrapping round x = 0 unless the
+/// runs start at column 0), every share a rectangle of leaves holding its seat's point and the
+/// point's neighbouring leaves; or nothing when no such cuts exist within `k_slab_balance` of
+/// the mean node count (see the file comment). \pre `parts` non-empty, no part 0, summing to the
+/// number of seats.
+[[nodiscard]] std::optional<std::vector<net::PeerId>> block_partition(
+    const core::TetraGrid& grid, const LeafGraph& graph, std::span<const Seat> seats,
+    std::span<const std::size_t> parts);
 
 /// The shift (a position in the row-major leaf order) at which balanced slab cuts fall farthest
 /// from every point of interest: each point's position along the order (its leaf's middle, in
