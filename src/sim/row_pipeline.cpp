@@ -740,8 +740,19 @@ void accept_swapping(Rkf45Workspace& ws, MembraneState& state) noexcept
         {
             const std::ptrdiff_t a = static_cast<std::ptrdiff_t>(y) * s + r.x0;
             const std::ptrdiff_t b = static_cast<std::ptrdiff_t>(y) * s + r.x1;
-            std::copy(u + a, u + b, uo + a);
-            std::copy(v + a, v + b, vo + a);
+            // Most runs are the one or two ring nodes at a share's row ends: a loop, not a
+            // memmove call, for those.
+            if (b - a <= 4)
+                for (std::ptrdiff_t i = a; i < b; ++i)
+                {
+                    uo[i] = u[i];
+                    vo[i] = v[i];
+                }
+            else
+            {
+                std::copy(u + a, u + b, uo + a);
+                std::copy(v + a, v + b, vo + a);
+            }
         }
     std::swap(state.u, ws.u_out);
     std::swap(state.v, ws.v_out);
