@@ -683,7 +683,7 @@ double thread_cpu_s()
 
 /// One seat layout's steps (steps_suite): each peer's restricted step against the full step, per
 /// partition, and the partitions' kinds (g grown shares, s slabs, r whole-row slabs, t turned
-/// slabs, b blocks).
+/// slabs, w wide shares, b blocks).
 struct LayoutSteps
 {
     char fast_kind = 'g';
@@ -806,6 +806,9 @@ private:
             return 's';
         if (owners == session::slab_partition(grid_, graph_, seats, 0, true))
             return 'r';
+        for (const std::uint32_t row_hop : session::k_wide_row_hops)
+            if (owners == session::wide_partition(grid_, graph_, seats, row_hop))
+                return 'w';
         // The blocks' band layouts: the compositions of the seat count into fewer parts.
         const std::size_t p = seats.size();
         for (std::uint32_t bits = 0; bits + 1 < (1U << (p - 1)); ++bits)
@@ -859,7 +862,8 @@ void steps_suite(bench::Report& report, const std::vector<int>& levels, bool kee
 {
     std::printf(
         "# sim step CPU per peer / full step (thread CPU time, best of 5 rounds, 1 "
-        "thread); partition: g grown shares, s slabs, r whole-row slabs, t turned slabs, b "
+        "thread); partition: g grown shares, s slabs, r whole-row slabs, t turned slabs, w wide "
+        "shares, b "
         "blocks\nlevel "
         "peers points | fast: max mean | exact: max mean | full step us | fast, clearance "
         "inside: max mean\n");
@@ -913,8 +917,8 @@ void random_steps_suite(bench::Report& report, const std::vector<int>& levels, i
         "# sim step CPU of the busiest peer / full step over %d random point layouts "
         "(every member declares a uniformly drawn face; thread CPU time, best of 3 "
         "rounds, 1 thread): median, worst, layouts within the target (55 %% with 2 "
-        "peers, 30 %% with 4), partitions taken (g grown, s slabs, r whole-row, t turned, b "
-        "blocks)\n"
+        "peers, 30 %% with 4), partitions taken (g grown, s slabs, r whole-row, t turned, w "
+        "wide, b blocks)\n"
         "level peers | fast: median worst met kinds | exact: median worst met kinds | "
         "fast, clearance inside: median worst met kinds\n",
         layouts);
@@ -966,7 +970,7 @@ void random_steps_suite(bench::Report& report, const std::vector<int>& levels, i
                 const auto met =
                     std::count_if(b.begin(), b.end(), [&](double x) { return x <= target; });
                 std::string kinds;
-                for (const char kc : {'g', 's', 'r', 't', 'b'})
+                for (const char kc : {'g', 's', 'r', 't', 'w', 'b'})
                     if (const auto n = std::count(cols[c].kinds.begin(), cols[c].kinds.end(), kc))
                         kinds += std::to_string(n) + kc;
                 if (std::isnan(target))

@@ -280,10 +280,13 @@ void rebalance(const LeafGraph& graph, std::span<const std::uint32_t> seed,
 }
 
 /// The balanced BFS growth from the seats' leaves (the file comment of partition.h), rebalanced
-/// where a front closed early, as a seat index per leaf. \pre seats sorted by peer id,
-/// non-empty.
+/// where a front closed early, as a seat index per leaf. With `row_hop` > 1 (the wide shares),
+/// each seat's front is ordered by a distance from its seed in which a hop to another leaf row
+/// costs `row_hop` and a hop along a leaf row 1 (ties: first discovered first), so the shares
+/// grow along the rows: fewer grid rows, hence fewer row segments, for the same nodes.
+/// \pre seats sorted by peer id, non-empty; row_hop >= 1.
 std::vector<std::uint32_t> grow_seats(const core::TetraGrid& grid, const LeafGraph& graph,
-                                      std::span<const Seat> seats)
+                                      std::span<const Seat> seats, std::uint32_t row_hop = 1)
 {
     const std::size_t p = seats.size();
     const std::size_t n = graph.size();
@@ -322,41 +325,72 @@ std::vector<std::uint32_t> grow_seats(const core::TetraGrid& grid, const LeafGra
             take(s, best);
         }
 
-    // Balanced growth along each seat's own BFS front.
-    std::vector<std::deque<std::uint32_t>> front(p);
-    std::vector<std::vector<bool>> seen(p, std::vector<bool>(n, false));
+    // Balanced growth along each seat's own front: (distance from the seed, discovery order,
+    // leaf), smallest first. With row_hop 1 the distance is the BFS hop count and discovery
+    // order already sorts the front, which is then the plain BFS queue.
+    using Entry = std::array<std::uint64_t, 3>;
+    std::vector<std::vector<Entry>> front(p);  // min-heaps
+    std::vector<std::vector<std::uint64_t>> dist(p, std::vector<std::uint64_t>(n, UINT64_MAX));
     std::vector<std::size_t> count(p, 0);
+    std::uint64_t discovered = 0;
+    const int side = grid.w() >> graph.depth();
+    const auto regions = graph.regions();
+    const auto later = [](const Entry& a, const Entry& b) { return a > b; };
     auto grow_from = [&](std::size_t s, std::uint32_t leaf)
     {
         count[s] += graph.node_count(leaf);
         for (const std::uint32_t b : graph.neighbours(leaf))
-            if (!seen[s][b])
+        {
+            const bool same_row = regions[b].y0 / side == regions[leaf].y0 / side;
+            const std::uint64_t d = dist[s][leaf] + (same_row ? 1U : row_hop);
+            if (d < dist[s][b])
             {
-                seen[s][b] = true;
-                front[s].push_back(b);
+                dist[s][b] = d;
+                front[s].push_back({d, discovered++, b});
+                std::push_heap(front[s].begin(), front[s].end(), later);
             }
+        }
     };
     for (std::size_t s = 0; s < p; ++s)
         if (seed[s] != k_unowned)
         {
-            seen[s][seed[s]] = true;
+            dist[s][seed[s]] = 0;
             grow_from(s, seed[s]);
         }
     std::size_t free_left = n - placed.size();
+    // Wide shares reach the rows above and below a point late, so a point's seat first takes
+    // the free neighbours of its leaf (the clearance every other candidate keeps).
+    if (row_hop > 1)
+        for (std::size_t s = 0; s < p; ++s)
+            if (seats[s].seed && seed[s] != k_unowned)
+                for (const std::uint32_t b : graph.neighbours(seed[s]))
+                    if (owner[b] == k_unowned)
+                    {
+                        owner[b] = static_cast<std::uint32_t>(s);
+                        dist[s][b] = std::min(dist[s][b], std::uint64_t{row_hop});
+                        grow_from(s, b);
+                        --free_left;
+                    }
     while (free_left > 0)
     {
         std::size_t pick = p;
         for (std::size_t s = 0; s < p; ++s)
         {
-            while (!front[s].empty() && owner[front[s].front()] != k_unowned)
-                front[s].pop_front();
+            // Drop taken leaves and entries a shorter path has superseded.
+            while (!front[s].empty() && (owner[front[s].front()[2]] != k_unowned ||
+                                         front[s].front()[0] != dist[s][front[s].front()[2]]))
+            {
+                std::pop_heap(front[s].begin(), front[s].end(), later);
+                front[s].pop_back();
+            }
             if (!front[s].empty() && (pick == p || count[s] < count[pick]))
                 pick = s;
         }
         if (pick == p)
             break;  // every front is closed (cannot happen on a connected graph)
-        const std::uint32_t leaf = front[pick].front();
-        front[pick].pop_front();
+        const auto leaf = static_cast<std::uint32_t>(front[pick].front()[2]);
+        std::pop_heap(front[pick].begin(), front[pick].end(), later);
+        front[pick].pop_back();
         owner[leaf] = static_cast<std::uint32_t>(pick);
         grow_from(pick, leaf);
         --free_left;
@@ -368,7 +402,10 @@ std::vector<std::uint32_t> grow_seats(const core::TetraGrid& grid, const LeafGra
             owner[l] = static_cast<std::uint32_t>(smallest);
             count[static_cast<std::size_t>(smallest)] += graph.node_count(l);
         }
-    rebalance(graph, seed, owner, count);
+    // The wide shares skip it: at level 10 their fronts leave 8 shares far enough apart that
+    // the pass took up to 0.9 s; they are a candidate only where the growth alone balances.
+    if (row_hop == 1)
+        rebalance(graph, seed, owner, count);
     return owner;
 }
 
@@ -533,6 +570,24 @@ std::optional<std::vector<std::uint32_t>> slab_seats(const core::TetraGrid& grid
         for (std::size_t i = cut[k]; i < cut[k + 1]; ++i)
             owner[order[i]] = seat_at[k];
     return owner;
+}
+
+/// Whether every seat's point has its leaf and the leaf's neighbours in its own share (`owner`
+/// by seat index).
+bool points_inside(const LeafGraph& graph, std::span<const std::uint32_t> owner,
+                   std::span<const Seat> seats)
+{
+    for (std::size_t s = 0; s < seats.size(); ++s)
+        if (seats[s].seed)
+        {
+            const std::uint32_t leaf = graph.leaf_of(*seats[s].seed);
+            if (owner[leaf] != s)
+                return false;
+            for (const std::uint32_t b : graph.neighbours(leaf))
+                if (owner[b] != s)
+                    return false;
+        }
+    return true;
 }
 
 /// Blocks: bands of whole leaf rows, one per part of `parts` (a composition of the seat count,
@@ -718,19 +773,41 @@ std::optional<std::vector<std::uint32_t>> block_seats(const core::TetraGrid& gri
         owner[l] = block_seat[owner[l]];
         count[owner[l]] += graph.node_count(l);
     }
-    for (std::size_t s = 0; s < p; ++s)
-        if (point_leaf[s] != k_unowned)
-        {
-            if (owner[point_leaf[s]] != s)
-                return std::nullopt;
-            for (const std::uint32_t b : graph.neighbours(point_leaf[s]))
-                if (owner[b] != s)
-                    return std::nullopt;
-        }
+    if (!points_inside(graph, owner, seats))
+        return std::nullopt;
     const double mean = static_cast<double>(before[rows]) / static_cast<double>(p);
     for (const std::size_t c : count)
         if (std::abs(static_cast<double>(c) - mean) > k_slab_balance * mean)
             return std::nullopt;
+    return owner;
+}
+
+/// The wide shares: the growth with a hop to another leaf row costing `row_hop`, or nothing
+/// when a point's leaf or one of its neighbours that its seat holds in the grown shares
+/// (`grown`; points too close together share their neighbours there) went to another seat, or
+/// a share ended farther than `k_slab_balance` from the mean. \pre seats sorted by peer id.
+std::optional<std::vector<std::uint32_t>> wide_seats(const core::TetraGrid& grid,
+                                                     const LeafGraph& graph,
+                                                     std::span<const Seat> seats,
+                                                     std::span<const std::uint32_t> grown,
+                                                     std::uint32_t row_hop)
+{
+    std::vector<std::uint32_t> owner = grow_seats(grid, graph, seats, row_hop);
+    for (std::size_t s = 0; s < seats.size(); ++s)
+        if (seats[s].seed)
+        {
+            const std::uint32_t leaf = graph.leaf_of(*seats[s].seed);
+            if (grown[leaf] == s && owner[leaf] != s)
+                return std::nullopt;
+            for (const std::uint32_t b : graph.neighbours(leaf))
+                if (grown[b] == s && owner[b] != s)
+                    return std::nullopt;
+        }
+    std::vector<std::size_t> count(seats.size(), 0);
+    for (std::size_t l = 0; l < owner.size(); ++l)
+        count[owner[l]] += graph.node_count(l);
+    if (imbalance_of(count) > k_slab_balance)
+        return std::nullopt;
     return owner;
 }
 
@@ -931,6 +1008,18 @@ std::vector<net::PeerId> grown_partition(const core::TetraGrid& grid, const Leaf
     return to_peers(grow_seats(grid, graph, seats), seats);
 }
 
+std::optional<std::vector<net::PeerId>> wide_partition(const core::TetraGrid& grid,
+                                                       const LeafGraph& graph,
+                                                       std::span<const Seat> seats_in,
+                                                       std::uint32_t row_hop)
+{
+    PLIANT_ASSERT(row_hop >= 1, "wide_partition: row_hop must be at least 1");
+    const std::vector<Seat> seats = sorted_seats(seats_in);
+    if (auto owner = wide_seats(grid, graph, seats, grow_seats(grid, graph, seats), row_hop))
+        return to_peers(*owner, seats);
+    return std::nullopt;
+}
+
 std::optional<std::vector<net::PeerId>> slab_partition(const core::TetraGrid& grid,
                                                        const LeafGraph& graph,
                                                        std::span<const Seat> seats_in,
@@ -1039,6 +1128,13 @@ std::vector<net::PeerId> partition_leaves(const core::TetraGrid& grid, const Lea
     };
     for (const Candidate& cand : candidates)
         consider(slab_seats(grid, graph, row_major, seats, cand.shift, cand.whole_rows));
+    // Without points the slabs hold every seat in a band of its own, which neither the wide
+    // shares nor the blocks undercut, so those two are for seats with points.
+    const bool any_point =
+        std::any_of(seats.begin(), seats.end(), [](const Seat& s) { return s.seed.has_value(); });
+    if (any_point)
+        for (const std::uint32_t row_hop : k_wide_row_hops)
+            consider(wide_seats(grid, graph, seats, grown, row_hop));
     // Then the blocks, for every band layout (up to k_max_block_seats participants). A block is
     // a rectangle of leaves, so its step costs at least its nodes and a row segment for every
     // grid row it spans but the two folded ones (where half the positions are twins): the
@@ -1061,10 +1157,6 @@ std::vector<net::PeerId> partition_leaves(const core::TetraGrid& grid, const Lea
                                         k_row_segment_cost * std::max(0, y1[s] - y0[s] - 2));
         return bound;
     };
-    // Without points the slabs hold every seat in a band of its own, which no block undercuts
-    // (twice the rows for the same nodes and border), so the blocks are for seats with points.
-    const bool any_point =
-        std::any_of(seats.begin(), seats.end(), [](const Seat& s) { return s.seed.has_value(); });
     if (any_point && seats.size() <= k_max_block_seats)
         for (const std::vector<std::size_t>& parts : block_layouts(seats.size()))
             if (auto blocks = block_seats(grid, graph, seats, parts);

@@ -49,7 +49,7 @@ if(PLIANT_BUILD_BENCH AND EXISTS ${PROJECT_SOURCE_DIR}/bench/CMakeLists.txt)
         # Random point layouts at level 4 (a few seconds): the 4-peer row closes the table, with
         # a median, a worst, the count within the target and the partitions' kinds per column.
         pliant_bench_args(bench_session_steps_random_points_level_4 pliant_bench_session 0 STDOUT
-                          "\n +4 +4 \\| [0-9.]+ [0-9.]+ +[0-9]+ [0-9gsrtb]+ \\| [0-9.]+ [0-9.]+ +[0-9]+ [0-9gsrtb]+ \\| [0-9.]+ [0-9.]+ +[0-9]+ [0-9gsrtb]+\n"
+                          "\n +4 +4 \\| [0-9.]+ [0-9.]+ +[0-9]+ [0-9gsrtwb]+ \\| [0-9.]+ [0-9.]+ +[0-9]+ [0-9gsrtwb]+ \\| [0-9.]+ [0-9.]+ +[0-9]+ [0-9gsrtwb]+\n"
                           --steps 4 --random-points 1)
         pliant_bench_args(bench_args_session_coarse_level_too_low pliant_bench_session 2 STDERR
                           "^pliant_bench_session: --coarse level '2' is out of range \\(expected 3\\.\\.10\\)"

@@ -490,8 +490,26 @@ TEST(Partition, PointsOnTheBalancedCutsTurnTheSlabsInExactCoupling)
                     << p;
             }
         }
-        // Fast coupling keeps the grown shares here: their borders are farther from the points.
-        EXPECT_EQ(partition_leaves(g, graph, seats), grown_partition(g, graph, seats)) << p;
+        // Fast coupling takes no slabs here: their borders are nearer the points than the grown
+        // shares' (the wide shares may keep the grown shares' distance, and are then taken).
+        const auto fast = partition_leaves(g, graph, seats);
+        const auto grown = grown_partition(g, graph, seats);
+        EXPECT_NE(fast, *turned) << p;
+        for (const Seat& s : seats)
+        {
+            if (s.seed)
+            {
+                EXPECT_GE(border_hops(graph, fast, *s.seed), border_hops(graph, grown, *s.seed))
+                    << p;
+            }
+        }
+        if (fast != grown)
+        {
+            bool wide = false;
+            for (const std::uint32_t row_hop : k_wide_row_hops)
+                wide = wide || fast == wide_partition(g, graph, seats, row_hop);
+            EXPECT_TRUE(wide) << p;
+        }
     }
 }
 
@@ -645,8 +663,10 @@ TEST(Partition, TakesTheSlabsExactlyWhenTheirBusiestStepIsCheaper)
                 centred != 0 ? slab_partition(g, graph, seats, centred) : Owners{};
             const Owners turned_rows =
                 centred_row != 0 ? slab_partition(g, graph, seats, centred_row, true) : Owners{};
-            // Then the blocks of every band layout.
+            // Then the wide shares, then the blocks of every band layout.
             std::vector<Owners> candidates = {slabs, rows, turned, turned_rows};
+            for (const std::uint32_t row_hop : k_wide_row_hops)
+                candidates.push_back(wide_partition(g, graph, seats, row_hop));
             for (const auto& parts : compositions(static_cast<std::size_t>(p)))
                 candidates.push_back(block_partition(g, graph, seats, parts));
             const auto choose = [&](bool clearance, double ring_cost)
@@ -822,6 +842,67 @@ TEST(Partition, BlocksAreRectanglesInBandsBalancedWithEveryPointAndItsNeighbours
     }
     std::printf("blocks made for %zu of %zu random layouts and band layouts\n", made, tried);
     EXPECT_GT(made, tried / 10);  // the checks above ran on many
+}
+
+TEST(Partition, WideSharesAreBalancedConnectedKeepTheGrownClearanceAndSpanFewerRows)
+{
+    std::mt19937 rng(20261206);
+    std::size_t wide_segments = 0;
+    std::size_t grown_segments = 0;
+    std::size_t made = 0;
+    for (int level = 5; level <= 8; ++level)
+    {
+        const auto g = grid_of(level);
+        const LeafGraph graph(g, leaf_depth_for(g, net::ValueEncoding::F64));
+        for (int p = 2; p <= 4; ++p)
+            for (int trial = 0; trial < 10; ++trial)
+            {
+                std::vector<Seat> seats;
+                for (int k = 0; k < p; ++k)
+                {
+                    seats.push_back(
+                        {net::PeerId{static_cast<std::uint16_t>(5 * k + 2)}, std::nullopt});
+                    if (trial % 5 != 0 || k > 0)  // every fifth layout: the first has none
+                        seats.back().seed = g.canonical(
+                            core::NodeIndex{static_cast<std::uint32_t>(rng() % g.node_count())});
+                }
+                const auto grown = grown_partition(g, graph, seats);
+                // Row hop 1 is the grown shares' own growth.
+                EXPECT_EQ(wide_partition(g, graph, seats, 1).value_or(grown), grown);
+                for (const std::uint32_t row_hop : k_wide_row_hops)
+                {
+                    const auto wide = wide_partition(g, graph, seats, row_hop);
+                    auto reversed = seats;
+                    std::reverse(reversed.begin(), reversed.end());
+                    EXPECT_EQ(wide, wide_partition(g, graph, reversed, row_hop));
+                    if (!wide)
+                        continue;
+                    ++made;
+                    const auto q = measure_partition(g, graph, *wide);
+                    EXPECT_LE(q.imbalance, k_slab_balance);
+                    for (const auto& sh : q.shares)
+                        EXPECT_EQ(sh.fragments, 1U) << "level " << level << " layout " << trial;
+                    for (const Seat& s : seats)
+                        if (s.seed)
+                        {
+                            const std::uint32_t leaf = graph.leaf_of(*s.seed);
+                            EXPECT_TRUE(grown[leaf] != s.peer || (*wide)[leaf] == s.peer);
+                            for (const std::uint32_t b : graph.neighbours(leaf))
+                                EXPECT_TRUE(grown[b] != s.peer || (*wide)[b] == s.peer);
+                        }
+                    for (const Seat& s : seats)
+                    {
+                        wide_segments += brute_row_segments(g, graph, *wide, s.peer);
+                        grown_segments += brute_row_segments(g, graph, grown, s.peer);
+                    }
+                }
+            }
+    }
+    std::printf("wide shares made %zu times: %zu row segments against %zu grown\n", made,
+                wide_segments, grown_segments);
+    EXPECT_GT(made, 100U);
+    // What they are for: fewer row segments (the step's per-row cost) for the same nodes.
+    EXPECT_LT(static_cast<double>(wide_segments), 0.9 * static_cast<double>(grown_segments));
 }
 
 TEST(Partition, PointsInTheSameRowsTakeTheBlocksNotTheSlabs)

@@ -53,6 +53,11 @@
 ///   share per step: `step_cost` counts those `ring_nodes` at `k_exact_ring_cost` in exact
 ///   coupling, so that a share with two borders (a band, or the two caps) costs more than one
 ///   with one. Fast coupling steps its own nodes only (weight 0).
+/// - Wide shares (`wide_partition`): the grown shares' growth with each seat's front ordered by
+///   a distance in which a hop to another leaf row costs more (`k_wide_row_hops`), so that the
+///   shares grow along the rows and span fewer of them; a seat with a point takes the point's
+///   neighbouring leaves first. Taken where cheaper and, in fast coupling, where no point comes
+///   nearer a border than in the grown shares.
 /// - Blocks (`block_partition`): bands of whole leaf rows holding several seats each, every
 ///   band cut into runs of whole leaf columns, so that each share is a rectangle of leaves (one
 ///   x-run per grid row over a fraction of the rows) holding its point and the point's
@@ -141,6 +146,8 @@ struct Seat
 /// owned nodes in one grid row), in nodes: 0.11-0.13 us per segment against 7.4 ns per node,
 /// measured on the development machine (docs/session.md §3).
 inline constexpr double k_row_segment_cost = 16.0;
+/// The row hops of the wide shares `partition_leaves` tries (`wide_partition`).
+inline constexpr std::array<std::uint32_t, 2> k_wide_row_hops = {2, 4};
 /// The most participants for which `partition_leaves` tries the blocks: their band layouts (the
 /// compositions of the participant count) double with every participant, and with 8 the
 /// repartition took up to 77 ms at level 10 (docs/session.md §3).
@@ -183,6 +190,18 @@ enum class PointClearance : std::uint8_t
 [[nodiscard]] std::vector<net::PeerId> grown_partition(const core::TetraGrid& grid,
                                                        const LeafGraph& graph,
                                                        std::span<const Seat> seats);
+
+/// The wide shares alone: the grown shares' balanced growth with each seat's front ordered by a
+/// distance in which a hop to another leaf row costs `row_hop` (1: the grown shares), so that
+/// shares grow along the rows (a point's seat takes the point's neighbouring leaves first); or
+/// nothing when a point's leaf or one of its neighbouring leaves that its seat holds in the
+/// grown shares is another seat's, or a share is farther than `k_slab_balance` from the mean
+/// node count.
+/// \pre row_hop >= 1.
+[[nodiscard]] std::optional<std::vector<net::PeerId>> wide_partition(const core::TetraGrid& grid,
+                                                                     const LeafGraph& graph,
+                                                                     std::span<const Seat> seats,
+                                                                     std::uint32_t row_hop);
 
 /// The slabs alone, cut along the row-major leaf order taken as a cycle from its position
 /// `shift` (0: from the first leaf; otherwise the slab across the end and the start of the order
