@@ -56,8 +56,10 @@
 /// - Wide shares (`wide_partition`): the grown shares' growth with each seat's front ordered by
 ///   a distance in which a hop to another leaf row costs more (`k_wide_row_hops`), so that the
 ///   shares grow along the rows and span fewer of them; a seat with a point takes the point's
-///   neighbouring leaves first. Taken where cheaper and, in fast coupling, where no point comes
-///   nearer a border than in the grown shares.
+///   neighbouring leaves first. No rebalancing pass (at level 10 it took up to 0.9 s on these
+///   shares), so they exist only where the growth alone balances. Tried with points only; taken
+///   where cheaper and, in fast coupling, where no point comes nearer a border than in the
+///   grown shares.
 /// - Blocks (`block_partition`): bands of whole leaf rows holding several seats each, every
 ///   band cut into runs of whole leaf columns, so that each share is a rectangle of leaves (one
 ///   x-run per grid row over a fraction of the rows) holding its point and the point's
@@ -174,9 +176,9 @@ enum class PointClearance : std::uint8_t
 /// Owner of every leaf (index as `LeafGraph::leaves()`), deterministic in its inputs (the seats
 /// are sorted by peer id first; their order does not matter). \pre seats non-empty, ids unique.
 /// Of the candidates in the file comment (grown shares, plain and turned slabs, each also with
-/// whole-row cuts, then the blocks of each band layout), the one with the lowest busiest
-/// `step_cost` (with `ring_cost`: 0 for fast coupling, `k_exact_ring_cost` for exact) among
-/// those that meet `clearance` (ties: the earlier).
+/// whole-row cuts, then the wide shares and the blocks of each band layout), the one with the
+/// lowest busiest `step_cost` (with `ring_cost`: 0 for fast coupling, `k_exact_ring_cost` for
+/// exact) among those that meet `clearance` (ties: the earlier).
 [[nodiscard]] std::vector<net::PeerId> partition_leaves(
     const core::TetraGrid& grid, const LeafGraph& graph, std::span<const Seat> seats,
     PointClearance clearance = PointClearance::AsGrown, double ring_cost = 0.0);
@@ -193,10 +195,10 @@ enum class PointClearance : std::uint8_t
 
 /// The wide shares alone: the grown shares' balanced growth with each seat's front ordered by a
 /// distance in which a hop to another leaf row costs `row_hop` (1: the grown shares), so that
-/// shares grow along the rows (a point's seat takes the point's neighbouring leaves first); or
-/// nothing when a point's leaf or one of its neighbouring leaves that its seat holds in the
-/// grown shares is another seat's, or a share is farther than `k_slab_balance` from the mean
-/// node count.
+/// shares grow along the rows (a point's seat takes the point's neighbouring leaves first, and
+/// for `row_hop` > 1 no rebalancing pass follows); or nothing when a point's leaf or one of its
+/// neighbouring leaves that its seat holds in the grown shares is another seat's, or a share is
+/// farther than `k_slab_balance` from the mean node count.
 /// \pre row_hop >= 1.
 [[nodiscard]] std::optional<std::vector<net::PeerId>> wide_partition(const core::TetraGrid& grid,
                                                                      const LeafGraph& graph,
