@@ -809,19 +809,9 @@ private:
         for (const std::uint32_t row_hop : session::k_wide_row_hops)
             if (owners == session::wide_partition(grid_, graph_, seats, row_hop))
                 return 'w';
-        // The blocks' band layouts: the compositions of the seat count into fewer parts.
-        const std::size_t p = seats.size();
-        for (std::uint32_t bits = 0; bits + 1 < (1U << (p - 1)); ++bits)
-        {
-            std::vector<std::size_t> parts = {1};
-            for (std::size_t i = 0; i + 1 < p; ++i)
-                if ((bits >> i & 1U) != 0)
-                    parts.push_back(1);
-                else
-                    ++parts.back();
+        for (const auto& parts : session::block_layouts(seats.size()))
             if (owners == session::block_partition(grid_, graph_, seats, parts))
                 return 'b';
-        }
         return 't';
     }
 

@@ -811,31 +811,6 @@ std::optional<std::vector<std::uint32_t>> wide_seats(const core::TetraGrid& grid
     return owner;
 }
 
-/// The compositions of `p` (ordered parts, each >= 1) into 1 .. p - 1 parts: the band layouts
-/// of `block_seats` (p parts of one seat each are the whole-row slabs), in lexicographic order.
-std::vector<std::vector<std::size_t>> block_layouts(std::size_t p)
-{
-    std::vector<std::vector<std::size_t>> out;
-    std::vector<std::size_t> parts;
-    const auto extend = [&](const auto& self, std::size_t left) -> void
-    {
-        if (left == 0)
-        {
-            if (parts.size() < p)
-                out.push_back(parts);
-            return;
-        }
-        for (std::size_t k = 1; k <= left; ++k)
-        {
-            parts.push_back(k);
-            self(self, left - k);
-            parts.pop_back();
-        }
-    };
-    extend(extend, p);
-    return out;
-}
-
 std::vector<Seat> sorted_seats(std::span<const Seat> seats_in)
 {
     PLIANT_ASSERT(!seats_in.empty(), "partition_leaves: no participant");
@@ -1047,6 +1022,29 @@ std::optional<std::vector<net::PeerId>> block_partition(const core::TetraGrid& g
     if (auto owner = block_seats(grid, graph, seats, parts))
         return to_peers(*owner, seats);
     return std::nullopt;
+}
+
+std::vector<std::vector<std::size_t>> block_layouts(std::size_t p)
+{
+    std::vector<std::vector<std::size_t>> out;
+    std::vector<std::size_t> parts;
+    const auto extend = [&](const auto& self, std::size_t left) -> void
+    {
+        if (left == 0)
+        {
+            if (parts.size() < p)
+                out.push_back(parts);
+            return;
+        }
+        for (std::size_t k = 1; k <= left; ++k)
+        {
+            parts.push_back(k);
+            self(self, left - k);
+            parts.pop_back();
+        }
+    };
+    extend(extend, p);
+    return out;
 }
 
 std::size_t centred_slab_shift(const LeafGraph& graph, std::span<const Seat> seats)

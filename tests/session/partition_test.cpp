@@ -764,6 +764,13 @@ TEST(Partition, BorderHopsEqualTheHopsFromTheOnlyForeignLeaf)
               std::numeric_limits<std::uint32_t>::max());
 }
 
+TEST(Partition, BlockLayoutsAreTheCompositionsIntoFewerParts)
+{
+    for (std::size_t p = 1; p <= 8; ++p)
+        EXPECT_EQ(block_layouts(p), compositions(p)) << p;
+    EXPECT_EQ(block_layouts(4).size(), 7U);  // 2^(p-1) compositions less the all-ones one
+}
+
 TEST(Partition, BlocksAreRectanglesInBandsBalancedWithEveryPointAndItsNeighboursInside)
 {
     std::mt19937 rng(20261205);

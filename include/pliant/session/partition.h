@@ -227,6 +227,11 @@ enum class PointClearance : std::uint8_t
     const core::TetraGrid& grid, const LeafGraph& graph, std::span<const Seat> seats,
     std::span<const std::size_t> parts);
 
+/// The band layouts `partition_leaves` tries for the blocks of `p` participants: every
+/// composition of p (ordered parts, each >= 1) into fewer than p parts (p parts of one seat each
+/// are the whole-row slabs), in lexicographic order.
+[[nodiscard]] std::vector<std::vector<std::size_t>> block_layouts(std::size_t p);
+
 /// The shift (a position in the row-major leaf order) at which balanced slab cuts fall farthest
 /// from every point of interest: each point's position along the order (its leaf's middle, in
 /// nodes) taken modulo one slab's node count, and the cuts in the middle of the widest gap
