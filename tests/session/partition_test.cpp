@@ -47,6 +47,22 @@ std::vector<Seat> seats_of(const core::TetraGrid& g, int p, bool with_points)
     return seats;
 }
 
+// p seats with peer ids step * k + first, each declaring a uniformly drawn canonical node, but
+// the first seat when `first_without` (a member with no point).
+std::vector<Seat> random_seats(const core::TetraGrid& g, std::mt19937& rng, int p, int step,
+                               int first, bool first_without)
+{
+    std::vector<Seat> seats;
+    for (int k = 0; k < p; ++k)
+    {
+        seats.push_back({net::PeerId{static_cast<std::uint16_t>(step * k + first)}, std::nullopt});
+        if (!first_without || k > 0)
+            seats.back().seed =
+                g.canonical(core::NodeIndex{static_cast<std::uint32_t>(rng() % g.node_count())});
+    }
+    return seats;
+}
+
 TEST(LeafDepth, SmallestDepthWhoseLeavesFitOneDatagram)
 {
     for (int level = 1; level <= 10; ++level)
@@ -166,14 +182,8 @@ TEST(Partition, RandomPointsStayBalancedConnectedAndOwnTheirLeaves)
         for (int p = 2; p <= 4; ++p)
             for (int trial = 0; trial < layouts; ++trial)
             {
-                std::vector<Seat> seats;
-                for (int k = 0; k < p; ++k)
-                {
-                    seats.push_back({net::PeerId{static_cast<std::uint16_t>(k + 1)}, std::nullopt});
-                    if (trial % 4 != 0 || k > 0)  // every fourth layout: the master has none
-                        seats.back().seed = g.canonical(
-                            core::NodeIndex{static_cast<std::uint32_t>(rng() % g.node_count())});
-                }
+                // Every fourth layout: the master has none.
+                const std::vector<Seat> seats = random_seats(g, rng, p, 1, 1, trial % 4 == 0);
                 for (const PointClearance c : {PointClearance::AsGrown, PointClearance::Inside})
                 {
                     const auto owners = partition_leaves(g, graph, seats, c);
@@ -785,15 +795,8 @@ TEST(Partition, BlocksAreRectanglesInBandsBalancedWithEveryPointAndItsNeighbours
         for (int p = 2; p <= 4; ++p)
             for (int trial = 0; trial < 12; ++trial)
             {
-                std::vector<Seat> seats;
-                for (int k = 0; k < p; ++k)
-                {
-                    seats.push_back(
-                        {net::PeerId{static_cast<std::uint16_t>(2 * k + 3)}, std::nullopt});
-                    if (trial % 3 != 0 || k > 0)  // every third layout: the first has none
-                        seats.back().seed = g.canonical(
-                            core::NodeIndex{static_cast<std::uint32_t>(rng() % g.node_count())});
-                }
+                // Every third layout: the first has none.
+                const std::vector<Seat> seats = random_seats(g, rng, p, 2, 3, trial % 3 == 0);
                 for (const auto& parts : compositions(static_cast<std::size_t>(p)))
                 {
                     ++tried;
@@ -864,15 +867,8 @@ TEST(Partition, WideSharesAreBalancedConnectedKeepTheGrownClearanceAndSpanFewerR
         for (int p = 2; p <= 4; ++p)
             for (int trial = 0; trial < 10; ++trial)
             {
-                std::vector<Seat> seats;
-                for (int k = 0; k < p; ++k)
-                {
-                    seats.push_back(
-                        {net::PeerId{static_cast<std::uint16_t>(5 * k + 2)}, std::nullopt});
-                    if (trial % 5 != 0 || k > 0)  // every fifth layout: the first has none
-                        seats.back().seed = g.canonical(
-                            core::NodeIndex{static_cast<std::uint32_t>(rng() % g.node_count())});
-                }
+                // Every fifth layout: the first has none.
+                const std::vector<Seat> seats = random_seats(g, rng, p, 5, 2, trial % 5 == 0);
                 const auto grown = grown_partition(g, graph, seats);
                 // Row hop 1 is the grown shares' own growth.
                 EXPECT_EQ(wide_partition(g, graph, seats, 1).value_or(grown), grown);
