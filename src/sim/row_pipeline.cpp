@@ -152,11 +152,18 @@ void copy_row(const Inputs& in, const BandBuffers& b, int m, int y) noexcept
     }
 }
 
-// U_P and U_{P+1} of row yy, x in [x0, x1) (full steps: [-1, nx]), in one loop over u and v (and
-// kv_0..kv_3 as each needs), with the operations of fill_row<P> and fill_row<P + 1>.
+// U_P and U_{P+1} of row yy over the segments [segs, end) (full steps: one, [-1, nx]): at moving
+// positions in one loop over u and v (and kv_0..kv_3 as each needs), with the operations of
+// fill_row<P> and fill_row<P + 1>; at Dirichlet positions (restricted steps) the stage pass
+// computes u + c_S h v + ... with v and every slope +0.0, which is u + 0.0 for every stage (h > 0,
+// so h c_S 0 = +0.0; the slope terms then add +-0.0 to a value that is not -0.0).
+// All of a row's segments go in one call: a restricted step's cost per row segment is mostly
+// per-call set-up (pointers, constants, loop entry), so one call per row, not per segment,
+// cuts it (docs/physics.md §8).
 template <int P>
-void fill_pair(const Inputs& in, const Coeffs& c, const BandBuffers& b, int yy, int x0,
-               int x1) noexcept
+void fill_pair(const Inputs& in, const Coeffs& c, const BandBuffers& b, int yy,
+               const Rkf45Workspace::RowSegment* segs,
+               const Rkf45Workspace::RowSegment* end) noexcept
 {
     constexpr int A = P;
     constexpr int B = P + 1;
@@ -170,48 +177,46 @@ void fill_pair(const Inputs& in, const Coeffs& c, const BandBuffers& b, int yy, 
     double* __restrict db = b.U_row(B, yy);
     const double cua = c.cu[A];
     const double cub = c.cu[B];
+    for (; segs != end; ++segs)
+    {
+        const int x1 = segs->x1;
+        if (!segs->moves)
+        {
+            for (int x = segs->x0; x < x1; ++x)
+            {
+                const double value = u[x] + 0.0;
+                da[x] = value;
+                db[x] = value;
+            }
+            continue;
+        }
 #pragma GCC ivdep
-    for (int x = x0; x < x1; ++x)
-    {
-        double ua = u[x] + cua * v[x];
-        if constexpr (A > 1)
-            ua = ua + c.ck[A][0] * k0[x];
-        if constexpr (A > 2)
-            ua = ua + c.ck[A][1] * k1[x];
-        if constexpr (A > 3)
-            ua = ua + c.ck[A][2] * k2[x];
-        double ub = u[x] + cub * v[x];
-        if constexpr (B > 1)
-            ub = ub + c.ck[B][0] * k0[x];
-        if constexpr (B > 2)
-            ub = ub + c.ck[B][1] * k1[x];
-        if constexpr (B > 3)
-            ub = ub + c.ck[B][2] * k2[x];
-        if constexpr (B > 4)
-            ub = ub + c.ck[B][3] * k3[x];
-        da[x] = ua;
-        db[x] = ub;
+        for (int x = segs->x0; x < x1; ++x)
+        {
+            double ua = u[x] + cua * v[x];
+            if constexpr (A > 1)
+                ua = ua + c.ck[A][0] * k0[x];
+            if constexpr (A > 2)
+                ua = ua + c.ck[A][1] * k1[x];
+            if constexpr (A > 3)
+                ua = ua + c.ck[A][2] * k2[x];
+            double ub = u[x] + cub * v[x];
+            if constexpr (B > 1)
+                ub = ub + c.ck[B][0] * k0[x];
+            if constexpr (B > 2)
+                ub = ub + c.ck[B][1] * k1[x];
+            if constexpr (B > 3)
+                ub = ub + c.ck[B][2] * k2[x];
+            if constexpr (B > 4)
+                ub = ub + c.ck[B][3] * k3[x];
+            da[x] = ua;
+            db[x] = ub;
+        }
     }
 }
 
-// U_P and U_{P+1} at Dirichlet nodes of row yy, x in [x0, x1) (restricted steps): the stage pass
-// computes u + c_S h v + ... with v and every slope +0.0 there, which is u + 0.0 for every stage
-// (h > 0, so h c_S 0 = +0.0; the slope terms then add +-0.0 to a value that is not -0.0).
-template <int P>
-void fill_pair_dirichlet(const Inputs& in, const BandBuffers& b, int yy, int x0, int x1) noexcept
-{
-    const double* __restrict u = in.row(in.u, yy);
-    double* __restrict da = b.U_row(P, yy);
-    double* __restrict db = b.U_row(P + 1, yy);
-    for (int x = x0; x < x1; ++x)
-    {
-        const double value = u[x] + 0.0;
-        da[x] = value;
-        db[x] = value;
-    }
-}
-
-// Stages P and P + 1 of row y in one loop, with the operations of stage_row<P> and
+// Stages P and P + 1 of row y at the moving positions of the segments [segs, end) (full steps:
+// one, [0, nx)), in one loop per segment, with the operations of stage_row<P> and
 // stage_row<P + 1> (checked bit for bit by tests/sim/pipeline_test.cpp). Stage P + 1 reads
 // kv_P only at its own node: the value just computed, which for a canonical node is what the
 // stage pass reads from the kv_P plane (twins and ghosts are overwritten by copy_row before any
@@ -222,7 +227,8 @@ void fill_pair_dirichlet(const Inputs& in, const BandBuffers& b, int yy, int x0,
 // and add the +0.0 that acc + ft rate is there, so the bits are those of the stage pass.
 template <int P, bool Forced>
 double pair_row(const Inputs& in, const Coeffs& c, const StageConstants& k, const BandBuffers& b,
-                int y, int x0, int x1, double& probe) noexcept
+                int y, const Rkf45Workspace::RowSegment* segs,
+                const Rkf45Workspace::RowSegment* end, double& probe) noexcept
 {
     constexpr int A = P;
     constexpr int B = P + 1;
@@ -253,48 +259,56 @@ double pair_row(const Inputs& in, const Coeffs& c, const StageConstants& k, cons
     std::int64_t err_bits = 0;
     std::int64_t bad = 0;
     const int x_canon = (y == 0 || y == k.w) ? k.w + 1 : 2 * k.w;
-#pragma GCC ivdep
-    for (int x = x0; x < x1; ++x)
+    for (; segs != end; ++segs)
     {
-        double kk[5] = {};
-        if constexpr (A > 0)
-            kk[0] = k0[x];
-        if constexpr (A > 1)
-            kk[1] = k1[x];
-        if constexpr (A > 2)
-            kk[2] = k2[x];
-        if constexpr (A > 3)
-            kk[3] = k3[x];
-        double vel = v[x];
-        for (int m = 0; m < A; ++m)
-            vel = vel + c.cv[A][m] * kk[m];
-        const double uc = ac[x];
-        const double ku = stencil(uc, ac[x + 1], ac[x - 1], an[x], ap[x], an[x + 1], ap[x - 1],
-                                  wx[x], wx[x - 1], wy[x], wyb[x], wd[x], wdb[x - 1]);
-        double fa = 0.0;
-        double fb = 0.0;
-        if constexpr (Forced)
+        if (!segs->moves)
+            continue;
+        const int x1 = segs->x1;
+#pragma GCC ivdep
+        for (int x = segs->x0; x < x1; ++x)
         {
-            fa = acc[x] + c.ft[A] * rate[x];
-            fb = acc[x] + c.ft[B] * rate[x];
-        }
-        const double sa = ((-k.beta * vel - k.k_f * uc) - inv_m[x] * ku) + fa;
-        kk[A] = sa;
-        double vel_b = v[x];
-        for (int m = 0; m < B; ++m)
-            vel_b = vel_b + c.cv[B][m] * kk[m];
-        const double ucb = bc[x];
-        const double kub = stencil(ucb, bc[x + 1], bc[x - 1], bn[x], bp[x], bn[x + 1], bp[x - 1],
-                                   wx[x], wx[x - 1], wy[x], wyb[x], wd[x], wdb[x - 1]);
-        const double sb = ((-k.beta * vel_b - k.k_f * ucb) - inv_m[x] * kub) + fb;
-        if constexpr (P < 4)
-        {
-            out_a[x] = sa;
-            out_b[x] = sb;
-        }
-        else
-        {
-            update_node(k, c, u[x], v[x], kk, sb, x < x_canon, u_out[x], v_out[x], err_bits, bad);
+            double kk[5] = {};
+            if constexpr (A > 0)
+                kk[0] = k0[x];
+            if constexpr (A > 1)
+                kk[1] = k1[x];
+            if constexpr (A > 2)
+                kk[2] = k2[x];
+            if constexpr (A > 3)
+                kk[3] = k3[x];
+            double vel = v[x];
+            for (int m = 0; m < A; ++m)
+                vel = vel + c.cv[A][m] * kk[m];
+            const double uc = ac[x];
+            const double ku = stencil(uc, ac[x + 1], ac[x - 1], an[x], ap[x], an[x + 1], ap[x - 1],
+                                      wx[x], wx[x - 1], wy[x], wyb[x], wd[x], wdb[x - 1]);
+            double fa = 0.0;
+            double fb = 0.0;
+            if constexpr (Forced)
+            {
+                fa = acc[x] + c.ft[A] * rate[x];
+                fb = acc[x] + c.ft[B] * rate[x];
+            }
+            const double sa = ((-k.beta * vel - k.k_f * uc) - inv_m[x] * ku) + fa;
+            kk[A] = sa;
+            double vel_b = v[x];
+            for (int m = 0; m < B; ++m)
+                vel_b = vel_b + c.cv[B][m] * kk[m];
+            const double ucb = bc[x];
+            const double kub =
+                stencil(ucb, bc[x + 1], bc[x - 1], bn[x], bp[x], bn[x + 1], bp[x - 1], wx[x],
+                        wx[x - 1], wy[x], wyb[x], wd[x], wdb[x - 1]);
+            const double sb = ((-k.beta * vel_b - k.k_f * ucb) - inv_m[x] * kub) + fb;
+            if constexpr (P < 4)
+            {
+                out_a[x] = sa;
+                out_b[x] = sb;
+            }
+            else
+            {
+                update_node(k, c, u[x], v[x], kk, sb, x < x_canon, u_out[x], v_out[x], err_bits,
+                            bad);
+            }
         }
     }
     if (bad != 0)
@@ -355,17 +369,15 @@ void fill_rows(const Inputs& in, const Coeffs& c, const BandBuffers& b, int yy) 
     {
         const Rkf45Workspace::PairPlan& plan = in.ws->pair_plans[P / 2];
         const auto r = static_cast<std::size_t>(yy + 1);
-        for (std::size_t i = plan.fill_start[r]; i < plan.fill_start[r + 1]; ++i)
-        {
-            const Rkf45Workspace::RowSegment& seg = plan.fill_segments[i];
-            if (seg.moves)
-                fill_pair<P>(in, c, b, yy, seg.x0, seg.x1);
-            else
-                fill_pair_dirichlet<P>(in, b, yy, seg.x0, seg.x1);
-        }
+        const Rkf45Workspace::RowSegment* segs = plan.fill_segments.data();
+        if (plan.fill_start[r] != plan.fill_start[r + 1])
+            fill_pair<P>(in, c, b, yy, segs + plan.fill_start[r], segs + plan.fill_start[r + 1]);
     }
     else
-        fill_pair<P>(in, c, b, yy, -1, in.nx + 1);
+    {
+        const Rkf45Workspace::RowSegment whole{-1, in.nx + 1, true};
+        fill_pair<P>(in, c, b, yy, &whole, &whole + 1);
+    }
 }
 
 // Stages P and P + 1 at row y (the band's first row of this pair is `first`): the next U rows,
@@ -386,20 +398,24 @@ double stage_pair(const Inputs& in, const Coeffs& c, const StageConstants& k, co
     {
         const Rkf45Workspace::PairPlan& plan = in.ws->pair_plans[P / 2];
         const auto r = static_cast<std::size_t>(y);
-        for (std::size_t i = plan.kernel_start[r]; i < plan.kernel_start[r + 1]; ++i)
-        {
-            const Rkf45Workspace::RowSegment& seg = plan.kernel_segments[i];
-            if (seg.moves)
-                err = std::max(err,
-                               forced ? pair_row<P, true>(in, c, k, b, y, seg.x0, seg.x1, probe)
-                                      : pair_row<P, false>(in, c, k, b, y, seg.x0, seg.x1, probe));
-            else if constexpr (P == 4)
-                err = std::max(err, dirichlet_row(in, c, k, b, y, seg.x0, seg.x1, probe));
-        }
+        const Rkf45Workspace::RowSegment* first_seg =
+            plan.kernel_segments.data() + plan.kernel_start[r];
+        const Rkf45Workspace::RowSegment* end_seg =
+            plan.kernel_segments.data() + plan.kernel_start[r + 1];
+        if (first_seg != end_seg)
+            err = forced ? pair_row<P, true>(in, c, k, b, y, first_seg, end_seg, probe)
+                         : pair_row<P, false>(in, c, k, b, y, first_seg, end_seg, probe);
+        if constexpr (P == 4)
+            for (const Rkf45Workspace::RowSegment* seg = first_seg; seg != end_seg; ++seg)
+                if (!seg->moves)
+                    err = std::max(err, dirichlet_row(in, c, k, b, y, seg->x0, seg->x1, probe));
     }
     else
-        err = forced ? pair_row<P, true>(in, c, k, b, y, 0, in.nx, probe)
-                     : pair_row<P, false>(in, c, k, b, y, 0, in.nx, probe);
+    {
+        const Rkf45Workspace::RowSegment whole{0, in.nx, true};
+        err = forced ? pair_row<P, true>(in, c, k, b, y, &whole, &whole + 1, probe)
+                     : pair_row<P, false>(in, c, k, b, y, &whole, &whole + 1, probe);
+    }
     if constexpr (P < 4)
     {
         // Restricted: a row none of whose copies reads a moving node is skipped (every copy
