@@ -32,7 +32,8 @@
 ///   top and one at the bottom of the grid). `centred_slab_shift` puts the cuts where they fall
 ///   farthest from the points, so that points on the plain slabs' cuts get bands about them.
 /// - Why slabs: a restricted sim step pays per row segment (one x-run of owned nodes in
-///   one grid row) about what 16 nodes cost (`k_row_segment_cost`). A grown share spans most
+///   one grid row) about what 16 nodes cost (`k_row_segment_cost`; 13-15 since the kernels take a
+///   row's segments in one call, docs/physics.md §8, kept at 16). A grown share spans most
 ///   rows, often as two runs (the periodic seam splits it), so half the nodes cost 0.57-0.71 of a
 ///   full step at levels 6-8; a slab spans 1/p of the rows in one run each.
 ///   `partition_leaves` takes, of the grown shares, the plain slabs and the turned slabs, the
