@@ -2,11 +2,18 @@
 // SPDX-FileCopyrightText: 2026 pliant contributors
 #include "cli_common.h"
 
+#include <pliant/net/secure_transport.h>
+#include <pliant/net/transport.h>
+
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cstdio>
+#include <cstdlib>
+#include <optional>
 
 namespace pliant::cli
 {
@@ -115,6 +122,40 @@ const volatile std::sig_atomic_t* install_interrupt_flag()
     std::signal(SIGINT, on_interrupt);
     std::signal(SIGTERM, on_interrupt);
     return &g_interrupted;
+}
+
+std::string lower_extension(const std::filesystem::path& p)
+{
+    std::string ext = p.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return ext;
+}
+
+core::Result<std::unique_ptr<net::Transport>> secure_or_plain(std::unique_ptr<net::Transport> inner,
+                                                              const std::string& passphrase,
+                                                              const std::string& key_file)
+{
+    std::optional<core::Result<net::SecretKey>> key;
+    const char* env = std::getenv("PLIANT_PASSPHRASE");
+    if (!passphrase.empty())
+        key = net::derive_key(passphrase);
+    else if (!key_file.empty())
+        key = net::key_from_file(key_file);
+    else if (env != nullptr && *env != '\0')
+        key = net::derive_key(env);
+    if (!key)
+    {
+        spdlog::warn(
+            "no --passphrase, --key-file or PLIANT_PASSPHRASE: the session is neither "
+            "encrypted nor authenticated");
+        return inner;
+    }
+    if (!*key)
+        return core::fail((*key).error().code, (*key).error().message);
+    spdlog::info("datagrams are authenticated and encrypted (ChaCha20-Poly1305)");
+    return std::unique_ptr<net::Transport>(
+        std::make_unique<net::SecureTransport>(std::move(inner), **key));
 }
 
 }  // namespace pliant::cli

@@ -3,17 +3,24 @@
 #pragma once
 
 // Shared pieces of the subcommands: global options, logging set-up, mapping errors to exit
-// codes, the bundled mesh and a terminal progress bar.
+// codes, the bundled mesh, a terminal progress bar, file extensions and the sessions' transport.
 
 #include <pliant/core/error.h>
 #include <pliant/core/progress.h>
+#include <pliant/core/result.h>
 
 #include <CLI/CLI.hpp>
 
 #include <chrono>
 #include <csignal>
 #include <filesystem>
+#include <memory>
 #include <string>
+
+namespace pliant::net
+{
+class Transport;
+}
 
 namespace pliant::cli
 {
@@ -59,6 +66,16 @@ auto command_callback(const GlobalOptions& global, Body body)
 /// The bundled default mesh (data/spot.obj), found next to the executable's install or in the
 /// source tree.
 std::filesystem::path bundled_mesh();
+
+/// The extension of `p` in lower case, with its dot (".ply"), or "" when it has none.
+std::string lower_extension(const std::filesystem::path& p);
+
+/// Wraps `inner` in net::SecureTransport when --passphrase, --key-file or PLIANT_PASSPHRASE gives
+/// a key (in that order); otherwise warns once and returns it unencrypted (docs/operations.md).
+/// `pliant host` and `pliant join`.
+core::Result<std::unique_ptr<net::Transport>> secure_or_plain(std::unique_ptr<net::Transport> inner,
+                                                              const std::string& passphrase,
+                                                              const std::string& key_file);
 
 /// A progress bar on stderr: redrawn in place on a terminal, a line per 10 % otherwise, nothing
 /// with --quiet.

@@ -468,7 +468,7 @@ void add_bench_command(CLI::App& app, const GlobalOptions& global)
         command_callback(global, [opt, &global]() -> int { return run_bench(*opt, global); }));
 }
 
-const CommandRegistrar k_register{{"bench", 90, &add_bench_command}};
+const CommandRegistrar k_register_bench{{"bench", 90, &add_bench_command}};
 
 }  // namespace
 }  // namespace pliant::cli

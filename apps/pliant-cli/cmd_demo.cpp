@@ -825,7 +825,7 @@ void add_demo_command(CLI::App& app, const GlobalOptions& global)
         }));
 }
 
-const CommandRegistrar k_register{{"demo", 5, &add_demo_command}};
+const CommandRegistrar k_register_demo{{"demo", 5, &add_demo_command}};
 
 }  // namespace
 }  // namespace pliant::cli

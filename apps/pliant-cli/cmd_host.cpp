@@ -30,34 +30,6 @@ namespace pliant::cli
 namespace
 {
 
-// Wraps `inner` in net::SecureTransport when --passphrase, --key-file or PLIANT_PASSPHRASE gives a
-// key (in that order); otherwise warns once and returns it unencrypted (docs/operations.md).
-core::Result<std::unique_ptr<net::Transport>> secure_or_plain(std::unique_ptr<net::Transport> inner,
-                                                              const std::string& passphrase,
-                                                              const std::string& key_file)
-{
-    std::optional<core::Result<net::SecretKey>> key;
-    const char* env = std::getenv("PLIANT_PASSPHRASE");
-    if (!passphrase.empty())
-        key = net::derive_key(passphrase);
-    else if (!key_file.empty())
-        key = net::key_from_file(key_file);
-    else if (env != nullptr && *env != '\0')
-        key = net::derive_key(env);
-    if (!key)
-    {
-        spdlog::warn(
-            "no --passphrase, --key-file or PLIANT_PASSPHRASE: the session is neither "
-            "encrypted nor authenticated");
-        return inner;
-    }
-    if (!*key)
-        return core::fail((*key).error().code, (*key).error().message);
-    spdlog::info("datagrams are authenticated and encrypted (ChaCha20-Poly1305)");
-    return std::unique_ptr<net::Transport>(
-        std::make_unique<net::SecureTransport>(std::move(inner), **key));
-}
-
 struct HostOptions
 {
     std::string grid;
@@ -211,7 +183,7 @@ void add_host_command(CLI::App& app, const GlobalOptions& global)
     cmd->callback(command_callback(global, [opt]() -> int { return run_host(*opt); }));
 }
 
-const CommandRegistrar k_register{{"host", 50, &add_host_command}};
+const CommandRegistrar k_register_host{{"host", 50, &add_host_command}};
 
 }  // namespace
 }  // namespace pliant::cli

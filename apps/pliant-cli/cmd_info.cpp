@@ -147,7 +147,7 @@ void add_info_command(CLI::App& app, const GlobalOptions& global)
     cmd->callback(command_callback(global, [opt]() -> int { return run_info(*opt); }));
 }
 
-const CommandRegistrar k_register{{"info", 10, &add_info_command}};
+const CommandRegistrar k_register_info{{"info", 10, &add_info_command}};
 
 }  // namespace
 }  // namespace pliant::cli

@@ -36,14 +36,6 @@ struct RefineOptions
     int threads = 1;
 };
 
-std::string lower_extension(const std::filesystem::path& p)
-{
-    std::string ext = p.extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(),
-                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    return ext;
-}
-
 int run_refine(const RefineOptions& opt)
 {
     using core::ErrorCode;
@@ -183,7 +175,7 @@ void add_refine_command(CLI::App& app, const GlobalOptions& global)
     cmd->callback(command_callback(global, [opt]() -> int { return run_refine(*opt); }));
 }
 
-const CommandRegistrar k_register{{"refine", 30, &add_refine_command}};
+const CommandRegistrar k_register_refine{{"refine", 30, &add_refine_command}};
 
 }  // namespace
 }  // namespace pliant::cli

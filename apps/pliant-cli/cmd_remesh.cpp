@@ -44,14 +44,6 @@ struct RemeshOptions
     std::string domain_map = "equal-area";
 };
 
-std::string lower_extension(const std::filesystem::path& p)
-{
-    std::string ext = p.extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(),
-                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    return ext;
-}
-
 int run_remesh(const RemeshOptions& opt, const GlobalOptions& global)
 {
     const std::filesystem::path input = opt.mesh.empty() ? bundled_mesh() : opt.mesh;
@@ -224,7 +216,7 @@ void add_remesh_command(CLI::App& app, const GlobalOptions& global)
         command_callback(global, [opt, &global]() -> int { return run_remesh(*opt, global); }));
 }
 
-const CommandRegistrar k_register{{"remesh", 20, &add_remesh_command}};
+const CommandRegistrar k_register_remesh{{"remesh", 20, &add_remesh_command}};
 
 }  // namespace
 }  // namespace pliant::cli

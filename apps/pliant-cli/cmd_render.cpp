@@ -413,7 +413,7 @@ void add_render_command(CLI::App& app, const GlobalOptions& global)
         command_callback(global, [opt, &global]() -> int { return run_render(*opt, global); }));
 }
 
-const CommandRegistrar k_register{{"render", 60, &add_render_command}};
+const CommandRegistrar k_register_render{{"render", 60, &add_render_command}};
 
 }  // namespace
 }  // namespace pliant::cli

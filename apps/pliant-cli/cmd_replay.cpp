@@ -136,7 +136,7 @@ void add_replay_command(CLI::App& app, const GlobalOptions& global)
     cmd->callback(command_callback(global, [opt, &global]() { return run_replay(*opt, global); }));
 }
 
-const CommandRegistrar k_register{{"replay", 55, &add_replay_command}};
+const CommandRegistrar k_register_replay{{"replay", 55, &add_replay_command}};
 
 }  // namespace
 }  // namespace pliant::cli

@@ -607,7 +607,7 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global)
         command_callback(global, [opt, &global]() -> int { return run_simulate(*opt, global); }));
 }
 
-const CommandRegistrar k_register{{"simulate", 40, &add_simulate_command}};
+const CommandRegistrar k_register_simulate{{"simulate", 40, &add_simulate_command}};
 
 }  // namespace
 }  // namespace pliant::cli

@@ -117,7 +117,7 @@ void add_view_command(CLI::App& app, const GlobalOptions& global)
     cmd->callback(command_callback(global, [opt]() -> int { return run_view(*opt); }));
 }
 
-const CommandRegistrar k_register{{"view", 65, &add_view_command}};
+const CommandRegistrar k_register_view{{"view", 65, &add_view_command}};
 
 }  // namespace
 }  // namespace pliant::cli

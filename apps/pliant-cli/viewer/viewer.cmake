@@ -63,7 +63,9 @@ else()
         ${CMAKE_CURRENT_LIST_DIR}/viewer.cpp
         ${CMAKE_CURRENT_LIST_DIR}/viewer_panels.cpp)
     # The viewer's files use no CLI11: loading the command's precompiled header only slows them.
-    set_source_files_properties(${_pliant_viewer_sources} PROPERTIES SKIP_PRECOMPILE_HEADERS ON)
+    # Nor do they join the subcommands' unity batches (CMakeLists.txt next to this file).
+    set_source_files_properties(${_pliant_viewer_sources} ${_pliant_imgui_backends} PROPERTIES
+        SKIP_PRECOMPILE_HEADERS ON SKIP_UNITY_BUILD_INCLUSION ON)
     target_sources(pliant PRIVATE ${_pliant_viewer_sources} ${_pliant_imgui_backends})
     target_include_directories(pliant SYSTEM PRIVATE ${PLIANT_IMGUI_BACKEND_INCLUDE})
     target_compile_definitions(pliant PRIVATE PLIANT_HAVE_VIEWER=1)
