@@ -37,7 +37,7 @@ MembraneSettings settings(int threads, bool fixed, int leaf_depth = -1)
 }
 
 // A state with structure everywhere, corners and seams included.
-MembraneState initial_state(const MembraneModel& m)
+MembraneState varied_state(const MembraneModel& m)
 {
     MembraneState s = MembraneState::at_rest(m.grid());
     test::set_field(m, s.u,
@@ -79,7 +79,7 @@ std::vector<core::Region> some_regions(const MembraneModel& m)
 std::vector<MembraneState> run(MembraneModel m, bool pipeline, std::span<const core::Region> owned,
                                int steps, std::vector<StepReport>& reports, bool ramp = false)
 {
-    MembraneState s = initial_state(m);
+    MembraneState s = varied_state(m);
     Rkf45Workspace ws(m, std::max(1, m.settings().threads));
     EXPECT_TRUE(ws.pipeline_ok);
     ws.use_pipeline = pipeline;
@@ -246,7 +246,7 @@ TEST(Pipeline, RestrictedPlanFollowsTheOwnedSet)
 {
     MembraneModel m = test::sphere_model(4, settings(2, false));
     const std::vector<std::vector<core::Region>> sets = partition_like_sets(m);
-    MembraneState a = initial_state(m);
+    MembraneState a = varied_state(m);
     MembraneState b = a;
     Rkf45Workspace wa(m, 2);
     Rkf45Workspace wb(m, 2);
@@ -305,7 +305,7 @@ TEST(Pipeline, NeededNodesGetTheRestrictedStepsBits)
                         [&](bool pipeline, int threads, std::vector<StepReport>& reports)
                     {
                         MembraneModel m = test::sphere_model(level, settings(threads, fixed));
-                        MembraneState s = initial_state(m);
+                        MembraneState s = varied_state(m);
                         Rkf45Workspace ws(m, threads);
                         ws.use_pipeline = pipeline;
                         const std::vector<Force> f = forces_for(m);
@@ -342,7 +342,7 @@ TEST(Pipeline, NeededNodesGetTheRestrictedStepsBits)
                 // One fixed step against the restricted step over the owned set.
                 MembraneModel m = test::sphere_model(level, settings(2, true));
                 const std::vector<Force> f = forces_for(m);
-                MembraneState start = initial_state(m);
+                MembraneState start = varied_state(m);
                 Rkf45Workspace ws(m, 2);
                 (void)step(m, start, ws, f);  // every slope non-zero
                 MembraneState plain = start;
@@ -398,7 +398,7 @@ TEST(Pipeline, SwappingAcceptKeepsWhatTheNextStepReads)
                         const auto steps = [&](bool keep_outside, std::vector<StepReport>& reports)
                         {
                             MembraneModel m = test::sphere_model(level, settings(threads, fixed));
-                            MembraneState s = initial_state(m);
+                            MembraneState s = varied_state(m);
                             Rkf45Workspace ws(m, threads);
                             const std::vector<Force> f = forces_for(m);
                             StepOptions opt;
@@ -588,7 +588,7 @@ TEST(Pipeline, MatchesStraightforwardStep)
                     MembraneModel m = test::sphere_model(level, settings(threads, true, 1));
                     const std::vector<core::Region> owned =
                         restricted ? some_regions(m) : std::vector<core::Region>{};
-                    MembraneState s = initial_state(m);
+                    MembraneState s = varied_state(m);
                     Rkf45Workspace ws(m, threads);
                     const std::vector<Force> f = forces_for(m);
                     // Reach a state with every slope non-zero, then compare one step.
