@@ -22,34 +22,21 @@ namespace pliant::session::test
 namespace
 {
 
-constexpr int k_level = 5;
-constexpr std::uint64_t k_ticks = 300;
+constexpr int k_coarse_level = 5;
+constexpr std::uint64_t k_coarse_ticks = 300;
 
 SessionSettings coarse(int k, const char* name)
 {
     SessionSettings s;
     s.coupling = Coupling::Exact;
-    s.max_ticks = k_ticks;
+    s.max_ticks = k_coarse_ticks;
     s.name = name;
     s.stream_coarsen = k;
     return s;
 }
 
-bool same_bits(double a, double b)
-{
-    return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b);
-}
-
-bool all_at(const Harness& h, std::uint64_t tick)
-{
-    for (const auto& p : h.peers)
-        if (p->role() != SessionRole::Viewer && p->tick() < tick)
-            return false;
-    return true;
-}
-
 /// Master (coarsening k_master) and a participant (k_part), partitioned, both pulling, and a
-/// viewer; pumps to k_ticks, then lets the frozen final states reach everybody.
+/// viewer; pumps to k_coarse_ticks, then lets the frozen final states reach everybody.
 void run_pulling(Harness& h, int k_master, int k_part,
                  net::ValueEncoding encoding = net::ValueEncoding::F64)
 {
@@ -57,7 +44,7 @@ void run_pulling(Harness& h, int k_master, int k_part,
     SessionSettings ps = coarse(k_part, "part");
     ms.stream_encoding = encoding;
     ps.stream_encoding = encoding;
-    h.host(k_level, ms);
+    h.host(k_coarse_level, ms);
     Session& p = h.join(net::Role::Participant, ps);
     p.set_points_of_interest({net::Target{net::TargetKind::Face, 600, {0, 0, 0}, 0.0}});
     h.join(net::Role::Viewer, coarse(0, "viewer"));
@@ -71,7 +58,7 @@ void run_pulling(Harness& h, int k_master, int k_part,
         8000));
     h.peers[0]->set_forces({point_push(0.0, 0.0, 1.0, 0.3, 0.4)}, 60);
     p.set_forces({face_pull(700, 0.6)}, 80);
-    ASSERT_TRUE(h.pump_until([&] { return all_at(h, k_ticks); }, 60000, 0.0005));
+    ASSERT_TRUE(h.pump_until([&] { return all_at(h, k_coarse_ticks); }, 60000, 0.0005));
     for (int k = 0; k < 400; ++k)
         h.pump_once(0.0005);
 }
@@ -178,7 +165,7 @@ TEST_P(SessionCoarseStream, ViewsAreTheButterflyRefinementOfTheOwnersStateBitFor
     // Display only: the lockstep still equals a single process.
     const std::vector<Scheduled> sched = {{0, 60, {point_push(0.0, 0.0, 1.0, 0.3, 0.4)}},
                                           {1, 80, {face_pull(700, 0.6)}}};
-    const sim::MembraneState ref = reference_run(k_level, k_ticks, sched);
+    const sim::MembraneState ref = reference_run(k_coarse_level, k_coarse_ticks, sched);
     for (std::size_t i = 0; i < 2; ++i)
     {
         const Session& peer = *h.peers[i];
@@ -222,7 +209,7 @@ TEST(SessionCoarseStreamMixed, AFinerCoarseSenderKeepsItsLevelBesideACoarserOne)
     const core::Field<double> truth = owners_field(h, false);
     // Independently: restrict twice, refine once, put the participant's level n-1 nodes back,
     // refine again.
-    const auto plans = subdiv::make_plans(k_level - 2, 2).value();
+    const auto plans = subdiv::make_plans(k_coarse_level - 2, 2).value();
     const core::Field<double> c2 = subdiv::restrict(plans[0], subdiv::restrict(plans[1], truth));
     core::Field<double> c1 = subdiv::refine_levels<double>(std::span(plans.data(), 1), c2);
     for (std::size_t l = 0; l < graph.size(); ++l)
@@ -270,7 +257,7 @@ std::uint64_t viewer_bytes(int k, int pumps, bool batch = true,
     SessionSettings m = coarse(k, "master");
     m.max_ticks = 20;
     m.batch_leaves = batch;
-    h.host(k_level, m);
+    h.host(k_coarse_level, m);
     Session& v = h.join(net::Role::Viewer, coarse(0, "viewer"));
     EXPECT_TRUE(h.pump_until([&] { return v.ready() && h.peers[0]->tick() >= 20; }, 20000));
     for (int i = 0; i < 200; ++i)
@@ -316,13 +303,13 @@ TEST(SessionCoarseStreamBandwidth, BatchedCoarseLeavesCostFewerBytesAndShowTheSa
     EXPECT_LT(static_cast<double>(batched), 0.75 * static_cast<double>(single));
     EXPECT_LT(one_batched, one_single);
     EXPECT_GE(static_cast<double>(full), 12.0 * static_cast<double>(batched));
-    const core::TetraGrid g = core::TetraGrid::create(k_level).value();
+    const core::TetraGrid g = core::TetraGrid::create(k_coarse_level).value();
     EXPECT_EQ(mismatches(g, batched_view, single_view, {}), 0u);
 }
 
 TEST(SessionCoarseStreamRefusals, BadCombinationsSayWhy)
 {
-    const core::TetraGrid grid = core::TetraGrid::create(k_level).value();
+    const core::TetraGrid grid = core::TetraGrid::create(k_coarse_level).value();
     const auto rest = scenes::sphere_grid(grid, 1.0);
     auto host_error = [&](const core::TetraGrid& g, const SessionSettings& s) -> std::string
     {
@@ -360,7 +347,7 @@ TEST(SessionCoarseStreamRefusals, BadCombinationsSayWhy)
     SessionSettings fast;
     fast.coupling = Coupling::Fast;
     fast.name = "master";
-    h.host(k_level, fast);
+    h.host(k_coarse_level, fast);
     Session& p = h.join(net::Role::Participant, coarse(1, "part"));
     Session& v = h.join(net::Role::Viewer, coarse(1, "viewer"));
     EXPECT_TRUE(h.pump_until([&] { return p.left() && v.ready(); }, 8000));

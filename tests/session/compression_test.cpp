@@ -22,22 +22,17 @@ namespace pliant::session::test
 namespace
 {
 
-constexpr int k_level = 5;
-constexpr std::uint64_t k_ticks = 400;
+constexpr int k_compression_level = 5;
+constexpr std::uint64_t k_compression_ticks = 400;
 
 SessionSettings compressed(Coupling c, const char* name)
 {
     SessionSettings s;
     s.coupling = c;
-    s.max_ticks = k_ticks;
+    s.max_ticks = k_compression_ticks;
     s.name = name;
     s.stream_encoding = net::ValueEncoding::QuantisedDelta;
     return s;
-}
-
-bool same_bits(double a, double b)
-{
-    return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b);
 }
 
 bool on_grid(double x, int exponent)
@@ -98,16 +93,8 @@ std::size_t view_mismatches(const Harness& h, bool adopted)
     return bad;
 }
 
-bool all_at(const Harness& h, std::uint64_t tick)
-{
-    for (const auto& p : h.peers)
-        if (p->role() != SessionRole::Viewer && p->tick() < tick)
-            return false;
-    return true;
-}
-
-/// Master and one participant, partitioned, pulling from tick ~50 on; pumps to k_ticks. Both
-/// stream with `packing`, in LeafBatch datagrams if `batch`.
+/// Master and one participant, partitioned, pulling from tick ~50 on; pumps to k_compression_ticks.
+/// Both stream with `packing`, in LeafBatch datagrams if `batch`.
 void run_pulling(Harness& h, Coupling c, net::Packing packing = net::Packing::Rice,
                  bool batch = true)
 {
@@ -115,7 +102,7 @@ void run_pulling(Harness& h, Coupling c, net::Packing packing = net::Packing::Ri
     SessionSettings ps = compressed(c, "part");
     ms.stream_packing = ps.stream_packing = packing;
     ms.batch_leaves = ps.batch_leaves = batch;
-    h.host(k_level, ms);
+    h.host(k_compression_level, ms);
     Session& p = h.join(net::Role::Participant, ps);
     p.set_points_of_interest({net::Target{net::TargetKind::Face, 600, {0, 0, 0}, 0.0}});
     h.peers[0]->set_points_of_interest({point_push(0.0, 0.0, 1.0, 0.3, 0.4).target});
@@ -128,7 +115,7 @@ void run_pulling(Harness& h, Coupling c, net::Packing packing = net::Packing::Ri
         8000));
     h.peers[0]->set_forces({point_push(0.0, 0.0, 1.0, 0.3, 0.4)}, 100);
     p.set_forces({face_pull(700, 0.6)}, 150);
-    ASSERT_TRUE(h.pump_until([&] { return all_at(h, k_ticks); }, 60000, 0.0005));
+    ASSERT_TRUE(h.pump_until([&] { return all_at(h, k_compression_ticks); }, 60000, 0.0005));
 }
 
 std::uint64_t total(const Harness& h, std::uint64_t SessionStats::*field)
@@ -143,7 +130,7 @@ TEST(SessionCompression, FastModeViewsEqualTheOwnersQuantisedStateAndQuiescentLe
 {
     Harness h;
     run_pulling(h, Coupling::Fast);
-    // The simulation is frozen at k_ticks; let the last states and their acks through.
+    // The simulation is frozen at k_compression_ticks; let the last states and their acks through.
     for (int k = 0; k < 1000; ++k)
         h.pump_once(0.0005);
     EXPECT_EQ(view_mismatches(h, true), 0u);
@@ -229,7 +216,7 @@ bool start_at_rest(Harness& h, double refresh)
     SessionSettings ps = compressed(Coupling::Fast, "part");
     ms.quiescent_refresh_s = ps.quiescent_refresh_s = refresh;
     ms.max_ticks = ps.max_ticks = 0;
-    h.host(k_level, ms);
+    h.host(k_compression_level, ms);
     Session& p = h.join(net::Role::Participant, ps);
     p.set_points_of_interest({net::Target{net::TargetKind::Face, 600, {0, 0, 0}, 0.0}});
     return h.pump_until([&] { return p.ready() && h.peers[0]->epoch() >= 1; }, 8000);
@@ -312,7 +299,7 @@ TEST(SessionCompression, BandwidthCapHoldsAndEveryLeafStillArrives)
     SessionSettings ps = compressed(Coupling::Fast, "part");
     ms.bandwidth_cap_mbit_s = ps.bandwidth_cap_mbit_s = cap_mbit;
     ms.max_ticks = ps.max_ticks = 1500;  // still simulating while measuring
-    h.host(k_level, ms);
+    h.host(k_compression_level, ms);
     Session& p = h.join(net::Role::Participant, ps);
     p.set_points_of_interest({net::Target{net::TargetKind::Face, 600, {0, 0, 0}, 0.0}});
     h.peers[0]->set_points_of_interest({point_push(0.0, 0.0, 1.0, 0.3, 0.4).target});
@@ -363,7 +350,7 @@ TEST(SessionCompression, ExactModeIntegratesUnquantisedAndShowsQuantised)
     // The integrated state is not quantised: the lockstep is the uncompressed one.
     const std::vector<Scheduled> sched = {{0, 100, {point_push(0.0, 0.0, 1.0, 0.3, 0.4)}},
                                           {1, 150, {face_pull(700, 0.6)}}};
-    const sim::MembraneState ref = reference_run(k_level, k_ticks, sched);
+    const sim::MembraneState ref = reference_run(k_compression_level, k_compression_ticks, sched);
     const core::TetraGrid& g = h.peers[0]->model()->grid();
     for (const auto& peer : h.peers)
     {

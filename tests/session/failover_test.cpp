@@ -16,9 +16,9 @@ namespace pliant::session::test
 namespace
 {
 
-constexpr int k_level = 5;
+constexpr int k_failover_level = 5;
 
-SessionSettings settings_for(Coupling c, const char* name)
+SessionSettings failover_settings(Coupling c, const char* name)
 {
     SessionSettings s;
     s.coupling = c;
@@ -215,14 +215,14 @@ std::vector<std::size_t> lose(Harness& h, std::size_t victim, std::size_t master
 void run_failover(Coupling c, bool lossy = false, std::uint64_t seed = 1)
 {
     Harness h(quick_network(lossy, seed));
-    h.host(k_level, settings_for(c, "master"));
+    h.host(k_failover_level, failover_settings(c, "master"));
     for (int k = 0; k < 3; ++k)
     {
-        Session& p = h.join(net::Role::Participant, settings_for(c, "part"));
+        Session& p = h.join(net::Role::Participant, failover_settings(c, "part"));
         p.set_points_of_interest({net::Target{
             net::TargetKind::Face, static_cast<std::uint32_t>(600 + 1300 * k), {0, 0, 0}, 0.0}});
     }
-    h.join(net::Role::Viewer, settings_for(c, "viewer"));
+    h.join(net::Role::Viewer, failover_settings(c, "viewer"));
     // Forces that keep everything moving: the master, participant 1 and participant 3 (lost
     // first) each pull a face in their own share.
     h.peers[0]->set_points_of_interest({net::Target{net::TargetKind::Face, 3900, {0, 0, 0}, 0.0}});
@@ -304,7 +304,7 @@ void run_failover(Coupling c, bool lossy = false, std::uint64_t seed = 1)
     }
 
     // (c) The successor admits a joiner that knows its address.
-    Session& late = h.join(net::Role::Participant, settings_for(c, "late"), h.addresses[succ]);
+    Session& late = h.join(net::Role::Participant, failover_settings(c, "late"), h.addresses[succ]);
     late.set_points_of_interest({net::Target{net::TargetKind::Face, 2500, {0, 0, 0}, 0.0}});
     const std::size_t late_k = h.peers.size() - 1;
     ASSERT_TRUE(h.pump_until(
@@ -329,14 +329,14 @@ void run_failover(Coupling c, bool lossy = false, std::uint64_t seed = 1)
 void run_master_leaves(Coupling c)
 {
     Harness h(quick_network());
-    h.host(k_level, settings_for(c, "master"));
+    h.host(k_failover_level, failover_settings(c, "master"));
     for (int k = 0; k < 2; ++k)
     {
-        Session& p = h.join(net::Role::Participant, settings_for(c, "part"));
+        Session& p = h.join(net::Role::Participant, failover_settings(c, "part"));
         p.set_points_of_interest({net::Target{
             net::TargetKind::Face, static_cast<std::uint32_t>(600 + 1300 * k), {0, 0, 0}, 0.0}});
     }
-    h.join(net::Role::Viewer, settings_for(c, "viewer"));
+    h.join(net::Role::Viewer, failover_settings(c, "viewer"));
     h.peers[0]->set_points_of_interest({net::Target{net::TargetKind::Face, 3900, {0, 0, 0}, 0.0}});
     h.peers[0]->set_forces({face_pull(3900, 0.6)}, 0);
     ASSERT_TRUE(h.pump_until(
@@ -372,11 +372,11 @@ void run_master_leaves(Coupling c)
 TEST(SessionFailover, JoiningThroughAPeerThatIsNotTheMasterIsRefused)
 {
     Harness h(quick_network());
-    h.host(k_level, settings_for(Coupling::Fast, "master"));
-    Session& p = h.join(net::Role::Participant, settings_for(Coupling::Fast, "part"));
+    h.host(k_failover_level, failover_settings(Coupling::Fast, "master"));
+    Session& p = h.join(net::Role::Participant, failover_settings(Coupling::Fast, "part"));
     ASSERT_TRUE(h.pump_until([&] { return p.ready(); }, 4000));
     Session& wrong =
-        h.join(net::Role::Participant, settings_for(Coupling::Fast, "wrong"), h.addresses[1]);
+        h.join(net::Role::Participant, failover_settings(Coupling::Fast, "wrong"), h.addresses[1]);
     ASSERT_TRUE(h.pump_until([&] { return wrong.left(); }, 200));  // 0.1 s, far below a timeout
     EXPECT_FALSE(wrong.ready());
     EXPECT_FALSE(p.left());
@@ -392,14 +392,14 @@ void run_successor_tells_first(Coupling c)
     net::SimulatedNetworkSettings slow = quick_network();
     slow.connect_timeout_s = 5.0;
     Harness h(slow);
-    h.host(k_level, settings_for(c, "master"));
+    h.host(k_failover_level, failover_settings(c, "master"));
     for (int k = 0; k < 2; ++k)
     {
-        Session& p = h.join(net::Role::Participant, settings_for(c, "part"));
+        Session& p = h.join(net::Role::Participant, failover_settings(c, "part"));
         p.set_points_of_interest({net::Target{
             net::TargetKind::Face, static_cast<std::uint32_t>(600 + 1300 * k), {0, 0, 0}, 0.0}});
     }
-    h.join(net::Role::Viewer, settings_for(c, "viewer"));
+    h.join(net::Role::Viewer, failover_settings(c, "viewer"));
     ASSERT_TRUE(h.pump_until(
         [&]
         {
@@ -454,10 +454,10 @@ TEST(SessionFailover, ExactOthersFollowTheSuccessorBeforeTheirOwnTimeout)
 TEST(SessionFailover, ExactLeaverHandsOverToTheSuccessorOfALostMaster)
 {
     Harness h(quick_network());
-    h.host(k_level, settings_for(Coupling::Exact, "master"));
+    h.host(k_failover_level, failover_settings(Coupling::Exact, "master"));
     for (int k = 0; k < 2; ++k)
     {
-        Session& p = h.join(net::Role::Participant, settings_for(Coupling::Exact, "part"));
+        Session& p = h.join(net::Role::Participant, failover_settings(Coupling::Exact, "part"));
         p.set_points_of_interest({net::Target{
             net::TargetKind::Face, static_cast<std::uint32_t>(600 + 1300 * k), {0, 0, 0}, 0.0}});
         p.set_forces({face_pull(static_cast<std::uint32_t>(610 + 1300 * k), 0.6)}, 0);

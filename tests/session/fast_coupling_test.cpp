@@ -19,12 +19,6 @@ namespace
 {
 
 // One frame's force lists, from the master's simulated time `time` on.
-struct Frame
-{
-    double time = 0.0;
-    std::vector<sim::Force> forces;
-};
-
 struct Outcome
 {
     double worst_error = 0.0;  // max over checkpoints of max |u - u_ref| / max |u_ref|

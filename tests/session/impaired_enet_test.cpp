@@ -43,12 +43,6 @@ sim::MembraneSettings relay_material()
     return m;
 }
 
-struct Frame
-{
-    double time = 0.0;  // master's simulated time when the forces were set
-    std::vector<sim::Force> forces;
-};
-
 // Largest |u| of a single-process run of the same force lists (from the master's times on),
 // sampled every 10 steps, up to `end`.
 double reference_max_u(int level, const std::vector<Frame>& frames, double end)

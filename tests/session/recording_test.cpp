@@ -19,13 +19,13 @@ namespace pliant::session::test
 namespace
 {
 
-constexpr int k_level = 4;
-constexpr std::uint64_t k_ticks = 300;
+constexpr int k_recording_level = 4;
+constexpr std::uint64_t k_recording_ticks = 300;
 
 SessionSettings exact(const char* name)
 {
     SessionSettings s;
-    s.max_ticks = k_ticks;
+    s.max_ticks = k_recording_ticks;
     s.name = name;
     return s;
 }
@@ -41,7 +41,7 @@ struct RecordedRun
 void record_session(RecordedRun& run)
 {
     Harness& h = run.h;
-    Session& master = h.host(k_level, exact("master"));
+    Session& master = h.host(k_recording_level, exact("master"));
     ASSERT_TRUE(master.start_recording());
     for (int k = 0; k < 2; ++k)
     {
@@ -57,7 +57,7 @@ void record_session(RecordedRun& run)
         [&]
         {
             for (const auto& p : h.peers)
-                if (p->tick() < k_ticks)
+                if (p->tick() < k_recording_ticks)
                     return false;
             return true;
         },
@@ -86,14 +86,14 @@ TEST(Recording, ReplayOfARecordedSessionIsBitIdentical)
     record_session(run);
     if (HasFatalFailure())
         return;
-    EXPECT_EQ(run.recording.final_tick, k_ticks);
+    EXPECT_EQ(run.recording.final_tick, k_recording_ticks);
     // Four lists: the master's, participant 1's two, participant 2's.
     ASSERT_EQ(run.recording.forces.size(), 4U);
     auto replayed = replay(run.recording);
     ASSERT_TRUE(replayed) << replayed.error().message;
     const core::TetraGrid& g = replayed->model.grid();
     EXPECT_EQ(replayed->coupling, Coupling::Exact);
-    EXPECT_EQ(replayed->state.tick, k_ticks);
+    EXPECT_EQ(replayed->state.tick, k_recording_ticks);
     const Diff du = compare(g, replayed->state.u, run.u, {});
     EXPECT_EQ(du.max_abs, 0.0);
     EXPECT_GT(du.max_ref, 1e-4);  // the forces moved the surface
@@ -113,7 +113,7 @@ TEST(Recording, ReplayRuleEqualsTheReferenceSchedule)
                                        {0, 80, {}},
                                        {2, 30, {face_pull(201, -0.5)}},  // same tick: later wins
                                        {1, 50, {point_push(1.0, 0.0, 0.0, 0.3, 0.2)}}};
-    const core::TetraGrid grid = core::TetraGrid::create(k_level).value();
+    const core::TetraGrid grid = core::TetraGrid::create(k_recording_level).value();
     auto model =
         sim::MembraneModel::create(grid, scenes::sphere_grid(grid, 1.0), material()).value();
     Recording rec;
@@ -124,7 +124,7 @@ TEST(Recording, ReplayRuleEqualsTheReferenceSchedule)
     auto replayed = replay(rec);
     ASSERT_TRUE(replayed) << replayed.error().message;
     // reference_run takes, per sender, the entry with the greatest `from` (ties: the later one).
-    const sim::MembraneState ref = reference_run(k_level, 150, sched);
+    const sim::MembraneState ref = reference_run(k_recording_level, 150, sched);
     EXPECT_EQ(compare(grid, replayed->state.u, ref.u, {}).max_abs, 0.0);
     EXPECT_EQ(compare(grid, replayed->state.v, ref.v, {}).max_abs, 0.0);
     EXPECT_GT(compare(grid, replayed->state.u, ref.u, {}).max_ref, 1e-5);

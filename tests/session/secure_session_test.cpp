@@ -16,8 +16,8 @@ namespace
 
 TEST(SecureSession, TwoPeersThroughSecureTransportEqualSingleProcess)
 {
-    constexpr int k_level = 3;
-    constexpr std::uint64_t k_ticks = 200;
+    constexpr int k_secure_level = 3;
+    constexpr std::uint64_t k_secure_ticks = 200;
     const net::SecretKey key = net::derive_key("a session passphrase", net::k_default_key_context,
                                                net::KdfLimits::cheapest_for_tests())
                                    .value();
@@ -31,9 +31,9 @@ TEST(SecureSession, TwoPeersThroughSecureTransportEqualSingleProcess)
 
     SessionSettings settings;
     settings.coupling = Coupling::Exact;
-    settings.max_ticks = k_ticks;
+    settings.max_ticks = k_secure_ticks;
     settings.name = "master";
-    const core::TetraGrid grid = core::TetraGrid::create(k_level).value();
+    const core::TetraGrid grid = core::TetraGrid::create(k_secure_level).value();
     auto master =
         Session::host(master_transport, grid, scenes::sphere_grid(grid, 1.0), material(), settings)
             .value();
@@ -63,16 +63,16 @@ TEST(SecureSession, TwoPeersThroughSecureTransportEqualSingleProcess)
     };
     ASSERT_TRUE(pump_until([&] { return peer->ready() && master->tick() > 0; }, 4000));
     EXPECT_LT(master->tick(), 40U) << "joined before the first force";
-    ASSERT_TRUE(
-        pump_until([&] { return master->tick() >= k_ticks && peer->tick() >= k_ticks; }, 40000));
+    ASSERT_TRUE(pump_until(
+        [&] { return master->tick() >= k_secure_ticks && peer->tick() >= k_secure_ticks; }, 40000));
     for (int k = 0; k < 200; ++k)
         pump_until([] { return false; }, 1);
 
-    const sim::MembraneState ref = reference_run(k_level, k_ticks, schedule);
+    const sim::MembraneState ref = reference_run(k_secure_level, k_secure_ticks, schedule);
     const core::TetraGrid& g = master->model()->grid();
     for (const Session* s : {master.get(), peer.get()})
     {
-        ASSERT_EQ(s->tick(), k_ticks);
+        ASSERT_EQ(s->tick(), k_secure_ticks);
         const Diff du = compare(g, s->display_u(), ref.u, {});
         EXPECT_EQ(du.max_abs, 0.0) << "bit-exact, as without encryption";
         EXPECT_GT(du.max_ref, 1e-5) << "the forces did something";

@@ -12,7 +12,9 @@
 #include "grid_shapes.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -193,6 +195,28 @@ struct Harness
         }
         return done();
     }
+};
+
+/// Whether two doubles have the same bits.
+inline bool same_bits(double a, double b)
+{
+    return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b);
+}
+
+/// Whether every participant of `h` (viewers aside) has reached `tick`.
+inline bool all_at(const Harness& h, std::uint64_t tick)
+{
+    for (const auto& p : h.peers)
+        if (p->role() != SessionRole::Viewer && p->tick() < tick)
+            return false;
+    return true;
+}
+
+/// The forces a scripted peer set at a time (its simulated time when it set them).
+struct Frame
+{
+    double time = 0.0;
+    std::vector<sim::Force> forces;
 };
 
 }  // namespace pliant::session::test
