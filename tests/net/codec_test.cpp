@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include "net/encode_vec.h"
 #include "net/sample_messages.h"
 
 #include <algorithm>
@@ -21,17 +22,7 @@ namespace pliant::net
 namespace
 {
 
-std::vector<std::byte> encode_vec(const Message& m)
-{
-    std::vector<std::byte> out(encoded_size(m));
-    auto r = encode(m, out);
-    EXPECT_TRUE(r.has_value()) << to_string(m.type());
-    if (r)
-    {
-        EXPECT_EQ(*r, out.size());
-    }
-    return out;
-}
+using test::encode_vec;
 
 const Message& first_of(MessageType type)
 {

@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include "net/encode_vec.h"
 #include "net/sample_messages.h"
 
 #include <algorithm>
@@ -18,12 +19,7 @@ namespace pliant::net
 namespace
 {
 
-std::vector<std::byte> encode_vec(const Message& m)
-{
-    std::vector<std::byte> out(encoded_size(m));
-    EXPECT_TRUE(encode(m, out).has_value());
-    return out;
-}
+using test::encode_vec;
 
 Message ping(std::uint32_t session = 0xC0FFEE01u, PeerId sender = PeerId{3})
 {

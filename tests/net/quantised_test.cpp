@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 #include <zstd.h>
 
+#include "net/encode_vec.h"
 #include "net/sample_messages.h"
 
 #include <bit>
@@ -25,12 +26,7 @@ namespace pliant::net
 namespace
 {
 
-std::vector<std::byte> encode_vec(const Message& m)
-{
-    std::vector<std::byte> out(encoded_size(m));
-    EXPECT_TRUE(encode(m, out).has_value());
-    return out;
-}
+using test::encode_vec;
 
 /// A zstd frame of `raw` written by the test itself (not by pack_residuals).
 std::vector<std::byte> frame_of(const std::vector<std::byte>& raw, bool content_size = true)

@@ -57,7 +57,7 @@ std::string as_key(const std::vector<std::byte>& bytes)
     return {reinterpret_cast<const char*>(bytes.data()), bytes.size()};
 }
 
-std::vector<std::byte> payload(std::size_t size, std::uint32_t seed)
+std::vector<std::byte> seeded_payload(std::size_t size, std::uint32_t seed)
 {
     std::vector<std::byte> out(size);
     for (std::size_t k = 0; k < size; ++k)
@@ -304,12 +304,12 @@ TEST(SecureTransport, SamePassphraseExchangesBothChannelsIntactAndEncrypted)
     std::vector<std::vector<std::byte>> state;
     for (std::uint32_t k = 0; k < 40; ++k)
     {
-        control.push_back(payload(1 + 97 * k, k));
-        state.push_back(payload(24 + 31 * k, 1000 + k));
+        control.push_back(seeded_payload(1 + 97 * k, k));
+        state.push_back(seeded_payload(24 + 31 * k, 1000 + k));
         ASSERT_TRUE(p.a->send(p.a_to_b, Channel::Control, control.back(), Delivery::Reliable));
         ASSERT_TRUE(p.a->send(p.a_to_b, Channel::State, state.back(), Delivery::Unreliable));
     }
-    ASSERT_TRUE(p.b->send(p.b_to_a, Channel::State, payload(100, 7), Delivery::Unsequenced));
+    ASSERT_TRUE(p.b->send(p.b_to_a, Channel::State, seeded_payload(100, 7), Delivery::Unsequenced));
     ASSERT_TRUE(p.pump_until([&] { return p.received_by_b().size() == 80 && !p.from_a.empty(); }));
     std::vector<std::vector<std::byte>> got_control;
     std::vector<std::vector<std::byte>> got_state;
@@ -318,7 +318,7 @@ TEST(SecureTransport, SamePassphraseExchangesBothChannelsIntactAndEncrypted)
     EXPECT_EQ(got_control, control);
     EXPECT_EQ(got_state, state);  // no loss on this link, and ENet-like sequencing keeps order
     ASSERT_EQ(p.from_a.size(), 1u);
-    EXPECT_EQ(p.from_a[0].data, payload(100, 7));
+    EXPECT_EQ(p.from_a[0].data, seeded_payload(100, 7));
 
     // On the wire: 25 bytes more than the plaintext, and no 16-byte run of plaintext survives.
     std::size_t data_datagrams = 0;
@@ -381,7 +381,8 @@ TEST(SecureTransport, TamperedDatagramsAreDroppedCountedAndFinallyCutTheSenderOf
         d[where[next++ % 4]] ^= std::byte{0x01};
     };
     for (std::uint32_t k = 0; k < 4; ++k)
-        ASSERT_TRUE(p.a->send(p.a_to_b, Channel::State, payload(60, k), Delivery::Unreliable));
+        ASSERT_TRUE(
+            p.a->send(p.a_to_b, Channel::State, seeded_payload(60, k), Delivery::Unreliable));
     p.pump(50);
     EXPECT_TRUE(p.received_by_b().empty());
     EXPECT_EQ(p.b->secure_stats(p.b_to_a)->auth_failures, 4u);
@@ -389,12 +390,12 @@ TEST(SecureTransport, TamperedDatagramsAreDroppedCountedAndFinallyCutTheSenderOf
     EXPECT_EQ(p.b->peers().size(), 1u) << "at the limit, not past it";
 
     p.tap_b->mutate = nullptr;
-    ASSERT_TRUE(p.a->send(p.a_to_b, Channel::State, payload(60, 99), Delivery::Unreliable));
+    ASSERT_TRUE(p.a->send(p.a_to_b, Channel::State, seeded_payload(60, 99), Delivery::Unreliable));
     ASSERT_TRUE(p.pump_until([&] { return p.received_by_b().size() == 1; }, 100));
-    EXPECT_EQ(p.received_by_b()[0]->data, payload(60, 99));
+    EXPECT_EQ(p.received_by_b()[0]->data, seeded_payload(60, 99));
 
     p.tap_b->mutate = [](std::vector<std::byte>& d) { d[20] ^= std::byte{0x80}; };
-    ASSERT_TRUE(p.a->send(p.a_to_b, Channel::Control, payload(60, 5), Delivery::Reliable));
+    ASSERT_TRUE(p.a->send(p.a_to_b, Channel::Control, seeded_payload(60, 5), Delivery::Reliable));
     ASSERT_TRUE(p.pump_until(
         [&]
         {
@@ -415,9 +416,11 @@ TEST(SecureTransport, ReplayedDatagramsAreDroppedOnTheSameAndOnANewConnection)
     SimPair p;
     ASSERT_TRUE(p.connect());
     for (std::uint32_t k = 0; k < 5; ++k)
-        ASSERT_TRUE(p.a->send(p.a_to_b, Channel::State, payload(40, k), Delivery::Unreliable));
+        ASSERT_TRUE(
+            p.a->send(p.a_to_b, Channel::State, seeded_payload(40, k), Delivery::Unreliable));
     for (std::uint32_t k = 0; k < 3; ++k)
-        ASSERT_TRUE(p.a->send(p.a_to_b, Channel::Control, payload(40, 50 + k), Delivery::Reliable));
+        ASSERT_TRUE(
+            p.a->send(p.a_to_b, Channel::Control, seeded_payload(40, 50 + k), Delivery::Reliable));
     ASSERT_TRUE(p.pump_until([&] { return p.received_by_b().size() == 8; }, 200));
     std::vector<TransportEvent> captured;
     for (const auto& e : p.tap_b->received)
@@ -497,14 +500,15 @@ TEST(SecureTransport, NetworkDuplicatesAndReorderingDeliverEveryDatagramOnce)
     ASSERT_TRUE(p.connect());
     constexpr std::uint32_t k_count = 400;
     for (std::uint32_t k = 0; k < k_count; ++k)
-        ASSERT_TRUE(p.a->send(p.a_to_b, Channel::State, payload(30, k), Delivery::Unsequenced));
+        ASSERT_TRUE(
+            p.a->send(p.a_to_b, Channel::State, seeded_payload(30, k), Delivery::Unsequenced));
     p.pump(200);
     std::multiset<std::string> got;
     for (const TransportEvent* e : p.received_by_b())
         got.insert(as_key(e->data));
     std::multiset<std::string> want;
     for (std::uint32_t k = 0; k < k_count; ++k)
-        want.insert(as_key(payload(30, k)));
+        want.insert(as_key(seeded_payload(30, k)));
     EXPECT_EQ(got, want);
     EXPECT_GT(p.b->secure_stats(p.b_to_a)->replayed, 0u) << "the network duplicated some";
     EXPECT_EQ(p.b->peers().size(), 1u) << "duplicates are not held against the peer";
@@ -522,7 +526,8 @@ TEST(SecureTransport, NoncesNeverRepeatAndKeysAreFreshPerConnection)
     for (int k = 0; k < k_sends; ++k)
     {
         const auto [channel, delivery] = kinds[k % 4];
-        ASSERT_TRUE(p.a->send(p.a_to_b, channel, payload(8, 1), delivery));  // same plaintext
+        ASSERT_TRUE(
+            p.a->send(p.a_to_b, channel, seeded_payload(8, 1), delivery));  // same plaintext
     }
     ASSERT_TRUE(p.pump_until([&] { return p.received_by_b().size() == k_sends; }, 500));
     // The nonce is (counter, stream = 2 channel + reliable); the type byte says reliable.
@@ -554,7 +559,7 @@ TEST(SecureTransport, NoncesNeverRepeatAndKeysAreFreshPerConnection)
     p.from_b.clear();
     ASSERT_TRUE(p.connect());
     p.tap_a->sent.clear();
-    ASSERT_TRUE(p.a->send(p.a_to_b, Channel::Control, payload(8, 1), Delivery::Reliable));
+    ASSERT_TRUE(p.a->send(p.a_to_b, Channel::Control, seeded_payload(8, 1), Delivery::Reliable));
     ASSERT_EQ(p.tap_a->sent.size(), 1u);
     const auto& again = p.tap_a->sent[0].second;
     ASSERT_EQ(again.size(), first_sealed.size());
@@ -598,7 +603,8 @@ TEST(SecureTransport, ALostHandshakeDatagramCostsARepeatPeriodNotARetransmission
         if (!ok || p.tap_a->connected_us < 0 || p.tap_b->connected_us < 0)
             return 1e9;
         // Data flows once both sides are connected.
-        EXPECT_TRUE(p.a->send(p.a_to_b, Channel::Control, payload(20, 1), Delivery::Reliable));
+        EXPECT_TRUE(
+            p.a->send(p.a_to_b, Channel::Control, seeded_payload(20, 1), Delivery::Reliable));
         EXPECT_TRUE(p.pump_until([&] { return !p.received_by_b().empty(); }, 20000))
             << "seed " << seed;
         return 1e-6 * static_cast<double>(done_us -
@@ -728,11 +734,11 @@ TEST(SecureTransport, OverEnetSamePassphraseWorksAndAWrongOneIsRefused)
     ASSERT_EQ(at_a[0].kind, TransportEvent::Kind::Connected);
     ASSERT_EQ(at_b[0].kind, TransportEvent::Kind::Connected);
     const PeerHandle b_to_a = at_b[0].peer;
-    ASSERT_TRUE(a.send(a_to_b, Channel::Control, payload(5000, 1), Delivery::Reliable));
-    ASSERT_TRUE(a.send(a_to_b, Channel::State, payload(1200, 2), Delivery::Unreliable));
+    ASSERT_TRUE(a.send(a_to_b, Channel::Control, seeded_payload(5000, 1), Delivery::Reliable));
+    ASSERT_TRUE(a.send(a_to_b, Channel::State, seeded_payload(1200, 2), Delivery::Unreliable));
     ASSERT_TRUE(pump([&] { return at_b.size() == 3; }));
-    EXPECT_EQ(at_b[1].data, payload(5000, 1));
-    EXPECT_EQ(at_b[2].data, payload(1200, 2));
+    EXPECT_EQ(at_b[1].data, seeded_payload(5000, 1));
+    EXPECT_EQ(at_b[2].data, seeded_payload(1200, 2));
     EXPECT_EQ(at_b[2].channel, Channel::State);
 
     const PeerHandle i_to_b = intruder.connect(*rb).value();
