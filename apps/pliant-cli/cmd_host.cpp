@@ -7,7 +7,6 @@
 #include <pliant/core/sphere_domain.h>
 #include <pliant/core/tetra_grid.h>
 #include <pliant/net/enet_transport.h>
-#include <pliant/net/secure_transport.h>
 #include <pliant/session/runner.h>
 #include <pliant/session/session.h>
 #include <pliant/sim/membrane.h>
@@ -20,7 +19,6 @@
 #include "stream_options.h"
 
 #include <cstdio>
-#include <cstdlib>
 #include <memory>
 #include <optional>
 #include <string>

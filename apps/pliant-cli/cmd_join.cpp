@@ -3,7 +3,6 @@
 // `pliant join HOST:PORT [--viewer] [--script F] [--duration S] [--stats F.csv]`: joins a
 // collaborative session as a participant or a viewer (docs/session.md).
 #include <pliant/net/enet_transport.h>
-#include <pliant/net/secure_transport.h>
 #include <pliant/session/runner.h>
 #include <pliant/session/session.h>
 
@@ -14,9 +13,7 @@
 #include "stream_options.h"
 
 #include <cstdio>
-#include <cstdlib>
 #include <memory>
-#include <optional>
 #include <string>
 
 namespace pliant::cli
