@@ -11,8 +11,10 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <optional>
 
 namespace pliant::cli
@@ -37,6 +39,18 @@ int report(const core::Error& error)
     case core::ErrorCode::NetworkError: return k_exit_failure;
     default: return k_exit_bad_input;
     }
+}
+
+core::Result<void> check_writable(const std::filesystem::path& path, std::string_view what)
+{
+    errno = 0;
+    std::FILE* f = std::fopen(path.c_str(), "a");
+    if (f == nullptr)
+        return core::fail(
+            core::ErrorCode::IoError,
+            std::string(what) + ": cannot write '" + path.string() + "': " + std::strerror(errno));
+    std::fclose(f);
+    return {};
 }
 
 std::filesystem::path bundled_mesh()

@@ -35,6 +35,7 @@ struct GlobalOptions
 /// Exit codes: 0 success, 1 bad input (the message says which rule), 2 usage error (CLI11),
 /// 3 internal or numerical failure.
 inline constexpr int k_exit_bad_input = 1;
+inline constexpr int k_exit_usage = 2;
 inline constexpr int k_exit_failure = 3;
 
 /// Sets spdlog's level from the global options (warn by default, debug with --verbose, error
@@ -62,6 +63,11 @@ auto command_callback(const GlobalOptions& global, Body body)
             throw CLI::RuntimeError(rc);
     };
 }
+
+/// Whether `path` can be written (it is created if missing, and left as it was otherwise):
+/// checked before a long run starts, so a bad --stats or output path fails at once, with the
+/// reason. \return IoError naming `what`, the file and the system's reason.
+core::Result<void> check_writable(const std::filesystem::path& path, std::string_view what);
 
 /// The bundled default mesh (data/spot.obj), found next to the executable's install or in the
 /// source tree.

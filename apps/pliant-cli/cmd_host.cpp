@@ -10,14 +10,17 @@
 #include <pliant/session/runner.h>
 #include <pliant/session/session.h>
 #include <pliant/sim/membrane.h>
+#include <pliant/sim/rkf45.h>
 
 #include <spdlog/spdlog.h>
 
 #include "../../scenes/grid_shapes.h"
 #include "cli_common.h"
 #include "commands.h"
+#include "peer_files.h"
 #include "stream_options.h"
 
+#include <cstdint>
 #include <cstdio>
 #include <memory>
 #include <optional>
@@ -40,6 +43,13 @@ struct HostOptions
     std::string script;
     std::string stats;
     double dt = 1e-3;
+    std::uint64_t ticks = 0;  ///< exact mode: stop stepping at this tick (0: never)
+    std::string record;       ///< exact mode: the recording, written at the end
+    std::string save;         ///< this peer's view of the object, written at the end
+    double tension = 1.0;     ///< T [N/m]
+    double density = 1.0;     ///< rho [kg/m^2]
+    double damping = 0.5;     ///< beta [1/s]
+    double foundation = 1.0;  ///< k_f [1/s^2]
     std::string name = "master";
     std::string passphrase;
     std::string key_file;
@@ -80,7 +90,20 @@ int run_host(const HostOptions& opt)
         if (!script)
             return report(script.error());
         run.script = std::move(*script);
+        run.script_name = opt.script;
+        if (auto ok =
+                session::check_script(run.script, static_cast<std::int64_t>(grid->face_count()),
+                                      session::SessionRole::Master, opt.script);
+            !ok)
+            return report(ok.error());
     }
+    if (!opt.stats.empty())
+        if (auto ok = check_writable(opt.stats, "host: --stats"); !ok)
+            return report(ok.error());
+    if (opt.mode != "exact" && (opt.ticks != 0 || !opt.record.empty()))
+        return report({core::ErrorCode::InvalidArgument,
+                       "host: --ticks and --record need --mode exact (a fast session's state "
+                       "depends on timing, so it cannot be replayed or stopped on one tick)"});
     auto secured = secure_or_plain(net::make_enet_transport(), opt.passphrase, opt.key_file);
     if (!secured)
         return report(secured.error());
@@ -89,8 +112,10 @@ int run_host(const HostOptions& opt)
     if (!bound)
         return report(bound.error());
     sim::MembraneSettings material;
-    material.beta = 0.5;
-    material.k_f = 1.0;
+    material.T = opt.tension;
+    material.rho = opt.density;
+    material.beta = opt.damping;
+    material.k_f = opt.foundation;
     material.fixed_dt = opt.dt;
     material.fixed_step = opt.mode == "exact";
     session::SessionSettings settings;
@@ -101,20 +126,48 @@ int run_host(const HostOptions& opt)
         settings.point_clearance = session::PointClearance::Inside;
     settings.name = opt.name;
     settings.listen_port = bound->port;
+    settings.max_ticks = opt.ticks;
     apply_stream_options(opt.stream, settings);
     auto s = session::Session::host(*transport, *grid, rest, material, settings);
     if (!s)
         return report(s.error());
+    if (opt.mode == "exact")
+    {
+        // Lockstep has no error control: a step above the stability bound grows without limit.
+        const double stable = sim::stable_fixed_step(*(*s)->model());
+        if (opt.dt > stable)
+            spdlog::warn(
+                "host: --dt {:g} s is above this grid's stable fixed step {:g} s "
+                "(docs/physics.md §5): the session will likely blow up; use --dt {:g} "
+                "or less",
+                opt.dt, stable, 0.9 * stable);
+    }
     spdlog::info("hosting level {} ({} mode, point clearance {}) on port {}", grid->level(),
                  opt.mode,
                  (*s)->point_clearance() == session::PointClearance::Inside ? "inside" : "grown",
                  bound->port);
     std::printf("hosting on port %u\n", static_cast<unsigned>(bound->port));
     std::fflush(stdout);
+    if (!opt.record.empty())
+    {
+        if (auto ok = check_writable(opt.record, "host: --record"); !ok)
+            return report(ok.error());
+        if (auto ok = (*s)->start_recording(); !ok)
+            return report(ok.error());
+    }
+    if (!opt.save.empty())
+        if (auto ok = check_writable(opt.save, "host: --save"); !ok)
+            return report(ok.error());
     run.stop = install_interrupt_flag();  // Ctrl-C: leave or end cleanly
     auto summary = session::run_peer(**s, run);
     if (!summary)
         return report(summary.error());
+    if (!opt.record.empty())
+        if (auto ok = save_master_recording(**s, opt.record); !ok)
+            return report(ok.error());
+    if (!opt.save.empty())
+        if (auto ok = save_peer_state(**s, opt.save); !ok)
+            return report(ok.error());
     std::printf("host: %.1f s, tick %llu, %llu bytes out, %llu bytes in\n", summary->elapsed_s,
                 static_cast<unsigned long long>(summary->final_tick),
                 static_cast<unsigned long long>(summary->stats.bytes_sent),
@@ -167,8 +220,34 @@ void add_host_command(CLI::App& app, const GlobalOptions& global)
     cmd->add_option("--script", opt->script, "Script of timed grabs / leave")
         ->check(CLI::ExistingFile);
     cmd->add_option("--stats", opt->stats, "Per-second statistics CSV");
-    cmd->add_option("--dt", opt->dt, "Fixed step of exact mode [s]")
+    cmd->add_option("--dt", opt->dt,
+                    "Fixed step of exact mode [s]; a warning says when it is above the grid's "
+                    "stable step")
         ->check(CLI::PositiveNumber)
+        ->capture_default_str();
+    cmd->add_option("--ticks", opt->ticks,
+                    "Exact mode: stop stepping at this tick (0: never) and stream on until "
+                    "--duration; give the participants the same --ticks, so that all end on the "
+                    "same state")
+        ->capture_default_str();
+    cmd->add_option("--record", opt->record,
+                    "Exact mode: record every peer's forces into FILE.prec, with the hash of the "
+                    "final state; `pliant replay FILE.prec` checks one process reproduces it");
+    cmd->add_option("--save", opt->save,
+                    "Write what this peer shows at the end to FILE.pgrid (positions, u, v and "
+                    "the owner of every node: `pliant render FILE.pgrid --color owner`)");
+    cmd->add_option("--tension", opt->tension, "Membrane tension T [N/m]")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
+    cmd->add_option("--density", opt->density, "Areal density rho [kg/m^2]")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
+    cmd->add_option("--damping", opt->damping, "Nodal velocity damping beta [1/s]")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
+    cmd->add_option("--foundation", opt->foundation,
+                    "Elastic foundation k_f [1/s^2]: pulls the surface back to rest")
+        ->check(CLI::NonNegativeNumber)
         ->capture_default_str();
     cmd->add_option("--name", opt->name, "Peer name (printable ASCII, 1..32)")
         ->capture_default_str();

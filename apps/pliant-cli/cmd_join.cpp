@@ -10,9 +10,12 @@
 
 #include "cli_common.h"
 #include "commands.h"
+#include "peer_files.h"
 #include "stream_options.h"
 
+#include <cstdint>
 #include <cstdio>
+#include <limits>
 #include <memory>
 #include <string>
 
@@ -29,6 +32,8 @@ struct JoinOptions
     double duration = 60.0;
     std::string script;
     std::string stats;
+    std::string save;         ///< this peer's view of the object, written at the end
+    std::uint64_t ticks = 0;  ///< exact mode: stop stepping at this tick (0: never)
     std::string name = "peer";
     std::string passphrase;
     std::string key_file;
@@ -37,7 +42,7 @@ struct JoinOptions
 
 int run_join(const JoinOptions& opt)
 {
-    auto master = net::parse_address(opt.master);
+    auto master = net::resolve_address(opt.master);
     if (!master)
         return report(master.error());
     session::RunOptions run;
@@ -49,7 +54,21 @@ int run_join(const JoinOptions& opt)
         if (!script)
             return report(script.error());
         run.script = std::move(*script);
+        run.script_name = opt.script;
+        // A viewer's grabs are refused now; faces are checked once the welcome gives the grid.
+        if (opt.viewer)
+            if (auto ok =
+                    session::check_script(run.script, std::numeric_limits<std::int64_t>::max(),
+                                          session::SessionRole::Viewer, opt.script);
+                !ok)
+                return report(ok.error());
     }
+    if (!opt.stats.empty())
+        if (auto ok = check_writable(opt.stats, "join: --stats"); !ok)
+            return report(ok.error());
+    if (!opt.save.empty())
+        if (auto ok = check_writable(opt.save, "join: --save"); !ok)
+            return report(ok.error());
     auto secured = secure_or_plain(net::make_enet_transport(), opt.passphrase, opt.key_file);
     if (!secured)
         return report(secured.error());
@@ -60,6 +79,7 @@ int run_join(const JoinOptions& opt)
     session::SessionSettings settings;
     settings.name = opt.name;
     settings.listen_port = bound->port;
+    settings.max_ticks = opt.ticks;
     apply_stream_options(opt.stream, settings);
     auto s = session::Session::join(
         *transport, *master, opt.viewer ? net::Role::Viewer : net::Role::Participant, settings);
@@ -79,6 +99,9 @@ int run_join(const JoinOptions& opt)
         spdlog::error("join: never received the model from {}", opt.master);
         return k_exit_failure;
     }
+    if (!opt.save.empty())
+        if (auto ok = save_peer_state(**s, opt.save); !ok)
+            return report(ok.error());
     std::printf("join (id %u): model in %.2f s; %.1f s, tick %llu, %llu bytes out, %llu bytes in\n",
                 static_cast<unsigned>((*s)->id().value), summary->model_s, summary->elapsed_s,
                 static_cast<unsigned long long>(summary->final_tick),
@@ -100,7 +123,9 @@ void add_join_command(CLI::App& app, const GlobalOptions& global)
         "Use the master's --passphrase/--key-file (or PLIANT_PASSPHRASE): without one the\n"
         "session is unencrypted; with a different one the master refuses the connection.\n"
         "Ctrl-C (or SIGTERM) leaves cleanly: a participant hands its leaves over first.");
-    cmd->add_option("MASTER", opt->master, "The master's address HOST:PORT")->required();
+    cmd->add_option("MASTER", opt->master,
+                    "The master's address HOST:PORT: a.b.c.d, localhost or a host name (IPv4)")
+        ->required();
     cmd->add_flag("--viewer", opt->viewer, "Only watch (simulate nothing)");
     cmd->add_option("-p,--port", opt->port, "UDP port to listen on for other peers (0: any)")
         ->capture_default_str();
@@ -110,6 +135,13 @@ void add_join_command(CLI::App& app, const GlobalOptions& global)
     cmd->add_option("--script", opt->script, "Script of timed grabs / leave")
         ->check(CLI::ExistingFile);
     cmd->add_option("--stats", opt->stats, "Per-second statistics CSV");
+    cmd->add_option("--ticks", opt->ticks,
+                    "Exact sessions: stop stepping at this tick (0: never); give every peer the "
+                    "master's --ticks, so that all end on the same state")
+        ->capture_default_str();
+    cmd->add_option("--save", opt->save,
+                    "Write what this peer shows at the end to FILE.pgrid (positions, u, v and "
+                    "the owner of every node: `pliant render FILE.pgrid --color owner`)");
     cmd->add_option("--name", opt->name, "Peer name (printable ASCII, 1..32)")
         ->capture_default_str();
     cmd->add_option("--passphrase", opt->passphrase,

@@ -41,6 +41,20 @@ int main(int argc, char** argv)
     for (const auto& spec : registry)
         spec.add(app, global);
 
-    CLI11_PARSE(app, argc, argv);
+    try
+    {
+        app.parse(argc, argv);
+    }
+    catch (const CLI::RuntimeError& e)
+    {
+        return e.get_exit_code();  // a subcommand's own result (command_callback)
+    }
+    catch (const CLI::ParseError& e)
+    {
+        // --help and --version exit 0; every other CLI11 error is a usage error, whatever code
+        // CLI11 gives it (105 for a bad value, 106 for a missing option...): one documented code.
+        const int rc = app.exit(e);
+        return rc == 0 ? 0 : pliant::cli::k_exit_usage;
+    }
     return 0;
 }

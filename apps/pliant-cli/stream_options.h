@@ -29,12 +29,13 @@ inline void add_stream_options(CLI::App* cmd, StreamOptions& opt)
                   "about 1.4 Mbit/s per peer at level 6 and 60 Hz (docs/session.md §5.1)");
     cmd->add_option("--cap", opt.cap_mbit,
                     "With --compress: leaf-state bytes per peer at most [Mbit/s] (0: no cap)")
-        ->check(CLI::NonNegativeNumber);
+        ->check(CLI::NonNegativeNumber)
+        ->needs("--compress");
     cmd->add_option("--stream-coarsen", opt.stream_coarsen,
                     "Stream leaf states K levels coarser (every 2^K-th node, ~4^-K of the bytes;\n"
-                    "0: off); receivers refine them by butterfly subdivision for display. Exact\n"
-                    "mode only (refused with --mode fast and with --compress); K <= 2 at levels\n"
-                    ">= 3, K <= 1 at level 2 (docs/session.md §5.2)")
+                    "0: off); receivers refine them by butterfly subdivision for display. Only in\n"
+                    "exact sessions (the master's --mode; refused in fast ones) and not with\n"
+                    "--compress; K <= 2 at levels >= 3, K <= 1 at level 2 (docs/session.md §5.2)")
         ->check(CLI::Range(0, 2))
         ->capture_default_str();
     cmd->add_option("--max-halo-age", opt.max_halo_age_s,

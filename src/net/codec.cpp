@@ -97,11 +97,8 @@ Err check_time(double t) noexcept
 
 Err check_name(const std::string& name) noexcept
 {
-    if (name.empty() || name.size() > k_max_name_length)
+    if (!is_valid_name(name))
         return DecodeError::BadName;
-    for (char c : name)
-        if (c < 0x20 || c > 0x7E)
-            return DecodeError::BadName;
     return {};
 }
 
@@ -1388,6 +1385,13 @@ Body make_body(std::size_t index) noexcept
 }
 
 }  // namespace
+
+bool is_valid_name(std::string_view name) noexcept
+{
+    if (name.empty() || name.size() > k_max_name_length)
+        return false;
+    return std::all_of(name.begin(), name.end(), [](char c) { return c >= 0x20 && c <= 0x7E; });
+}
 
 std::optional<DecodeError> validate(const Message& message) noexcept
 {

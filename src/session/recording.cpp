@@ -191,10 +191,7 @@ std::vector<sim::Force> forces_at(const sim::MembraneModel& model,
               [](const ForceRecord* a, const ForceRecord* b) { return a->sender < b->sender; });
     std::vector<sim::Force> out;
     for (const ForceRecord* r : active)
-        for (const net::UserForce& f : r->forces)
-            out.push_back(to_sim_force(f));
-    if (!sim::validate_forces(model, out))
-        out.clear();
+        (void)append_valid_forces(model, r->forces, out);
     return out;
 }
 

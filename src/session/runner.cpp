@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <span>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -18,10 +19,10 @@ namespace pliant::session
 namespace
 {
 
-core::Unexpected bad_line(std::size_t line, const std::string& why)
+core::Unexpected bad_line(std::string_view source, std::size_t line, const std::string& why)
 {
     return core::fail(core::ErrorCode::ParseError,
-                      "script line " + std::to_string(line) + ": " + why);
+                      std::string(source) + ":" + std::to_string(line) + ": " + why);
 }
 
 bool read_number(std::istringstream& in, double& out)
@@ -36,7 +37,7 @@ bool read_number(std::istringstream& in, double& out)
 
 }  // namespace
 
-core::Result<std::vector<ScriptEvent>> parse_script(std::string_view text)
+core::Result<std::vector<ScriptEvent>> parse_script(std::string_view text, std::string_view source)
 {
     std::vector<ScriptEvent> events;
     std::istringstream lines{std::string(text)};
@@ -52,10 +53,11 @@ core::Result<std::vector<ScriptEvent>> parse_script(std::string_view text)
         if (!(in >> first))
             continue;
         ScriptEvent e;
+        e.line = number;
         {
             std::istringstream t(first);
             if (!read_number(t, e.time) || e.time < 0.0)
-                return bad_line(number, "expected a time >= 0, got '" + first + "'");
+                return bad_line(source, number, "expected a time >= 0, got '" + first + "'");
         }
         std::string cmd;
         in >> cmd;
@@ -71,7 +73,7 @@ core::Result<std::vector<ScriptEvent>> parse_script(std::string_view text)
                 double f = 0.0;
                 if (!read_number(in, f) || f < 0.0 || f >= net::k_max_face_index ||
                     f != std::floor(f))
-                    return bad_line(number, "expected a face index");
+                    return bad_line(source, number, "expected a face index");
                 e.force.target.kind = net::TargetKind::Face;
                 e.force.target.face = static_cast<std::uint32_t>(f);
             }
@@ -80,35 +82,37 @@ core::Result<std::vector<ScriptEvent>> parse_script(std::string_view text)
                 e.force.target.kind = net::TargetKind::Position;
                 for (double& c : e.force.target.position)
                     if (!read_number(in, c))
-                        return bad_line(number, "expected three coordinates after 'point'");
+                        return bad_line(source, number, "expected three coordinates after 'point'");
             }
             else
-                return bad_line(number, "expected 'face' or 'point' after '" + cmd + "'");
+                return bad_line(source, number, "expected 'face' or 'point' after '" + cmd + "'");
             std::string key;
             while (in >> key)
             {
                 if (key == "radius")
                 {
                     if (!read_number(in, e.force.target.radius) || e.force.target.radius < 0.0)
-                        return bad_line(number, "expected a radius >= 0");
+                        return bad_line(source, number, "expected a radius >= 0");
                 }
                 else if (key == "force" && e.kind == ScriptEvent::Kind::Grab)
                 {
                     for (double& c : e.force.force)
                         if (!read_number(in, c))
-                            return bad_line(number, "expected three force components");
+                            return bad_line(source, number, "expected three force components");
                 }
                 else if (key == "for" && e.kind == ScriptEvent::Kind::Grab)
                 {
                     if (!read_number(in, e.duration) || e.duration < 0.0)
-                        return bad_line(number, "expected a duration >= 0");
+                        return bad_line(source, number, "expected a duration >= 0");
                 }
                 else
-                    return bad_line(number, "unknown key '" + key + "'");
+                    return bad_line(source, number, "unknown key '" + key + "'");
             }
         }
         else
-            return bad_line(number, "unknown command '" + cmd + "'");
+            return bad_line(source, number, "unknown command '" + cmd + "'");
+        if (e.kind == ScriptEvent::Kind::Grab && !(e.duration > 0.0))
+            return bad_line(source, number, "a grab needs 'for SECONDS' with a duration > 0");
         events.push_back(e);
     }
     std::stable_sort(events.begin(), events.end(),
@@ -123,7 +127,28 @@ core::Result<std::vector<ScriptEvent>> load_script(const std::filesystem::path& 
         return core::fail(core::ErrorCode::IoError, "cannot read script " + path.string());
     std::stringstream ss;
     ss << in.rdbuf();
-    return parse_script(ss.str());
+    return parse_script(ss.str(), path.string());
+}
+
+core::Result<void> check_script(std::span<const ScriptEvent> script, std::int64_t face_count,
+                                SessionRole role, std::string_view source)
+{
+    for (const ScriptEvent& e : script)
+    {
+        const std::string where = std::string(source) + ":" + std::to_string(e.line) + ": ";
+        if (e.kind == ScriptEvent::Kind::Grab && role == SessionRole::Viewer)
+            return core::fail(core::ErrorCode::InvalidArgument,
+                              where +
+                                  "a viewer cannot grab (join as a participant to apply "
+                                  "forces)");
+        if (e.kind != ScriptEvent::Kind::Leave && e.force.target.kind == net::TargetKind::Face &&
+            static_cast<std::int64_t>(e.force.target.face) >= face_count)
+            return core::fail(core::ErrorCode::InvalidArgument,
+                              where + "face " + std::to_string(e.force.target.face) +
+                                  " is not on this grid (faces 0.." +
+                                  std::to_string(face_count - 1) + ")");
+    }
+    return {};
 }
 
 core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
@@ -150,6 +175,7 @@ core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
     };
     std::vector<ActiveGrab> grabs;
     bool leave_asked = false;
+    core::Result<void> script_error;
     SessionStats last{};
     double next_row = 1.0;
     RunSummary summary;
@@ -190,7 +216,14 @@ core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
         }
         session.poll();
         if (summary.model_s < 0.0 && session.ready())
+        {
             summary.model_s = now;
+            // The grid is known from here on (a joiner learns it from the welcome).
+            const auto faces = static_cast<std::int64_t>(session.model()->grid().face_count());
+            script_error = check_script(options.script, faces, session.role(), options.script_name);
+            if (!script_error)
+                break;
+        }
         bool forces_changed = false;
         while (next_event < options.script.size() && options.script[next_event].time <= now &&
                session.ready())
@@ -247,6 +280,8 @@ core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
             std::this_thread::sleep_for(std::chrono::microseconds(200));
         }
     }
+    if (!script_error)
+        return core::fail(script_error.error().code, script_error.error().message);
     summary.elapsed_s = elapsed();
     write_row(summary.elapsed_s);
     summary.final_tick = session.tick();

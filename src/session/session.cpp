@@ -3,6 +3,7 @@
 // The Session peer (include/pliant/session/session.h has the design; docs/session.md the story).
 #include <pliant/core/assert.h>
 #include <pliant/core/hash.h>
+#include <pliant/net/codec.h>
 #include <pliant/net/quantised.h>
 #include <pliant/session/recording.h>
 #include <pliant/session/session.h>
@@ -16,6 +17,7 @@
 #include <bit>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <set>
 
@@ -267,21 +269,68 @@ sim::Force to_sim_force(const net::UserForce& f)
     return out;
 }
 
+std::size_t append_valid_forces(const sim::MembraneModel& model,
+                                std::span<const net::UserForce> forces,
+                                std::vector<sim::Force>& out)
+{
+    std::size_t dropped = 0;
+    for (const net::UserForce& f : forces)
+    {
+        const sim::Force force = to_sim_force(f);
+        if (sim::validate_forces(model, std::span(&force, 1)))
+            out.push_back(force);
+        else
+            ++dropped;
+    }
+    return dropped;
+}
+
 namespace
 {
 
-/// The settings' own ranges (host and join refuse others with InvalidArgument).
-bool valid(const SessionSettings& s)
+/// The settings' own ranges: host and join refuse others with InvalidArgument, naming the
+/// setting, its value and the rule.
+core::Result<void> check_settings(const SessionSettings& s, const char* who)
 {
-    return s.stream_rate_hz > 0.0 && s.frame_rate_hz > 0.0 && s.ack_rate_hz > 0.0 &&
-           s.u_step_exponent >= net::k_min_step_exponent &&
-           s.u_step_exponent <= net::k_max_step_exponent &&
-           s.v_step_exponent >= net::k_min_step_exponent &&
-           s.v_step_exponent <= net::k_max_step_exponent && s.bandwidth_cap_mbit_s >= 0.0 &&
-           s.interest_boost >= 0.0 && s.max_halo_age_s >= 0.0 && std::isfinite(s.max_halo_age_s) &&
-           s.max_stall_s >= 0.0 && std::isfinite(s.max_stall_s) && s.quiescent_refresh_s >= 0.0 &&
-           std::isfinite(s.quiescent_refresh_s) && s.halo_rings >= 3 && !s.name.empty() &&
-           s.name.size() <= net::k_max_name_length;
+    const auto bad = [who](const std::string& what)
+    { return core::fail(core::ErrorCode::InvalidArgument, std::string(who) + ": " + what); };
+    const auto num = [](double x)
+    {
+        char text[32];
+        std::snprintf(text, sizeof text, "%g", x);
+        return std::string(text);
+    };
+    if (!net::is_valid_name(s.name))
+        return bad("the peer name '" + s.name + "' must be 1 to " +
+                   std::to_string(net::k_max_name_length) +
+                   " characters of printable ASCII (space to '~'), it has " +
+                   std::to_string(s.name.size()) + " bytes");
+    if (!(s.stream_rate_hz > 0.0) || !(s.frame_rate_hz > 0.0) || !(s.ack_rate_hz > 0.0))
+        return bad("stream, frame and ack rates must be > 0 Hz (stream " + num(s.stream_rate_hz) +
+                   ", frame " + num(s.frame_rate_hz) + ", ack " + num(s.ack_rate_hz) + ")");
+    for (const int e : {s.u_step_exponent, s.v_step_exponent})
+        if (e < net::k_min_step_exponent || e > net::k_max_step_exponent)
+            return bad("quantisation step exponents must lie in " +
+                       std::to_string(net::k_min_step_exponent) + ".." +
+                       std::to_string(net::k_max_step_exponent) + " (u " +
+                       std::to_string(s.u_step_exponent) + ", v " +
+                       std::to_string(s.v_step_exponent) + ")");
+    if (!(s.bandwidth_cap_mbit_s >= 0.0))
+        return bad("the bandwidth cap must be >= 0 Mbit/s (0: none), not " +
+                   num(s.bandwidth_cap_mbit_s));
+    if (!(s.interest_boost >= 0.0))
+        return bad("the interest boost must be >= 0, not " + num(s.interest_boost));
+    for (const double t : {s.max_halo_age_s, s.max_stall_s, s.quiescent_refresh_s})
+        if (!(t >= 0.0) || !std::isfinite(t))
+            return bad(
+                "halo age, stall and quiescent refresh limits must be finite and >= 0 s "
+                "(max_halo_age_s " +
+                num(s.max_halo_age_s) + ", max_stall_s " + num(s.max_stall_s) +
+                ", quiescent_refresh_s " + num(s.quiescent_refresh_s) + ")");
+    if (s.halo_rings < 3)
+        return bad("exact coupling needs at least 3 halo rings, not " +
+                   std::to_string(s.halo_rings));
+    return {};
 }
 
 /// The grid-independent rules of coarse streaming (docs/session.md §5.2).
@@ -953,10 +1002,7 @@ struct Session::Impl
         std::vector<sim::Force> out;
         for (const auto& [id, e] : entries)
             if (e != nullptr)
-                for (const net::UserForce& f : e->forces)
-                    out.push_back(to_sim_force(f));
-        if (!sim::validate_forces(*s.model_, out))
-            out.clear();
+                (void)append_valid_forces(*s.model_, e->forces, out);
         return out;
     }
 
@@ -3110,8 +3156,8 @@ core::Result<std::unique_ptr<Session>> Session::host(net::Transport& transport,
                                                      const sim::MembraneSettings& material,
                                                      const SessionSettings& settings)
 {
-    if (!valid(settings))
-        return core::fail(core::ErrorCode::InvalidArgument, "Session::host: bad settings");
+    if (auto r = check_settings(settings, "Session::host"); !r)
+        return core::fail(r.error().code, r.error().message);
     if (auto r = check_coarsen(settings, "Session::host"); !r)
         return core::fail(r.error().code, r.error().message);
     sim::MembraneSettings m = material;
@@ -3151,8 +3197,8 @@ core::Result<std::unique_ptr<Session>> Session::join(net::Transport& transport,
                                                      const net::Address& master, net::Role role,
                                                      const SessionSettings& settings)
 {
-    if (!valid(settings))
-        return core::fail(core::ErrorCode::InvalidArgument, "Session::join: bad settings");
+    if (auto r = check_settings(settings, "Session::join"); !r)
+        return core::fail(r.error().code, r.error().message);
     if (auto r = check_coarsen(settings, "Session::join"); !r)
         return core::fail(r.error().code, r.error().message);
     std::unique_ptr<Session> s(new Session());

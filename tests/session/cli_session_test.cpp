@@ -2,15 +2,22 @@
 // SPDX-FileCopyrightText: 2026 pliant contributors
 // `pliant host` and two `pliant join` as separate processes on 127.0.0.1 for a few seconds:
 // all exit 0 and their statistics show traffic both ways. Bounded by --duration.
+#include <pliant/core/grid_io.h>
+#include <pliant/core/tetra_grid.h>
+
 #include <gtest/gtest.h>
 #include <unistd.h>
 
 #include "stats_csv.h"
 #include "support/test_paths.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <fstream>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -209,6 +216,90 @@ TEST(SessionCli, StreamCoarsenFeedsAViewerAndIsRefusedInFastMode)
     EXPECT_NE(read(dir / "refused.rc"), "0\n");
     EXPECT_NE(read(dir / "refused.log").find("refused in fast coupling"), std::string::npos)
         << read(dir / "refused.log");
+}
+
+// The check with separate processes over ENet on 127.0.0.1: a master and 1 or 2
+// participants in exact coupling, each grabbing, all stop at tick 1,500 (--ticks) and save what
+// they show (8 s of wall time leave room for a slow build, as under the sanitizers, to reach
+// that tick); the master's recording replayed on one process (`pliant replay`) is bit-identical
+// to the session, and every peer's saved u and v equal the replay's to 1e-12 (in fact exactly).
+void run_exact_processes(int participants)
+{
+    const auto dir = pliant::test::scratch_dir(participants == 1 ? "session_cli_exact_2"
+                                                                 : "session_cli_exact_3");
+    const int port = 20000 + static_cast<int>((getpid() + 6007 + 13 * participants) % 19990);
+    {
+        std::ofstream(dir / "g1.txt") << "0.2 grab face 700 force 0 0 0.5 for 0.6\n";
+        std::ofstream(dir / "g2.txt") << "0.3 grab point 0 0 1 radius 0.4 force 0 0 -0.4 for 0.5\n";
+    }
+    const std::string exe = PLIANT_EXE;
+    const std::string d = dir.string();
+    const std::string p = std::to_string(port);
+    std::string cmd = "cd '" + d + "' && rm -f *.rc *.pgrid *.prec; ('" + exe +
+                      "' host --level 4 --port " + p +
+                      " --ticks 1500 --duration 8 --record rec.prec --save host.pgrid > host.log "
+                      "2>&1; echo $? > host.rc) & sleep 0.3; ";
+    for (int k = 1; k <= participants; ++k)
+    {
+        const std::string n = std::to_string(k);
+        cmd += "('" + exe + "' join 127.0.0.1:" + p + " --ticks 1500 --duration 9 --script g" + n +
+               ".txt --save p" + n + ".pgrid > p" + n + ".log 2>&1; echo $? > p" + n + ".rc) & ";
+    }
+    cmd +=
+        "wait; '" + exe + "' replay rec.prec -o ref.pgrid > replay.log 2>&1; echo $? > replay.rc";
+    ASSERT_EQ(std::system(cmd.c_str()), 0);
+    const std::string host_log = read(dir / "host.log");
+    if (host_log.find("bind") != std::string::npos && read(dir / "host.rc") != "0\n")
+        GTEST_SKIP() << "cannot bind UDP port " << port << " on this machine: " << host_log;
+    std::vector<std::string> peers{"host"};
+    for (int k = 1; k <= participants; ++k)
+        peers.push_back("p" + std::to_string(k));
+    for (const std::string& name : peers)
+        ASSERT_EQ(read(dir / (name + ".rc")), "0\n") << name << ": " << read(dir / (name + ".log"));
+    EXPECT_EQ(read(dir / "replay.rc"), "0\n") << read(dir / "replay.log");
+    EXPECT_NE(read(dir / "replay.log").find("bit-identical"), std::string::npos);
+    const auto ref = pliant::core::load_grid(dir / "ref.pgrid");
+    ASSERT_TRUE(ref) << ref.error().message;
+    const pliant::core::TetraGrid grid = pliant::core::TetraGrid::create(4).value();
+    for (const std::string& name : peers)
+    {
+        const auto saved = pliant::core::load_grid(dir / (name + ".pgrid"));
+        ASSERT_TRUE(saved) << name << ": " << saved.error().message;
+        std::set<long> owners;
+        for (const char* channel : {"u", "v"})
+        {
+            const pliant::core::Field<double>* a = saved->find(channel);
+            const pliant::core::Field<double>* b = ref->find(channel);
+            ASSERT_NE(a, nullptr);
+            ASSERT_NE(b, nullptr);
+            double diff = 0.0;
+            double scale = 0.0;
+            for (std::uint32_t i = 0; i < grid.node_count(); ++i)
+            {
+                const pliant::core::NodeIndex n{i};
+                diff = std::max(diff, std::abs((*a)[n] - (*b)[n]));
+                scale = std::max(scale, std::abs((*b)[n]));
+            }
+            EXPECT_GT(scale, 1e-3) << "the grabs moved the surface";
+            EXPECT_LE(diff, 1e-12 * scale) << name << " " << channel;
+            EXPECT_EQ(diff, 0.0) << name << " " << channel << ": bit for bit";
+        }
+        const pliant::core::Field<double>* owner = saved->find("owner");
+        ASSERT_NE(owner, nullptr);
+        for (std::uint32_t i = 0; i < grid.node_count(); ++i)
+            owners.insert(std::lround((*owner)[pliant::core::NodeIndex{i}]));
+        EXPECT_EQ(owners.size(), peers.size()) << name << ": every member owns a share";
+    }
+}
+
+TEST(SessionCli, ExactTwoProcessesEqualOneProcessBitForBit)
+{
+    run_exact_processes(1);
+}
+
+TEST(SessionCli, ExactThreeProcessesEqualOneProcessBitForBit)
+{
+    run_exact_processes(2);
 }
 
 }  // namespace

@@ -526,5 +526,59 @@ TEST(SessionPeers, EveryPeerListsTheOthersWithRolesNamesAndLinks)
     EXPECT_EQ(viewer.stats().peers_connected, 1U);
 }
 
+// A force that breaks the model's rules (a face beyond the grid, a non-finite vector) is left
+// out on its own: the other users' grabs still apply (they were all cancelled before).
+TEST(SessionForces, ABadForceIsLeftOutAlone)
+{
+    const core::TetraGrid g = core::TetraGrid::create(3).value();
+    const auto model = sim::MembraneModel::create(g, scenes::sphere_grid(g, 1.0), material());
+    ASSERT_TRUE(model);
+    const auto faces = static_cast<std::uint32_t>(g.face_count());
+    net::UserForce nan_force = face_pull(3, 1.0);
+    nan_force.force[1] = std::nan("");
+    const std::vector<net::UserForce> list{face_pull(7, 0.5), face_pull(faces, 1.0),
+                                           point_push(0.0, 0.0, 1.0, 0.3, 0.2), nan_force,
+                                           face_pull(faces - 1, -0.5)};
+    std::vector<sim::Force> out;
+    EXPECT_EQ(append_valid_forces(*model, list, out), 2U);
+    ASSERT_EQ(out.size(), 3U);
+    EXPECT_EQ(out[0].face, 7);
+    EXPECT_EQ(out[1].face, -1);
+    EXPECT_EQ(out[2].face, static_cast<std::int64_t>(faces) - 1);
+}
+
+// Settings a peer cannot run with are refused naming the rule: a name the wire cannot carry
+// (non-ASCII, empty, too long) used to pass here and fail every join later without a word.
+TEST(SessionSettings, ANameTheWireCannotCarryIsRefusedNamingTheRule)
+{
+    net::SimulatedNetwork network;
+    auto transport = network.create_endpoint();
+    ASSERT_TRUE(transport->open({}));
+    const core::TetraGrid g = core::TetraGrid::create(3).value();
+    for (const std::string& name :
+         {std::string("h\xC3\xB4te"), std::string(), std::string(33, 'a')})
+    {
+        SessionSettings set;
+        set.name = name;
+        const auto host =
+            Session::host(*transport, g, scenes::sphere_grid(g, 1.0), material(), set);
+        ASSERT_FALSE(host.has_value()) << name;
+        EXPECT_EQ(host.error().code, core::ErrorCode::InvalidArgument);
+        EXPECT_NE(host.error().message.find("printable ASCII"), std::string::npos)
+            << host.error().message;
+        const auto join = Session::join(*transport, net::Address{}, net::Role::Participant, set);
+        ASSERT_FALSE(join.has_value()) << name;
+        EXPECT_NE(join.error().message.find("Session::join: the peer name"), std::string::npos)
+            << join.error().message;
+    }
+    SessionSettings set;
+    set.stream_rate_hz = 0.0;
+    const auto bad_rate =
+        Session::host(*transport, g, scenes::sphere_grid(g, 1.0), material(), set);
+    ASSERT_FALSE(bad_rate.has_value());
+    EXPECT_NE(bad_rate.error().message.find("rates must be > 0 Hz (stream 0"), std::string::npos)
+        << bad_rate.error().message;
+}
+
 }  // namespace
 }  // namespace pliant::session::test

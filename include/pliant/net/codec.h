@@ -63,6 +63,10 @@ enum class EncodeError : std::uint8_t
 /// sizes, the f32 range with F32 encoding). \return the error decode() would report, or nothing.
 [[nodiscard]] std::optional<DecodeError> validate(const Message& message) noexcept;
 
+/// Whether `name` is a valid peer name on the wire: 1 to k_max_name_length bytes of printable
+/// ASCII (0x20..0x7E; docs/protocol.md §6 Hello).
+[[nodiscard]] bool is_valid_name(std::string_view name) noexcept;
+
 /// Bytes encode() writes for `message` (valid or not; at most k_max_datagram_size when valid).
 [[nodiscard]] std::size_t encoded_size(const Message& message) noexcept;
 

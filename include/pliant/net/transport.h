@@ -46,8 +46,13 @@ struct Address
 /// Formats "a.b.c.d:port".
 [[nodiscard]] std::string to_string(const Address& address);
 
-/// Parses "a.b.c.d:port" or "localhost:port". \return ErrorCode::InvalidArgument if malformed.
+/// Parses "a.b.c.d:port" or "localhost:port" (port 1..65535). \return
+/// ErrorCode::InvalidArgument if malformed.
 [[nodiscard]] core::Result<Address> parse_address(std::string_view text);
+/// As parse_address, and "hostname:port" through the system's resolver (IPv4, the first address
+/// found). Blocks on the look-up: for the command line, before a session starts. \return
+/// ErrorCode::InvalidArgument naming the host when it cannot be resolved.
+[[nodiscard]] core::Result<Address> resolve_address(std::string_view text);
 
 /// A connection as one Transport instance sees it. Handles are never reused by an instance, so
 /// a stale handle is detected rather than aliased to a new peer.

@@ -25,6 +25,8 @@
 
 #include <csignal>
 #include <filesystem>
+#include <span>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -43,19 +45,29 @@ struct ScriptEvent
     double time = 0.0;      ///< s
     double duration = 0.0;  ///< s (grab)
     net::UserForce force;   ///< target (+ force for Grab)
+    std::size_t line = 0;   ///< the script's line (1-based), for messages
 };
 
-/// Parses a script. \return ParseError naming the line for a malformed command, a negative or
-/// non-finite number.
-core::Result<std::vector<ScriptEvent>> parse_script(std::string_view text);
-/// Reads and parses a script file. \return IoError or parse_script's errors.
+/// Parses a script. \return ParseError naming `source` and the line (`source:LINE: why`) for
+/// a malformed command, a negative or non-finite number, or a grab without a duration > 0.
+core::Result<std::vector<ScriptEvent>> parse_script(std::string_view text,
+                                                    std::string_view source = "script");
+/// Reads and parses a script file (messages name the file). \return IoError or
+/// parse_script's errors.
 core::Result<std::vector<ScriptEvent>> load_script(const std::filesystem::path& path);
+/// The rules a script can only be checked against once the grid is known: every face lies on
+/// the grid (below `face_count`), and a viewer does not grab. \return InvalidArgument naming
+/// `source`, the line and the rule. (A session drops a force that breaks them rather than
+/// applying it, so a script is checked before it plays.)
+core::Result<void> check_script(std::span<const ScriptEvent> script, std::int64_t face_count,
+                                SessionRole role, std::string_view source);
 
 struct RunOptions
 {
     double duration_s = 10.0;  ///< the loop ends after this (wall clock), > 0
     std::vector<ScriptEvent> script;
-    std::filesystem::path stats_csv;  ///< empty: none
+    std::string script_name = "script";  ///< names the script in messages (its file)
+    std::filesystem::path stats_csv;     ///< empty: none
     double idle_sleep_s = 0.0002;  ///< sleep per loop iteration unless the peer is behind real time
     /// When set and non-zero (a signal handler's flag: Ctrl-C), the loop ends early and winds
     /// down as at the end of the duration.
@@ -75,7 +87,8 @@ struct RunSummary
 
 /// Runs `session` in real time until the duration, the session's end or the script's `leave`,
 /// then leaves (participants, viewers) or shuts the session down (master).
-/// \return IoError if the stats file cannot be written.
+/// \return IoError if the stats file cannot be written; check_script's errors once the grid is
+/// known (the peer then leaves at once).
 core::Result<RunSummary> run_peer(Session& session, const RunOptions& options);
 
 }  // namespace pliant::session

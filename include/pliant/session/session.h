@@ -383,5 +383,13 @@ core::Result<DecodedModel> decode_model(std::span<const std::byte> blob);
 
 /// The sim force of a wire force (face or point + radius).
 [[nodiscard]] sim::Force to_sim_force(const net::UserForce& force);
+/// Appends to `out` the sim forces of `forces` that `model` accepts (sim::validate_forces: a face
+/// on the grid, finite vector and point, radius >= 0) and leaves out the others. Every peer and
+/// the replay apply it to the same lists, so they leave out the same forces, and one bad force
+/// (a face beyond this grid in someone's script) does not cancel everyone's grabs.
+/// \return how many were left out.
+std::size_t append_valid_forces(const sim::MembraneModel& model,
+                                std::span<const net::UserForce> forces,
+                                std::vector<sim::Force>& out);
 
 }  // namespace pliant::session
