@@ -33,7 +33,7 @@ enum class DecodeError : std::uint8_t
     TooLarge = 2,         ///< more than k_max_datagram_size bytes
     BadMagic = 3,         ///< protocol id is not "PLNT"
     BadVersion = 4,       ///< version is not k_protocol_version
-    UnknownType = 5,      ///< message type outside 1..17
+    UnknownType = 5,      ///< message type outside 1..k_message_type_count (19)
     BadFlags = 6,         ///< header flags not zero (reserved)
     BadSession = 7,       ///< session 0 in a message other than Hello or Reject
     BadSender = 8,        ///< sender k_no_peer in a message other than Hello
