@@ -17,7 +17,8 @@
 ///     3.0  leave
 ///
 /// A grab applies its force (N) to a face, or to the nodes within `radius` (m) of a point, for
-/// `for` seconds; it also declares the grabbed face or point as the peer's point of interest.
+/// `for` seconds (> 0, required); it also declares the grabbed face or point as the peer's point
+/// of interest. Faces are checked against the grid once it is known (check_script).
 
 #include <pliant/core/result.h>
 #include <pliant/net/message.h>
