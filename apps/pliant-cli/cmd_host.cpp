@@ -70,7 +70,7 @@ int run_host(const HostOptions& opt)
             return report(g.error());
         auto positions = core::geometry_of(*g, *file);
         if (!positions)
-            return report(positions.error());
+            return report({positions.error().code, opt.grid + ": " + positions.error().message});
         grid = std::move(*g);
         rest = std::move(*positions);
     }

@@ -46,14 +46,22 @@ int run_refine(const RefineOptions& opt)
                            " must end in .pgrid (native grid), .obj, .ply, .gltf or .glb"});
     std::error_code ec;
     if (!std::filesystem::is_regular_file(opt.grid, ec))
-        return report({ErrorCode::IoError, "refine: " + opt.grid.string() +
-                                               ": no such file (expected a .pgrid grid file; "
-                                               "make one with `pliant remesh`)"});
+        return report({ErrorCode::IoError,
+                       "refine: " + opt.grid.string() +
+                           (std::filesystem::exists(opt.grid, ec) ? ": not a regular file"
+                                                                  : ": no such file") +
+                           " (expected a .pgrid grid file; make one with `pliant remesh`)"});
 
     auto file = core::load_grid(opt.grid);
     if (!file)
         return report(file.error());
     const int level = file->level;
+    // The finest level first: "--levels 0 or fewer" is no advice (--levels starts at 1).
+    if (level >= core::k_max_level)
+        return report({ErrorCode::InvalidArgument, "refine: " + opt.grid.string() +
+                                                       " is already at the finest level " +
+                                                       std::to_string(core::k_max_level) +
+                                                       ": there is nothing finer to refine to"});
     if (level + opt.levels > core::k_max_level)
         return report({ErrorCode::InvalidArgument,
                        "refine: " + opt.grid.string() + " is level " + std::to_string(level) +
@@ -62,17 +70,13 @@ int run_refine(const RefineOptions& opt)
                            " exceeds the finest level " + std::to_string(core::k_max_level) +
                            " (use --levels " + std::to_string(core::k_max_level - level) +
                            " or fewer)"});
-    if (level >= core::k_max_level)
-        return report({ErrorCode::InvalidArgument, "refine: " + opt.grid.string() +
-                                                       " is already at the finest level " +
-                                                       std::to_string(core::k_max_level)});
 
     auto grid = core::TetraGrid::create(level);
     if (!grid)
         return report(grid.error());
     // Checks that the file has positions, even when only they are written.
     if (auto geometry = core::geometry_of(*grid, *file); !geometry)
-        return report(geometry.error());
+        return report({geometry.error().code, opt.grid.string() + ": " + geometry.error().message});
 
     auto plans = subdiv::make_plans(level, opt.levels);
     if (!plans)

@@ -103,6 +103,10 @@ Result<void> save_grid(const std::filesystem::path& path, const GridFile& file)
 Result<GridFile> load_grid(const std::filesystem::path& path)
 {
     const std::string where = path.string() + ": ";
+    // A directory opens as a stream on Linux and then throws from the first read.
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec))
+        return fail(ErrorCode::IoError, where + "is a directory, not a grid file");
     std::ifstream is(path, std::ios::binary);
     if (!is)
         return fail(ErrorCode::IoError, where + "cannot open for reading");

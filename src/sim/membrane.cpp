@@ -215,9 +215,16 @@ core::Result<MembraneModel> MembraneModel::create(const core::TetraGrid& grid,
             const Vec3 n = ((cr[0] + cr[3]) + (cr[1] + cr[4])) + (cr[2] + cr[5]);
             const double len = core::norm(n);
             if (!(len > 0.0))
+            {
+                // Name the surface vertex (a ghost position stands for a node inside).
+                const core::GridCoord node = grid.fold(x, y);
                 return core::fail(core::ErrorCode::DegenerateFace,
-                                  "MembraneModel::create: zero normal at node (" +
-                                      std::to_string(x) + ", " + std::to_string(y) + ")");
+                                  "MembraneModel::create: the rest surface has no normal at "
+                                  "node (" +
+                                      std::to_string(node.x) + ", " + std::to_string(node.y) +
+                                      "): its neighbours' positions span no area (all equal, "
+                                      "or on one line)");
+            }
             m.N_[0].at(x, y) = sign * n.x / len;
             m.N_[1].at(x, y) = sign * n.y / len;
             m.N_[2].at(x, y) = sign * n.z / len;

@@ -81,6 +81,13 @@ TEST(GridIo, RefusesCorruptTruncatedAndForeignFiles)
     auto missing = load_grid(dir / "missing.pgrid");
     ASSERT_FALSE(missing.has_value());
     EXPECT_EQ(missing.error().code, ErrorCode::IoError);
+
+    // A directory opens as a stream and used to throw from the first read.
+    std::filesystem::create_directories(dir / "folder.pgrid");
+    auto folder = load_grid(dir / "folder.pgrid");
+    ASSERT_FALSE(folder.has_value());
+    EXPECT_EQ(folder.error().code, ErrorCode::IoError);
+    EXPECT_NE(folder.error().message.find("folder.pgrid: is a directory"), std::string::npos);
 }
 
 TEST(GridIo, RefusesTwinsThatDiffer)

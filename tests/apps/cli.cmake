@@ -1,0 +1,60 @@
+# SPDX-License-Identifier: MIT
+# SPDX-FileCopyrightText: 2026 pliant contributors
+# `pliant refine` end to end, and the exit codes every command shares (docs/troubleshooting.md):
+# 0 done, 1 bad input (the message names the file and the rule), 2 usage error (CLI11: an
+# unknown option, a value out of range, a missing argument, an option without the one it needs).
+if(TARGET pliant)
+    set(cli_dir ${CMAKE_CURRENT_BINARY_DIR}/cli-refine)
+    file(MAKE_DIRECTORY ${cli_dir})
+    # pliant_cli_expect(NAME EXIT STDOUT|STDERR REGEX ARGS...)
+    function(pliant_cli_expect name exit stream regex)
+        list(JOIN ARGN ";" args)
+        add_test(NAME ${name}
+                 COMMAND ${CMAKE_COMMAND} "-DCOMMAND=$<TARGET_FILE:pliant>;${args}"
+                         -DEXIT=${exit} "-D${stream}_REGEX=${regex}"
+                         -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+        set_tests_properties(${name} PROPERTIES TIMEOUT 120
+                                                ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0")
+    endfunction()
+
+    # A level-3 grid of the bundled cow, shared by the refine tests.
+    pliant_cli_expect(cli_refine_setup 0 STDOUT "level 3: 130 vertices"
+                      remesh ${PROJECT_SOURCE_DIR}/data/spot.obj --level 3
+                      -o ${cli_dir}/spot3.pgrid)
+    set_tests_properties(cli_refine_setup PROPERTIES FIXTURES_SETUP cli_refine)
+    # Two levels to OBJ: level 5 has 2,050 surface vertices and 4,096 faces; --verbose times
+    # each level.
+    pliant_cli_expect(cli_refine_obj_verbose 0 STDERR
+                      "level 3 -> 4: [0-9.]+ ms.*level 4 -> 5: [0-9.]+ ms.*2 levels in"
+                      refine ${cli_dir}/spot3.pgrid --levels 2 -o ${cli_dir}/spot5.obj -v)
+    pliant_cli_expect(cli_refine_obj_counts 0 STDOUT
+                      "level 3 -> 5, 2050 vertices, 4096 faces, 3 channel\\(s\\)"
+                      refine ${cli_dir}/spot3.pgrid --levels 2 -o ${cli_dir}/spot5b.obj)
+    pliant_cli_expect(cli_refine_native 0 STDOUT "level 3 -> 4"
+                      refine ${cli_dir}/spot3.pgrid --levels 1 -o ${cli_dir}/spot4.pgrid)
+    pliant_cli_expect(cli_refine_bad_extension 1 STDERR "must end in \\.pgrid"
+                      refine ${cli_dir}/spot3.pgrid --levels 1 -o ${cli_dir}/spot4.xyz)
+    pliant_cli_expect(cli_refine_directory 1 STDERR "cli-refine: not a regular file"
+                      refine ${cli_dir} --levels 1 -o ${cli_dir}/x.obj)
+    pliant_cli_expect(cli_refine_not_a_grid 1 STDERR "spot.obj: .*not a pliant grid file"
+                      refine ${PROJECT_SOURCE_DIR}/data/spot.obj --levels 1
+                      -o ${cli_dir}/x.obj)
+    pliant_cli_expect(cli_refine_too_fine 1 STDERR "level 3 \\+ 8 = 11 exceeds the finest level 10 \\(use --levels 7 or fewer\\)"
+                      refine ${cli_dir}/spot3.pgrid --levels 8 -o ${cli_dir}/x.obj)
+    set_tests_properties(cli_refine_obj_verbose cli_refine_obj_counts cli_refine_native
+                         cli_refine_directory
+                         cli_refine_bad_extension cli_refine_not_a_grid cli_refine_too_fine
+                         PROPERTIES FIXTURES_REQUIRED cli_refine)
+
+    # Usage errors: status 2 from every command, with CLI11's message.
+    pliant_cli_expect(cli_usage_levels_out_of_range 2 STDERR "--levels: Value 0 not in range"
+                      refine x.pgrid --levels 0 -o x.obj)
+    pliant_cli_expect(cli_usage_unknown_option 2 STDERR "The following argument was not expected: --bogus"
+                      host --bogus)
+    pliant_cli_expect(cli_usage_bad_choice 2 STDERR "--mode: bogus not in \\{exact,fast\\}"
+                      host --mode bogus)
+    pliant_cli_expect(cli_usage_missing_argument 2 STDERR "MASTER is required" join)
+    pliant_cli_expect(cli_usage_needs 2 STDERR "--cap requires --compress" join 127.0.0.1:7777 --cap 1)
+    pliant_cli_expect(cli_usage_no_command 2 STDERR "A subcommand is required")
+    pliant_cli_expect(cli_help_exits_0 0 STDOUT "Subcommands:" --help)
+endif()
