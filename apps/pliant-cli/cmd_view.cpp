@@ -80,11 +80,13 @@ void add_view_command(CLI::App& app, const GlobalOptions& global)
         "view", "Interactive viewer: simulate, drag the surface, join or host a session.");
     cmd->footer(
         "INPUT is a .pgrid grid, a mesh (remeshed at --level on a worker thread), or HOST:PORT\n"
-        "of a session's master (joins as a viewer, or with --participant). Without INPUT the\n"
-        "bundled spot.obj is remeshed. Left drag on the surface pulls it; on the background it\n"
-        "orbits; the wheel zooms; P or F12 saves a screenshot; W wireframe; C colouring; Space\n"
-        "pause; R rest; H hides the panels. --script, --screenshot and --exit-after make a\n"
-        "headless run for tests (docs/viewer.md); their clocks start when the object shows.\n\n"
+        "of a session's master, HOST being a.b.c.d or localhost (joins as a viewer, or with\n"
+        "--participant; when the master does not answer, the window says so in red and a run\n"
+        "with --exit-after exits with status 1). Without INPUT the bundled spot.obj is\n"
+        "remeshed. Left drag on the surface pulls it; on the background it orbits; the wheel\n"
+        "zooms; P or F12 saves a screenshot; W wireframe; C colouring; Space pause; R rest; H\n"
+        "hides the panels. --script, --screenshot and --exit-after make a headless run for\n"
+        "tests (docs/viewer.md); their clocks start when the object shows.\n\n"
         "Examples:\n"
         "  pliant view                                   # the bundled cow, level 6\n"
         "  pliant view spot.pgrid --display-level 8\n"

@@ -56,6 +56,17 @@ if(TARGET pliant AND PLIANT_HAVE_VIEWER AND PLIANT_XVFB_RUN)
              COMMAND ${CMAKE_COMMAND} -DPNG=${_demo_view_png} -DMIN_BYTES=8000
                      -P ${CMAKE_CURRENT_SOURCE_DIR}/viewer_check_png.cmake)
     set_tests_properties(cli_demo_view_png PROPERTIES FIXTURES_REQUIRED demo_view_png)
+    # A join that cannot reach its master (UDP port 9 on this machine: nothing answers) must say
+    # so and, in a scripted run, exit with status 1 within ENet's connection timeout (about 5 s),
+    # not wait for --exit-after's 300 s grace.
+    add_test(NAME cli_view_join_unreachable
+             COMMAND ${CMAKE_COMMAND}
+                     "-DCOMMAND=${_xvfb};$<TARGET_FILE:pliant>;view;127.0.0.1:9;--exit-after;1"
+                     -DEXIT=1
+                     "-DSTDERR_REGEX=could not reach the master at 127\\.0\\.0\\.1:9: no answer"
+                     -DTIMEOUT=50 -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+    set_tests_properties(cli_view_join_unreachable PROPERTIES TIMEOUT 60
+        ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0;LIBGL_ALWAYS_SOFTWARE=1")
     # Each export re-imports as a closed genus-0 surface (`pliant info` exits 0) with the
     # simulation level's 4W^2 = 1024 faces (level 4).
     foreach(_export IN LISTS _viewer_exports)

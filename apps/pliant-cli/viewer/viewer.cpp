@@ -304,13 +304,19 @@ bool Viewer::join_session(const std::string& address, bool participant)
         return false;
     }
     session_ = std::move(*s);
+    session_address_ = address;
+    // The Session panel's field shows the address tried, so a retry is one click.
+    std::snprintf(join_address_.data(), join_address_.size(), "%s", address.c_str());
+    joined_ = false;
     open_session_panel_ = true;
     local_.reset();
     rest_bounds_.reset();
     shown_epoch_ = 0;
     shown_owner_level_ = -1;
     last_stats_ = {};
-    set_status("joining " + address + (participant ? " as a participant" : " as a viewer"), false);
+    set_status("joining " + address + (participant ? " as a participant" : " as a viewer") +
+                   " (waiting for the master's answer and the model)",
+               false);
     return true;
 }
 
@@ -345,6 +351,8 @@ bool Viewer::host_session(std::uint16_t port, bool exact)
         return false;
     }
     session_ = std::move(*s);
+    session_address_ = "port " + std::to_string(bound->port);
+    joined_ = true;
     open_session_panel_ = true;
     local_.reset();
     shown_epoch_ = 0;
@@ -355,7 +363,7 @@ bool Viewer::host_session(std::uint16_t port, bool exact)
     return true;
 }
 
-void Viewer::leave_session()
+void Viewer::leave_session(const std::string& message, bool error)
 {
     if (!session_)
         return;
@@ -387,7 +395,7 @@ void Viewer::leave_session()
         LoadedSurface copy{surface_->grid, surface_->positions, surface_->description};
         start_local(std::move(copy));
     }
-    set_status("left the session", false);
+    set_status(message, error);
 }
 
 void Viewer::pump_session(double now_s)
@@ -408,8 +416,33 @@ void Viewer::pump_session(double now_s)
     } while (Clock::now() < budget_end && !session_->left());
     if (session_->left())
     {
-        set_status("the session ended", true);
-        leave_session();
+        // Why: the session refused this peer's settings, the master never answered (a joiner
+        // gets the model right after the greeting), or the link broke or the master ended it.
+        std::string why;
+        if (!session_->refusal().empty())
+            why =
+                "the session at " + session_address_ + " refused this peer: " + session_->refusal();
+        else if (session_->role() == session::SessionRole::Master)
+            why = "the session hosted on " + session_address_ + " ended";
+        else if (!session_->ready())
+            why = "could not reach the master at " + session_address_ +
+                  ": no answer (is `pliant host` running there, on that UDP port?)";
+        else
+            why = "the session ended: the master at " + session_address_ +
+                  " ended it or the connection was lost";
+        session_failed_ = true;
+        leave_session(why, true);
+        return;
+    }
+    if (!joined_ && session_->ready())
+    {
+        joined_ = true;
+        set_status(
+            "joined " + session_address_ + " as " +
+                (session_->role() == session::SessionRole::Viewer ? "a viewer" : "a participant") +
+                " (id " + std::to_string(session_->id().value) + ", level " +
+                std::to_string(session_->model()->grid().level()) + ")",
+            false);
     }
 }
 
@@ -804,7 +837,9 @@ int Viewer::run()
 
         finish_load();
         if (headless && !load_ && !object_shown() && !session_ && status_error_)
-            return 1;  // the input failed to load: nothing to test
+            return 1;  // the input failed to load or the join failed: nothing to test
+        if (headless && session_failed_)
+            return 1;  // the session was lost: what the run checks did not happen
         if (headless && !shown_since_ && seconds(now - start) > options_.exit_after + 300.0)
         {
             spdlog::error("view: nothing to show after {:.0f} s; giving up", seconds(now - start));

@@ -114,6 +114,9 @@ public:
     bool join_as_participant_ = true;
     bool host_exact_ = false;
     bool open_session_panel_ = false;  ///< unfold the Session panel once (joined or hosting)
+    std::string session_address_;      ///< the master's HOST:PORT (hosting: "port N")
+    bool joined_ = false;              ///< the status line said the join completed
+    bool session_failed_ = false;      ///< a session ended on its own (a headless run fails)
 
     // Input.
     enum class Drag : std::uint8_t
@@ -148,7 +151,9 @@ public:
     void start_local(LoadedSurface surface);
     bool join_session(const std::string& address, bool participant);
     bool host_session(std::uint16_t port, bool exact);
-    void leave_session();
+    /// Leaves (or, as master, ends) the session and goes on with a local simulation of its
+    /// surface; `message` becomes the status line (an error keeps it red).
+    void leave_session(const std::string& message = "left the session", bool error = false);
     void pump_session(double now_s);
     void simulate(double wall_dt);
     void update_surface();

@@ -62,10 +62,12 @@ void Viewer::draw_panels()
     // Status and loading.
     if (!status_.empty())
     {
+        // Wrapped in both cases: an error names an address or a file and must be read whole.
         if (status_error_)
-            ImGui::TextColored(ImVec4(1.0F, 0.45F, 0.4F, 1.0F), "%s", status_.c_str());
-        else
-            ImGui::TextWrapped("%s", status_.c_str());
+            ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(1.0F, 0.45F, 0.4F, 1.0F));
+        ImGui::TextWrapped("%s", status_.c_str());
+        if (status_error_)
+            ImGui::PopStyleColor();
     }
     if (load_)
     {
