@@ -8,11 +8,16 @@ find_program(PLIANT_XVFB_RUN xvfb-run)
 if(TARGET pliant AND PLIANT_HAVE_VIEWER AND PLIANT_XVFB_RUN)
     set(_viewer_png ${CMAKE_CURRENT_BINARY_DIR}/viewer.png)
     # The script exports the surface after the drag (`export viewer_export.glb`, then key E:
-    # pliant-view-0000.obj, the first free name) into the test's working folder; stale copies
-    # from an earlier run are removed first so the checks below see this run's files.
+    # pliant-view-0000.obj, the first free name) and takes two screenshots (P, F12) into the
+    # test's working folder; stale files from an earlier run are removed first so the checks
+    # below see this run's, and a stand-in earlier screenshot pliant-view-0000.png is written,
+    # which the presses must not overwrite.
     set(_viewer_exports ${CMAKE_CURRENT_BINARY_DIR}/viewer_export.glb
                         ${CMAKE_CURRENT_BINARY_DIR}/pliant-view-0000.obj)
-    add_test(NAME cli_view_export_clean COMMAND ${CMAKE_COMMAND} -E rm -f ${_viewer_exports})
+    add_test(NAME cli_view_export_clean
+             COMMAND ${CMAKE_COMMAND} -DDIR=${CMAKE_CURRENT_BINARY_DIR}
+                     "-DFILES=viewer_export.glb;pliant-view-0000.obj;pliant-view-0001.png;pliant-view-0002.png;pliant-view-0003.png"
+                     -P ${CMAKE_CURRENT_SOURCE_DIR}/viewer_prepare.cmake)
     set_tests_properties(cli_view_export_clean PROPERTIES FIXTURES_SETUP viewer_export_clean)
     # The viewer's runs go through expect_exit.cmake: the output must match and the exit status
     # must be 0 (it exits cleanly), which PASS_REGULAR_EXPRESSION alone would not check.
@@ -37,6 +42,11 @@ if(TARGET pliant AND PLIANT_HAVE_VIEWER AND PLIANT_XVFB_RUN)
              COMMAND ${CMAKE_COMMAND} -DPNG=${_viewer_png} -DMIN_BYTES=8000
                      -P ${CMAKE_CURRENT_SOURCE_DIR}/viewer_check_png.cmake)
     set_tests_properties(cli_view_screenshot_png PROPERTIES FIXTURES_REQUIRED viewer_png)
+    add_test(NAME cli_view_screenshots_first_free
+             COMMAND ${CMAKE_COMMAND} -DDIR=${CMAKE_CURRENT_BINARY_DIR}
+                     -P ${CMAKE_CURRENT_SOURCE_DIR}/viewer_check_screenshots.cmake)
+    set_tests_properties(cli_view_screenshots_first_free PROPERTIES
+                         FIXTURES_REQUIRED viewer_export)
     # `pliant demo --view`: the demo's peers on a second thread in real time, the viewer joined
     # to the master over 127.0.0.1 for 4 s after the object shows. The viewer must show the
     # object (>= 5 % of the view) deformed by the scripted grabs it received (>= 0.5 % of the
@@ -66,6 +76,24 @@ if(TARGET pliant AND PLIANT_HAVE_VIEWER AND PLIANT_XVFB_RUN)
                      "-DSTDERR_REGEX=could not reach the master at 127\\.0\\.0\\.1:9: no answer"
                      -DTIMEOUT=50 -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
     set_tests_properties(cli_view_join_unreachable PROPERTIES TIMEOUT 60
+        ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0;LIBGL_ALWAYS_SOFTWARE=1")
+    # An input that is neither a file nor a.b.c.d:port / localhost:port says both.
+    add_test(NAME cli_view_bad_input
+             COMMAND ${CMAKE_COMMAND}
+                     "-DCOMMAND=${_xvfb};$<TARGET_FILE:pliant>;view;example.org:7777;--exit-after;1"
+                     -DEXIT=1
+                     "-DSTDERR_REGEX=example\\.org:7777 is neither an existing file nor a HOST:PORT to join"
+                     -DTIMEOUT=50 -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+    set_tests_properties(cli_view_bad_input PROPERTIES TIMEOUT 60
+        ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0;LIBGL_ALWAYS_SOFTWARE=1")
+    # A script pressing a key the viewer ignores is refused before the window opens, naming the
+    # file and line.
+    add_test(NAME cli_view_script_unknown_key
+             COMMAND ${CMAKE_COMMAND}
+                     "-DCOMMAND=${_xvfb};$<TARGET_FILE:pliant>;view;${PROJECT_SOURCE_DIR}/data/spot.obj;--level;3;--script;${CMAKE_CURRENT_SOURCE_DIR}/viewer_bad_key.txt;--exit-after;1"
+                     -DEXIT=1 "-DSTDERR_REGEX=viewer_bad_key\\.txt:4: unknown key `q`"
+                     -DTIMEOUT=50 -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+    set_tests_properties(cli_view_script_unknown_key PROPERTIES TIMEOUT 60
         ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0;LIBGL_ALWAYS_SOFTWARE=1")
     # Each export re-imports as a closed genus-0 surface (`pliant info` exits 0) with the
     # simulation level's 4W^2 = 1024 faces (level 4).

@@ -165,6 +165,21 @@ double seconds(std::chrono::steady_clock::duration d)
     return std::chrono::duration<double>(d).count();
 }
 
+/// The first `pliant-view-NNNN.<extension>` that does not exist in the working folder
+/// (bounded search: none after 9999).
+std::optional<std::filesystem::path> first_free_name(const char* extension)
+{
+    std::error_code ec;
+    for (int k = 0; k < 10000; ++k)
+    {
+        char name[64];
+        std::snprintf(name, sizeof name, "pliant-view-%04d.%s", k, extension);
+        if (!std::filesystem::exists(name, ec))
+            return std::filesystem::path(name);
+    }
+    return std::nullopt;
+}
+
 }  // namespace
 
 Viewer::Viewer(const ViewerOptions& options) : options_(options)
@@ -268,9 +283,18 @@ void Viewer::start_local(LoadedSurface surface)
     surface_.emplace(std::move(surface));
     rest_bounds_.reset();
     shown_owner_level_ = -1;
-    display_level_ = options_.display_level >= 0
-                         ? std::clamp(options_.display_level, level, core::k_max_level)
-                         : std::min(level + 1, std::max(level, 8));
+    display_level_ = initial_display_level(level);
+}
+
+int Viewer::initial_display_level(int sim_level) const
+{
+    const int highest = max_display_level(sim_level);
+    if (options_.display_level < 0)
+        return std::min(sim_level + 1, std::max(sim_level, 8));
+    if (options_.display_level > highest)
+        spdlog::warn("view: --display-level {} is above simulation level {} + 3; showing level {}",
+                     options_.display_level, sim_level, highest);
+    return std::clamp(options_.display_level, sim_level, highest);
 }
 
 // --- sessions ------------------------------------------------------------------------------
@@ -549,8 +573,8 @@ void Viewer::update_surface()
     }
     const core::Field<double>& u = session_ ? session_->view_u() : local_->state().u;
     const int level = m->grid().level();
-    if (display_level_ < level)
-        display_level_ = std::min(level + 1, std::max(level, 8));  // a joined session's model
+    if (display_level_ < level || display_level_ > max_display_level(level))
+        display_level_ = initial_display_level(level);  // a joined session's model
     view_.update(*m, u, display_level_ - level);
     renderer_->upload(view_.display_grid(), view_.display_positions(), &view_.display_u());
     gpu_surface_valid_ = true;
@@ -668,9 +692,12 @@ void Viewer::request_screenshot(std::optional<std::filesystem::path> path)
         screenshot_request_ = std::move(*path);
         return;
     }
-    char name[64];
-    std::snprintf(name, sizeof name, "pliant-view-%04d.png", screenshot_counter_++);
-    screenshot_request_ = std::filesystem::path(name);
+    // The first free name, as for exports: a screenshot never overwrites an earlier one.
+    if (auto name = first_free_name("png"))
+        screenshot_request_ = std::move(*name);
+    else
+        set_status("screenshot: pliant-view-0000 ... 9999.png all exist in the working folder",
+                   true);
 }
 
 bool Viewer::write_screenshot(const std::filesystem::path& path, int width, int height)
@@ -703,16 +730,9 @@ bool Viewer::export_surface(std::optional<std::filesystem::path> path)
     }
     if (!path)
     {
-        // The first free name, so an export never overwrites an earlier one (bounded search).
+        // The first free name, so an export never overwrites an earlier one.
         const std::size_t format = static_cast<std::size_t>(std::clamp(export_format_, 0, 3));
-        std::error_code ec;
-        for (int k = 0; k < 10000 && !path; ++k)
-        {
-            char name[64];
-            std::snprintf(name, sizeof name, "pliant-view-%04d.%s", k, k_export_extensions[format]);
-            if (!std::filesystem::exists(name, ec))
-                path = std::filesystem::path(name);
-        }
+        path = first_free_name(k_export_extensions[format]);
         if (!path)
         {
             set_status("export: pliant-view-0000 ... 9999 all exist in the working folder", true);
@@ -742,6 +762,17 @@ bool Viewer::export_surface(std::optional<std::filesystem::path> path)
 
 int Viewer::run()
 {
+    // A broken script is refused before any window opens.
+    if (!options_.script.empty())
+    {
+        auto events = load_input_script(options_.script);
+        if (!events)
+        {
+            spdlog::error("view: {}", events.error().message);
+            return 1;
+        }
+        script_.emplace(std::move(*events));
+    }
     glfwSetErrorCallback(on_glfw_error);
     if (glfwInit() != GLFW_TRUE)
     {
@@ -795,28 +826,27 @@ int Viewer::run()
     ImGui_ImplOpenGL3_Init("#version 330 core");
     imgui_ready_ = true;
 
-    if (!options_.script.empty())
-    {
-        auto events = load_input_script(options_.script);
-        if (!events)
-        {
-            spdlog::error("{}", events.error().message);
-            return 1;
-        }
-        script_.emplace(std::move(*events));
-    }
     const bool headless = options_.exit_after > 0.0;
-    auto address = net::parse_address(options_.input);
     std::error_code ec;
     if (options_.input.empty())
         start_load(options_.bundled_mesh);
-    else if (!std::filesystem::exists(options_.input, ec) && address)
+    else if (std::filesystem::exists(options_.input, ec))
+        start_load(options_.input);
+    else if (net::parse_address(options_.input))
     {
         if (!join_session(options_.input, options_.participant) && headless)
             return 1;
     }
     else
-        start_load(options_.input);
+    {
+        // Neither: say both, since a misspelt file and a host name look alike.
+        set_status(options_.input +
+                       " is neither an existing file nor a HOST:PORT to join (a.b.c.d:port or "
+                       "localhost:port; host names are not looked up)",
+                   true);
+        if (headless)
+            return 1;
+    }
 
     const auto start = Clock::now();
     last_frame_ = start;
