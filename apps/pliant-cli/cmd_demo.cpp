@@ -281,6 +281,35 @@ private:
     std::vector<std::uint16_t> owner_ids_;
 };
 
+/// Writes the session's final state as a .pgrid: deformed positions px/py/pz, u, v, and the
+/// owning peer's id per node under `master`'s newest partition (channel "owner"). u and v hold
+/// each node's owner's values on canonical nodes; twins are given their canonical's.
+core::Result<void> save_final_grid(const fs::path& path, const session::Session& master,
+                                   core::Field<double> u, core::Field<double> v)
+{
+    const sim::MembraneModel& model = *master.model();
+    const core::TetraGrid& grid = model.grid();
+    core::sync_twins(grid, u);
+    core::sync_twins(grid, v);
+    core::Vec3Field<double> positions;
+    model.positions(u, positions);
+    core::GridFile file = core::make_geometry_file(grid, positions);
+    core::Field<double> owner(grid, 0, -1.0);
+    const std::vector<net::PeerId> owners = master.owners();
+    if (const session::LeafGraph* leaves = master.leaf_graph(); leaves != nullptr)
+        for (std::uint32_t n = 0; n < grid.node_count(); ++n)
+        {
+            const std::uint32_t leaf = leaves->leaf_of(core::NodeIndex{n});
+            if (leaf < owners.size() && owners[leaf] != net::k_no_peer)
+                owner[core::NodeIndex{n}] = owners[leaf].value;
+        }
+    core::sync_twins(grid, owner);
+    file.fields.push_back({"u", std::move(u)});
+    file.fields.push_back({"v", std::move(v)});
+    file.fields.push_back({"owner", std::move(owner)});
+    return core::save_grid(path, file);
+}
+
 /// Single-quotes `text` for /bin/sh.
 std::string shell_quote(const std::string& text)
 {
@@ -582,6 +611,11 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
     }
     session::Recording recording = peers[0].session->recording();
     recording.final_hash = session::state_hash(grid, final_u, final_v);
+    // final.pgrid: that state with the master's partition, the owning peer's id per node
+    // (channel "owner", docs/grid-format.md), for `pliant render final.pgrid --color owner`.
+    if (auto saved = save_final_grid(opt.out / "final.pgrid", *peers[0].session, final_u, final_v);
+        !saved)
+        return report(saved.error());
     if (auto saved = session::save_recording(opt.out / "session.prec", recording); !saved)
         return report(saved.error());
     std::vector<session::SessionStats> stats;
@@ -707,8 +741,8 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
     std::printf("%s", table.c_str());
     std::ofstream(opt.out / "summary.md") << table;
     std::printf(
-        "\nwrote %s (grid.pgrid, %s, session.prec, timeline.csv, remesh-report.json, "
-        "summary.md)\n",
+        "\nwrote %s (grid.pgrid, final.pgrid, %s, session.prec, timeline.csv, "
+        "remesh-report.json, summary.md)\n",
         opt.out.string().c_str(),
         painted == 0              ? "no frames"
         : animation == "demo.gif" ? "frame_*.png, demo.gif"
@@ -772,8 +806,9 @@ void add_demo_command(CLI::App& app, const GlobalOptions& global)
         "own part, two users grabbing different ends, a viewer joining late; frames rendered\n"
         "offscreen in owner colours, the inputs recorded and replayed bit for bit.\n"
         "Output (in --out, default demo-out/): frame_NNNN.png, demo.gif (with ImageMagick or\n"
-        "ffmpeg), summary.md, session.prec (`pliant replay`), grid.pgrid, timeline.csv,\n"
-        "remesh-report.json.\n\n"
+        "ffmpeg), summary.md, session.prec (`pliant replay`), grid.pgrid, final.pgrid (the\n"
+        "final state with the owning peer per node: `pliant render final.pgrid --color owner`),\n"
+        "timeline.csv, remesh-report.json.\n\n"
         "With a display, --view opens the viewer (`pliant view`) on the running session instead\n"
         "of rendering frames: the peers run in real time on a second thread, the two users'\n"
         "grabs repeat every --duration seconds, and closing the window ends the session (the\n"

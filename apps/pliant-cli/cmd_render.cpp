@@ -53,7 +53,15 @@ struct RenderOptions
     int level_up = 0;
     int samples = 4;
     int owner_depth = 1;
+    double color_range = 0.0;  ///< m; 0: the largest |u| (of the file, or of the whole sequence)
     bool wireframe = false;
+};
+
+/// Owner ids per node, and where they came from (printed with --color owner).
+struct Owners
+{
+    std::vector<std::uint16_t> ids;
+    std::string source;
 };
 
 /// A grid ready to draw: positions (displaced from the rest grid when the file has only "u"),
@@ -64,6 +72,7 @@ struct GridScene
     core::Vec3Field<double> positions;
     std::optional<core::Field<double>> u;
     std::vector<std::uint16_t> owners;
+    std::string owner_source;
 };
 
 core::Result<std::array<int, 2>> parse_size(const std::string& text)
@@ -98,20 +107,32 @@ core::Result<render::CameraSettings> parse_camera(const std::string& text)
     return camera;
 }
 
-/// Owners from a channel "owner" (rounded), or the quad-tree leaves at `depth` (DESIGN §5) as
-/// a stand-in partition: each canonical node belongs to exactly one leaf, twins follow it.
-std::vector<std::uint16_t> owners_of(const core::TetraGrid& grid, const core::GridFile& file,
-                                     int depth)
+/// Owners from a channel "owner" (the owning peer's id per node, rounded; written by
+/// `pliant demo` into final.pgrid, docs/grid-format.md), or the quad-tree leaves at `depth`
+/// (DESIGN §5) as a stand-in partition: each canonical node belongs to exactly one leaf, twins
+/// follow it.
+Owners owners_of(const core::TetraGrid& grid, const core::GridFile& file, int depth)
 {
-    std::vector<std::uint16_t> owners(grid.node_count(), render::k_no_owner);
+    Owners owners{std::vector<std::uint16_t>(grid.node_count(), render::k_no_owner), {}};
     if (const core::Field<double>* channel = file.find("owner"); channel != nullptr)
     {
+        std::vector<std::uint16_t> seen;
         for (std::uint32_t i = 0; i < grid.node_count(); ++i)
         {
             const double v = (*channel)[core::NodeIndex{i}];
-            owners[i] = v >= 0.0 && v < 65535.0 ? static_cast<std::uint16_t>(std::lround(v))
-                                                : render::k_no_owner;
+            const std::uint16_t id = v >= 0.0 && v < 65535.0
+                                         ? static_cast<std::uint16_t>(std::lround(v))
+                                         : render::k_no_owner;
+            owners.ids[i] = id;
+            if (id != render::k_no_owner && std::find(seen.begin(), seen.end(), id) == seen.end())
+                seen.push_back(id);
         }
+        std::sort(seen.begin(), seen.end());
+        std::string list;
+        for (const std::uint16_t id : seen)
+            list += (list.empty() ? "" : ", ") + std::to_string(id);
+        owners.source = "the channel \"owner\": " + std::to_string(seen.size()) + " peer" +
+                        (seen.size() == 1 ? "" : "s") + " (ids " + list + ")";
         return owners;
     }
     const int d = std::clamp(depth, 0, grid.level());
@@ -122,10 +143,12 @@ std::vector<std::uint16_t> owners_of(const core::TetraGrid& grid, const core::Gr
         for (int y = r.y0; y < r.y1; ++y)
             for (int x = r.x0; x < r.x1; ++x)
                 if (grid.is_canonical(grid.index(x, y)))
-                    owners[grid.index(x, y).value] = static_cast<std::uint16_t>(k);
+                    owners.ids[grid.index(x, y).value] = static_cast<std::uint16_t>(k);
     }
     for (const core::TwinPair& t : grid.twins())
-        owners[t.twin.value] = owners[t.canonical.value];
+        owners.ids[t.twin.value] = owners.ids[t.canonical.value];
+    owners.source = "no channel \"owner\": the " + std::to_string(leaves.size()) +
+                    " quad-tree leaves at depth " + std::to_string(d) + " stand in for peers";
     return owners;
 }
 
@@ -161,7 +184,8 @@ core::Result<GridScene> load_grid_scene(const fs::path& path, const RenderOption
     std::optional<core::Field<double>> u;
     if (const core::Field<double>* channel = file->find("u"); channel != nullptr)
         u = *channel;
-    std::vector<std::uint16_t> owners = owners_of(*grid, *file, opt.owner_depth);
+    Owners owner_info = owners_of(*grid, *file, opt.owner_depth);
+    std::vector<std::uint16_t> owners = std::move(owner_info.ids);
 
     core::TetraGrid display = *grid;
     core::Vec3Field<double> p = std::move(*rest_positions);
@@ -192,7 +216,8 @@ core::Result<GridScene> load_grid_scene(const fs::path& path, const RenderOption
                 for (int x = 0; x < display.nx(); ++x)
                     p[c].at(x, y) += u->at(x, y) * n[c].at(x, y);
     }
-    return GridScene{std::move(display), std::move(p), std::move(u), std::move(owners)};
+    return GridScene{std::move(display), std::move(p), std::move(u), std::move(owners),
+                     std::move(owner_info.source)};
 }
 
 struct Target
@@ -208,6 +233,33 @@ core::Result<void> save(const Target& target, const fs::path& path)
     if (path.has_parent_path())
         fs::create_directories(path.parent_path(), ec);  // a failure shows up in write_png
     return render::write_png(path, target.framebuffer.read_rgba8());
+}
+
+/// The largest |u| over the "u" channels of `files` (0 when none has one): a first pass over
+/// the sequence, so that one colour range serves every frame.
+core::Result<double> largest_displacement(const std::vector<fs::path>& files)
+{
+    double largest = 0.0;
+    for (const fs::path& path : files)
+    {
+        auto file = core::load_grid(path);
+        if (!file)
+            return file.error();
+        if (const core::Field<double>* u = file->find("u"); u != nullptr)
+            for (int y = 0; y < u->ny(); ++y)
+                for (int x = 0; x < u->nx(); ++x)
+                    largest = std::max(largest, std::abs(u->at(x, y)));
+    }
+    return largest;
+}
+
+/// "full colour at |u| = ... m (...)" for the summary line.
+std::string range_note(double range, const std::string& origin)
+{
+    std::array<char, 32> number{};
+    std::snprintf(number.data(), number.size(), "%.3e", range);
+    return "displacement colours full at |u| = " + std::string(number.data()) + " m (" + origin +
+           ")";
 }
 
 int run_frames(const RenderOptions& opt, render::DrawSettings settings, Target& target,
@@ -233,6 +285,18 @@ int run_frames(const RenderOptions& opt, render::DrawSettings settings, Target& 
             return report(loaded.error());
         rest = std::move(*loaded);
     }
+    // One colour range for the whole sequence, so that colours compare across frames: the
+    // largest |u| of any frame (frame 0 of `pliant simulate` is the rest state, whose own
+    // largest |u| is 0), or --color-range.
+    std::string note;
+    double largest = 0.0;
+    if (settings.color == render::ColorMode::Displacement && opt.color_range <= 0.0)
+    {
+        auto found = largest_displacement(files);
+        if (!found)
+            return report(found.error());
+        largest = *found;
+    }
     auto renderer = render::GridRenderer::create();
     if (!renderer)
         return report(renderer.error());
@@ -251,9 +315,25 @@ int run_frames(const RenderOptions& opt, render::DrawSettings settings, Target& 
         {
             // One still camera for the whole sequence: aimed at the first frame's box.
             settings.camera.fit_to = renderer->bounds();
-            if (settings.displacement_range <= 0.0F)
-                settings.displacement_range =
-                    static_cast<float>(std::max(renderer->max_abs_value(), 1e-12));
+            if (settings.color == render::ColorMode::Displacement)
+            {
+                if (opt.color_range > 0.0)
+                {
+                    settings.displacement_range = static_cast<float>(opt.color_range);
+                    note = range_note(opt.color_range, "--color-range");
+                }
+                else
+                {
+                    // A sequence at rest throughout: any small range shows grey.
+                    const double range =
+                        std::max(largest, 1e-9 * std::max(renderer->bounds().radius(), 1e-30));
+                    settings.displacement_range = static_cast<float>(range);
+                    note = range_note(range, "the largest |u| over the " +
+                                                 std::to_string(files.size()) + " frames");
+                }
+            }
+            else if (settings.color == render::ColorMode::Owner)
+                note = "owners from " + scene->owner_source;
         }
         target.framebuffer.bind();
         renderer->draw(settings, target.width, target.height);
@@ -264,8 +344,9 @@ int run_frames(const RenderOptions& opt, render::DrawSettings settings, Target& 
             return report(saved.error());
         progress.update("render", static_cast<double>(i + 1) / static_cast<double>(files.size()));
     }
-    std::printf("%zu frames from %s -> %s\n", files.size(), opt.frames.string().c_str(),
-                (dir / (stem + "_NNNN.png")).string().c_str());
+    std::printf("%zu frames from %s -> %s%s%s\n", files.size(), opt.frames.string().c_str(),
+                (dir / (stem + "_NNNN.png")).string().c_str(), note.empty() ? "" : "; ",
+                note.c_str());
     return 0;
 }
 
@@ -291,6 +372,9 @@ int run_render(const RenderOptions& opt, const GlobalOptions& global)
                      : opt.color == "owner"      ? render::ColorMode::Owner
                                                  : render::ColorMode::None;
 
+    if (opt.color_range > 0.0 && settings.color != render::ColorMode::Displacement)
+        spdlog::warn("render: --color-range applies to --color displacement only");
+
     const render::GlBackend backend = opt.backend == "egl"      ? render::GlBackend::Egl
                                       : opt.backend == "osmesa" ? render::GlBackend::OsMesa
                                                                 : render::GlBackend::Auto;
@@ -312,6 +396,7 @@ int run_render(const RenderOptions& opt, const GlobalOptions& global)
     if (!fs::is_regular_file(opt.input, ec))
         return report({ErrorCode::IoError, "render: " + opt.input.string() + ": no such file"});
     std::string what;
+    std::string note;
     if (opt.input.extension() == ".pgrid")
     {
         auto scene = load_grid_scene(opt.input, opt, nullptr);
@@ -325,6 +410,15 @@ int run_render(const RenderOptions& opt, const GlobalOptions& global)
             return report(renderer.error());
         renderer->upload(scene->grid, scene->positions, scene->u ? &*scene->u : nullptr);
         renderer->upload_owners(scene->grid, scene->owners);
+        if (settings.color == render::ColorMode::Displacement)
+        {
+            const double range = opt.color_range > 0.0 ? opt.color_range
+                                                       : std::max(renderer->max_abs_value(), 1e-12);
+            settings.displacement_range = static_cast<float>(range);
+            note = range_note(range, opt.color_range > 0.0 ? "--color-range" : "its largest |u|");
+        }
+        else if (settings.color == render::ColorMode::Owner)
+            note = "owners from " + scene->owner_source;
         target.framebuffer.bind();
         renderer->draw(settings, target.width, target.height);
         what = "level " + std::to_string(scene->grid.level()) + " grid, " +
@@ -356,6 +450,8 @@ int run_render(const RenderOptions& opt, const GlobalOptions& global)
     std::printf("%s: %dx%d, %s (%s) in %.2f s -> %s\n", opt.input.string().c_str(), target.width,
                 target.height, what.c_str(), render::to_string(context->backend()), seconds,
                 opt.out.string().c_str());
+    if (!note.empty())
+        std::printf("%s\n", note.c_str());
     return 0;
 }
 
@@ -370,16 +466,21 @@ void add_render_command(CLI::App& app, const GlobalOptions& global)
         "ones) and a channel \"u\" feeds --color displacement. Any other file is imported as a\n"
         "mesh. Uses EGL (surfaceless, Mesa) or OSMesa: no window, no X server.\n"
         "--frames DIR renders every DIR/*.pgrid in name order to OUT_0000.png, OUT_0001.png, ...\n"
-        "with the camera of the first frame (GRID, if given, supplies the rest positions P of\n"
-        "frames that carry only \"u\": those are drawn at P + u N). Owner colours come from a "
-        "channel \"owner\" or, without\n"
-        "one, from the quad-tree leaves at --owner-depth.\n\n"
+        "with the camera of the first frame and one displacement colour range for them all: the\n"
+        "largest |u| of any frame (read in a first pass), or --color-range. GRID, if given,\n"
+        "supplies the rest positions P of frames that carry only \"u\" (drawn at P + u N).\n"
+        "Owner colours come from a channel \"owner\" (the owning peer per node: `pliant demo`\n"
+        "writes it into final.pgrid) or, without one, from the quad-tree leaves at\n"
+        "--owner-depth as stand-ins; the summary line says which.\n\n"
         "Examples:\n"
         "  pliant render spot.pgrid -o spot.png\n"
         "  pliant render spot.pgrid -o spot.png --size 800x800 --camera 40,25 --level-up 1\n"
         "  pliant render spot.pgrid -o owners.png --color owner --wireframe\n"
         "  pliant render data/spot.obj -o mesh.png\n"
-        "  pliant render --frames out/spot -o frames/f.png --color displacement");
+        "  pliant render demo-out/final.pgrid -o peers.png --color owner\n"
+        "  pliant render --frames out/spot -o frames/f.png --color displacement\n"
+        "  pliant render --frames out/spot -o frames/f.png --color displacement --color-range "
+        "0.05");
     cmd->add_option("GRID_OR_MESH", opt->input,
                     "A .pgrid grid file or a mesh file (.obj, .ply, "
                     "...)");
@@ -396,6 +497,10 @@ void add_render_command(CLI::App& app, const GlobalOptions& global)
     cmd->add_option("--color", opt->color, "Colouring: none, displacement or owner")
         ->check(CLI::IsMember({"none", "displacement", "owner"}))
         ->capture_default_str();
+    cmd->add_option("--color-range", opt->color_range,
+                    "|u| in metres shown at full colour by --color displacement (default: the "
+                    "largest |u| of the file, or of every frame with --frames)")
+        ->check(CLI::PositiveNumber);
     cmd->add_flag("--wireframe", opt->wireframe, "Draw the triangle edges over the surface");
     cmd->add_option("--frames", opt->frames, "Render every .pgrid in this folder (a sequence)");
     cmd->add_option("--samples", opt->samples, "Multisampling (1 = off)")

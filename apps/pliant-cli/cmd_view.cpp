@@ -80,11 +80,14 @@ void add_view_command(CLI::App& app, const GlobalOptions& global)
         "view", "Interactive viewer: simulate, drag the surface, join or host a session.");
     cmd->footer(
         "INPUT is a .pgrid grid, a mesh (remeshed at --level on a worker thread), or HOST:PORT\n"
-        "of a session's master (joins as a viewer, or with --participant). Without INPUT the\n"
-        "bundled spot.obj is remeshed. Left drag on the surface pulls it; on the background it\n"
-        "orbits; the wheel zooms; P or F12 saves a screenshot; W wireframe; C colouring; Space\n"
-        "pause; R rest; H hides the panels. --script, --screenshot and --exit-after make a\n"
-        "headless run for tests (docs/viewer.md); their clocks start when the object shows.\n\n"
+        "of a session's master, HOST being a.b.c.d or localhost (joins as a viewer, or with\n"
+        "--participant; when the master does not answer, the window says so in red and a run\n"
+        "with --exit-after exits with status 1). Without INPUT the bundled spot.obj is\n"
+        "remeshed. Left drag on the surface pulls it; on the background it orbits; the wheel\n"
+        "zooms; P or F12 saves a screenshot (the first free pliant-view-NNNN.png); W wireframe;\n"
+        "C colouring; Space pause; R rest; H hides the panels. --script, --screenshot and\n"
+        "--exit-after make a headless run for tests (docs/viewer.md); their clocks start when\n"
+        "the object shows.\n\n"
         "Examples:\n"
         "  pliant view                                   # the bundled cow, level 6\n"
         "  pliant view spot.pgrid --display-level 8\n"
@@ -96,7 +99,9 @@ void add_view_command(CLI::App& app, const GlobalOptions& global)
         ->check(CLI::Range(1, 10))
         ->capture_default_str();
     cmd->add_option("--display-level", opt->display_level,
-                    "Display level (butterfly refinement of the simulated surface); default: "
+                    "Display level (butterfly refinement of the simulated surface), from the "
+                    "simulation level to simulation level + 3 (at most 10), as the Display "
+                    "panel's slider; a level outside is clamped with a warning. Default: "
                     "simulation level + 1, at most 8")
         ->check(CLI::Range(1, 10));
     cmd->add_option("--size", opt->size, "Window size WxH")->capture_default_str();

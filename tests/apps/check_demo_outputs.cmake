@@ -1,8 +1,9 @@
 # SPDX-License-Identifier: MIT
 # SPDX-FileCopyrightText: 2026 pliant contributors
-# Checks what `pliant demo --quick` left in DIR: the grid, 12 frames, the CSV (its session time
-# increasing frame after frame, the grabs moving the surface), the recording and the summary.
-foreach(f grid.pgrid summary.md timeline.csv session.prec remesh-report.json frame_0001.png frame_0012.png)
+# Checks what `pliant demo --quick` left in DIR: the grid, the final state with its owners, 12
+# frames, the CSV (its session time increasing frame after frame, the grabs moving the surface),
+# the recording and the summary.
+foreach(f grid.pgrid final.pgrid summary.md timeline.csv session.prec remesh-report.json frame_0001.png frame_0012.png)
     if(NOT EXISTS ${DIR}/${f})
         message(FATAL_ERROR "pliant demo --quick did not write ${DIR}/${f}")
     endif()

@@ -2,8 +2,16 @@
 # SPDX-FileCopyrightText: 2026 pliant contributors
 # Runs COMMAND (a ;-list) and passes only if it exits with status EXIT and its output matches:
 # STDOUT_REGEX against stdout, STDERR_REGEX against stderr (each optional). A program's --help
-# (usage on stdout, exit 0) and its argument errors (message on stderr, exit 2) both.
-execute_process(COMMAND ${COMMAND} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+# (usage on stdout, exit 0), its argument errors (message on stderr, exit 2), and runs whose
+# output and clean exit both matter (the viewer's tests: PASS_REGULAR_EXPRESSION alone ignores
+# the exit status). TIMEOUT (s, optional) stops COMMAND itself, so a hung program fails here
+# rather than being left behind when ctest stops this script.
+set(timeout_args)
+if(DEFINED TIMEOUT)
+    set(timeout_args TIMEOUT ${TIMEOUT})
+endif()
+execute_process(COMMAND ${COMMAND} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err
+                ${timeout_args})
 if(NOT "${rc}" STREQUAL "${EXIT}")
     message(FATAL_ERROR "expected exit ${EXIT}, got ${rc}:\n${out}${err}")
 endif()
@@ -13,3 +21,4 @@ endif()
 if(DEFINED STDERR_REGEX AND NOT "${err}" MATCHES "${STDERR_REGEX}")
     message(FATAL_ERROR "stderr does not match '${STDERR_REGEX}':\n${err}\nstdout:\n${out}")
 endif()
+message("${out}${err}")

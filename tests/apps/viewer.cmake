@@ -8,53 +8,94 @@ find_program(PLIANT_XVFB_RUN xvfb-run)
 if(TARGET pliant AND PLIANT_HAVE_VIEWER AND PLIANT_XVFB_RUN)
     set(_viewer_png ${CMAKE_CURRENT_BINARY_DIR}/viewer.png)
     # The script exports the surface after the drag (`export viewer_export.glb`, then key E:
-    # pliant-view-0000.obj, the first free name) into the test's working folder; stale copies
-    # from an earlier run are removed first so the checks below see this run's files.
+    # pliant-view-0000.obj, the first free name) and takes two screenshots (P, F12) into the
+    # test's working folder; stale files from an earlier run are removed first so the checks
+    # below see this run's, and a stand-in earlier screenshot pliant-view-0000.png is written,
+    # which the presses must not overwrite.
     set(_viewer_exports ${CMAKE_CURRENT_BINARY_DIR}/viewer_export.glb
                         ${CMAKE_CURRENT_BINARY_DIR}/pliant-view-0000.obj)
-    add_test(NAME cli_view_export_clean COMMAND ${CMAKE_COMMAND} -E rm -f ${_viewer_exports})
+    add_test(NAME cli_view_export_clean
+             COMMAND ${CMAKE_COMMAND} -DDIR=${CMAKE_CURRENT_BINARY_DIR}
+                     "-DFILES=viewer_export.glb;pliant-view-0000.obj;pliant-view-0001.png;pliant-view-0002.png;pliant-view-0003.png"
+                     -P ${CMAKE_CURRENT_SOURCE_DIR}/viewer_prepare.cmake)
     set_tests_properties(cli_view_export_clean PROPERTIES FIXTURES_SETUP viewer_export_clean)
-    add_test(NAME cli_view_scripted_drag
-             COMMAND ${PLIANT_XVFB_RUN} -a -s "-screen 0 1280x800x24"
-                     $<TARGET_FILE:pliant> view ${PROJECT_SOURCE_DIR}/data/spot.obj --level 4
-                     --size 640x480 --script ${CMAKE_CURRENT_SOURCE_DIR}/viewer_drag.txt
-                     --screenshot ${_viewer_png} --exit-after 3)
+    # The viewer's runs go through expect_exit.cmake: the output must match and the exit status
+    # must be 0 (it exits cleanly), which PASS_REGULAR_EXPRESSION alone would not check.
+    set(_xvfb ${PLIANT_XVFB_RUN} -a -s "-screen 0 1280x800x24")
     # The drag must move the surface by at least 0.5 % of its radius (the pull gives several per
     # cent; an unpicked or ignored drag gives 0.000 %), and the object must cover at least 5 % of
     # the picture (a failed read-back or an empty view gives 0).
+    set(_drag_regex
+        "largest \\|u\\| reached [0-9.e+-]+ m = ([1-9][0-9]*|0\\.[5-9][0-9]*)\\.?[0-9]* % of the object radius.*covers ([5-9]|[1-9][0-9])\\.[0-9] % of the 3D view")
+    add_test(NAME cli_view_scripted_drag
+             COMMAND ${CMAKE_COMMAND}
+                     "-DCOMMAND=${_xvfb};$<TARGET_FILE:pliant>;view;${PROJECT_SOURCE_DIR}/data/spot.obj;--level;4;--size;640x480;--script;${CMAKE_CURRENT_SOURCE_DIR}/viewer_drag.txt;--screenshot;${_viewer_png};--exit-after;3"
+                     -DEXIT=0 "-DSTDOUT_REGEX=${_drag_regex}" -DTIMEOUT=110
+                     -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
     set_tests_properties(cli_view_scripted_drag PROPERTIES
         TIMEOUT 120
         WORKING_DIRECTORY ${CMAKE_CURRENT_BINARY_DIR}
         FIXTURES_SETUP "viewer_png;viewer_export"
         FIXTURES_REQUIRED viewer_export_clean
-        PASS_REGULAR_EXPRESSION
-            "largest \\|u\\| reached [0-9.e+-]+ m = ([1-9][0-9]*|0\\.[5-9][0-9]*)\\.?[0-9]* % of the object radius.*covers ([5-9]|[1-9][0-9])\\.[0-9] % of the 3D view"
         ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0;LIBGL_ALWAYS_SOFTWARE=1;OMP_NUM_THREADS=1")
     add_test(NAME cli_view_screenshot_png
              COMMAND ${CMAKE_COMMAND} -DPNG=${_viewer_png} -DMIN_BYTES=8000
                      -P ${CMAKE_CURRENT_SOURCE_DIR}/viewer_check_png.cmake)
     set_tests_properties(cli_view_screenshot_png PROPERTIES FIXTURES_REQUIRED viewer_png)
+    add_test(NAME cli_view_screenshots_first_free
+             COMMAND ${CMAKE_COMMAND} -DDIR=${CMAKE_CURRENT_BINARY_DIR}
+                     -P ${CMAKE_CURRENT_SOURCE_DIR}/viewer_check_screenshots.cmake)
+    set_tests_properties(cli_view_screenshots_first_free PROPERTIES
+                         FIXTURES_REQUIRED viewer_export)
     # `pliant demo --view`: the demo's peers on a second thread in real time, the viewer joined
     # to the master over 127.0.0.1 for 4 s after the object shows. The viewer must show the
     # object (>= 5 % of the view) deformed by the scripted grabs it received (>= 0.5 % of the
     # radius), and the demo must end and write its summary and recording after the window
-    # closes (the last line; PASS_REGULAR_EXPRESSION ignores the exit code, so it is matched).
+    # closes (the last line), and exit 0.
     set(_demo_view_png ${CMAKE_CURRENT_BINARY_DIR}/demo-view.png)
     add_test(NAME cli_demo_view
-             COMMAND ${PLIANT_XVFB_RUN} -a -s "-screen 0 1280x800x24"
-                     $<TARGET_FILE:pliant> demo --quick --view
-                     --out ${CMAKE_CURRENT_BINARY_DIR}/demo-view
-                     --screenshot ${_demo_view_png} --exit-after 4)
+             COMMAND ${CMAKE_COMMAND}
+                     "-DCOMMAND=${_xvfb};$<TARGET_FILE:pliant>;demo;--quick;--view;--out;${CMAKE_CURRENT_BINARY_DIR}/demo-view;--screenshot;${_demo_view_png};--exit-after;4"
+                     -DEXIT=0 "-DSTDOUT_REGEX=${_drag_regex}.*wrote .*session\\.prec"
+                     -DTIMEOUT=170 -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
     set_tests_properties(cli_demo_view PROPERTIES
         TIMEOUT 180
         FIXTURES_SETUP demo_view_png
-        PASS_REGULAR_EXPRESSION
-            "largest \\|u\\| reached [0-9.e+-]+ m = ([1-9][0-9]*|0\\.[5-9][0-9]*)\\.?[0-9]* % of the object radius.*covers ([5-9]|[1-9][0-9])\\.[0-9] % of the 3D view.*wrote .*session\\.prec"
         ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0;LIBGL_ALWAYS_SOFTWARE=1;OMP_NUM_THREADS=1")
     add_test(NAME cli_demo_view_png
              COMMAND ${CMAKE_COMMAND} -DPNG=${_demo_view_png} -DMIN_BYTES=8000
                      -P ${CMAKE_CURRENT_SOURCE_DIR}/viewer_check_png.cmake)
     set_tests_properties(cli_demo_view_png PROPERTIES FIXTURES_REQUIRED demo_view_png)
+    # A join that cannot reach its master (UDP port 9 on this machine: nothing answers) must say
+    # so and, in a scripted run, exit with status 1 within ENet's connection timeout (about 5 s),
+    # not wait for --exit-after's 300 s grace.
+    add_test(NAME cli_view_join_unreachable
+             COMMAND ${CMAKE_COMMAND}
+                     "-DCOMMAND=${_xvfb};$<TARGET_FILE:pliant>;view;127.0.0.1:9;--exit-after;1"
+                     -DEXIT=1
+                     "-DSTDERR_REGEX=could not reach the master at 127\\.0\\.0\\.1:9: no answer"
+                     -DTIMEOUT=50 -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+    set_tests_properties(cli_view_join_unreachable PROPERTIES TIMEOUT 60
+        ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0;LIBGL_ALWAYS_SOFTWARE=1")
+    # An input that is neither a file nor a HOST:PORT that resolves says both (RFC 6761: names
+    # under .invalid never resolve).
+    add_test(NAME cli_view_bad_input
+             COMMAND ${CMAKE_COMMAND}
+                     "-DCOMMAND=${_xvfb};$<TARGET_FILE:pliant>;view;no-such-host.invalid:7777;--exit-after;1"
+                     -DEXIT=1
+                     "-DSTDERR_REGEX=no-such-host\\.invalid:7777 is neither an existing file nor a HOST:PORT to join"
+                     -DTIMEOUT=50 -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+    set_tests_properties(cli_view_bad_input PROPERTIES TIMEOUT 60
+        ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0;LIBGL_ALWAYS_SOFTWARE=1")
+    # A script pressing a key the viewer ignores is refused before the window opens, naming the
+    # file and line.
+    add_test(NAME cli_view_script_unknown_key
+             COMMAND ${CMAKE_COMMAND}
+                     "-DCOMMAND=${_xvfb};$<TARGET_FILE:pliant>;view;${PROJECT_SOURCE_DIR}/data/spot.obj;--level;3;--script;${CMAKE_CURRENT_SOURCE_DIR}/viewer_bad_key.txt;--exit-after;1"
+                     -DEXIT=1 "-DSTDERR_REGEX=viewer_bad_key\\.txt:4: unknown key `q`"
+                     -DTIMEOUT=50 -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+    set_tests_properties(cli_view_script_unknown_key PROPERTIES TIMEOUT 60
+        ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0;LIBGL_ALWAYS_SOFTWARE=1")
     # Each export re-imports as a closed genus-0 surface (`pliant info` exits 0) with the
     # simulation level's 4W^2 = 1024 faces (level 4).
     foreach(_export IN LISTS _viewer_exports)

@@ -2,7 +2,8 @@
 // SPDX-FileCopyrightText: 2026 pliant contributors
 // The viewer's pure parts, with no window: the pixel ray (against render::project_to_pixel, its
 // independent inverse), the ray/triangle test (against hand-computed hits), the surface picker
-// (against the analytic sphere a sphere grid approximates) and the input script parser/player.
+// (against the analytic sphere a sphere grid approximates) and the input script parser/player
+// (its errors name the file and line; unknown keys are refused).
 #include <pliant/core/tetra_grid.h>
 #include <pliant/render/camera.h>
 
@@ -11,10 +12,14 @@
 #include "../../apps/pliant-cli/viewer/input_script.h"
 #include "../../apps/pliant-cli/viewer/picking.h"
 #include "../../scenes/grid_shapes.h"
+#include "support/test_paths.h"
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace pliant::viewer
@@ -200,9 +205,44 @@ TEST(ViewerScript, RejectsMalformedLines)
         ASSERT_FALSE(r.has_value()) << bad;
         EXPECT_EQ(r.error().code, core::ErrorCode::ParseError);
     }
-    auto line = parse_input_script("0.1 key p\n0.5 jump 1 2\n");
+    auto line = parse_input_script("0.1 key p\n0.5 jump 1 2\n", "drag.txt");
     ASSERT_FALSE(line.has_value());
-    EXPECT_NE(line.error().message.find("line 2"), std::string::npos) << line.error().message;
+    EXPECT_EQ(line.error().message.rfind("drag.txt:2: unknown command `jump`", 0), 0U)
+        << line.error().message;
+    auto overlap = parse_input_script("0 drag 0 0 -> 1 1 for 2\n\n1 drag 0 0 -> 1 1 for 1\n");
+    ASSERT_FALSE(overlap.has_value());
+    EXPECT_EQ(overlap.error().message, "script:3: this drag starts before the drag of line 1 ends");
+}
+
+TEST(ViewerScript, RejectsUnknownKeysNamingFileAndLine)
+{
+    // Every key the viewer handles is accepted, in any case.
+    for (const std::string_view key : k_script_keys)
+    {
+        auto ok = parse_input_script("0.1 key " + std::string(key) + "\n");
+        EXPECT_TRUE(ok.has_value()) << key << ": " << ok.error().message;
+    }
+    EXPECT_TRUE(parse_input_script("0.1 key SPACE\n0.2 key F12\n").has_value());
+    // A key it ignores would make a test pass without doing what it says.
+    auto bad = parse_input_script("0.1 key p\n# q quits?\n0.2 key q\n", "run.txt");
+    ASSERT_FALSE(bad.has_value());
+    EXPECT_EQ(bad.error().code, core::ErrorCode::ParseError);
+    EXPECT_EQ(bad.error().message,
+              "run.txt:3: unknown key `q` (expected p, f12, e, w, c, h, r, space or escape)");
+}
+
+TEST(ViewerScript, FileErrorsNameTheFile)
+{
+    const std::filesystem::path path = test::scratch_dir("ViewerScript") / "bad.txt";
+    {
+        std::ofstream out(path);
+        out << "0.1 wheel 1 2\n";
+    }
+    auto r = load_input_script(path);
+    ASSERT_FALSE(r.has_value());
+    EXPECT_EQ(r.error().message.rfind(path.string() + ":1: expected `TIME wheel X Y CLICKS`", 0),
+              0U)
+        << r.error().message;
 }
 
 }  // namespace

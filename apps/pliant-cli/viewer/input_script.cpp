@@ -14,10 +14,15 @@ namespace pliant::viewer
 namespace
 {
 
-core::Error parse_error(std::size_t line, const std::string& what)
+core::Error parse_error(std::string_view source, std::size_t line, const std::string& what)
 {
     return {core::ErrorCode::ParseError,
-            "view --script: line " + std::to_string(line) + ": " + what};
+            std::string(source) + ":" + std::to_string(line) + ": " + what};
+}
+
+bool is_known_key(std::string_view key)
+{
+    return std::find(k_script_keys.begin(), k_script_keys.end(), key) != k_script_keys.end();
 }
 
 bool read_number(std::istringstream& in, double& out)
@@ -32,7 +37,8 @@ bool read_number(std::istringstream& in, double& out)
 
 }  // namespace
 
-core::Result<std::vector<ScriptEvent>> parse_input_script(std::string_view text)
+core::Result<std::vector<ScriptEvent>> parse_input_script(std::string_view text,
+                                                          std::string_view source)
 {
     std::vector<ScriptEvent> events;
     std::istringstream lines{std::string(text)};
@@ -45,14 +51,15 @@ core::Result<std::vector<ScriptEvent>> parse_input_script(std::string_view text)
             line.resize(hash);
         std::istringstream in(line);
         ScriptEvent e;
+        e.line = number;
         if (!read_number(in, e.time))
         {
             if (line.find_first_not_of(" \t\r") == std::string::npos)
                 continue;  // blank or comment
-            return parse_error(number, "expected a time in seconds first");
+            return parse_error(source, number, "expected a time in seconds first");
         }
         if (e.time < 0.0)
-            return parse_error(number, "negative time");
+            return parse_error(source, number, "negative time");
         std::string command;
         in >> command;
         if (command == "drag")
@@ -63,56 +70,63 @@ core::Result<std::vector<ScriptEvent>> parse_input_script(std::string_view text)
             if (!read_number(in, e.x0) || !read_number(in, e.y0) || !(in >> arrow) ||
                 arrow != "->" || !read_number(in, e.x1) || !read_number(in, e.y1) ||
                 !(in >> for_word) || for_word != "for" || !read_number(in, e.duration))
-                return parse_error(number, "expected `TIME drag X0 Y0 -> X1 Y1 for SECONDS`");
+                return parse_error(source, number,
+                                   "expected `TIME drag X0 Y0 -> X1 Y1 for SECONDS`");
             if (e.duration < 0.0)
-                return parse_error(number, "negative drag duration");
+                return parse_error(source, number, "negative drag duration");
         }
         else if (command == "wheel")
         {
             e.kind = ScriptEvent::Kind::Wheel;
             if (!read_number(in, e.x0) || !read_number(in, e.y0) || !read_number(in, e.clicks))
-                return parse_error(number, "expected `TIME wheel X Y CLICKS`");
+                return parse_error(source, number, "expected `TIME wheel X Y CLICKS`");
         }
         else if (command == "key")
         {
             e.kind = ScriptEvent::Kind::Key;
             if (!(in >> e.key))
-                return parse_error(number, "expected `TIME key NAME`");
+                return parse_error(source, number, "expected `TIME key NAME`");
             std::transform(e.key.begin(), e.key.end(), e.key.begin(),
                            [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+            if (!is_known_key(e.key))
+                return parse_error(source, number,
+                                   "unknown key `" + e.key +
+                                       "` (expected p, f12, e, w, c, h, r, space or escape)");
         }
         else if (command == "export")
         {
             e.kind = ScriptEvent::Kind::Export;
             if (!(in >> e.file))
-                return parse_error(number, "expected `TIME export FILE`");
+                return parse_error(source, number, "expected `TIME export FILE`");
             std::string ext = std::filesystem::path(e.file).extension().string();
             std::transform(ext.begin(), ext.end(), ext.begin(),
                            [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
             if (ext != ".obj" && ext != ".ply" && ext != ".gltf" && ext != ".glb")
                 return parse_error(
-                    number, "export file `" + e.file + "` must end in .obj, .ply, .gltf or .glb");
+                    source, number,
+                    "export file `" + e.file + "` must end in .obj, .ply, .gltf or .glb");
         }
         else
             return parse_error(
-                number, "unknown command `" + command + "` (expected drag, wheel, key or export)");
+                source, number,
+                "unknown command `" + command + "` (expected drag, wheel, key or export)");
         std::string extra;
         if (in >> extra)
-            return parse_error(number, "unexpected `" + extra + "` at the end");
+            return parse_error(source, number, "unexpected `" + extra + "` at the end");
         events.push_back(std::move(e));
     }
     std::stable_sort(events.begin(), events.end(),
                      [](const ScriptEvent& a, const ScriptEvent& b) { return a.time < b.time; });
-    double drag_end = -1.0;
+    const ScriptEvent* previous = nullptr;
     for (const ScriptEvent& e : events)
     {
         if (e.kind != ScriptEvent::Kind::Drag)
             continue;
-        if (e.time < drag_end)
-            return core::fail(core::ErrorCode::ParseError,
-                              "view --script: the drag at " + std::to_string(e.time) +
-                                  " s starts before the previous drag ends");
-        drag_end = e.time + e.duration;
+        if (previous != nullptr && e.time < previous->time + previous->duration)
+            return parse_error(source, e.line,
+                               "this drag starts before the drag of line " +
+                                   std::to_string(previous->line) + " ends");
+        previous = &e;
     }
     return events;
 }
@@ -124,7 +138,7 @@ core::Result<std::vector<ScriptEvent>> load_input_script(const std::filesystem::
         return core::fail(core::ErrorCode::IoError, "view --script: cannot read " + path.string());
     std::stringstream text;
     text << in.rdbuf();
-    return parse_input_script(text.str());
+    return parse_input_script(text.str(), path.string());
 }
 
 ScriptPlayer::ScriptPlayer(std::vector<ScriptEvent> events) : events_(std::move(events)) {}

@@ -10,7 +10,8 @@
 //     0.5  drag 320 240 -> 360 200 for 1.0   # left button down at (320, 240), moved linearly,
 //                                           # released at (360, 200) 1.0 s later
 //     2.0  wheel 320 240 -1                  # scroll one click (negative: zoom out)
-//     2.5  key p                             # a key: p (screenshot), e (export), w, c, ...
+//     2.5  key p                             # a key: p or f12 (screenshot), e (export), w,
+//                                           # c, h, r, space, escape (k_script_keys)
 //     2.8  export out.glb                    # export the surface to a file (.obj .ply .gltf
 //                                           # .glb; relative to the working folder)
 //
@@ -18,6 +19,7 @@
 
 #include <pliant/core/result.h>
 
+#include <array>
 #include <cstddef>
 #include <filesystem>
 #include <string>
@@ -44,12 +46,20 @@ struct ScriptEvent
     double clicks = 0.0;        ///< wheel
     std::string key;            ///< key name (lower case)
     std::string file;           ///< export: the file to write (one word, no spaces)
+    std::size_t line = 0;       ///< line of the script it came from (1-based)
 };
 
-/// Parses a script. \return ParseError naming the line for an unknown command, a missing or
-/// non-finite number, a negative time or duration, overlapping drags, or an export file whose
-/// extension is not .obj, .ply, .gltf or .glb.
-core::Result<std::vector<ScriptEvent>> parse_input_script(std::string_view text);
+/// The key names a script may press (`TIME key NAME`, case-insensitive): those the viewer's
+/// key handler knows.
+inline constexpr std::array<std::string_view, 9> k_script_keys{"p", "f12", "e",     "w",     "c",
+                                                               "h", "r",   "space", "escape"};
+
+/// Parses a script; `source` (the file name) starts every message, `SOURCE:LINE: ...`.
+/// \return ParseError naming the line for an unknown command or key, a missing or non-finite
+/// number, a negative time or duration, overlapping drags, or an export file whose extension is
+/// not .obj, .ply, .gltf or .glb.
+core::Result<std::vector<ScriptEvent>> parse_input_script(std::string_view text,
+                                                          std::string_view source = "script");
 /// Reads and parses a script file. \return IoError or parse_input_script's errors.
 core::Result<std::vector<ScriptEvent>> load_input_script(const std::filesystem::path& path);
 

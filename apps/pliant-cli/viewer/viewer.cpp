@@ -165,6 +165,21 @@ double seconds(std::chrono::steady_clock::duration d)
     return std::chrono::duration<double>(d).count();
 }
 
+/// The first `pliant-view-NNNN.<extension>` that does not exist in the working folder
+/// (bounded search: none after 9999).
+std::optional<std::filesystem::path> first_free_name(const char* extension)
+{
+    std::error_code ec;
+    for (int k = 0; k < 10000; ++k)
+    {
+        char name[64];
+        std::snprintf(name, sizeof name, "pliant-view-%04d.%s", k, extension);
+        if (!std::filesystem::exists(name, ec))
+            return std::filesystem::path(name);
+    }
+    return std::nullopt;
+}
+
 }  // namespace
 
 Viewer::Viewer(const ViewerOptions& options) : options_(options)
@@ -268,16 +283,25 @@ void Viewer::start_local(LoadedSurface surface)
     surface_.emplace(std::move(surface));
     rest_bounds_.reset();
     shown_owner_level_ = -1;
-    display_level_ = options_.display_level >= 0
-                         ? std::clamp(options_.display_level, level, core::k_max_level)
-                         : std::min(level + 1, std::max(level, 8));
+    display_level_ = initial_display_level(level);
+}
+
+int Viewer::initial_display_level(int sim_level) const
+{
+    const int highest = max_display_level(sim_level);
+    if (options_.display_level < 0)
+        return std::min(sim_level + 1, std::max(sim_level, 8));
+    if (options_.display_level > highest)
+        spdlog::warn("view: --display-level {} is above simulation level {} + 3; showing level {}",
+                     options_.display_level, sim_level, highest);
+    return std::clamp(options_.display_level, sim_level, highest);
 }
 
 // --- sessions ------------------------------------------------------------------------------
 
 bool Viewer::join_session(const std::string& address, bool participant)
 {
-    auto master = net::parse_address(address);
+    auto master = net::resolve_address(address);
     if (!master)
     {
         set_status(master.error().message, true);
@@ -304,13 +328,19 @@ bool Viewer::join_session(const std::string& address, bool participant)
         return false;
     }
     session_ = std::move(*s);
+    session_address_ = address;
+    // The Session panel's field shows the address tried, so a retry is one click.
+    std::snprintf(join_address_.data(), join_address_.size(), "%s", address.c_str());
+    joined_ = false;
     open_session_panel_ = true;
     local_.reset();
     rest_bounds_.reset();
     shown_epoch_ = 0;
     shown_owner_level_ = -1;
     last_stats_ = {};
-    set_status("joining " + address + (participant ? " as a participant" : " as a viewer"), false);
+    set_status("joining " + address + (participant ? " as a participant" : " as a viewer") +
+                   " (waiting for the master's answer and the model)",
+               false);
     return true;
 }
 
@@ -345,6 +375,8 @@ bool Viewer::host_session(std::uint16_t port, bool exact)
         return false;
     }
     session_ = std::move(*s);
+    session_address_ = "port " + std::to_string(bound->port);
+    joined_ = true;
     open_session_panel_ = true;
     local_.reset();
     shown_epoch_ = 0;
@@ -355,7 +387,7 @@ bool Viewer::host_session(std::uint16_t port, bool exact)
     return true;
 }
 
-void Viewer::leave_session()
+void Viewer::leave_session(const std::string& message, bool error)
 {
     if (!session_)
         return;
@@ -387,7 +419,7 @@ void Viewer::leave_session()
         LoadedSurface copy{surface_->grid, surface_->positions, surface_->description};
         start_local(std::move(copy));
     }
-    set_status("left the session", false);
+    set_status(message, error);
 }
 
 void Viewer::pump_session(double now_s)
@@ -408,8 +440,33 @@ void Viewer::pump_session(double now_s)
     } while (Clock::now() < budget_end && !session_->left());
     if (session_->left())
     {
-        set_status("the session ended", true);
-        leave_session();
+        // Why: the session refused this peer's settings, the master never answered (a joiner
+        // gets the model right after the greeting), or the link broke or the master ended it.
+        std::string why;
+        if (!session_->refusal().empty())
+            why =
+                "the session at " + session_address_ + " refused this peer: " + session_->refusal();
+        else if (session_->role() == session::SessionRole::Master)
+            why = "the session hosted on " + session_address_ + " ended";
+        else if (!session_->ready())
+            why = "could not reach the master at " + session_address_ +
+                  ": no answer (is `pliant host` running there, on that UDP port?)";
+        else
+            why = "the session ended: the master at " + session_address_ +
+                  " ended it or the connection was lost";
+        session_failed_ = true;
+        leave_session(why, true);
+        return;
+    }
+    if (!joined_ && session_->ready())
+    {
+        joined_ = true;
+        set_status(
+            "joined " + session_address_ + " as " +
+                (session_->role() == session::SessionRole::Viewer ? "a viewer" : "a participant") +
+                " (id " + std::to_string(session_->id().value) + ", level " +
+                std::to_string(session_->model()->grid().level()) + ")",
+            false);
     }
 }
 
@@ -516,8 +573,8 @@ void Viewer::update_surface()
     }
     const core::Field<double>& u = session_ ? session_->view_u() : local_->state().u;
     const int level = m->grid().level();
-    if (display_level_ < level)
-        display_level_ = std::min(level + 1, std::max(level, 8));  // a joined session's model
+    if (display_level_ < level || display_level_ > max_display_level(level))
+        display_level_ = initial_display_level(level);  // a joined session's model
     view_.update(*m, u, display_level_ - level);
     renderer_->upload(view_.display_grid(), view_.display_positions(), &view_.display_u());
     gpu_surface_valid_ = true;
@@ -635,9 +692,12 @@ void Viewer::request_screenshot(std::optional<std::filesystem::path> path)
         screenshot_request_ = std::move(*path);
         return;
     }
-    char name[64];
-    std::snprintf(name, sizeof name, "pliant-view-%04d.png", screenshot_counter_++);
-    screenshot_request_ = std::filesystem::path(name);
+    // The first free name, as for exports: a screenshot never overwrites an earlier one.
+    if (auto name = first_free_name("png"))
+        screenshot_request_ = std::move(*name);
+    else
+        set_status("screenshot: pliant-view-0000 ... 9999.png all exist in the working folder",
+                   true);
 }
 
 bool Viewer::write_screenshot(const std::filesystem::path& path, int width, int height)
@@ -670,16 +730,9 @@ bool Viewer::export_surface(std::optional<std::filesystem::path> path)
     }
     if (!path)
     {
-        // The first free name, so an export never overwrites an earlier one (bounded search).
+        // The first free name, so an export never overwrites an earlier one.
         const std::size_t format = static_cast<std::size_t>(std::clamp(export_format_, 0, 3));
-        std::error_code ec;
-        for (int k = 0; k < 10000 && !path; ++k)
-        {
-            char name[64];
-            std::snprintf(name, sizeof name, "pliant-view-%04d.%s", k, k_export_extensions[format]);
-            if (!std::filesystem::exists(name, ec))
-                path = std::filesystem::path(name);
-        }
+        path = first_free_name(k_export_extensions[format]);
         if (!path)
         {
             set_status("export: pliant-view-0000 ... 9999 all exist in the working folder", true);
@@ -709,6 +762,17 @@ bool Viewer::export_surface(std::optional<std::filesystem::path> path)
 
 int Viewer::run()
 {
+    // A broken script is refused before any window opens.
+    if (!options_.script.empty())
+    {
+        auto events = load_input_script(options_.script);
+        if (!events)
+        {
+            spdlog::error("view: {}", events.error().message);
+            return 1;
+        }
+        script_.emplace(std::move(*events));
+    }
     glfwSetErrorCallback(on_glfw_error);
     if (glfwInit() != GLFW_TRUE)
     {
@@ -762,28 +826,28 @@ int Viewer::run()
     ImGui_ImplOpenGL3_Init("#version 330 core");
     imgui_ready_ = true;
 
-    if (!options_.script.empty())
-    {
-        auto events = load_input_script(options_.script);
-        if (!events)
-        {
-            spdlog::error("{}", events.error().message);
-            return 1;
-        }
-        script_.emplace(std::move(*events));
-    }
     const bool headless = options_.exit_after > 0.0;
-    auto address = net::parse_address(options_.input);
     std::error_code ec;
     if (options_.input.empty())
         start_load(options_.bundled_mesh);
-    else if (!std::filesystem::exists(options_.input, ec) && address)
+    else if (std::filesystem::exists(options_.input, ec))
+        start_load(options_.input);
+    else if (auto address = net::resolve_address(options_.input))
     {
         if (!join_session(options_.input, options_.participant) && headless)
             return 1;
     }
     else
-        start_load(options_.input);
+    {
+        // Neither: say both, since a misspelt file and a host name look alike.
+        set_status(options_.input +
+                       " is neither an existing file nor a HOST:PORT to join (a.b.c.d:port, "
+                       "localhost:port or hostname:port): " +
+                       address.error().message,
+                   true);
+        if (headless)
+            return 1;
+    }
 
     const auto start = Clock::now();
     last_frame_ = start;
@@ -804,7 +868,9 @@ int Viewer::run()
 
         finish_load();
         if (headless && !load_ && !object_shown() && !session_ && status_error_)
-            return 1;  // the input failed to load: nothing to test
+            return 1;  // the input failed to load or the join failed: nothing to test
+        if (headless && session_failed_)
+            return 1;  // the session was lost: what the run checks did not happen
         if (headless && !shown_since_ && seconds(now - start) > options_.exit_after + 300.0)
         {
             spdlog::error("view: nothing to show after {:.0f} s; giving up", seconds(now - start));

@@ -13,6 +13,7 @@
 // The window never waits on work: a mesh is remeshed on a worker thread (mesh_loader.h) and the
 // per-frame simulation is capped (sim_scene.h).
 
+#include <pliant/core/tetra_grid.h>
 #include <pliant/net/transport.h>
 #include <pliant/render/draw_settings.h>
 #include <pliant/render/grid_renderer.h>
@@ -24,6 +25,7 @@
 #include "sim_scene.h"
 #include "viewer.h"
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cstdint>
@@ -114,6 +116,9 @@ public:
     bool join_as_participant_ = true;
     bool host_exact_ = false;
     bool open_session_panel_ = false;  ///< unfold the Session panel once (joined or hosting)
+    std::string session_address_;      ///< the master's HOST:PORT (hosting: "port N")
+    bool joined_ = false;              ///< the status line said the join completed
+    bool session_failed_ = false;      ///< a session ended on its own (a headless run fails)
 
     // Input.
     enum class Drag : std::uint8_t
@@ -137,7 +142,6 @@ public:
     double max_u_reached_ = 0.0;
     double object_radius_ = 0.0;
     std::uint64_t frames_ = 0;
-    int screenshot_counter_ = 0;
     std::optional<std::filesystem::path> screenshot_request_;
     int export_format_ = 0;  ///< index into k_export_extensions (viewer.cpp): obj ply gltf glb
     double last_coverage_ = -1.0;
@@ -146,9 +150,19 @@ public:
     void start_load(const std::filesystem::path& path);
     void finish_load();
     void start_local(LoadedSurface surface);
+    /// The display level for a surface simulated at `sim_level`: --display-level clamped to
+    /// sim_level .. max_display_level (with a warning above), else sim level + 1 up to 8.
+    [[nodiscard]] int initial_display_level(int sim_level) const;
+    /// The highest display level, as the panel's slider allows: sim level + 3, at most 10.
+    [[nodiscard]] static int max_display_level(int sim_level) noexcept
+    {
+        return std::min(core::k_max_level, sim_level + 3);
+    }
     bool join_session(const std::string& address, bool participant);
     bool host_session(std::uint16_t port, bool exact);
-    void leave_session();
+    /// Leaves (or, as master, ends) the session and goes on with a local simulation of its
+    /// surface; `message` becomes the status line (an error keeps it red).
+    void leave_session(const std::string& message = "left the session", bool error = false);
     void pump_session(double now_s);
     void simulate(double wall_dt);
     void update_surface();

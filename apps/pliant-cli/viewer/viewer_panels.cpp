@@ -62,10 +62,12 @@ void Viewer::draw_panels()
     // Status and loading.
     if (!status_.empty())
     {
+        // Wrapped in both cases: an error names an address or a file and must be read whole.
         if (status_error_)
-            ImGui::TextColored(ImVec4(1.0F, 0.45F, 0.4F, 1.0F), "%s", status_.c_str());
-        else
-            ImGui::TextWrapped("%s", status_.c_str());
+            ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(1.0F, 0.45F, 0.4F, 1.0F));
+        ImGui::TextWrapped("%s", status_.c_str());
+        if (status_error_)
+            ImGui::PopStyleColor();
     }
     if (load_)
     {
@@ -89,8 +91,7 @@ void Viewer::draw_panels()
     if (ImGui::CollapsingHeader("Display", ImGuiTreeNodeFlags_DefaultOpen) && m != nullptr)
     {
         const int level = m->grid().level();
-        ImGui::SliderInt("display level", &display_level_, level,
-                         std::min(core::k_max_level, level + 3));
+        ImGui::SliderInt("display level", &display_level_, level, max_display_level(level));
         ImGui::Text("sim level %d, %zu triangles drawn", level,
                     renderer_ ? renderer_->triangle_count() : std::size_t{0});
         int color = static_cast<int>(color_);
@@ -218,6 +219,7 @@ void Viewer::draw_panels()
             me.master = session_->role() == session::SessionRole::Master;
             me.role = session_->role() == session::SessionRole::Viewer ? net::Role::Viewer
                                                                        : net::Role::Participant;
+            me.name = options_.name;  // what this peer announced (SessionSettings::name)
             rows.push_back(me);
             for (const session::PeerStatus& p : session_->peer_status())
                 rows.push_back(p);

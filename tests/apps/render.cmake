@@ -1,0 +1,113 @@
+# SPDX-License-Identifier: MIT
+# SPDX-FileCopyrightText: 2026 pliant contributors
+# `pliant render` end to end (docs/rendering.md) under Mesa's software OpenGL (EGL surfaceless
+# or OSMesa: no display needed). Each render runs through render_and_check.cmake: it must exit 0
+# and print what it drew, and pliant_png_check (png_check.cpp) must find a PNG of the asked size
+# with the object covering a plausible share of it and the colours asked for. Inputs: a level-4
+# remesh of the bundled cow, the first half second of the pull scenario at level 4 (6 frames,
+# tests/data/scenarios/pull_short.toml), and the final state of `pliant demo --quick`.
+if(TARGET pliant AND TARGET pliant_png_check)
+    set(_r ${CMAKE_CURRENT_BINARY_DIR}/render)
+    set(_check $<TARGET_FILE:pliant_png_check>)
+    set(_env "ASAN_OPTIONS=detect_leaks=0;OMP_NUM_THREADS=1")
+    add_test(NAME cli_render_clean
+             COMMAND ${CMAKE_COMMAND} -DDIR=${_r} -P ${CMAKE_CURRENT_SOURCE_DIR}/fresh_dir.cmake)
+    set_tests_properties(cli_render_clean PROPERTIES FIXTURES_SETUP render_clean)
+    add_test(NAME cli_render_setup_remesh
+             COMMAND pliant remesh ${PROJECT_SOURCE_DIR}/data/spot.obj --level 4
+                     -o ${_r}/spot4.pgrid)
+    set_tests_properties(cli_render_setup_remesh PROPERTIES TIMEOUT 120
+        FIXTURES_REQUIRED render_clean FIXTURES_SETUP render_grid)
+    add_test(NAME cli_render_setup_simulate
+             COMMAND pliant simulate
+                     --scenario ${PROJECT_SOURCE_DIR}/tests/data/scenarios/pull_short.toml
+                     -o ${_r}/frames --level 4 -j 1)
+    set_tests_properties(cli_render_setup_simulate PROPERTIES TIMEOUT 120
+        FIXTURES_REQUIRED render_clean FIXTURES_SETUP render_frames
+        PASS_REGULAR_EXPRESSION "6 frames, 0.500 s simulated")
+
+    # pliant_add_render_test(NAME FIXTURE REGEX ARGS CHECK...): `pliant render ARGS` (a ;-list)
+    # with stdout matching REGEX, then pliant_png_check with each CHECK's arguments (a
+    # ,-separated list).
+    function(pliant_add_render_test name fixture regex args)
+        set(checks)
+        set(n 0)
+        foreach(check IN LISTS ARGN)
+            math(EXPR n "${n} + 1")
+            list(APPEND checks "-DCHECK${n}=${check}")
+        endforeach()
+        add_test(NAME ${name}
+                 COMMAND ${CMAKE_COMMAND} "-DCOMMAND=$<TARGET_FILE:pliant>;render;${args}"
+                         "-DSTDOUT_REGEX=${regex}" -DPNG_CHECK=${_check} ${checks} -DTIMEOUT=110
+                         -P ${CMAKE_CURRENT_SOURCE_DIR}/render_and_check.cmake)
+        set_tests_properties(${name} PROPERTIES TIMEOUT 120 FIXTURES_REQUIRED "${fixture}"
+                             ENVIRONMENT "${_env}")
+    endfunction()
+
+    # A mesh (vertex-buffer path) and a remeshed grid refined one level for display (texture
+    # path): PNGs of the asked size with the cow on 5-80 % of the picture (measured 16 %).
+    pliant_add_render_test(cli_render_mesh render_clean
+        "320x240, mesh, 5856 triangles"
+        "${PROJECT_SOURCE_DIR}/data/spot.obj;-o;${_r}/mesh.png;--size;320x240"
+        "${_r}/mesh.png,--size,320x240,--cover,0.05,0.8")
+    pliant_add_render_test(cli_render_grid render_grid
+        "320x240, level 5 grid, 4096 triangles"
+        "${_r}/spot4.pgrid;-o;${_r}/grid.png;--size;320x240;--level-up;1;--camera;40,25"
+        "${_r}/grid.png,--size,320x240,--cover,0.05,0.8,--saturated,0,0.05")
+    # Owners without an "owner" channel: the stand-in leaves, in at least 3 palette colours
+    # from one side, and the summary line says they are stand-ins.
+    pliant_add_render_test(cli_render_grid_owner render_grid
+        "owners from no channel \"owner\": the 8 quad-tree leaves at depth 1 stand in for peers"
+        "${_r}/spot4.pgrid;-o;${_r}/owner.png;--size;320x240;--color;owner;--wireframe"
+        "${_r}/owner.png,--size,320x240,--cover,0.05,0.8,--min-owner-colours,3")
+    # The demo's final state carries the session's partition: its 3 peers in their colours.
+    pliant_add_render_test(cli_render_demo_owners demo_quick
+        "owners from the channel \"owner\": 3 peers"
+        "${CMAKE_CURRENT_BINARY_DIR}/demo-quick/final.pgrid;-o;${_r}/demo-owners.png;--size;320x240;--color;owner"
+        "${_r}/demo-owners.png,--size,320x240,--cover,0.05,0.8,--min-owner-colours,3")
+    # A simulated sequence in displacement colours, one range for all frames (the largest |u|
+    # of any): the rest state (frame 0) is grey, the first frame's small bump leaves most of
+    # the surface grey too, and the last frame's bump is saturated somewhere. With the first
+    # frame's range (|u| = 0, floored at 1e-12) every later frame was wholly saturated.
+    pliant_add_render_test(cli_render_frames_displacement render_frames
+        "6 frames from .*; displacement colours full at \\|u\\| = [0-9.]+e-0[1-3] m \\(the largest \\|u\\| over the 6 frames\\)"
+        "--frames;${_r}/frames;-o;${_r}/seq/f.png;--size;240x180;--color;displacement;--camera;0,30"
+        "${_r}/seq/f_0000.png,--size,240x180,--cover,0.05,0.9,--saturated,0,0.01"
+        "${_r}/seq/f_0001.png,--saturated,0,0.2"
+        "${_r}/seq/f_0005.png,--saturated,0.01,0.6")
+    # --color-range sets the range by hand: 1 mm saturates the bump of frame 5 over more of the
+    # surface than the automatic range does.
+    pliant_add_render_test(cli_render_frames_color_range render_frames
+        "6 frames from .*; displacement colours full at \\|u\\| = 1\\.000e-03 m \\(--color-range\\)"
+        "--frames;${_r}/frames;-o;${_r}/seq-range/f.png;--size;240x180;--color;displacement;--camera;0,30;--color-range;1e-3"
+        "${_r}/seq-range/f_0000.png,--saturated,0,0.01"
+        "${_r}/seq-range/f_0005.png,--saturated,0.3,1")
+
+    # Bad input: each refusal exits non-zero and says why.
+    file(MAKE_DIRECTORY ${CMAKE_CURRENT_BINARY_DIR}/render-inputs/empty)
+    file(WRITE ${CMAKE_CURRENT_BINARY_DIR}/render-inputs/corrupt.pgrid "not a grid file\n")
+    # Each case: NAME|ARGUMENTS (comma-separated)|REGEX.
+    set(_inputs ${CMAKE_CURRENT_BINARY_DIR}/render-inputs)
+    set(_bad_cases
+        "missing_file|${_r}/none.pgrid,-o,${_r}/x.png|none\\.pgrid: no such file"
+        "no_input|-o,${_r}/x.png|give GRID or MESH"
+        "bad_size|${_r}/spot4.pgrid,-o,${_r}/x.png,--size,8x8|--size 8x8 is not WxH"
+        "not_png|${_r}/spot4.pgrid,-o,${_r}/x.jpg|must end in \\.png"
+        "bad_camera|${_r}/spot4.pgrid,-o,${_r}/x.png,--camera,north|--camera north is not AZIMUTH"
+        "bad_color_range|${_r}/spot4.pgrid,-o,${_r}/x.png,--color-range,-1|--color-range"
+        "corrupt_grid|${_inputs}/corrupt.pgrid,-o,${_r}/x.png|corrupt\\.pgrid"
+        "empty_frames|--frames,${_inputs}/empty,-o,${_r}/x.png|no \\.pgrid files in"
+        "frames_not_a_folder|--frames,${_r}/none,-o,${_r}/x.png|--frames .*none is not a folder")
+    foreach(case IN LISTS _bad_cases)
+        string(REPLACE "|" ";" parts "${case}")
+        list(GET parts 0 what)
+        list(GET parts 1 args)
+        list(GET parts 2 regex)
+        string(REPLACE "," ";" args "${args}")
+        add_test(NAME cli_render_refuses_${what}
+                 COMMAND ${CMAKE_COMMAND} "-DCOMMAND=$<TARGET_FILE:pliant>;render;${args}"
+                         "-DREGEX=${regex}" -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_failure.cmake)
+        set_tests_properties(cli_render_refuses_${what} PROPERTIES TIMEOUT 60
+                             FIXTURES_REQUIRED render_grid ENVIRONMENT "${_env}")
+    endforeach()
+endif()
