@@ -302,4 +302,38 @@ TEST(SessionCli, ExactThreeProcessesEqualOneProcessBitForBit)
     run_exact_processes(2);
 }
 
+// --f32 and --stream-rate reach the stream: a viewer of a host streaming f32 leaf states at
+// 30 Hz receives about a quarter of the bytes of one streaming f64 at 60 Hz (half the value
+// bytes, half the rate; headers and control traffic make it a little more).
+TEST(SessionCli, F32AndStreamRateCutTheStream)
+{
+    const auto dir = pliant::test::scratch_dir("session_cli_stream_options");
+    const int port = 20000 + static_cast<int>((getpid() + 8011) % 19990);
+    const std::string exe = PLIANT_EXE;
+    const std::string d = dir.string();
+    const std::string p = std::to_string(port);
+    const std::string q = std::to_string(port + 1);
+    const std::string cmd =
+        "cd '" + d + "' && rm -f *.rc *.csv; ('" + exe + "' host --level 4 --port " + p +
+        " --duration 3 > full.log 2>&1; echo $? > full.rc) & ('" + exe +
+        "' host --level 4 --port " + q +
+        " --duration 3 --f32 --stream-rate 30 > cut.log 2>&1; echo $? > cut.rc) & sleep 0.3; ('" +
+        exe + "' join 127.0.0.1:" + p +
+        " --viewer --duration 2 --stats vfull.csv > vfull.log 2>&1; echo $? > vfull.rc) & ('" +
+        exe + "' join 127.0.0.1:" + q +
+        " --viewer --duration 2 --stats vcut.csv > vcut.log 2>&1; echo $? > vcut.rc) & wait";
+    ASSERT_EQ(std::system(cmd.c_str()), 0);
+    const std::string host_log = read(dir / "full.log");
+    if (host_log.find("bind") != std::string::npos && read(dir / "full.rc") != "0\n")
+        GTEST_SKIP() << "cannot bind UDP port " << port << " on this machine: " << host_log;
+    for (const char* name : {"full", "cut", "vfull", "vcut"})
+        ASSERT_EQ(read(dir / (std::string(name) + ".rc")), "0\n")
+            << name << ": " << read(dir / (std::string(name) + ".log"));
+    const double full = column_sum(dir / "vfull.csv", "bytes_in");
+    const double cut = column_sum(dir / "vcut.csv", "bytes_in");
+    EXPECT_GT(cut, 1000.0);
+    EXPECT_LT(cut, 0.4 * full) << "f32 at 30 Hz: " << cut << " bytes, f64 at 60 Hz: " << full;
+    EXPECT_GT(cut, 0.15 * full) << "f32 at 30 Hz: " << cut << " bytes, f64 at 60 Hz: " << full;
+}
+
 }  // namespace
