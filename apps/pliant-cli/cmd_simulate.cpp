@@ -27,10 +27,12 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <memory>
 #include <numbers>
 #include <optional>
 #include <set>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -39,13 +41,18 @@ namespace pliant::cli
 namespace
 {
 
+// The most frames a run writes (frame_NNNNN files; a day at 10 frames per second is 864,000).
+constexpr double k_max_frames = 1e6;
+
 struct TimedForce
 {
     double start = 0.0;  ///< s
-    double end = 0.0;    ///< s (exclusive)
+    double end = 0.0;    ///< s (the linear hold acts on start < t <= end, the step hold on
+                         ///< [start, end)); the run's duration when the file gives none
     sim::Force force;
     std::optional<core::Vec3> to;  ///< a point force slides to here by `end` (slide_point)
     std::int64_t line = 0;         ///< where the [[force]] table starts in the file
+    std::int64_t face_line = 0;    ///< where its `face` key is (face forces)
 };
 
 struct Scenario
@@ -53,7 +60,10 @@ struct Scenario
     sim::MembraneSettings settings;
     double duration = 1.0;     ///< s
     double frame_rate = 25.0;  ///< frames per second
+    int frames = 25;           ///< frames after frame 0: floor(duration * frame_rate)
     std::vector<TimedForce> forces;
+    std::map<std::string, std::int64_t> lines;  ///< the line of each key the file gives
+                                                ///< ("integrator.fixed_dt")
 };
 
 struct SimulateOptions
@@ -65,7 +75,7 @@ struct SimulateOptions
     int level = 6;
     double radius = 1.0;
     std::string sphere_map = "equal-area";
-    int threads = 0;
+    int threads = -1;  ///< -j; -1: not given (the scenario's `threads`), 0: OpenMP's default
 };
 
 std::string fmt_number(double v)
@@ -186,6 +196,15 @@ public:
         return std::nullopt;
     }
 
+    [[nodiscard]] bool has(const std::string& key) const { return table_.get(key) != nullptr; }
+
+    // Records the line of every key of this table in `lines` (prefixed, as errors name them).
+    void record_lines(std::map<std::string, std::int64_t>& lines) const
+    {
+        for (auto&& [key, node] : table_)
+            lines[prefix_ + std::string(key.str())] = node.source().begin.line;
+    }
+
     [[nodiscard]] const toml::table& table() const noexcept { return table_; }
 
 private:
@@ -231,6 +250,25 @@ core::Result<Scenario> parse_scenario(const std::filesystem::path& path)
     PLIANT_TRY(top.unknown_keys({"duration", "frame_rate", "material", "integrator", "force"}));
     PLIANT_TRY(top.number("duration", sc.duration, 0.0, 1e6));
     PLIANT_TRY(top.number("frame_rate", sc.frame_rate, 1e-3, 1e4));
+    top.record_lines(sc.lines);
+    // Frame numbers are ints and every frame is a file: refuse runs that would write more than
+    // k_max_frames (1e6 s at 1e4 frames per second would be 1e10).
+    const double frame_count = std::floor(sc.duration * sc.frame_rate + 1e-9);
+    if (frame_count > k_max_frames)
+    {
+        const bool rate_given = top.has("frame_rate");
+        const std::string key = rate_given ? "frame_rate" : "duration";
+        const std::string what = rate_given
+                                     ? "= " + fmt_number(sc.frame_rate) +
+                                           " with 'duration' = " + fmt_number(sc.duration) + " s"
+                                     : "= " + fmt_number(sc.duration) +
+                                           " s at 'frame_rate' = " + fmt_number(sc.frame_rate);
+        return scenario_error(path, root.get(key)->source(), key,
+                              what + " makes " + fmt_number(frame_count) +
+                                  " frames; a run writes at most " +
+                                  std::to_string(static_cast<long>(k_max_frames)));
+    }
+    sc.frames = static_cast<int>(frame_count);
 
     sim::MembraneSettings& s = sc.settings;
     if (const toml::node* node = root.get("material"))
@@ -243,12 +281,14 @@ core::Result<Scenario> parse_scenario(const std::filesystem::path& path)
         PLIANT_TRY(r.number("rho", s.rho, 1e-12, 1e12));
         PLIANT_TRY(r.number("beta", s.beta, 0.0, 1e12));
         PLIANT_TRY(r.number("k_f", s.k_f, 0.0, 1e12));
+        r.record_lines(sc.lines);
     }
     if (const toml::node* node = root.get("integrator"))
     {
         if (!node->is_table())
             return scenario_error(path, node->source(), "integrator", "must be a table");
-        const Reader r(path, *node->as_table(), "integrator.");
+        const toml::table& table = *node->as_table();
+        const Reader r(path, table, "integrator.");
         PLIANT_TRY(r.unknown_keys({"rtol", "atol", "dt_min", "dt_max", "dt_initial", "safety",
                                    "max_growth", "min_shrink", "fixed_step", "fixed_dt",
                                    "reassemble_every", "threads", "force_hold"}));
@@ -269,9 +309,43 @@ core::Result<Scenario> parse_scenario(const std::filesystem::path& path)
         PLIANT_TRY(r.choice("force_hold", hold,
                             {linear, std::string(sim::to_string(sim::ForceHold::Step))}));
         s.force_hold = hold == linear ? sim::ForceHold::Linear : sim::ForceHold::Step;
-        if (s.dt_min > s.dt_max || s.dt_initial < s.dt_min || s.dt_initial > s.dt_max)
-            return scenario_error(path, node->source(), "integrator",
-                                  "needs dt_min <= dt_initial <= dt_max");
+        r.record_lines(sc.lines);
+        // Each message names the key the file gives and says which value is a default.
+        const auto given = [&](const char* key) { return r.has(key); };
+        const auto value = [&](const char* key, double v) {
+            return "'" + std::string(key) + "' = " + fmt_number(v) +
+                   (given(key) ? "" : " (default)");
+        };
+        if (s.dt_min > s.dt_max)
+        {
+            const bool min_given = given("dt_min");
+            return scenario_error(
+                path, table.get(min_given ? "dt_min" : "dt_max")->source(),
+                min_given ? "integrator.dt_min" : "integrator.dt_max",
+                min_given ? "= " + fmt_number(s.dt_min) + " is above " + value("dt_max", s.dt_max)
+                          : "= " + fmt_number(s.dt_max) + " is below " + value("dt_min", s.dt_min));
+        }
+        if (!given("dt_initial"))
+            s.dt_initial = std::clamp(s.dt_initial, s.dt_min, s.dt_max);  // the default fits
+        else if (s.dt_initial < s.dt_min || s.dt_initial > s.dt_max)
+            return scenario_error(path, table.get("dt_initial")->source(), "integrator.dt_initial",
+                                  "= " + fmt_number(s.dt_initial) + " is outside [" +
+                                      value("dt_min", s.dt_min) + ", " + value("dt_max", s.dt_max) +
+                                      "]");
+        // Keys the chosen mode ignores are warned about, not refused: a file may keep both.
+        if (!s.fixed_step && given("fixed_dt"))
+            spdlog::warn(
+                "{}:{}: 'integrator.fixed_dt' has no effect without 'fixed_step = true' "
+                "(the steps are adaptive)",
+                path.string(), sc.lines["integrator.fixed_dt"]);
+        if (s.fixed_step)
+            for (const char* key : {"rtol", "atol", "dt_min", "dt_max", "dt_initial", "safety",
+                                    "max_growth", "min_shrink"})
+                if (given(key))
+                    spdlog::warn(
+                        "{}:{}: 'integrator.{}' has no effect with 'fixed_step = true' "
+                        "(every step is fixed_dt)",
+                        path.string(), sc.lines["integrator." + std::string(key)], key);
     }
     if (const toml::node* node = root.get("force"))
     {
@@ -279,6 +353,10 @@ core::Result<Scenario> parse_scenario(const std::filesystem::path& path)
         if (arr == nullptr)
             return scenario_error(path, node->source(), "force",
                                   "must be an array of tables ([[force]] sections)");
+        if (!arr->empty() && !(sc.duration > 0.0))
+            return scenario_error(
+                path, root.get("duration")->source(), "duration",
+                "= " + fmt_number(sc.duration) + " s: a scenario with forces needs a duration > 0");
         for (std::size_t k = 0; k < arr->size(); ++k)
         {
             const toml::node& item = (*arr)[k];
@@ -286,10 +364,11 @@ core::Result<Scenario> parse_scenario(const std::filesystem::path& path)
             if (!item.is_table())
                 return scenario_error(path, item.source(), "force[" + std::to_string(k) + "]",
                                       "must be a table");
-            const Reader r(path, *item.as_table(), prefix);
+            const toml::table& table = *item.as_table();
+            const Reader r(path, table, prefix);
             PLIANT_TRY(r.unknown_keys({"start", "end", "face", "point", "to", "radius", "vector"}));
             TimedForce f;
-            f.end = sc.duration;
+            f.end = sc.duration;  // documented default: the force acts until the run ends
             PLIANT_TRY(r.number("start", f.start, 0.0, 1e6));
             PLIANT_TRY(r.number("end", f.end, 0.0, 1e6));
             int face = -1;
@@ -309,10 +388,33 @@ core::Result<Scenario> parse_scenario(const std::filesystem::path& path)
             if (f.to && face >= 0)
                 return scenario_error(path, item.source(), prefix + "to",
                                       "only applies to point forces");
+            if (point && !r.has("radius"))
+                return scenario_error(path, item.source(), prefix + "radius",
+                                      "is missing: a point force spreads over the vertices "
+                                      "within this distance [m] of its point");
+            if (point && !(f.force.radius > 0.0))
+                return scenario_error(path, table.get("radius")->source(), prefix + "radius",
+                                      "= 0 must be > 0 for a point force (one shorter than the "
+                                      "edges puts the whole force on the nearest vertex)");
+            if (face >= 0 && r.has("radius"))
+                spdlog::warn("{}:{}: '{}radius' has no effect on a face force", path.string(),
+                             table.get("radius")->source().begin.line, prefix);
             if (!(f.end > f.start))
-                return scenario_error(path, item.source(), prefix + "end",
-                                      "must be later than 'start'");
+            {
+                if (r.has("end"))
+                    return scenario_error(
+                        path, table.get("end")->source(), prefix + "end",
+                        "= " + fmt_number(f.end) +
+                            " s must be later than 'start' = " + fmt_number(f.start) + " s");
+                return scenario_error(path, table.get("start")->source(), prefix + "start",
+                                      "= " + fmt_number(f.start) +
+                                          " s is not before 'end', which defaults to the "
+                                          "duration " +
+                                          fmt_number(sc.duration) + " s");
+            }
             f.line = item.source().begin.line;
+            if (face >= 0)
+                f.face_line = table.get("face")->source().begin.line;
             f.force.face = face;
             f.force.point = point.value_or(core::Vec3{});
             f.force.vector = *vector;
@@ -442,14 +544,54 @@ core::Result<void> write_frame(const SimulateOptions& opt, const sim::MembraneMo
     return core::save_grid(path, file);
 }
 
+// "file:line: 'key'" for a key the scenario gives, "file: 'key'" for a default.
+std::string key_at(const Scenario& sc, const std::filesystem::path& path, const std::string& key)
+{
+    const auto it = sc.lines.find(key);
+    if (it == sc.lines.end())
+        return path.string() + ": '" + key + "'";
+    return path.string() + ":" + std::to_string(it->second) + ": '" + key + "'";
+}
+
+// " (default)" when the scenario does not give `key`.
+const char* default_note(const Scenario& sc, const std::string& key)
+{
+    return sc.lines.count(key) != 0 ? "" : " (default)";
+}
+
+// Warns when the steps the run is bound to take are above the stable step of the model
+// (docs/physics.md §5): a fixed step, or an adaptive run's dt_min, which the error control cannot
+// go below. Either lets the fastest modes grow at every step.
+void warn_unstable_step(const Scenario& sc, const sim::MembraneModel& model,
+                        const std::filesystem::path& path)
+{
+    const sim::MembraneSettings& s = sc.settings;
+    const double stable = sim::stable_fixed_step(model);
+    if (s.fixed_step && s.fixed_dt > stable)
+        spdlog::warn(
+            "{} = {:.3g} s{} is {:.3g} times the stable step {:.3g} s of this grid and "
+            "material (sim::stable_fixed_step, docs/physics.md §5): the fastest modes "
+            "grow at every step and the run will likely diverge; use fixed_dt <= {:.3g}",
+            key_at(sc, path, "integrator.fixed_dt"), s.fixed_dt,
+            default_note(sc, "integrator.fixed_dt"), s.fixed_dt / stable, stable, stable);
+    else if (!s.fixed_step && s.dt_min > stable)
+        spdlog::warn(
+            "{} = {:.3g} s{} is {:.3g} times the stable step {:.3g} s of this grid and "
+            "material (sim::stable_fixed_step, docs/physics.md §5): the error control "
+            "cannot shrink a step below dt_min, so the run will likely diverge; use "
+            "dt_min <= {:.3g}",
+            key_at(sc, path, "integrator.dt_min"), s.dt_min, default_note(sc, "integrator.dt_min"),
+            s.dt_min / stable, stable, stable);
+}
+
 int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
 {
     auto scenario = parse_scenario(opt.scenario);
     if (!scenario)
         return report(scenario.error());
     Scenario& sc = *scenario;
-    if (opt.threads > 0)
-        sc.settings.threads = opt.threads;
+    if (opt.threads >= 0)
+        sc.settings.threads = opt.threads;  // -j 0: OpenMP's default, as threads = 0 in the file
 
     // Rest geometry: a grid file, or a sphere.
     std::optional<core::TetraGrid> grid;
@@ -482,14 +624,31 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
     auto model = sim::MembraneModel::create(*grid, rest, sc.settings);
     if (!model)
         return report(model.error());
-    std::vector<sim::Force> check;
-    for (const TimedForce& f : sc.forces)
-        check.push_back(f.force);
-    if (auto ok = sim::validate_forces(*model, check); !ok)
-        return report(
-            {core::ErrorCode::BadScenario, opt.scenario.string() + ": " + ok.error().message});
+    // Forces against this grid, each error naming its key and line like the parser's.
+    const auto faces = static_cast<std::int64_t>(grid->face_count());
+    for (std::size_t k = 0; k < sc.forces.size(); ++k)
+    {
+        const TimedForce& f = sc.forces[k];
+        const std::string name = "force[" + std::to_string(k) + "]";
+        if (f.force.face >= faces)
+            return report({core::ErrorCode::BadScenario,
+                           opt.scenario.string() + ":" + std::to_string(f.face_line) + ": '" +
+                               name + ".face' = " + std::to_string(f.force.face) +
+                               " is not below the grid's " + std::to_string(faces) +
+                               " faces (level " + std::to_string(grid->level()) + ")"});
+        if (auto ok = sim::validate_forces(*model, std::span<const sim::Force>(&f.force, 1)); !ok)
+        {
+            // "force 0: what": keep what.
+            const std::string& msg = ok.error().message;
+            const std::size_t colon = msg.find(": ");
+            return report({core::ErrorCode::BadScenario,
+                           opt.scenario.string() + ":" + std::to_string(f.line) + ": '" + name +
+                               "' " + (colon == std::string::npos ? msg : msg.substr(colon + 2))});
+        }
+    }
 
     warn_unreachable_points(sc, *grid, rest, centre, opt.scenario);
+    warn_unstable_step(sc, *model, opt.scenario);
 
     std::error_code ec;
     std::filesystem::create_directories(opt.out, ec);
@@ -505,55 +664,119 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
 
     sim::MembraneState state = sim::MembraneState::at_rest(*grid);
     sim::Rkf45Workspace ws(*model, sc.settings.threads);
-    const int frames = static_cast<int>(std::floor(sc.duration * sc.frame_rate + 1e-9));
+    const int frames = sc.frames;
+    const bool fixed = sc.settings.fixed_step;
+    const double h = sc.settings.fixed_dt;
     ProgressBar bar(global);
     std::vector<sim::Force> forces;
     std::uint64_t total_steps = 0;
     std::uint64_t total_rejections = 0;
+    std::uint64_t total_at_min = 0;
+    // A diverged run stops with the frames written so far (energy.csv keeps their rows).
+    const auto diverged = [&](const std::string& what, int frame)
+    {
+        spdlog::error(
+            "{}: {} at t = {} s: the run diverged and stops (frames 0 to {} are in {}); "
+            "lower {} or the forces",
+            opt.scenario.string(), what, fmt_number(state.time), frame, opt.out.string(),
+            fixed ? "fixed_dt" : "dt_min and dt_max");
+        return k_exit_failure;
+    };
     const auto start = std::chrono::steady_clock::now();
     for (int frame = 0; frame <= frames; ++frame)
     {
         const double t_frame = frame / sc.frame_rate;
         sim::AdvanceReport rep;
-        // Split the interval at force start/end times so each piece has one force set.
-        while (state.time < t_frame - 1e-12 * std::max(1.0, t_frame))
+        // Advances to t_next with the forces of [state.time, t_next), adding to the frame's
+        // report.
+        const auto advance = [&](double t_next)
         {
-            double t_next = t_frame;
-            for (const TimedForce& f : sc.forces)
-                for (const double e : {f.start, f.end})
-                    if (e > state.time + 1e-12 && e < t_next)
-                        t_next = e;
             active_forces(sc, state.time, t_next, centre, forces);
             const sim::AdvanceReport r = sim::advance_to(*model, state, ws, t_next, forces);
             rep.status = rep.status | r.status;
             rep.steps += r.steps;
             rep.rejections += r.rejections;
-            if (sim::has_flag(r.status, sim::StepStatus::NonFinite))
-                return report(
-                    {core::ErrorCode::InvalidArgument,
-                     "simulate: the state became non-finite at t = " + std::to_string(state.time) +
-                         " s; lower dt_max / fixed_dt or the forces"});
-            if (!r.reached)
-                break;  // fixed-step mode: the remainder waits for the next frame
+            rep.at_min_steps += r.at_min_steps;
+            return r;
+        };
+        if (fixed)
+        {
+            // Whole steps only: the frame is written at the last step boundary at or before its
+            // time and the remainder waits for the next frame (docs/physics.md §7). A force's
+            // start or end inside the frame splits it at the first boundary at or after it (at
+            // it, when it lies on one).
+            for (;;)
+            {
+                const double t = state.time;
+                const double slack = 1e-12 * std::max(1.0, std::fabs(t_frame));
+                double n = std::floor((t_frame - t + slack) / h);
+                if (!(n >= 1.0))
+                    break;
+                double t_next = t_frame;
+                for (const TimedForce& f : sc.forces)
+                    for (const double e : {f.start, f.end})
+                        if (e > t + slack)
+                            if (const double n_e = std::max(1.0, std::ceil((e - t - slack) / h));
+                                n_e < n)
+                            {
+                                n = n_e;
+                                t_next = e;
+                            }
+                if (const double boundary = t + n * h; std::fabs(boundary - t_next) > slack)
+                    t_next = boundary;
+                const sim::AdvanceReport r = advance(t_next);
+                if (sim::has_flag(r.status, sim::StepStatus::NonFinite))
+                    return diverged("the state became non-finite", frame - 1);
+                if (r.steps == 0)
+                    break;  // no whole step fitted after all (rounding): the next frame takes it
+            }
+        }
+        else
+        {
+            // Split the interval at force start/end times so each piece has one force set.
+            while (state.time < t_frame - 1e-12 * std::max(1.0, t_frame))
+            {
+                double t_next = t_frame;
+                for (const TimedForce& f : sc.forces)
+                    for (const double e : {f.start, f.end})
+                        if (e > state.time + 1e-12 && e < t_next)
+                            t_next = e;
+                const sim::AdvanceReport r = advance(t_next);
+                if (sim::has_flag(r.status, sim::StepStatus::NonFinite))
+                    return diverged("the state became non-finite", frame - 1);
+                if (!r.reached)
+                    break;  // max_steps: the remainder waits for the next frame
+            }
         }
         total_steps += rep.steps;
         total_rejections += rep.rejections;
+        total_at_min += rep.at_min_steps;
         if (auto ok = write_frame(opt, *model, state, frame); !ok)
             return report(ok.error());
         const sim::Energy e = sim::energy(*model, state);
         csv << frame << ',' << state.time << ',' << e.kinetic << ',' << e.strain << ','
             << e.foundation << ',' << e.total() << ',' << rep.steps << ',' << rep.rejections << ','
             << static_cast<std::uint32_t>(rep.status) << '\n';
+        if (!std::isfinite(e.total()))
+            return diverged("the energy became non-finite", frame);
         bar.update("simulate", frames > 0 ? static_cast<double>(frame) / frames : 1.0);
     }
     const double wall =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::printf(
         "%d frames, %.3f s simulated in %.3f s wall (%.2fx real time), level %d, %zu "
-        "vertices, %llu steps, %llu rejections -> %s\n",
+        "vertices, %llu steps, %llu rejections, %d thread(s) -> %s\n",
         frames + 1, state.time, wall, wall > 0.0 ? state.time / wall : 0.0, grid->level(),
         grid->unique_count(), static_cast<unsigned long long>(total_steps),
-        static_cast<unsigned long long>(total_rejections), opt.out.string().c_str());
+        static_cast<unsigned long long>(total_rejections), ws.max_threads,
+        opt.out.string().c_str());
+    if (total_at_min > 0)
+        spdlog::warn(
+            "{} = {:.3g} s{}: {} of {} steps were taken at dt_min with the error above "
+            "the tolerance (flag 2 in energy.csv): the results may be inaccurate, or "
+            "diverging; lower dt_min",
+            key_at(sc, opt.scenario, "integrator.dt_min"), sc.settings.dt_min,
+            default_note(sc, "integrator.dt_min"), total_at_min, total_steps);
     return 0;
 }
 
@@ -566,20 +789,25 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global)
         "file, headless.");
     cmd->footer(
         "The scenario (TOML) sets the material (T N/m, rho kg/m^2, beta 1/s, k_f 1/s^2), the\n"
-        "integrator (rtol, atol, dt_min, dt_max, fixed_step, fixed_dt, reassemble_every,\n"
-        "threads, force_hold), duration [s], frame_rate [1/s] and timed forces ([[force]]: start,\n"
-        "end, face or point + radius [m], optional 'to' for a point sliding over the surface,\n"
-        "vector [N]); see scenes/pull.toml and docs/physics.md. Errors name the key and its line.\n"
-        "Forces are sampled at frame times and ramp linearly between samples (force_hold =\n"
-        "\"linear\", the default: a force ramps up over the frame after its start and down over\n"
-        "the frame after its end); force_hold = \"step\" holds each sample for the whole frame.\n\n"
+        "integrator (adaptive: rtol, atol, dt_min, dt_max, dt_initial [s], safety, max_growth,\n"
+        "min_shrink; or fixed_step = true with fixed_dt [s]; reassemble_every, threads,\n"
+        "force_hold), duration [s], frame_rate [1/s] and timed forces ([[force]]: start, end\n"
+        "(default: the duration), face, or point + radius [m] with an optional 'to' for a point\n"
+        "sliding over the surface, vector [N]); see scenes/pull.toml and docs/physics.md.\n"
+        "Errors name the key and its line. Forces are sampled at frame times and ramp linearly\n"
+        "between samples (force_hold = \"linear\", the default: a force acts for\n"
+        "start < t <= end, ramping up over the frame after its start and down over the frame\n"
+        "after its end); force_hold = \"step\" holds each sample for the whole frame (a force\n"
+        "acts for start <= t < end). Fixed steps are whole: a frame is written at the last step\n"
+        "at or before its time. A fixed_dt (or dt_min) above the grid's stable step is warned\n"
+        "about; a run whose state becomes non-finite stops with exit status 3.\n\n"
         "DIR receives frame_NNNNN.pgrid per frame (channels px py pz = deformed positions\n"
         "P + u N, u [m], v [m/s]; or surfaces with --format ply, obj, gltf or glb) and\n"
         "energy.csv (frame, time, kinetic, strain, foundation, total energy [J], steps,\n"
         "rejections, flags).\n\n"
         "Examples:\n"
         "  pliant simulate --scenario scenes/pull.toml -o out/pull            # sphere, level 6\n"
-        "  pliant simulate spot.pgrid --scenario scenes/pull.toml -o out/spot --format ply");
+        "  pliant simulate spot.pgrid --scenario scenes/spot.toml -o out/spot --format ply");
     cmd->add_option("GRID", opt->grid,
                     "Rest geometry (.pgrid from `pliant remesh`); omitted: a sphere of --level");
     cmd->add_option("-s,--scenario", opt->scenario, "Scenario file (.toml)")
@@ -601,7 +829,8 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global)
         ->check(CLI::IsMember({"equal-area", "gnomonic"}))
         ->capture_default_str();
     cmd->add_option("-j,--threads", opt->threads,
-                    "Threads (overrides the scenario; results are identical for any count)")
+                    "Threads (overrides the scenario's; 0: OpenMP's default; results are "
+                    "identical for any count)")
         ->check(CLI::Range(0, 1024));
     cmd->callback(
         command_callback(global, [opt, &global]() -> int { return run_simulate(*opt, global); }));

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <string>
 #include <string_view>
+#include <utility>
 
 namespace pliant::sim
 {
@@ -232,6 +233,8 @@ core::Result<MembraneModel> MembraneModel::create(const core::TetraGrid& grid,
 
     if (auto r = m.assemble(m.P_); !r)
         return r.error();
+    // The spare planes now hold nothing (the swap left the empty initial planes there): a
+    // model that never re-assembles keeps one set of weights and masses.
     return m;
 }
 
@@ -251,7 +254,18 @@ core::Result<void> MembraneModel::set_settings(const MembraneSettings& settings)
 core::Result<void> MembraneModel::assemble(const Vec3Field<double>& X)
 {
     const core::TetraGrid& g = grid_;
-    Field<double> wx(g, 1), wy(g, 1), wd(g, 1), mass(g, 1), inv(g, 1);
+    // The new planes are written into the spare ones (allocated by the first assembly or
+    // re-assembly) and swapped in on success, so the model is unchanged on failure and a
+    // re-assembly allocates nothing. Every assembly writes the same entries of them, so a reused
+    // plane ends bit for bit as a fresh one would.
+    for (Field<double>* f : {&spare_wx_, &spare_wy_, &spare_wd_, &spare_mass_, &spare_inv_mass_})
+        if (f->empty() || f->level() != g.level() || f->ghost() != 1)
+            *f = Field<double>(g, 1);
+    Field<double>& wx = spare_wx_;
+    Field<double>& wy = spare_wy_;
+    Field<double>& wd = spare_wd_;
+    Field<double>& mass = spare_mass_;
+    Field<double>& inv = spare_inv_mass_;
     const double half_t = 0.5 * settings_.T;
     bool degenerate = false;
     // Edge weights for every edge a stencil at an in-range node reads (x, y >= -1).
@@ -296,21 +310,22 @@ core::Result<void> MembraneModel::assemble(const Vec3Field<double>& X)
         }
     sync(mass);
     sync(inv);
-    wx_ = std::move(wx);
-    wy_ = std::move(wy);
-    wd_ = std::move(wd);
-    mass_ = std::move(mass);
-    inv_mass_ = std::move(inv);
+    std::swap(wx_, wx);
+    std::swap(wy_, wy);
+    std::swap(wd_, wd);
+    std::swap(mass_, mass);
+    std::swap(inv_mass_, inv);
     return {};
 }
 
 core::Result<void> MembraneModel::reassemble(const Field<double>& u)
 {
     const core::TetraGrid& g = grid_;
-    Vec3Field<double> X;
+    Vec3Field<double>& X = deformed_;
     for (std::size_t k = 0; k < 3; ++k)
     {
-        X[k] = Field<double>(g, 2);
+        if (X[k].empty() || X[k].level() != g.level() || X[k].ghost() != 2)
+            X[k] = Field<double>(g, 2);
         for (int y = 0; y < g.ny(); ++y)
             for (int x = 0; x < g.nx(); ++x)
                 X[k].at(x, y) = P_[k].at(x, y) + u.at(x, y) * N_[k].at(x, y);

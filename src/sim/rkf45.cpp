@@ -777,6 +777,8 @@ AdvanceReport advance_to(MembraneModel& model, MembraneState& state, Rkf45Worksp
         if (has_flag(r.status, StepStatus::NonFinite))
             break;
         ++report.steps;
+        if (has_flag(r.status, StepStatus::MinStepReached))
+            ++report.at_min_steps;
         if (!set.fixed_step && r.dt >= remaining)
             state.time = target_time;  // land exactly, whatever the rounding of time += h
     }

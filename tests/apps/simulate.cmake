@@ -4,7 +4,14 @@
 # writes every frame and the energy table, and its finger slides over the surface (no vertex is
 # ever out of its reach: the chord it used to follow passed 0.29 m below the surface); a point
 # force out of every vertex's reach is warned about, naming the file, line and distance; a
-# misspelt key or an unknown force hold is refused, naming the file, line and key.
+# misspelt key or an unknown force hold is refused, naming the file, line and key. The audit of
+# simulate (fixed steps, divergence, messages): a fixed step that does not divide the frame
+# interval runs to the end (it hung); an unstable fixed_dt or dt_min is warned about and the steps
+# at dt_min are counted; a run that becomes non-finite stops with exit 3; a face index beyond the
+# grid, too many frames, a zero duration with forces and a point force without radius are refused
+# with the key and its line; the default dt_initial is clamped under a small dt_max; keys the run
+# ignores are warned about; -j 0 means OpenMP's default; --help lists every integrator key; the
+# documented spot example runs without warnings.
 if(TARGET pliant)
     set(sim_out ${CMAKE_CURRENT_BINARY_DIR}/simulate-pull)
     add_test(NAME cli_simulate_pull
@@ -41,4 +48,108 @@ if(TARGET pliant)
                      "-DREGEX=bad_hold.toml:8: 'integrator.force_hold' must be one of: linear, step"
                      -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_failure.cmake)
     set_tests_properties(cli_simulate_refuses_unknown_force_hold PROPERTIES TIMEOUT 60)
+    set(scenarios ${PROJECT_SOURCE_DIR}/tests/data/scenarios)
+    # 166 whole steps of 3 ms in 0.5 s, frames at the last step before each 100 ms.
+    add_test(NAME cli_simulate_fixed_step_remainder
+             COMMAND pliant simulate --scenario ${scenarios}/fixed_remainder.toml
+                     -o ${CMAKE_CURRENT_BINARY_DIR}/simulate-fixed-remainder --level 3 -j 1)
+    set_tests_properties(cli_simulate_fixed_step_remainder PROPERTIES
+        TIMEOUT 60
+        PASS_REGULAR_EXPRESSION "6 frames, 0.498 s simulated.* 166 steps"
+        FAIL_REGULAR_EXPRESSION "warning|error")
+
+    add_test(NAME cli_simulate_warns_unstable_fixed_step
+             COMMAND ${CMAKE_COMMAND}
+                     "-DCOMMAND=$<TARGET_FILE:pliant>;simulate;--scenario;${scenarios}/unstable_fixed.toml;-o;${CMAKE_CURRENT_BINARY_DIR}/simulate-unstable;--level;4;-j;1"
+                     -DEXIT=0
+                     "-DSTDERR_REGEX=unstable_fixed.toml:9: 'integrator.fixed_dt' = 0.05 s is [0-9.]+ times the stable step [0-9.e-]+ s of this grid and material .* the run will likely diverge; use fixed_dt <= "
+                     -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+    set_tests_properties(cli_simulate_warns_unstable_fixed_step PROPERTIES TIMEOUT 60)
+
+    add_test(NAME cli_simulate_counts_steps_at_dt_min
+             COMMAND ${CMAKE_COMMAND}
+                     "-DCOMMAND=$<TARGET_FILE:pliant>;simulate;--scenario;${scenarios}/dt_min_too_large.toml;-o;${CMAKE_CURRENT_BINARY_DIR}/simulate-dt-min;--level;5;-j;1"
+                     -DEXIT=0
+                     "-DSTDERR_REGEX=dt_min_too_large.toml:12: 'integrator.dt_min' = 0.05 s is [0-9.]+ times the stable step .*will likely diverge.*dt_min_too_large.toml:12: 'integrator.dt_min' = 0.05 s: 10 of 10 steps were taken at dt_min with the error above the tolerance"
+                     -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+    set_tests_properties(cli_simulate_counts_steps_at_dt_min PROPERTIES TIMEOUT 60)
+
+    add_test(NAME cli_simulate_stops_when_non_finite
+             COMMAND ${CMAKE_COMMAND}
+                     "-DCOMMAND=$<TARGET_FILE:pliant>;simulate;--scenario;${scenarios}/diverges.toml;-o;${CMAKE_CURRENT_BINARY_DIR}/simulate-diverges;--level;3;-j;1"
+                     -DEXIT=3
+                     "-DSTDERR_REGEX=diverges.toml: the state became non-finite at t = [0-9.]+ s: the run diverged and stops \\(frames 0 to 0 are in "
+                     -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+    set_tests_properties(cli_simulate_stops_when_non_finite PROPERTIES TIMEOUT 60)
+
+    set(refusals
+        bad_face "bad_face.toml:7: 'force\\[0\\].face' = 999999 is not below the grid's 256 faces \\(level 3\\)"
+        too_many_frames "too_many_frames.toml:4: 'frame_rate' = 10000 with 'duration' = 1e\\+06 s makes 1e\\+10 frames. a run writes at most 1000000"
+        zero_duration "zero_duration.toml:3: 'duration' = 0 s: a scenario with forces needs a duration > 0"
+        no_radius "no_radius.toml:5: 'force\\[0\\].radius' is missing: a point force spreads")
+    list(LENGTH refusals n)
+    math(EXPR last "${n} - 1")
+    foreach(i RANGE 0 ${last} 2)
+        math(EXPR j "${i} + 1")
+        list(GET refusals ${i} name)
+        list(GET refusals ${j} regex)
+        add_test(NAME cli_simulate_refuses_${name}
+                 COMMAND ${CMAKE_COMMAND}
+                         "-DCOMMAND=$<TARGET_FILE:pliant>;simulate;--scenario;${scenarios}/${name}.toml;-o;${CMAKE_CURRENT_BINARY_DIR}/simulate-${name};--level;3"
+                         "-DREGEX=${regex}"
+                         -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_failure.cmake)
+        set_tests_properties(cli_simulate_refuses_${name} PROPERTIES TIMEOUT 60)
+    endforeach()
+
+    add_test(NAME cli_simulate_clamps_default_dt_initial
+             COMMAND pliant simulate --scenario ${scenarios}/default_dt_initial.toml
+                     -o ${CMAKE_CURRENT_BINARY_DIR}/simulate-dt-initial --level 3 -j 1)
+    set_tests_properties(cli_simulate_clamps_default_dt_initial PROPERTIES
+        TIMEOUT 60
+        PASS_REGULAR_EXPRESSION "3 frames, 0.020 s simulated"
+        FAIL_REGULAR_EXPRESSION "warning|error")
+
+    add_test(NAME cli_simulate_warns_ignored_keys
+             COMMAND ${CMAKE_COMMAND}
+                     "-DCOMMAND=$<TARGET_FILE:pliant>;simulate;--scenario;${scenarios}/ignored_keys.toml;-o;${CMAKE_CURRENT_BINARY_DIR}/simulate-ignored;--level;3"
+                     -DEXIT=0
+                     "-DSTDERR_REGEX=ignored_keys.toml:7: 'integrator.fixed_dt' has no effect without 'fixed_step = true'.*ignored_keys.toml:12: 'force\\[0\\].radius' has no effect on a face force"
+                     -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+    set_tests_properties(cli_simulate_warns_ignored_keys PROPERTIES TIMEOUT 60)
+
+    # -j 0 overrides the scenario's threads = 1 with OpenMP's default (here OMP_NUM_THREADS).
+    add_test(NAME cli_simulate_threads_zero_is_openmp_default
+             COMMAND ${CMAKE_COMMAND}
+                     "-DCOMMAND=$<TARGET_FILE:pliant>;simulate;--scenario;${scenarios}/ignored_keys.toml;-o;${CMAKE_CURRENT_BINARY_DIR}/simulate-j0;--level;3;-j;0"
+                     -DEXIT=0
+                     "-DSTDOUT_REGEX=, 3 thread\\(s\\) -> "
+                     -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+    set_tests_properties(cli_simulate_threads_zero_is_openmp_default PROPERTIES
+        TIMEOUT 60
+        ENVIRONMENT "OMP_NUM_THREADS=3")
+
+    add_test(NAME cli_simulate_help_lists_integrator_keys
+             COMMAND ${CMAKE_COMMAND}
+                     "-DCOMMAND=$<TARGET_FILE:pliant>;simulate;--help"
+                     -DEXIT=0
+                     "-DSTDOUT_REGEX=rtol, atol, dt_min, dt_max, dt_initial \\[s\\], safety, max_growth,.*min_shrink.*fixed_dt"
+                     -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+    set_tests_properties(cli_simulate_help_lists_integrator_keys PROPERTIES TIMEOUT 60)
+
+    # The help's second example on a remeshed spot (level 4 here): every point force reaches
+    # vertices of the surface, so nothing is warned about.
+    set(spot_grid ${CMAKE_CURRENT_BINARY_DIR}/simulate-spot.pgrid)
+    add_test(NAME cli_simulate_spot_remesh
+             COMMAND pliant remesh ${PROJECT_SOURCE_DIR}/data/spot.obj --level 4 -o ${spot_grid})
+    set_tests_properties(cli_simulate_spot_remesh PROPERTIES
+        TIMEOUT 300
+        FIXTURES_SETUP simulate_spot)
+    add_test(NAME cli_simulate_spot_example
+             COMMAND pliant simulate ${spot_grid} --scenario ${PROJECT_SOURCE_DIR}/scenes/spot.toml
+                     -o ${CMAKE_CURRENT_BINARY_DIR}/simulate-spot --format ply -j 1)
+    set_tests_properties(cli_simulate_spot_example PROPERTIES
+        TIMEOUT 120
+        FIXTURES_REQUIRED simulate_spot
+        PASS_REGULAR_EXPRESSION " frames, "
+        FAIL_REGULAR_EXPRESSION "warning|error")
 endif()

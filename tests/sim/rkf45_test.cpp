@@ -194,6 +194,32 @@ TEST(Rkf45, RejectsAndShrinksAnOversizedStep)
     EXPECT_EQ(s.time, r.dt);
 }
 
+// AdvanceReport::at_min_steps counts the accepted steps flagged MinStepReached (pliant simulate
+// reports them): every one with dt_min = dt_max and a tolerance no step of that size meets, none
+// with a free step size.
+TEST(Rkf45, AdvanceCountsTheStepsAtDtMin)
+{
+    MembraneSettings set = ode_settings();
+    set.rtol = 1e-10;
+    set.atol = 1e-12;
+    set.dt_min = set.dt_initial = set.dt_max = 0.02;
+    MembraneModel m = test::sphere_model(3, set);
+    MembraneState s = initial_state(m);
+    Rkf45Workspace ws(m, 1);
+    const AdvanceReport r = advance_to(m, s, ws, 0.1, {});
+    EXPECT_TRUE(has_flag(r.status, StepStatus::MinStepReached));
+    EXPECT_EQ(r.steps, 5U);
+    EXPECT_EQ(r.at_min_steps, 5U);
+
+    set = ode_settings();
+    MembraneModel free = test::sphere_model(3, set);
+    MembraneState s2 = initial_state(free);
+    Rkf45Workspace ws2(free, 1);
+    const AdvanceReport r2 = advance_to(free, s2, ws2, 0.1, {});
+    EXPECT_GT(r2.steps, 0U);
+    EXPECT_EQ(r2.at_min_steps, 0U);
+}
+
 TEST(Rkf45, NonFiniteTrialKeepsTheLastGoodState)
 {
     pliant::test::FpTrapsOff traps_off;

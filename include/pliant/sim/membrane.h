@@ -151,8 +151,11 @@ public:
     void sync(core::Field<double>& f) const noexcept;
 
     /// Re-assembles K and M from the deformed surface P + u N (u with ghosts synced); P and N
-    /// stay the rest geometry. \return DegenerateFace (the model is left unchanged) when a
-    /// deformed triangle has zero area or a non-finite position.
+    /// stay the rest geometry. The weights and masses are those `create` gives for rest
+    /// positions P + u N, bit for bit. The first call allocates spare planes (the deformed
+    /// positions and a second set of weights and masses, swapped in on success); later calls
+    /// allocate nothing. \return DegenerateFace (the model is left unchanged) when a deformed
+    /// triangle has zero area or a non-finite position.
     core::Result<void> reassemble(const core::Field<double>& u);
     /// The tick of the last re-assembly (0 after `create`).
     [[nodiscard]] std::uint64_t assembled_tick() const noexcept { return assembled_tick_; }
@@ -170,6 +173,10 @@ private:
     core::Vec3Field<double> P_;
     core::Vec3Field<double> N_;
     core::Field<double> wx_, wy_, wd_, mass_, inv_mass_;
+    // Scratch of `reassemble` (empty until its first call): the deformed positions (ghost ring
+    // 2) and the planes the next assembly writes before they are swapped with the ones above.
+    core::Vec3Field<double> deformed_;
+    core::Field<double> spare_wx_, spare_wy_, spare_wd_, spare_mass_, spare_inv_mass_;
     std::vector<core::LeafId> leaves_;
     std::vector<core::Region> regions_;
     std::vector<core::Vec3> bounds_;

@@ -115,6 +115,8 @@ struct AdvanceReport
     StepStatus status = StepStatus::Ok;  ///< union of the steps' flags
     std::uint64_t steps = 0;
     std::uint64_t rejections = 0;
+    std::uint64_t at_min_steps = 0;  ///< accepted steps flagged MinStepReached (at dt_min
+                                     ///< with the error above tolerance)
     bool reached = false;  ///< time == target (adaptive) or no full fixed step fits any more
 };
 

@@ -1,0 +1,157 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+// Re-assembly (`reassemble_every = R`, docs/physics.md §2): every R steps K and M are those of a
+// model created from the deformed surface, bit for bit; R = 0 keeps the rest-state ones; and a
+// re-assembly after the first allocates nothing (counted by the replaced operator new of
+// tests/support/allocation_counter.cpp, in the executable of no_allocation_test.cpp).
+
+#include <pliant/core/tetra_grid.h>
+#include <pliant/sim/membrane.h>
+#include <pliant/sim/rkf45.h>
+
+#include <gtest/gtest.h>
+
+#include "grid_shapes.h"
+#include "support/allocation_counter.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <vector>
+
+namespace pliant::sim
+{
+namespace
+{
+
+MembraneSettings settings(int reassemble_every)
+{
+    MembraneSettings s;
+    s.beta = 0.5;
+    s.k_f = 1.0;
+    s.fixed_step = true;
+    s.fixed_dt = 0.01;
+    s.reassemble_every = reassemble_every;
+    s.threads = 1;
+    return s;
+}
+
+MembraneModel sphere(int level, const MembraneSettings& s)
+{
+    const core::TetraGrid grid = core::TetraGrid::create(level).value();
+    return MembraneModel::create(grid, scenes::sphere_grid(grid, 1.0), s).value();
+}
+
+// A strong pull on the north pole, so the surface deforms by a good fraction of its size.
+Force pull()
+{
+    return Force{.face = -1, .point = {0.0, 0.0, 1.0}, .radius = 0.5, .vector = {0.0, 0.0, 40.0}};
+}
+
+bool same_bits(const core::Field<double>& a, const core::Field<double>& b)
+{
+    return a.padded().size() == b.padded().size() &&
+           std::memcmp(a.padded().data(), b.padded().data(), a.padded().size_bytes()) == 0;
+}
+
+bool same_assembly(const MembraneModel& a, const MembraneModel& b)
+{
+    return same_bits(a.weight_x(), b.weight_x()) && same_bits(a.weight_y(), b.weight_y()) &&
+           same_bits(a.weight_d(), b.weight_d()) && same_bits(a.mass(), b.mass()) &&
+           same_bits(a.inverse_mass(), b.inverse_mass());
+}
+
+// The model `create` gives for rest positions P + u N.
+MembraneModel created_from(const MembraneModel& m, const core::Field<double>& u)
+{
+    core::Vec3Field<double> p;
+    m.positions(u, p);
+    return MembraneModel::create(m.grid(), p, m.settings()).value();
+}
+
+TEST(MembraneReassembly, EveryRStepsGivesTheModelOfTheDeformedSurface)
+{
+    constexpr int k_r = 3;
+    MembraneModel m = sphere(4, settings(k_r));
+    const MembraneModel rest = sphere(4, settings(0));
+    MembraneState s = MembraneState::at_rest(m.grid());
+    Rkf45Workspace ws(m, 1);
+    const Force f = pull();
+    core::Field<double> u_at_last;  // u when the last re-assembly happened
+    for (int k = 0; k < 3 * k_r + 1; ++k)
+    {
+        const std::uint64_t tick = s.tick;
+        const core::Field<double> u_before = s.u;
+        const StepReport r = step(m, s, ws, {&f, 1});
+        ASSERT_EQ(r.status, StepStatus::Ok);
+        const bool due = tick > 0 && tick % k_r == 0;
+        EXPECT_EQ(r.reassembled, due) << "tick " << tick;
+        if (due)
+        {
+            u_at_last = u_before;
+            EXPECT_EQ(m.assembled_tick(), tick);
+            // K and M are, bit for bit, those of a model created from the deformed surface.
+            EXPECT_TRUE(same_assembly(m, created_from(m, u_before))) << "tick " << tick;
+        }
+    }
+    ASSERT_FALSE(u_at_last.empty());
+    // The deformation is large enough to change K and M: the test compares something.
+    EXPECT_FALSE(same_bits(m.weight_x(), rest.weight_x()));
+    EXPECT_FALSE(same_bits(m.mass(), rest.mass()));
+    EXPECT_TRUE(same_assembly(m, created_from(m, u_at_last)));
+    // P and N stay the rest geometry.
+    for (std::size_t k = 0; k < 3; ++k)
+    {
+        EXPECT_TRUE(same_bits(m.rest_positions()[k], rest.rest_positions()[k]));
+        EXPECT_TRUE(same_bits(m.normals()[k], rest.normals()[k]));
+    }
+}
+
+TEST(MembraneReassembly, NeverWhenRIsZero)
+{
+    MembraneModel m = sphere(4, settings(0));
+    const MembraneModel rest = sphere(4, settings(0));
+    MembraneState s = MembraneState::at_rest(m.grid());
+    Rkf45Workspace ws(m, 1);
+    const Force f = pull();
+    for (int k = 0; k < 10; ++k)
+    {
+        const StepReport r = step(m, s, ws, {&f, 1});
+        ASSERT_EQ(r.status, StepStatus::Ok);
+        EXPECT_FALSE(r.reassembled);
+    }
+    double largest = 0.0;
+    for (const double u : s.u.padded())
+        largest = std::max(largest, std::fabs(u));
+    EXPECT_GT(largest, 1e-3);  // it moved
+    EXPECT_TRUE(same_assembly(m, rest));
+    EXPECT_EQ(m.assembled_tick(), 0U);
+}
+
+TEST(MembraneReassembly, AllocatesNothingAfterTheFirst)
+{
+    MembraneModel m = sphere(4, settings(2));
+    MembraneState s = MembraneState::at_rest(m.grid());
+    Rkf45Workspace ws(m, 1);
+    const Force f = pull();
+    set_forces(m, ws, {&f, 1});
+    // Ticks 0..2: the first re-assembly (before the step from tick 2) allocates its planes.
+    for (int k = 0; k < 3; ++k)
+        ASSERT_EQ(step_prepared(m, s, ws).status, StepStatus::Ok);
+    ASSERT_EQ(m.assembled_tick(), 2U);
+    const std::uint64_t before = test::allocations();
+    int reassemblies = 0;
+    for (int k = 0; k < 7; ++k)
+    {
+        const StepReport r = step_prepared(m, s, ws);
+        ASSERT_EQ(r.status, StepStatus::Ok);
+        reassemblies += r.reassembled ? 1 : 0;
+    }
+    const std::uint64_t allocations = test::allocations() - before;
+    EXPECT_EQ(reassemblies, 3);  // before the steps from ticks 4, 6 and 8
+    EXPECT_EQ(allocations, 0U);
+}
+
+}  // namespace
+}  // namespace pliant::sim
