@@ -606,7 +606,8 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
             return report(g.error());
         auto positions = core::geometry_of(*g, *file);
         if (!positions)
-            return report(positions.error());
+            return report(
+                {positions.error().code, opt.grid.string() + ": " + positions.error().message});
         grid = std::move(*g);
         rest = std::move(*positions);
     }

@@ -76,7 +76,8 @@ void LoadJob::run() noexcept
             return finish(grid.error());
         auto positions = core::geometry_of(*grid, *file);
         if (!positions)
-            return finish(positions.error());
+            return finish(core::Error{positions.error().code,
+                                      path_.string() + ": " + positions.error().message});
         std::string what = name + " (level " + std::to_string(grid->level()) + " grid)";
         return finish(LoadedSurface{std::move(*grid), std::move(*positions), std::move(what)});
     }
