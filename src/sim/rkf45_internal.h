@@ -105,32 +105,66 @@ struct StageRow
     int y;
 };
 
+// The per-node formulas of a stage, written once: the stage pass (fill_row, stage_row) and the
+// row pipeline (fill_pair, pair_row, dirichlet_row) must make the same operations in the same
+// order, since tests compare their results bit for bit.
+
+// U_S = u + h c_S v + h^2 sum_m (A^2)_{S,m} kv_m at one node, from its u, v and slopes
+// kk[0..S-2] ((A^2)_{S,S-1} = 0: kv_{S-1} is not read).
+template <int S>
+[[gnu::always_inline]] inline double stage_displacement(const Coeffs& c, double u, double v,
+                                                        const double (&kk)[5]) noexcept
+{
+    double value = u + c.cu[S] * v;
+    for (int m = 0; m + 1 < S; ++m)
+        value = value + c.ck[S][m] * kk[m];
+    return value;
+}
+
+// V_S = v + h sum_{m < S} a_{S,m} kv_m at one node, from its slopes kk[0..S-1].
+template <int S>
+[[gnu::always_inline]] inline double stage_velocity(const Coeffs& c, double v,
+                                                    const double (&kk)[5]) noexcept
+{
+    double vel = v;
+    for (int m = 0; m < S; ++m)
+        vel = vel + c.cv[S][m] * kk[m];
+    return vel;
+}
+
+// The slope kv_S = -beta V_S - k_f U_S - (K U_S) / m + f at one node, from V_S, U_S, 1/m, the
+// stencil's K U_S and the force acceleration f (acc + ft_S rate, or +0.0 where there is none).
+[[gnu::always_inline]] inline double stage_slope(const StageConstants& k, double vel, double uc,
+                                                 double inv_m, double ku, double f) noexcept
+{
+    return ((-k.beta * vel - k.k_f * uc) - inv_m * ku) + f;
+}
+
 // Stage displacements U_S at x in [x0 - 1, x1] into dst[x] (dst indexed by grid x) from the
 // rows of u, v and kv_0..kv_{S-2} (row pointers indexed by grid x).
 template <int S>
 inline void fill_row(const Coeffs& c, const double* __restrict u, const double* __restrict v,
                      const double* const* kv, double* __restrict dst, int x0, int x1) noexcept
 {
-    const double cu = c.cu[S];
-    // (A^2)_{S, S-1} = 0: kv_{S-1} is not read. The rows never overlap dst (lets GCC vectorise
-    // without a runtime alias check per pointer pair, which it would give up on).
-    const double* k0 = S > 1 ? kv[0] : nullptr;
-    const double* k1 = S > 2 ? kv[1] : nullptr;
-    const double* k2 = S > 3 ? kv[2] : nullptr;
-    const double* k3 = S > 4 ? kv[3] : nullptr;
+    // The rows never overlap dst (lets GCC vectorise without a runtime alias check per pointer
+    // pair, which it would give up on).
+    const double* __restrict k0 = S > 1 ? kv[0] : nullptr;
+    const double* __restrict k1 = S > 2 ? kv[1] : nullptr;
+    const double* __restrict k2 = S > 3 ? kv[2] : nullptr;
+    const double* __restrict k3 = S > 4 ? kv[3] : nullptr;
 #pragma GCC ivdep
     for (int x = x0 - 1; x <= x1; ++x)
     {
-        double value = u[x] + cu * v[x];
+        double kk[5] = {};
         if constexpr (S > 1)
-            value = value + c.ck[S][0] * k0[x];
+            kk[0] = k0[x];
         if constexpr (S > 2)
-            value = value + c.ck[S][1] * k1[x];
+            kk[1] = k1[x];
         if constexpr (S > 3)
-            value = value + c.ck[S][2] * k2[x];
+            kk[2] = k2[x];
         if constexpr (S > 4)
-            value = value + c.ck[S][3] * k3[x];
-        dst[x] = value;
+            kk[3] = k3[x];
+        dst[x] = stage_displacement<S>(c, u[x], v[x], kk);
     }
 }
 
@@ -206,29 +240,28 @@ inline double stage_row(const StageConstants& k, const Coeffs& c, const StageRow
 #pragma GCC ivdep
     for (int x = x0; x < x1; ++x)
     {
-        double vel = v[x];
+        double kk[5] = {};
         if constexpr (S > 0)
-            vel = vel + c.cv[S][0] * k0[x];
+            kk[0] = k0[x];
         if constexpr (S > 1)
-            vel = vel + c.cv[S][1] * k1[x];
+            kk[1] = k1[x];
         if constexpr (S > 2)
-            vel = vel + c.cv[S][2] * k2[x];
+            kk[2] = k2[x];
         if constexpr (S > 3)
-            vel = vel + c.cv[S][3] * k3[x];
+            kk[3] = k3[x];
         if constexpr (S > 4)
-            vel = vel + c.cv[S][4] * k4[x];
+            kk[4] = k4[x];
+        const double vel = stage_velocity<S>(c, v[x], kk);
         const double uc = bc[x];
         const double ku = stencil(uc, bc[x + 1], bc[x - 1], bn[x], bp[x], bn[x + 1], bp[x - 1],
                                   wx[x], wx[x - 1], wy[x], wyb[x], wd[x], wdb[x - 1]);
-        const double a =
-            ((-k.beta * vel - k.k_f * uc) - inv_m[x] * ku) + (acc[x] + c.ft[S] * rate[x]);
+        const double a = stage_slope(k, vel, uc, inv_m[x], ku, acc[x] + c.ft[S] * rate[x]);
         if constexpr (S < 5)
         {
             out[x] = a;
         }
         else
         {
-            const double kk[5] = {k0[x], k1[x], k2[x], k3[x], k4[x]};
             update_node(k, c, u[x], v[x], kk, a, x < x_canon, u_out[x], v_out[x], err_bits, bad);
         }
     }

@@ -175,8 +175,6 @@ void fill_pair(const Inputs& in, const Coeffs& c, const BandBuffers& b, int yy,
     const double* __restrict k3 = B > 4 ? b.kv_row(3, yy) : nullptr;
     double* __restrict da = b.U_row(A, yy);
     double* __restrict db = b.U_row(B, yy);
-    const double cua = c.cu[A];
-    const double cub = c.cu[B];
     for (; segs != end; ++segs)
     {
         const int x1 = segs->x1;
@@ -193,22 +191,19 @@ void fill_pair(const Inputs& in, const Coeffs& c, const BandBuffers& b, int yy,
 #pragma GCC ivdep
         for (int x = segs->x0; x < x1; ++x)
         {
-            double ua = u[x] + cua * v[x];
-            if constexpr (A > 1)
-                ua = ua + c.ck[A][0] * k0[x];
-            if constexpr (A > 2)
-                ua = ua + c.ck[A][1] * k1[x];
-            if constexpr (A > 3)
-                ua = ua + c.ck[A][2] * k2[x];
-            double ub = u[x] + cub * v[x];
-            if constexpr (B > 1)
-                ub = ub + c.ck[B][0] * k0[x];
+            double kk[5] = {};
             if constexpr (B > 2)
-                ub = ub + c.ck[B][1] * k1[x];
-            if constexpr (B > 3)
-                ub = ub + c.ck[B][2] * k2[x];
+            {
+                kk[0] = k0[x];
+                kk[1] = k1[x];
+            }
             if constexpr (B > 4)
-                ub = ub + c.ck[B][3] * k3[x];
+            {
+                kk[2] = k2[x];
+                kk[3] = k3[x];
+            }
+            const double ua = stage_displacement<A>(c, u[x], v[x], kk);
+            const double ub = stage_displacement<B>(c, u[x], v[x], kk);
             da[x] = ua;
             db[x] = ub;
         }
@@ -276,9 +271,7 @@ double pair_row(const Inputs& in, const Coeffs& c, const StageConstants& k, cons
                 kk[2] = k2[x];
             if constexpr (A > 3)
                 kk[3] = k3[x];
-            double vel = v[x];
-            for (int m = 0; m < A; ++m)
-                vel = vel + c.cv[A][m] * kk[m];
+            const double vel = stage_velocity<A>(c, v[x], kk);
             const double uc = ac[x];
             const double ku = stencil(uc, ac[x + 1], ac[x - 1], an[x], ap[x], an[x + 1], ap[x - 1],
                                       wx[x], wx[x - 1], wy[x], wyb[x], wd[x], wdb[x - 1]);
@@ -289,16 +282,14 @@ double pair_row(const Inputs& in, const Coeffs& c, const StageConstants& k, cons
                 fa = acc[x] + c.ft[A] * rate[x];
                 fb = acc[x] + c.ft[B] * rate[x];
             }
-            const double sa = ((-k.beta * vel - k.k_f * uc) - inv_m[x] * ku) + fa;
+            const double sa = stage_slope(k, vel, uc, inv_m[x], ku, fa);
             kk[A] = sa;
-            double vel_b = v[x];
-            for (int m = 0; m < B; ++m)
-                vel_b = vel_b + c.cv[B][m] * kk[m];
+            const double vel_b = stage_velocity<B>(c, v[x], kk);
             const double ucb = bc[x];
             const double kub =
                 stencil(ucb, bc[x + 1], bc[x - 1], bn[x], bp[x], bn[x + 1], bp[x - 1], wx[x],
                         wx[x - 1], wy[x], wyb[x], wd[x], wdb[x - 1]);
-            const double sb = ((-k.beta * vel_b - k.k_f * ucb) - inv_m[x] * kub) + fb;
+            const double sb = stage_slope(k, vel_b, ucb, inv_m[x], kub, fb);
             if constexpr (P < 4)
             {
                 out_a[x] = sa;
@@ -345,14 +336,11 @@ double dirichlet_row(const Inputs& in, const Coeffs& c, const StageConstants& k,
     for (int x = x0; x < x1; ++x)
     {
         const double kk[5] = {0.0, 0.0, 0.0, 0.0, 0.0};
-        double vel = 0.0;
-        for (int m = 0; m < 5; ++m)
-            vel = vel + c.cv[5][m] * kk[m];
+        const double vel = stage_velocity<5>(c, 0.0, kk);
         const double uc = bc[x];
         const double ku = stencil(uc, bc[x + 1], bc[x - 1], bn[x], bp[x], bn[x + 1], bp[x - 1],
                                   wx[x], wx[x - 1], wy[x], wyb[x], wd[x], wdb[x - 1]);
-        const double a =
-            ((-k.beta * vel - k.k_f * uc) - inv_m[x] * ku) + (acc[x] + c.ft[5] * rate[x]);
+        const double a = stage_slope(k, vel, uc, inv_m[x], ku, acc[x] + c.ft[5] * rate[x]);
         update_node(k, c, u[x], 0.0, kk, a, x < x_canon, u_out[x], v_out[x], err_bits, bad);
     }
     if (bad != 0)
