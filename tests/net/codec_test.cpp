@@ -651,8 +651,8 @@ TEST(Codec, FuzzSeedCorpusSpeaksThisProtocolVersion)
         const std::vector<char> bytes((std::istreambuf_iterator<char>(in)),
                                       std::istreambuf_iterator<char>());
         ASSERT_GT(bytes.size(), 1U) << name;
-        const auto decoded = decode(std::span(reinterpret_cast<const std::byte*>(bytes.data()) + 1,
-                                              bytes.size() - 1));
+        const auto decoded = decode(
+            std::span(reinterpret_cast<const std::byte*>(bytes.data()) + 1, bytes.size() - 1));
         if (!decoded)
         {
             EXPECT_NE(decoded.error(), DecodeError::BadVersion) << name;
