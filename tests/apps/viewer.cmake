@@ -109,11 +109,12 @@ if(TARGET pliant AND PLIANT_HAVE_VIEWER AND PLIANT_XVFB)
                              ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0")
     endforeach()
 endif()
-# The viewer's window-free parts (picking, input scripts) as unit tests.
+# The viewer's window-free parts (picking, input scripts, the grab's spring) as unit tests.
 if(TARGET pliant_render AND TARGET pliant_test_support)
     pliant_add_test(viewer_picking_test
-        SOURCES viewer_picking_test.cpp
+        SOURCES viewer_picking_test.cpp viewer_grab_test.cpp
                 ${PROJECT_SOURCE_DIR}/apps/pliant-cli/viewer/picking.cpp
                 ${PROJECT_SOURCE_DIR}/apps/pliant-cli/viewer/input_script.cpp
-        LIBS pliant::render pliant::core)
+                ${PROJECT_SOURCE_DIR}/apps/pliant-cli/viewer/sim_scene.cpp
+        LIBS pliant::render pliant::sim pliant::subdiv pliant::core)
 endif()

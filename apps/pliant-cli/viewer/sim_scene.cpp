@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 namespace pliant::viewer
@@ -164,6 +165,14 @@ double default_grab_stiffness(const sim::MembraneSettings& material, double radi
     // order one here). A spring as stiff as the patch holds it halfway to the mouse.
     return material.rho * std::numbers::pi * radius * radius * material.k_f +
            2.0 * std::numbers::pi * material.T;
+}
+
+double grab_hold_limit(const sim::MembraneSettings& material, const Grab& grab)
+{
+    const double mass = material.rho * std::numbers::pi * grab.radius * grab.radius;
+    if (!(grab.stiffness > 0.0) || !(mass > 0.0))
+        return std::numeric_limits<double>::infinity();
+    return 0.5 / std::sqrt(grab.stiffness / mass);
 }
 
 }  // namespace pliant::viewer

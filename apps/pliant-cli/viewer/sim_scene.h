@@ -137,4 +137,12 @@ struct Grab
 /// the foundation and the tension of `material` (N/m).
 [[nodiscard]] double default_grab_stiffness(const sim::MembraneSettings& material, double radius);
 
+/// The longest simulated interval over which a grab's spring force may be held unchanged [s]. The
+/// force is evaluated once per frame from the shown surface and held for the frame's interval;
+/// the grabbed patch (mass rho pi r^2) on the spring oscillates at omega = sqrt(k / (rho pi r^2)),
+/// and held much longer than 1/omega the spring overshoots further every frame: at 3.8 fps with
+/// the 0.1 s cap the surface reached |u| = 12 km. Frames slower than this run the simulation in
+/// slow motion instead (docs/viewer.md, Real time).
+[[nodiscard]] double grab_hold_limit(const sim::MembraneSettings& material, const Grab& grab);
+
 }  // namespace pliant::viewer

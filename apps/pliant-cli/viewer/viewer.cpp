@@ -22,12 +22,32 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 #include <thread>
 
 namespace pliant::viewer
 {
 namespace
 {
+
+/// Keeps large blocks in the heap between frames. By default glibc serves blocks above its
+/// mmap threshold with fresh mappings and returns freed memory to the system, so the large
+/// per-frame buffers of Mesa's software rasteriser (llvmpipe bins a 262K-triangle frame into
+/// tens of MB) were mapped, faulted in page by page and unmapped every frame: 7.1 fps at display
+/// level 8 against 22.8 with these limits raised (docs/viewer.md, Real time).
+void keep_large_allocations()
+{
+#if defined(__GLIBC__)
+    (void)mallopt(M_MMAP_THRESHOLD, 32 << 20);  // glibc's largest allowed value
+    (void)mallopt(M_TRIM_THRESHOLD, 1 << 30);
+#endif
+}
+
+/// The most simulated time one frame advances [s]: a slower machine falls behind real time
+/// rather than freezing (docs/viewer.md, Real time).
+constexpr double k_max_frame_interval = 0.1;
 
 /// The few GL calls the viewer makes itself (render::GridRenderer makes the rest through the
 /// render module's table, loaded by render::load_gl from the same glfwGetProcAddress).
@@ -515,7 +535,12 @@ void Viewer::simulate(double wall_dt)
     }
     if (local_ && !paused_)
     {
-        local_->advance(wall_dt, forces);
+        // A grab's spring is held over the frame: slow frames get a shorter simulated interval
+        // (slow motion) rather than an unstable hold (grab_hold_limit).
+        const double interval =
+            grab_ ? std::min(k_max_frame_interval, grab_hold_limit(material_, *grab_))
+                  : k_max_frame_interval;
+        local_->advance(wall_dt, forces, interval);
         step_ms_.push(static_cast<float>(local_->last_step_seconds() * 1e3));
     }
 }
@@ -773,6 +798,7 @@ int Viewer::run()
         }
         script_.emplace(std::move(*events));
     }
+    keep_large_allocations();
     glfwSetErrorCallback(on_glfw_error);
     if (glfwInit() != GLFW_TRUE)
     {
