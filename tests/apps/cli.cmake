@@ -6,17 +6,6 @@
 if(TARGET pliant)
     set(cli_dir ${CMAKE_CURRENT_BINARY_DIR}/cli-refine)
     file(MAKE_DIRECTORY ${cli_dir})
-    # pliant_cli_expect(NAME EXIT STDOUT|STDERR REGEX ARGS...)
-    function(pliant_cli_expect name exit stream regex)
-        list(JOIN ARGN ";" args)
-        add_test(NAME ${name}
-                 COMMAND ${CMAKE_COMMAND} "-DCOMMAND=$<TARGET_FILE:pliant>;${args}"
-                         -DEXIT=${exit} "-D${stream}_REGEX=${regex}"
-                         -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
-        set_tests_properties(${name} PROPERTIES TIMEOUT 120
-                                                ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0")
-    endfunction()
-
     # A level-3 grid of the bundled cow, shared by the refine tests.
     pliant_cli_expect(cli_refine_setup 0 STDOUT "level 3: 130 vertices"
                       remesh ${PROJECT_SOURCE_DIR}/data/spot.obj --level 3

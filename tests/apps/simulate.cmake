@@ -58,29 +58,17 @@ if(TARGET pliant)
         PASS_REGULAR_EXPRESSION "6 frames, 0.498 s simulated.* 166 steps"
         FAIL_REGULAR_EXPRESSION "warning|error")
 
-    add_test(NAME cli_simulate_warns_unstable_fixed_step
-             COMMAND ${CMAKE_COMMAND}
-                     "-DCOMMAND=$<TARGET_FILE:pliant>;simulate;--scenario;${scenarios}/unstable_fixed.toml;-o;${CMAKE_CURRENT_BINARY_DIR}/simulate-unstable;--level;4;-j;1"
-                     -DEXIT=0
-                     "-DSTDERR_REGEX=unstable_fixed.toml:9: 'integrator.fixed_dt' = 0.05 s is [0-9.]+ times the stable step [0-9.e-]+ s of this grid and material .* the run will likely diverge; use fixed_dt <= "
-                     -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
-    set_tests_properties(cli_simulate_warns_unstable_fixed_step PROPERTIES TIMEOUT 60)
+    pliant_cli_expect(cli_simulate_warns_unstable_fixed_step 0 STDERR
+                      "unstable_fixed.toml:9: 'integrator.fixed_dt' = 0.05 s is [0-9.]+ times the stable step [0-9.e-]+ s of this grid and material .* the run will likely diverge; use fixed_dt <= "
+                      simulate --scenario ${scenarios}/unstable_fixed.toml -o ${CMAKE_CURRENT_BINARY_DIR}/simulate-unstable --level 4 -j 1)
 
-    add_test(NAME cli_simulate_counts_steps_at_dt_min
-             COMMAND ${CMAKE_COMMAND}
-                     "-DCOMMAND=$<TARGET_FILE:pliant>;simulate;--scenario;${scenarios}/dt_min_too_large.toml;-o;${CMAKE_CURRENT_BINARY_DIR}/simulate-dt-min;--level;5;-j;1"
-                     -DEXIT=0
-                     "-DSTDERR_REGEX=dt_min_too_large.toml:12: 'integrator.dt_min' = 0.05 s is [0-9.]+ times the stable step .*will likely diverge.*dt_min_too_large.toml:12: 'integrator.dt_min' = 0.05 s: 10 of 10 steps were taken at dt_min with the error above the tolerance"
-                     -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
-    set_tests_properties(cli_simulate_counts_steps_at_dt_min PROPERTIES TIMEOUT 60)
+    pliant_cli_expect(cli_simulate_counts_steps_at_dt_min 0 STDERR
+                      "dt_min_too_large.toml:12: 'integrator.dt_min' = 0.05 s is [0-9.]+ times the stable step .*will likely diverge.*dt_min_too_large.toml:12: 'integrator.dt_min' = 0.05 s: 10 of 10 steps were taken at dt_min with the error above the tolerance"
+                      simulate --scenario ${scenarios}/dt_min_too_large.toml -o ${CMAKE_CURRENT_BINARY_DIR}/simulate-dt-min --level 5 -j 1)
 
-    add_test(NAME cli_simulate_stops_when_non_finite
-             COMMAND ${CMAKE_COMMAND}
-                     "-DCOMMAND=$<TARGET_FILE:pliant>;simulate;--scenario;${scenarios}/diverges.toml;-o;${CMAKE_CURRENT_BINARY_DIR}/simulate-diverges;--level;3;-j;1"
-                     -DEXIT=3
-                     "-DSTDERR_REGEX=diverges.toml: the state became non-finite at t = [0-9.]+ s: the run diverged and stops \\(frames 0 to 0 are in "
-                     -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
-    set_tests_properties(cli_simulate_stops_when_non_finite PROPERTIES TIMEOUT 60)
+    pliant_cli_expect(cli_simulate_stops_when_non_finite 3 STDERR
+                      "diverges.toml: the state became non-finite at t = [0-9.]+ s: the run diverged and stops \\(frames 0 to 0 are in "
+                      simulate --scenario ${scenarios}/diverges.toml -o ${CMAKE_CURRENT_BINARY_DIR}/simulate-diverges --level 3 -j 1)
 
     set(refusals
         bad_face "bad_face.toml:7: 'force\\[0\\].face' = 999999 is not below the grid's 256 faces \\(level 3\\)"
@@ -109,32 +97,19 @@ if(TARGET pliant)
         PASS_REGULAR_EXPRESSION "3 frames, 0.020 s simulated"
         FAIL_REGULAR_EXPRESSION "warning|error")
 
-    add_test(NAME cli_simulate_warns_ignored_keys
-             COMMAND ${CMAKE_COMMAND}
-                     "-DCOMMAND=$<TARGET_FILE:pliant>;simulate;--scenario;${scenarios}/ignored_keys.toml;-o;${CMAKE_CURRENT_BINARY_DIR}/simulate-ignored;--level;3"
-                     -DEXIT=0
-                     "-DSTDERR_REGEX=ignored_keys.toml:7: 'integrator.fixed_dt' has no effect without 'fixed_step = true'.*ignored_keys.toml:12: 'force\\[0\\].radius' has no effect on a face force"
-                     -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
-    set_tests_properties(cli_simulate_warns_ignored_keys PROPERTIES TIMEOUT 60)
+    pliant_cli_expect(cli_simulate_warns_ignored_keys 0 STDERR
+                      "ignored_keys.toml:7: 'integrator.fixed_dt' has no effect without 'fixed_step = true'.*ignored_keys.toml:12: 'force\\[0\\].radius' has no effect on a face force"
+                      simulate --scenario ${scenarios}/ignored_keys.toml -o ${CMAKE_CURRENT_BINARY_DIR}/simulate-ignored --level 3)
 
     # -j 0 overrides the scenario's threads = 1 with OpenMP's default (here OMP_NUM_THREADS).
-    add_test(NAME cli_simulate_threads_zero_is_openmp_default
-             COMMAND ${CMAKE_COMMAND}
-                     "-DCOMMAND=$<TARGET_FILE:pliant>;simulate;--scenario;${scenarios}/ignored_keys.toml;-o;${CMAKE_CURRENT_BINARY_DIR}/simulate-j0;--level;3;-j;0"
-                     -DEXIT=0
-                     "-DSTDOUT_REGEX=, 3 thread\\(s\\) -> "
-                     -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
-    set_tests_properties(cli_simulate_threads_zero_is_openmp_default PROPERTIES
-        TIMEOUT 60
-        ENVIRONMENT "OMP_NUM_THREADS=3")
+    pliant_cli_expect(cli_simulate_threads_zero_is_openmp_default 0 STDOUT
+                      ", 3 thread\\(s\\) -> "
+                      simulate --scenario ${scenarios}/ignored_keys.toml -o ${CMAKE_CURRENT_BINARY_DIR}/simulate-j0 --level 3 -j 0)
+    set_tests_properties(cli_simulate_threads_zero_is_openmp_default PROPERTIES ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0;OMP_NUM_THREADS=3")
 
-    add_test(NAME cli_simulate_help_lists_integrator_keys
-             COMMAND ${CMAKE_COMMAND}
-                     "-DCOMMAND=$<TARGET_FILE:pliant>;simulate;--help"
-                     -DEXIT=0
-                     "-DSTDOUT_REGEX=rtol, atol, dt_min, dt_max, dt_initial \\[s\\], safety, max_growth,.*min_shrink.*fixed_dt"
-                     -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
-    set_tests_properties(cli_simulate_help_lists_integrator_keys PROPERTIES TIMEOUT 60)
+    pliant_cli_expect(cli_simulate_help_lists_integrator_keys 0 STDOUT
+                      "rtol, atol, dt_min, dt_max, dt_initial \\[s\\], safety, max_growth,.*min_shrink.*fixed_dt"
+                      simulate --help)
 
     # The help's second example on a remeshed spot (level 4 here): every point force reaches
     # vertices of the surface, so nothing is warned about.

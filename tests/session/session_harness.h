@@ -197,6 +197,24 @@ struct Harness
     }
 };
 
+/// Pumps `h` until its first `members` peers have the model and the master's partition gives
+/// each of them a share (bounded by `max_iterations`); \return whether that happened.
+inline bool pump_until_partitioned(Harness& h, std::size_t members, int max_iterations = 4000)
+{
+    return h.pump_until(
+        [&]
+        {
+            for (std::size_t k = 1; k < members; ++k)
+                if (!h.peers[k]->ready())
+                    return false;
+            auto owners = h.peers[0]->owners();
+            std::sort(owners.begin(), owners.end());
+            return static_cast<std::size_t>(std::unique(owners.begin(), owners.end()) -
+                                            owners.begin()) == members;
+        },
+        max_iterations);
+}
+
 /// Whether two doubles have the same bits.
 inline bool same_bits(double a, double b)
 {

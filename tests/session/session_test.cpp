@@ -90,18 +90,7 @@ void run_exact(int participants, bool late_viewer, bool one_leaves, int level = 
     apply_schedule(h, sched);
     const std::size_t members = static_cast<std::size_t>(participants) + 1;
     // Everyone joins and is partitioned long before the first force.
-    ASSERT_TRUE(h.pump_until(
-        [&]
-        {
-            for (std::size_t k = 1; k < members; ++k)
-                if (!h.peers[k]->ready())
-                    return false;
-            auto owners = h.peers[0]->owners();
-            std::sort(owners.begin(), owners.end());
-            return static_cast<std::size_t>(std::unique(owners.begin(), owners.end()) -
-                                            owners.begin()) == members;
-        },
-        4000));
+    ASSERT_TRUE(pump_until_partitioned(h, members));
     EXPECT_LT(h.peers[0]->tick(), 100U);
     if (one_leaves)
     {
@@ -232,15 +221,7 @@ TEST(SessionFast, RandomPointsStayFiniteAndNearOneProcess)
         SCOPED_TRACE("layout " + std::to_string(k) + ": " + std::to_string(participants) +
                      " participants from face " + std::to_string(first) + " every " +
                      std::to_string(step));
-        ASSERT_TRUE(h.pump_until(
-            [&]
-            {
-                auto owners = h.peers[0]->owners();
-                std::sort(owners.begin(), owners.end());
-                return static_cast<std::size_t>(std::unique(owners.begin(), owners.end()) -
-                                                owners.begin()) == members;
-            },
-            8000));
+        ASSERT_TRUE(pump_until_partitioned(h, members, 8000));
         const std::uint64_t start = h.peers[0]->tick();
         EXPECT_LT(start, 100U);
         const auto sched = schedule(std::min(participants, 2));

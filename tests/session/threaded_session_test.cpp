@@ -44,18 +44,7 @@ void run_exact_threads(int participants)
         h.peers[s.sender]->set_forces(s.forces, s.from);
     const std::size_t members = h.peers.size();
     // Everyone joins and is partitioned first, on this thread (the lockstep waits for them).
-    ASSERT_TRUE(h.pump_until(
-        [&]
-        {
-            for (std::size_t k = 1; k < members; ++k)
-                if (!h.peers[k]->ready())
-                    return false;
-            auto owners = h.peers[0]->owners();
-            std::sort(owners.begin(), owners.end());
-            return static_cast<std::size_t>(std::unique(owners.begin(), owners.end()) -
-                                            owners.begin()) == members;
-        },
-        4000));
+    ASSERT_TRUE(pump_until_partitioned(h, members));
     ASSERT_LT(h.peers[0]->tick(), 100U);
 
     // Then one thread per peer; this thread moves the virtual clock and the network.
