@@ -53,7 +53,10 @@ void Viewer::draw_panels()
     if (options_.hide_panels)
         return;
     ImGui::SetNextWindowPos(ImVec2(8.0F, 8.0F), ImGuiCond_FirstUseEver);
-    ImGui::SetNextWindowSize(ImVec2(340.0F, 0.0F), ImGuiCond_FirstUseEver);
+    // The window's height at its first use: an auto-fitted height (0) was measured once, before
+    // the Session panel opened, and cut it off below; the full height scrolls instead.
+    const float height = std::max(200.0F, ImGui::GetIO().DisplaySize.y - 16.0F);
+    ImGui::SetNextWindowSize(ImVec2(340.0F, height), ImGuiCond_FirstUseEver);
     if (!ImGui::Begin("pliant view"))
     {
         ImGui::End();
