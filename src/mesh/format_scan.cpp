@@ -19,6 +19,9 @@ namespace
 using core::ErrorCode;
 using core::fail;
 
+/// The most vertices a face may have in Assimp 5.2's OFF reader; it skips larger ones.
+constexpr std::size_t k_off_reader_max_corners = 9;
+
 std::string plural(std::size_t n, const char* word)
 {
     if (std::string_view(word) == "vertex")
@@ -84,6 +87,34 @@ std::optional<std::size_t> parse_count(std::string_view s)
     return v;
 }
 
+/// A coordinate as the text readers take it: a decimal or exponent number, "nan" or "inf"
+/// (refused later with their face), an optional leading sign.
+bool is_number(std::string_view s)
+{
+    if (!s.empty() && s.front() == '+')
+        s.remove_prefix(1);
+    double v = 0.0;
+    const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+    return !s.empty() && ptr == s.data() + s.size() &&
+           (ec == std::errc{} || ec == std::errc::result_out_of_range);
+}
+
+std::optional<long long> parse_integer(std::string_view s)
+{
+    if (!s.empty() && s.front() == '+')
+        s.remove_prefix(1);
+    long long v = 0;
+    const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+    if (s.empty() || ec != std::errc{} || ptr != s.data() + s.size())
+        return std::nullopt;
+    return v;
+}
+
+std::string quoted(std::string_view s)
+{
+    return "'" + std::string(s.substr(0, 40)) + (s.size() > 40 ? "...'" : "'");
+}
+
 /// A text format must not contain control bytes other than white space: the usual sign of a
 /// binary or random file handed to a text reader.
 core::Result<void> check_text(std::string_view bytes, const std::string& name, const char* what)
@@ -117,37 +148,87 @@ core::Result<ScanResult> scan_obj(std::string_view bytes, const std::string& nam
         return text.error();
     ScanResult r{.format = Format::Obj};
     std::size_t lines = 0;
-    // Which `v` records faces use (1-based, negative = relative), for the report only; indices
-    // that do not parse or are out of range are Assimp's to reject.
+    // Which `v` records faces use (1-based, negative = relative), for the report.
     std::vector<bool> used;
-    for_each_line(bytes,
-                  [&](std::string_view line)
-                  {
-                      ++lines;
-                      line = trim(line);
-                      if (line.size() < 2 || (line[1] != ' ' && line[1] != '\t'))
-                          return true;
-                      if (line[0] == 'v')
-                      {
-                          ++r.vertices;
-                          used.push_back(false);
-                      }
-                      else if (line[0] == 'f')
-                      {
-                          ++r.faces;
-                          const std::vector<std::string_view> t = tokens(line.substr(1));
-                          for (std::string_view corner : t)
-                          {
-                              long index = 0;
-                              std::from_chars(corner.data(), corner.data() + corner.size(), index);
-                              const long n = static_cast<long>(used.size());
-                              const long k = index < 0 ? n + index : index - 1;
-                              if (k >= 0 && k < n)
-                                  used[static_cast<std::size_t>(k)] = true;
-                          }
-                      }
-                      return true;
-                  });
+    // Assimp's OBJ reader says "vertex index out of range" for a bad index and for a bad
+    // coordinate alike, without a line; so both are checked here, each with its line. A positive
+    // index may refer to a `v` record further down (readers resolve them at the end), so the
+    // largest one is checked once every record is counted.
+    std::optional<core::Error> error;
+    std::size_t max_index = 0;
+    std::size_t max_index_line = 0;
+    const auto refuse = [&](ErrorCode code, std::string what)
+    {
+        error = core::Error{code, name + ":" + std::to_string(lines) + ": " + std::move(what)};
+        return false;
+    };
+    for_each_line(
+        bytes,
+        [&](std::string_view line)
+        {
+            ++lines;
+            line = trim(line);
+            if (line.size() < 2 || (line[1] != ' ' && line[1] != '\t'))
+                return true;
+            if (line[0] == 'v')
+            {
+                ++r.vertices;
+                used.push_back(false);
+                const std::vector<std::string_view> t = tokens(line.substr(1));
+                if (t.size() < 3)
+                    return refuse(ErrorCode::ParseError,
+                                  "vertex record " + std::to_string(r.vertices) + " has " +
+                                      plural(t.size(), "coordinate") + ", expected x y z");
+                for (std::size_t k = 0; k < 3; ++k)
+                    if (!is_number(t[k]))
+                        return refuse(ErrorCode::ParseError,
+                                      "vertex record " + std::to_string(r.vertices) +
+                                          ": coordinate " + quoted(t[k]) + " is not a number");
+            }
+            else if (line[0] == 'f')
+            {
+                ++r.faces;
+                const std::vector<std::string_view> t = tokens(line.substr(1));
+                if (t.size() < 3)
+                    return refuse(ErrorCode::BadIndex, "face " + std::to_string(r.faces - 1) +
+                                                           " has " + plural(t.size(), "corner") +
+                                                           ", a face needs at least 3");
+                const long long n = static_cast<long long>(used.size());
+                for (std::string_view corner : t)
+                {
+                    const std::string_view v = corner.substr(0, corner.find('/'));
+                    const auto index = parse_integer(v);
+                    if (!index || *index == 0)
+                        return refuse(ErrorCode::BadIndex,
+                                      "face " + std::to_string(r.faces - 1) + ": corner " +
+                                          quoted(corner) +
+                                          " is not a vertex index (1-based, or negative to "
+                                          "count back from the last vertex)");
+                    if (*index < 0 && -*index > n)
+                        return refuse(ErrorCode::BadIndex,
+                                      "face " + std::to_string(r.faces - 1) + ": relative index " +
+                                          std::to_string(*index) +
+                                          " reaches before the first vertex (" +
+                                          plural(used.size(), "vertex") + " so far)");
+                    if (*index > 0 && static_cast<unsigned long long>(*index) > max_index)
+                    {
+                        max_index = static_cast<std::size_t>(*index);
+                        max_index_line = lines;
+                    }
+                    const long long k = *index < 0 ? n + *index : *index - 1;
+                    if (k < n)
+                        used[static_cast<std::size_t>(k)] = true;
+                }
+            }
+            return true;
+        });
+    if (error)
+        return *error;
+    if (max_index > r.vertices)
+        return fail(ErrorCode::BadIndex, name + ":" + std::to_string(max_index_line) +
+                                             ": face refers to vertex " +
+                                             std::to_string(max_index) + " but the file has " +
+                                             plural(r.vertices, "vertex"));
     r.unreferenced = static_cast<std::size_t>(std::count(used.begin(), used.end(), false));
     r.faces_known = true;
     if (r.faces == 0)
@@ -161,31 +242,38 @@ core::Result<ScanResult> scan_off(std::string_view bytes, const std::string& nam
 {
     if (auto text = check_text(bytes, name, "OFF"); !text)
         return text.error();
-    // Content lines: comments (# to end of line) and blank lines removed.
-    std::vector<std::string_view> content;
+    // Content lines with their line numbers: comments (# to end of line) and blank lines removed.
+    struct Line
+    {
+        std::size_t number;
+        std::string_view text;
+    };
+    std::vector<Line> content;
+    std::size_t number = 0;
     for_each_line(bytes,
                   [&](std::string_view line)
                   {
+                      ++number;
                       const std::size_t hash = line.find('#');
                       if (hash != std::string_view::npos)
                           line = line.substr(0, hash);
                       line = trim(line);
                       if (!line.empty())
-                          content.push_back(line);
+                          content.push_back({number, line});
                       return true;
                   });
     if (content.empty())
         return fail(ErrorCode::EmptyInput, name + ": empty OFF file (no content lines)");
-    std::vector<std::string_view> head = tokens(content[0]);
+    std::vector<std::string_view> head = tokens(content[0].text);
     const std::string_view key = head.empty() ? std::string_view{} : head[0];
     if (key.size() < 3 || key.substr(key.size() - 3) != "OFF")
         return fail(ErrorCode::ParseError, name + ": not an OFF file: first line is '" +
-                                               std::string(content[0].substr(0, 40)) +
+                                               std::string(content[0].text.substr(0, 40)) +
                                                "', expected 'OFF'");
     std::size_t next = 1;
     head.erase(head.begin());
     if (head.empty() && content.size() > 1)
-        head = tokens(content[next++]);
+        head = tokens(content[next++].text);
     if (head.size() < 2)
         return fail(ErrorCode::ParseError,
                     name + ": bad OFF header: expected 'vertices faces edges' counts");
@@ -206,6 +294,80 @@ core::Result<ScanResult> scan_off(std::string_view bytes, const std::string& nam
                                                plural(*v, "vertex") + " and " + plural(*f, "face") +
                                                " but only " + plural(data_lines, "data line") +
                                                " follow");
+    // Every record is read here: Assimp's OFF reader replaces an out-of-range index with the last
+    // vertex, reads a missing or non-numeric index as 0 and skips faces of more than 9 vertices,
+    // all silently.
+    const auto at = [&](const Line& line)
+    { return name + ":" + std::to_string(line.number) + ": "; };
+    for (std::size_t i = 0; i < *v; ++i)
+    {
+        const Line& line = content[next + i];
+        const std::vector<std::string_view> t = tokens(line.text);
+        if (t.size() < 3)
+            return fail(ErrorCode::ParseError, at(line) + "vertex " + std::to_string(i) + " has " +
+                                                   plural(t.size(), "coordinate") +
+                                                   ", expected x y z");
+        for (std::size_t k = 0; k < 3; ++k)
+            if (!is_number(t[k]))
+                return fail(ErrorCode::ParseError, at(line) + "vertex " + std::to_string(i) +
+                                                       ": coordinate " + quoted(t[k]) +
+                                                       " is not a number");
+    }
+    bool large = false;
+    for (std::size_t i = 0; i < *f; ++i)
+    {
+        const Line& line = content[next + *v + i];
+        const std::vector<std::string_view> t = tokens(line.text);
+        const auto count = parse_integer(t[0]);
+        if (!count || *count < 3)
+            return fail(ErrorCode::BadIndex, at(line) + "face " + std::to_string(i) +
+                                                 ": vertex count " + quoted(t[0]) +
+                                                 " is not an integer of at least 3");
+        const auto n = static_cast<std::size_t>(*count);
+        if (t.size() - 1 < n)
+            return fail(ErrorCode::BadIndex, at(line) + "face " + std::to_string(i) + " declares " +
+                                                 plural(n, "vertex") + " but lists " +
+                                                 std::to_string(t.size() - 1));
+        for (std::size_t k = 1; k <= n; ++k)
+        {
+            const auto index = parse_integer(t[k]);
+            if (!index || *index < 0 || static_cast<unsigned long long>(*index) >= *v)
+                return fail(ErrorCode::BadIndex, at(line) + "face " + std::to_string(i) +
+                                                     ": index " + quoted(t[k]) +
+                                                     " is not a vertex (0-based, the file has " +
+                                                     plural(*v, "vertex") + ")");
+        }
+        large = large || n > k_off_reader_max_corners;
+    }
+    if (!large)
+        return r;
+    // Faces of more than 9 vertices: fan-split into triangles (0, i, i+1), as the import does with
+    // every polygon, in a copy of the file that Assimp reads instead.
+    std::string faces;
+    std::size_t face_count = 0;
+    for (std::size_t i = 0; i < *f; ++i)
+    {
+        const std::vector<std::string_view> t = tokens(content[next + *v + i].text);
+        const auto n = static_cast<std::size_t>(*parse_integer(t[0]));
+        if (n <= k_off_reader_max_corners)
+        {
+            faces.append(content[next + *v + i].text).push_back('\n');
+            ++face_count;
+            continue;
+        }
+        for (std::size_t k = 2; k < n; ++k, ++face_count)
+            faces.append("3 ")
+                .append(t[1])
+                .append(" ")
+                .append(t[k])
+                .append(" ")
+                .append(t[k + 1])
+                .push_back('\n');
+    }
+    r.rewritten = "OFF\n" + std::to_string(*v) + " " + std::to_string(face_count) + " 0\n";
+    for (std::size_t i = 0; i < *v; ++i)
+        r.rewritten.append(content[next + i].text).push_back('\n');
+    r.rewritten += faces;
     return r;
 }
 
@@ -477,25 +639,61 @@ core::Result<ScanResult> scan_stl(std::string_view bytes, const std::string& nam
     if (start.substr(0, 5) == "solid" && check_text(bytes, name, "STL"))
     {
         ScanResult r{.format = Format::StlAscii};
-        std::size_t closed = 0;
-        for_each_line(bytes,
-                      [&](std::string_view line)
-                      {
-                          const std::vector<std::string_view> t = tokens(trim(line));
-                          if (!t.empty() && t[0] == "facet")
-                              ++r.faces;
-                          if (!t.empty() && t[0] == "endfacet")
-                              ++closed;
-                          return true;
-                      });
+        // Every facet closed with exactly three vertices, and the solid closed: a file cut at a
+        // facet boundary otherwise reads as a smaller, open mesh.
+        std::optional<core::Error> error;
+        std::size_t line_number = 0;
+        std::size_t corners = 0;
+        bool in_facet = false;
+        bool ended = false;
+        for_each_line(
+            bytes,
+            [&](std::string_view line)
+            {
+                ++line_number;
+                const std::vector<std::string_view> t = tokens(trim(line));
+                const auto refuse = [&](const std::string& what)
+                {
+                    error = core::Error{ErrorCode::ParseError,
+                                        name + ":" + std::to_string(line_number) +
+                                            ": malformed ASCII STL: " + what};
+                    return false;
+                };
+                if (t.empty())
+                    return true;
+                if (t[0] == "facet")
+                {
+                    if (in_facet)
+                        return refuse("'facet' inside facet " + std::to_string(r.faces - 1));
+                    in_facet = true;
+                    corners = 0;
+                    ++r.faces;
+                }
+                else if (t[0] == "vertex")
+                    ++corners;
+                else if (t[0] == "endfacet")
+                {
+                    if (!in_facet || corners != 3)
+                        return refuse("facet " + std::to_string(r.faces - 1) + " has " +
+                                      plural(corners, "vertex") + ", expected 3");
+                    in_facet = false;
+                }
+                else if (t[0] == "endsolid")
+                    ended = true;
+                return true;
+            });
+        if (error)
+            return *error;
         r.vertices = 3 * r.faces;
         r.faces_known = true;
         if (r.faces == 0)
             return fail(ErrorCode::EmptyInput, name + ": no faces: no 'facet' in the ASCII STL");
-        if (closed != r.faces)
-            return fail(ErrorCode::ParseError,
-                        name + ": truncated ASCII STL file: " + plural(r.faces, "facet") +
-                            " opened, " + std::to_string(closed) + " closed");
+        if (in_facet || !ended)
+            return fail(
+                ErrorCode::ParseError,
+                name + ": truncated ASCII STL file: " +
+                    (in_facet ? "facet " + std::to_string(r.faces - 1) + " is not closed"
+                              : std::string("no 'endsolid' after ") + plural(r.faces, "facet")));
         return r;
     }
     if (size < 84)

@@ -6,11 +6,14 @@
 //
 // Assimp 5.2 is lenient where pliant must be strict: on a truncated binary STL or PLY, or an OFF
 // file shorter than its header's counts, some of its readers return the part they could read (or
-// reserve memory for the declared counts first). These scanners read only headers and record
-// boundaries, never the numbers, so they stay small and obviously bounded by the file size: every
-// loop advances through the buffer or stops. They also count the file's vertex and face records
-// for the ImportReport (Assimp's OBJ and STL readers expand vertices per face corner, so its
-// counts do not show the file's).
+// reserve memory for the declared counts first); its OFF reader replaces a bad index with the
+// last vertex or with 0 and skips faces of more than 9 vertices, and its OBJ reader reports a bad
+// index or a bad coordinate without a line. So the scanners check record boundaries in binary
+// files, and in the text formats OBJ and OFF every vertex record's coordinates (numbers) and every
+// face's indices (integers in range), with the line number in each message. Every loop advances
+// through the buffer or stops, so they are bounded by the file size. They also count the file's
+// vertex and face records for the ImportReport (Assimp's OBJ and STL readers expand vertices per
+// face corner, so its counts do not show the file's).
 
 #include <pliant/core/result.h>
 
@@ -45,6 +48,9 @@ struct ScanResult
     bool faces_known = false;  ///< `faces` is the file's exact face record count
     /// OBJ only: `v` records no `f` line refers to (Assimp's OBJ reader drops them silently).
     std::size_t unreferenced = 0;
+    /// OFF only, when a face has more than 9 vertices (Assimp's reader skips those): the file
+    /// with such faces fan-split into triangles, for Assimp to read instead. Empty otherwise.
+    std::string rewritten{};
 };
 
 /// Checks `bytes` (the whole file) against the structure of the format its lower-case extension

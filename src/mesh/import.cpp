@@ -80,6 +80,10 @@ core::Result<std::string> read_bytes(const std::filesystem::path& path, const st
         return fail(ErrorCode::IoError, name + ": cannot open: no such file");
     if (std::filesystem::is_directory(status))
         return fail(ErrorCode::IoError, name + ": cannot open: it is a directory");
+    // A device, FIFO or socket has no end to read to (/dev/zero) or blocks (a FIFO).
+    if (!std::filesystem::is_regular_file(status))
+        return fail(ErrorCode::IoError,
+                    name + ": cannot open: not a regular file (a device, FIFO or socket)");
     std::ifstream in(path, std::ios::binary);
     if (!in)
         return fail(ErrorCode::IoError, name + ": cannot open for reading");
@@ -270,7 +274,10 @@ core::Result<TriMesh> import_mesh(const std::filesystem::path& path, ImportRepor
     const aiScene* scene = nullptr;
     try
     {
-        scene = importer.ReadFile(name, aiProcess_ValidateDataStructure);
+        scene = scan->rewritten.empty()
+                    ? importer.ReadFile(name, aiProcess_ValidateDataStructure)
+                    : importer.ReadFileFromMemory(scan->rewritten.data(), scan->rewritten.size(),
+                                                  aiProcess_ValidateDataStructure, "off");
     }
     catch (const std::exception& e)
     {

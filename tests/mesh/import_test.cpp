@@ -8,11 +8,13 @@
 #include <pliant/mesh/validate.h>
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include "mesh/mesh_files.h"
 #include "shapes.h"
 #include "support/test_paths.h"
 
+#include <cmath>
 #include <cstdint>
 #include <random>
 #include <string>
@@ -186,6 +188,52 @@ TEST_F(Formats, EveryFormatImportsToTheSameMesh)
     EXPECT_TRUE(validate(*obj, "octahedron"));
 }
 
+// Assimp's OFF reader skips faces of more than 9 vertices; the import splits them first. A prism
+// with two 12-gon caps reads as the same mesh from OFF and from OBJ (whose reader keeps them).
+TEST_F(Formats, OffFacesOfMoreThanNineVerticesAreKept)
+{
+    constexpr int n = 12;
+    std::string off = "OFF\n" + std::to_string(2 * n) + " " + std::to_string(n + 2) + " 0\n";
+    std::string obj;
+    for (int z = 0; z < 2; ++z)
+        for (int i = 0; i < n; ++i)
+        {
+            // Coordinates exact in float, so both readers give the same numbers.
+            const std::string v = std::to_string(std::lround(8 * std::cos(2 * M_PI * i / n))) +
+                                  " " +
+                                  std::to_string(std::lround(8 * std::sin(2 * M_PI * i / n))) +
+                                  " " + std::to_string(z);
+            off += v + "\n";
+            obj += "v " + v + "\n";
+        }
+    std::string bottom = std::to_string(n);
+    std::string top = std::to_string(n);
+    std::string bottom_obj = "f";
+    std::string top_obj = "f";
+    for (int i = 0; i < n; ++i)
+    {
+        bottom += " " + std::to_string(n - 1 - i);
+        bottom_obj += " " + std::to_string(n - i);
+        top += " " + std::to_string(n + i);
+        top_obj += " " + std::to_string(n + i + 1);
+    }
+    off += bottom + "\n" + top + "\n";
+    obj += bottom_obj + "\n" + top_obj + "\n";
+    for (int i = 0; i < n; ++i)
+    {
+        const int j = (i + 1) % n;
+        off += "4 " + std::to_string(i) + " " + std::to_string(j) + " " + std::to_string(n + j) +
+               " " + std::to_string(n + i) + "\n";
+        obj += "f " + std::to_string(i + 1) + " " + std::to_string(j + 1) + " " +
+               std::to_string(n + j + 1) + " " + std::to_string(n + i + 1) + "\n";
+    }
+    ImportReport r;
+    const TriMesh from_off = load("prism.off", off, &r);
+    EXPECT_EQ(from_off.face_count(), std::size_t{4 * n - 4});  // 2 (n - 2) + 2 n
+    EXPECT_TRUE(validate(from_off, "prism.off"));
+    expect_same(from_off, load("prism.obj", obj, &r));
+}
+
 TEST_F(Formats, StlCornersAreWeldedBackToSixVertices)
 {
     ImportReport r;
@@ -299,8 +347,99 @@ TEST_F(BadFiles, GarbageBytesAreParseErrors)
               ErrorCode::ParseError);
     EXPECT_EQ(error_of("h.ply", "ply\nformat ascii 1.0\nelement vertex x\nend_header\n").code,
               ErrorCode::ParseError);
-    EXPECT_EQ(error_of("idx.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n").code,
-              ErrorCode::ParseError);
+}
+
+// A bad index or coordinate is refused with the file's line, whatever Assimp's reader would do
+// with it (its OFF reader replaces a bad index with the last vertex or with 0, silently).
+TEST_F(BadFiles, BadIndicesAndCoordinatesNameTheirLine)
+{
+    const std::string v3 = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+    const struct
+    {
+        const char* name;
+        std::string bytes;
+        ErrorCode code;
+        const char* says;
+    } cases[] = {
+        {"idx.obj", v3 + "f 1 2 9\n", ErrorCode::BadIndex, ":4: face refers to vertex 9"},
+        {"zero.obj", v3 + "f 2 3 0\n", ErrorCode::BadIndex, ":4: face 0: corner '0'"},
+        {"rel.obj", v3 + "f 1 2 -4\n", ErrorCode::BadIndex, ":4: face 0: relative index -4"},
+        {"two.obj", v3 + "f 1 2\n", ErrorCode::BadIndex, ":4: face 0 has 2 corners"},
+        {"word.obj", v3 + "f 1 2 x/1\n", ErrorCode::BadIndex, "corner 'x/1'"},
+        {"coord.obj", "v 1 abc 0\n" + v3 + "f 2 3 4\n", ErrorCode::ParseError,
+         ":1: vertex record 1: coordinate 'abc'"},
+        {"short.obj", v3 + "v 1 0\nf 1 2 3\n", ErrorCode::ParseError,
+         ":4: vertex record 4 has 2 coordinates"},
+    };
+    for (const auto& c : cases)
+    {
+        const core::Error e = error_of(c.name, c.bytes);
+        EXPECT_EQ(e.code, c.code) << c.name << ": " << e.message;
+        EXPECT_NE(e.message.find(c.says), std::string::npos) << e.message;
+    }
+    // The OFF tetrahedron with its last face line changed; the face lines start at line 7.
+    const std::string head = "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n";
+    const struct
+    {
+        const char* face;
+        const char* says;
+    } off_cases[] = {
+        {"3 1 2 77", ":10: face 3: index '77' is not a vertex"},
+        {"3 1 2 -1", ":10: face 3: index '-1'"},
+        {"3 1 2 x", ":10: face 3: index 'x'"},
+        {"3 1 2", ":10: face 3 declares 3 vertices but lists 2"},
+        {"9 1 2 3", ":10: face 3 declares 9 vertices but lists 3"},
+        {"2 1 2", ":10: face 3: vertex count '2'"},
+    };
+    for (const auto& c : off_cases)
+    {
+        const core::Error e = error_of("bad.off", head + c.face + "\n");
+        EXPECT_EQ(e.code, ErrorCode::BadIndex) << c.face << ": " << e.message;
+        EXPECT_NE(e.message.find(c.says), std::string::npos) << e.message;
+    }
+    test::write_bytes(dir_ / "good.off", head + "3 1 2 3\n");
+    EXPECT_TRUE(import_mesh(dir_ / "good.off"));
+    const core::Error coord = error_of("coord.off",
+                                       "OFF\n4 4 0\n0 0 0\n1 0 0\n0 y 0\n0 0 1\n3 0 2 1\n3 0 1 3\n"
+                                       "3 0 3 2\n3 1 2 3\n");
+    EXPECT_EQ(coord.code, ErrorCode::ParseError);
+    EXPECT_NE(coord.message.find(":5: vertex 2: coordinate 'y'"), std::string::npos)
+        << coord.message;
+}
+
+TEST_F(BadFiles, AsciiStlMustCloseEveryFacetAndTheSolid)
+{
+    const std::string full = test::to_stl_ascii(scenes::tetrahedron());
+    // Cut at a facet boundary: the facets read are whole, but the solid is not closed.
+    const std::size_t second = full.find("facet", full.find("endfacet") + 8);
+    const core::Error cut = error_of("cut.stl", full.substr(0, second));
+    EXPECT_EQ(cut.code, ErrorCode::ParseError);
+    EXPECT_NE(cut.message.find("no 'endsolid' after 1 facet"), std::string::npos) << cut.message;
+    // A facet with two vertices.
+    std::string two = full;
+    const std::size_t vertex = two.find("vertex");
+    two.erase(vertex, two.find('\n', vertex) + 1 - vertex);
+    const core::Error e = error_of("two.stl", two);
+    EXPECT_EQ(e.code, ErrorCode::ParseError);
+    EXPECT_NE(e.message.find("facet 0 has 2 vertices"), std::string::npos) << e.message;
+}
+
+TEST_F(BadFiles, DevicesAndFifosAreRefusedNotRead)
+{
+    const auto zero = dir_ / "zero.obj";
+    std::filesystem::remove(zero);
+    std::filesystem::create_symlink("/dev/zero", zero);
+    auto mesh = import_mesh(zero);
+    ASSERT_FALSE(mesh);
+    EXPECT_EQ(mesh.error().code, ErrorCode::IoError);
+    EXPECT_NE(mesh.error().message.find("not a regular file"), std::string::npos)
+        << mesh.error().message;
+    const auto fifo = dir_ / "fifo.obj";
+    std::filesystem::remove(fifo);
+    ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+    auto from_fifo = import_mesh(fifo);  // would block in a read
+    ASSERT_FALSE(from_fifo);
+    EXPECT_EQ(from_fifo.error().code, ErrorCode::IoError);
 }
 
 TEST_F(BadFiles, TruncatedBinaryStlIsParseError)
