@@ -163,8 +163,22 @@ int run_host(const HostOptions& opt)
     if (!summary)
         return report(summary.error());
     if (!opt.record.empty())
-        if (auto ok = save_master_recording(**s, opt.record); !ok)
-            return report(ok.error());
+    {
+        auto recorded = save_master_recording(**s, opt.record);
+        if (!recorded)
+            return report(recorded.error());
+        if (recorded->covered == 0)
+            spdlog::warn(
+                "host: {}: the master owned no node at the end, so the recording "
+                "holds no final hash; `pliant replay` replays it without a check",
+                opt.record);
+        else
+            std::printf(
+                "host: recorded %s: final hash of tick %llu over the master's %zu of "
+                "%zu nodes\n",
+                opt.record.c_str(), static_cast<unsigned long long>(summary->final_tick),
+                recorded->covered, recorded->total);
+    }
     if (!opt.save.empty())
         if (auto ok = save_peer_state(**s, opt.save); !ok)
             return report(ok.error());

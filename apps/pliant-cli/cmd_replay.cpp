@@ -57,13 +57,21 @@ int run_replay(const ReplayOptions& opt, const GlobalOptions& global)
     if (!result)
         return report(result.error());
     const core::TetraGrid& grid = result->model.grid();
-    const std::uint64_t hash = session::state_hash(grid, result->state.u, result->state.v);
+    const std::uint64_t hash =
+        session::state_hash(grid, result->state.u, result->state.v, recording->hash_mask);
+    const std::size_t covered = session::hash_mask_count(grid, recording->hash_mask);
     std::printf(
         "replayed %llu ticks (%.3f s at a fixed step of %.4g s), level %d, %zu force "
         "lists\n",
         static_cast<unsigned long long>(result->state.tick), result->state.time,
         result->model.settings().fixed_dt, grid.level(), recording->forces.size());
-    std::printf("final state hash %016llx\n", static_cast<unsigned long long>(hash));
+    if (covered == grid.unique_count())
+        std::printf("final state hash %016llx\n", static_cast<unsigned long long>(hash));
+    else
+        std::printf(
+            "final state hash %016llx over the %zu of %zu nodes the recording's hash "
+            "covers (the master's own)\n",
+            static_cast<unsigned long long>(hash), covered, grid.unique_count());
     int rc = 0;
     if (opt.until != 0 && opt.until != recording->final_tick)
         std::printf("stopped before the recording's end: no recorded hash to compare\n");

@@ -7,6 +7,7 @@
 
 #include <string>
 #include <utility>
+#include <vector>
 
 namespace pliant::cli
 {
@@ -40,16 +41,42 @@ core::Result<void> save_peer_state(const session::Session& peer, const std::file
     return core::save_grid(path, file);
 }
 
-core::Result<void> save_master_recording(const session::Session& master,
-                                         const std::filesystem::path& path)
+core::Result<RecordedHash> save_master_recording(const session::Session& master,
+                                                 const std::filesystem::path& path)
 {
     if (master.model() == nullptr)
         return core::fail(core::ErrorCode::InvalidArgument,
                           "cannot save '" + path.string() + "': the session has no model");
+    const core::TetraGrid& grid = master.model()->grid();
     session::Recording recording = master.recording();
+    // The master's own nodes are the session's state at its final tick; the others' are what
+    // their owners last streamed, which may be older (a participant without --ticks stops when
+    // the master leaves, some ticks later or earlier). So the hash covers the master's nodes.
+    // In exact coupling every node's state reaches them through the halos, one ring per stage,
+    // so a difference anywhere shows in them within a few ticks.
+    const auto owners = master.state_owners();
+    const auto nodes = grid.node_of_unique();
+    RecordedHash out{.covered = 0, .total = nodes.size()};
+    std::vector<std::uint8_t> mask((nodes.size() + 7) / 8, 0);
+    for (std::size_t k = 0; k < nodes.size(); ++k)
+    {
+        const std::uint32_t leaf = master.leaf_graph()->leaf_of(nodes[k]);
+        if (leaf < owners.size() && owners[leaf] == master.id())
+        {
+            mask[k / 8] = static_cast<std::uint8_t>(mask[k / 8] | (1U << (k % 8)));
+            ++out.covered;
+        }
+    }
+    if (out.covered == nodes.size())
+        mask.clear();
+    recording.hash_mask = std::move(mask);
     recording.final_hash =
-        session::state_hash(master.model()->grid(), master.display_u(), master.display_v());
-    return session::save_recording(path, recording);
+        out.covered == 0
+            ? 0
+            : session::state_hash(grid, master.state().u, master.state().v, recording.hash_mask);
+    if (auto saved = session::save_recording(path, recording); !saved)
+        return saved.error();
+    return out;
 }
 
 }  // namespace pliant::cli

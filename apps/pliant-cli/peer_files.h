@@ -7,6 +7,7 @@
 #include <pliant/core/result.h>
 #include <pliant/session/session.h>
 
+#include <cstddef>
 #include <filesystem>
 
 namespace pliant::cli
@@ -19,11 +20,20 @@ namespace pliant::cli
 /// errors.
 core::Result<void> save_peer_state(const session::Session& peer, const std::filesystem::path& path);
 
-/// Writes the master's recording with the hash of the state it shows as the final state: `pliant
-/// replay FILE` then says whether one process reproduces the session bit for bit.
+/// What the recording's final hash covers: the master's own canonical nodes, of `total`.
+struct RecordedHash
+{
+    std::size_t covered = 0;
+    std::size_t total = 0;
+};
+
+/// Writes the master's recording with the hash of its own nodes' state at its final tick (the
+/// others' last streamed states may be of other ticks): `pliant replay FILE` then says whether
+/// one process reproduces the session bit for bit on those nodes (docs/session.md §9).
 /// \pre `master` recorded from the start (Session::start_recording succeeded).
-/// \return save_recording's errors.
-core::Result<void> save_master_recording(const session::Session& master,
-                                         const std::filesystem::path& path);
+/// \return what the hash covers (0 nodes: no hash, the master owned none); InvalidArgument
+/// before the model; save_recording's errors.
+core::Result<RecordedHash> save_master_recording(const session::Session& master,
+                                                 const std::filesystem::path& path);
 
 }  // namespace pliant::cli

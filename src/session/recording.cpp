@@ -18,7 +18,9 @@ namespace
 {
 
 constexpr std::array<char, 8> k_magic{'P', 'L', 'I', 'A', 'N', 'T', 'R', '\0'};
-constexpr std::uint32_t k_version = 1;
+/// Version 2 added the hash mask after the final hash; version 1 files (no mask: the hash
+/// covers every node) still load.
+constexpr std::uint32_t k_version = 2;
 /// Force's layout has not changed since protocol version 1 (docs/protocol.md, the versions'
 /// history), so a recording made by an earlier build, whose force entries carry its protocol
 /// version, is read as if they carried this build's.
@@ -82,6 +84,9 @@ core::Result<void> save_recording(const std::filesystem::path& path, const Recor
     put(out, k_version, 4);
     put(out, recording.final_tick, 8);
     put(out, recording.final_hash, 8);
+    put(out, recording.hash_mask.size(), 4);
+    for (const std::uint8_t b : recording.hash_mask)
+        out.push_back(static_cast<std::byte>(b));
     put(out, recording.model.size(), 4);
     out.insert(out.end(), recording.model.begin(), recording.model.end());
     put(out, recording.forces.size(), 4);
@@ -124,13 +129,20 @@ core::Result<Recording> load_recording(const std::filesystem::path& path)
     if (tail.get(8) != core::hash_bytes(bytes.first(body)))
         return bad_file(path, body, "checksum mismatch (truncated or corrupted)");
     Reader r{bytes.first(body), k_magic.size()};
-    if (const auto v = r.get(4); v != k_version)
-        return bad_file(
-            path, 8,
-            "version " + std::to_string(v) + ", this build reads " + std::to_string(k_version));
+    const auto version = r.get(4);
+    if (version != 1 && version != k_version)
+        return bad_file(path, 8,
+                        "version " + std::to_string(version) + ", this build reads 1 to " +
+                            std::to_string(k_version));
     Recording rec;
     rec.final_tick = r.get(8);
     rec.final_hash = r.get(8);
+    if (version >= 2)
+    {
+        const auto mask_size = r.get(4);
+        for (const std::byte b : r.take(mask_size))
+            rec.hash_mask.push_back(std::to_integer<std::uint8_t>(b));
+    }
     const auto model_size = r.get(4);
     const auto model = r.take(model_size);
     rec.model.assign(model.begin(), model.end());
@@ -232,18 +244,39 @@ core::Result<ReplayResult> replay(const Recording& recording, int threads, std::
     return ReplayResult{std::move(model), coupling, std::move(state)};
 }
 
+namespace
+{
+
+bool in_mask(std::span<const std::uint8_t> mask, std::size_t k)
+{
+    return mask.empty() || (k / 8 < mask.size() && ((mask[k / 8] >> (k % 8)) & 1U) != 0);
+}
+
+}  // namespace
+
 std::uint64_t state_hash(const core::TetraGrid& grid, const core::Field<double>& u,
-                         const core::Field<double>& v)
+                         const core::Field<double>& v, std::span<const std::uint8_t> mask)
 {
     std::vector<double> values;
     values.reserve(2 * grid.unique_count());
-    for (const core::NodeIndex n : grid.node_of_unique())
+    const auto nodes = grid.node_of_unique();
+    for (std::size_t k = 0; k < nodes.size(); ++k)
     {
-        const core::GridCoord c = grid.coord(n);
+        if (!in_mask(mask, k))
+            continue;
+        const core::GridCoord c = grid.coord(nodes[k]);
         values.push_back(u.at(c.x, c.y));
         values.push_back(v.at(c.x, c.y));
     }
     return core::hash_span(std::span<const double>(values));
+}
+
+std::size_t hash_mask_count(const core::TetraGrid& grid, std::span<const std::uint8_t> mask)
+{
+    std::size_t n = 0;
+    for (std::size_t k = 0; k < grid.unique_count(); ++k)
+        n += in_mask(mask, k) ? 1 : 0;
+    return n;
 }
 
 }  // namespace pliant::session

@@ -3332,6 +3332,12 @@ std::vector<net::PeerId> Session::owners() const
     return p != nullptr ? p->owners : std::vector<net::PeerId>{};
 }
 
+std::vector<net::PeerId> Session::state_owners() const
+{
+    const PartitionEntry* p = impl_->stream_partition();
+    return p != nullptr ? p->owners : std::vector<net::PeerId>{};
+}
+
 std::vector<net::PeerId> Session::peers() const
 {
     std::vector<net::PeerId> out;

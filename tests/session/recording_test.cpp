@@ -162,7 +162,34 @@ TEST(Recording, FileRoundTripsExactlyAndRefusesCorruption)
     EXPECT_EQ(back->model, rec.model);
     EXPECT_EQ(back->final_tick, rec.final_tick);
     EXPECT_EQ(back->final_hash, rec.final_hash);
+    EXPECT_TRUE(back->hash_mask.empty());
     EXPECT_EQ(back->forces, rec.forces);
+
+    // A hash over part of the nodes keeps its mask; a file of version 1 (no mask: every node)
+    // still loads.
+    Recording masked = rec;
+    masked.hash_mask = {0x05, 0x00, 0x80};
+    ASSERT_TRUE(save_recording(dir / "masked.prec", masked));
+    auto masked_back = load_recording(dir / "masked.prec");
+    ASSERT_TRUE(masked_back) << masked_back.error().message;
+    EXPECT_EQ(masked_back->hash_mask, masked.hash_mask);
+    EXPECT_EQ(masked_back->forces, rec.forces);
+    {
+        std::vector<char> v1 = read_all(path);
+        v1[8] = 1;                                   // version
+        v1.erase(v1.begin() + 28, v1.begin() + 32);  // the mask size
+        const std::uint64_t h =
+            core::hash_bytes(std::as_bytes(std::span<const char>(v1.data(), v1.size() - 8)));
+        for (int k = 0; k < 8; ++k)
+            v1[v1.size() - 8 + static_cast<std::size_t>(k)] =
+                static_cast<char>((h >> (8 * k)) & 0xFF);
+        write_all(dir / "v1.prec", v1);
+        auto old = load_recording(dir / "v1.prec");
+        ASSERT_TRUE(old) << old.error().message;
+        EXPECT_EQ(old->final_hash, rec.final_hash);
+        EXPECT_TRUE(old->hash_mask.empty());
+        EXPECT_EQ(old->forces, rec.forces);
+    }
 
     const std::vector<char> good = read_all(path);
     auto expect_refused = [&](std::vector<char> bytes, const char* why)
@@ -200,12 +227,13 @@ TEST(Recording, ForceEntriesOfEarlierProtocolVersionsStillLoad)
     const auto dir = pliant::test::scratch_dir("recording_versions");
     ASSERT_TRUE(save_recording(dir / "now.prec", rec));
     std::vector<char> bytes = read_all(dir / "now.prec");
-    // The force entries: after magic (8), version (4), final tick (8), hash (8), model size (4),
-    // the model and the count (4), each a u16 size then the datagram.
+    // The force entries: after magic (8), version (4), final tick (8), hash (8), mask size (4,
+    // mask empty here), model size (4), the model and the count (4), each a u16 size then the
+    // datagram.
     const auto as_version = [&](std::uint8_t version)
     {
         std::vector<char> b = bytes;
-        std::size_t at = 8 + 4 + 8 + 8 + 4 + rec.model.size() + 4;
+        std::size_t at = 8 + 4 + 8 + 8 + 4 + 4 + rec.model.size() + 4;
         for (std::size_t i = 0; i < rec.forces.size(); ++i)
         {
             const std::size_t size =

@@ -35,6 +35,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <span>
 #include <vector>
 
 namespace pliant::session
@@ -54,7 +55,11 @@ struct Recording
 {
     std::vector<std::byte> model;  ///< encode_model's blob
     std::uint64_t final_tick = 0;
-    std::uint64_t final_hash = 0;     ///< state_hash of the session's final state; 0: unknown
+    std::uint64_t final_hash = 0;  ///< state_hash of the session's final state; 0: unknown
+    /// The canonical nodes `final_hash` covers, one bit per node in `node_of_unique()` order
+    /// (bit k of byte k / 8); empty: every node. A master of separate processes knows only its
+    /// own nodes exactly at its final tick (docs/session.md §9).
+    std::vector<std::uint8_t> hash_mask;
     std::vector<ForceRecord> forces;  ///< in the order the recorder saw them
 };
 
@@ -86,8 +91,14 @@ struct ReplayResult
 core::Result<ReplayResult> replay(const Recording& recording, int threads = 1,
                                   std::uint64_t until = 0, core::ProgressSink* progress = nullptr);
 
-/// A hash of u and v over the canonical nodes (bit-exact identity of a state).
+/// A hash of u and v over the canonical nodes (bit-exact identity of a state); with a
+/// non-empty `mask` (Recording::hash_mask's layout), over the nodes whose bit is set.
 [[nodiscard]] std::uint64_t state_hash(const core::TetraGrid& grid, const core::Field<double>& u,
-                                       const core::Field<double>& v);
+                                       const core::Field<double>& v,
+                                       std::span<const std::uint8_t> mask = {});
+
+/// How many canonical nodes `mask` covers (every node when empty).
+[[nodiscard]] std::size_t hash_mask_count(const core::TetraGrid& grid,
+                                          std::span<const std::uint8_t> mask);
 
 }  // namespace pliant::session

@@ -319,6 +319,10 @@ public:
     [[nodiscard]] std::uint32_t epoch() const noexcept;
     /// Owner of every leaf under the newest partition (empty: none).
     [[nodiscard]] std::vector<net::PeerId> owners() const;
+    /// Owner of every leaf under the partition state() was stepped with: in exact coupling,
+    /// the leaves this peer owns there hold the session's state at tick() bit for bit (empty:
+    /// none yet, or a joiner before its first halos). Fast coupling: the newest partition.
+    [[nodiscard]] std::vector<net::PeerId> state_owners() const;
     [[nodiscard]] const LeafGraph* leaf_graph() const noexcept { return graph_.get(); }
     [[nodiscard]] const sim::MembraneModel* model() const noexcept { return model_.get(); }
     /// The integrated state (valid on the nodes this peer owns).
