@@ -95,6 +95,9 @@ struct DemoOptions
 struct LiveLink
 {
     std::atomic<bool> stop{false};
+    /// The viewer failed: the session's files are not written (they would describe a session
+    /// nobody watched, and replace an earlier run's).
+    std::atomic<bool> discard{false};
     std::promise<std::uint16_t> master_port;
     std::atomic<bool> announced{false};
 
@@ -364,9 +367,6 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
     if (ec)
         return report({core::ErrorCode::IoError,
                        "demo: cannot create " + opt.out.string() + ": " + ec.message()});
-    for (const auto& entry : fs::directory_iterator(opt.out, ec))
-        if (entry.path().filename().string().rfind("frame_", 0) == 0)
-            fs::remove(entry.path(), ec);  // no stale frames from a longer earlier run
 
     // 1. Import, validate, remesh.
     auto mesh = mesh::import_mesh(mesh_path);
@@ -383,6 +383,14 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
     if (!remeshed)
         return report(remeshed.error());
     const core::TetraGrid& grid = remeshed->grid;
+    // The run starts: an earlier run's frames and animation go (a failed start above leaves
+    // them), so that the folder never mixes two runs.
+    for (const auto& entry : fs::directory_iterator(opt.out, ec))
+    {
+        const std::string name = entry.path().filename().string();
+        if (name.rfind("frame_", 0) == 0 || name == "demo.gif" || name == "demo.mp4")
+            fs::remove(entry.path(), ec);
+    }
     if (auto saved = core::save_grid(opt.out / "grid.pgrid",
                                      core::make_geometry_file(grid, remeshed->positions));
         !saved)
@@ -557,7 +565,7 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
             if (out_of_time())
                 return report({core::ErrorCode::NotConverged,
                                "demo: the session fell behind the wall-clock limit of " +
-                                   fmt("%.0f", opt.wall_limit) +
+                                   fmt("%g", opt.wall_limit) +
                                    " s (a heavily loaded machine? try --quick)"});
             if (viewer_ready_at < 0.0 && peers[3].session && peers[3].session->ready())
                 viewer_ready_at = now;
@@ -594,6 +602,8 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
             progress.update("session + render", static_cast<double>(frame) / frames);
     }
     const double t_run = seconds_since(t_session) - t_joined;
+    if (live && live_link->discard.load())
+        return k_exit_failure;  // the viewer said why
 
     // 5. The final state, assembled from every member's own leaves, and its replay.
     core::Field<double> final_u(grid), final_v(grid);
@@ -757,6 +767,14 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
 int run_demo_with_viewer(const DemoOptions& opt, const GlobalOptions& global)
 {
 #ifdef PLIANT_HAVE_VIEWER
+    // No display: say so before any work, and leave --out as it is.
+    if (std::string why; !viewer::display_available(&why))
+    {
+        spdlog::error("demo --view: {} (set DISPLAY, run under `xvfb-run -a`, or run the demo "
+                      "without --view to render frames offscreen)",
+                      why);
+        return k_exit_failure;
+    }
     LiveLink link;
     std::future<std::uint16_t> port = link.master_port.get_future();
     int demo_rc = 0;
@@ -782,6 +800,8 @@ int run_demo_with_viewer(const DemoOptions& opt, const GlobalOptions& global)
         v.name = "viewer";
         v.owner_colors = true;
         view_rc = viewer::run_viewer(v);
+        if (view_rc != 0)
+            link.discard = true;
     }
     link.stop = true;
     session_thread.join();

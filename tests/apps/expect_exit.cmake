@@ -5,7 +5,14 @@
 # (usage on stdout, exit 0), its argument errors (message on stderr, exit 2), and runs whose
 # output and clean exit both matter (the viewer's tests: PASS_REGULAR_EXPRESSION alone ignores
 # the exit status). TIMEOUT (s, optional) stops COMMAND itself, so a hung program fails here
-# rather than being left behind when ctest stops this script.
+# rather than being left behind when ctest stops this script. KEEP (a ;-list of paths,
+# optional): files written before COMMAND runs that must be there, unchanged, after it (an
+# earlier run's outputs that a refused run must not touch).
+foreach(f IN LISTS KEEP)
+    get_filename_component(d "${f}" DIRECTORY)
+    file(MAKE_DIRECTORY "${d}")
+    file(WRITE "${f}" "an earlier run's file\n")
+endforeach()
 set(timeout_args)
 if(DEFINED TIMEOUT)
     set(timeout_args TIMEOUT ${TIMEOUT})
@@ -21,4 +28,13 @@ endif()
 if(DEFINED STDERR_REGEX AND NOT "${err}" MATCHES "${STDERR_REGEX}")
     message(FATAL_ERROR "stderr does not match '${STDERR_REGEX}':\n${err}\nstdout:\n${out}")
 endif()
+foreach(f IN LISTS KEEP)
+    if(NOT EXISTS "${f}")
+        message(FATAL_ERROR "${f} was removed:\n${out}${err}")
+    endif()
+    file(READ "${f}" kept)
+    if(NOT kept STREQUAL "an earlier run's file\n")
+        message(FATAL_ERROR "${f} was overwritten:\n${out}${err}")
+    endif()
+endforeach()
 message("${out}${err}")

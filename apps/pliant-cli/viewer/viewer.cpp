@@ -999,6 +999,22 @@ int Viewer::run()
     return shot_ok ? 0 : 3;
 }
 
+bool display_available(std::string* why)
+{
+    // GLFW reports why through the error callback; keep its last message.
+    static thread_local std::string last;
+    last.clear();
+    glfwSetErrorCallback([](int code, const char* message)
+                         { last = "GLFW error " + std::to_string(code) + ": " + message; });
+    const bool ok = glfwInit() == GLFW_TRUE;
+    if (ok)
+        glfwTerminate();
+    glfwSetErrorCallback(nullptr);
+    if (!ok && why != nullptr)
+        *why = last.empty() ? std::string("GLFW could not start (no display?)") : last;
+    return ok;
+}
+
 int run_viewer(const ViewerOptions& options)
 {
     Viewer viewer(options);

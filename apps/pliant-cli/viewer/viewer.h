@@ -36,4 +36,7 @@ struct ViewerOptions
 /// Runs the viewer until the window closes or `exit_after`. \return the process exit code.
 int run_viewer(const ViewerOptions& options);
 
+/// Whether GLFW can start (a display to open a window on); else `why` says what failed.
+bool display_available(std::string* why);
+
 }  // namespace pliant::viewer
