@@ -770,9 +770,10 @@ int run_demo_with_viewer(const DemoOptions& opt, const GlobalOptions& global)
     // No display: say so before any work, and leave --out as it is.
     if (std::string why; !viewer::display_available(&why))
     {
-        spdlog::error("demo --view: {} (set DISPLAY, run under `xvfb-run -a`, or run the demo "
-                      "without --view to render frames offscreen)",
-                      why);
+        spdlog::error(
+            "demo --view: {} (set DISPLAY, run under `xvfb-run -a`, or run the demo "
+            "without --view to render frames offscreen)",
+            why);
         return k_exit_failure;
     }
     LiveLink link;

@@ -20,6 +20,7 @@
 #include "peer_files.h"
 #include "stream_options.h"
 
+#include <algorithm>
 #include <cstdint>
 #include <cstdio>
 #include <memory>
@@ -42,7 +43,7 @@ struct HostOptions
     double duration = 60.0;
     std::string script;
     std::string stats;
-    double dt = 1e-3;
+    double dt = 0.0;          // 0: automatic (the smaller of 1 ms and 0.9 x the grid's stable step)
     std::uint64_t ticks = 0;  ///< exact mode: stop stepping at this tick (0: never)
     std::string record;       ///< exact mode: the recording, written at the end
     std::string save;         ///< this peer's view of the object, written at the end
@@ -100,6 +101,12 @@ int run_host(const HostOptions& opt)
     if (!opt.stats.empty())
         if (auto ok = check_writable(opt.stats, "host: --stats"); !ok)
             return report(ok.error());
+    if (!opt.record.empty())
+        if (auto ok = check_writable(opt.record, "host: --record"); !ok)
+            return report(ok.error());
+    if (!opt.save.empty())
+        if (auto ok = check_writable(opt.save, "host: --save"); !ok)
+            return report(ok.error());
     if (opt.mode != "exact" && (opt.ticks != 0 || !opt.record.empty()))
         return report({core::ErrorCode::InvalidArgument,
                        "host: --ticks and --record need --mode exact (a fast session's state "
@@ -116,8 +123,28 @@ int run_host(const HostOptions& opt)
     material.rho = opt.density;
     material.beta = opt.damping;
     material.k_f = opt.foundation;
-    material.fixed_dt = opt.dt;
+    material.fixed_dt = opt.dt > 0.0 ? opt.dt : 1e-3;
     material.fixed_step = opt.mode == "exact";
+    if (opt.mode == "exact")
+    {
+        // Lockstep has no error control: a step above the stability bound grows without limit.
+        auto probe = sim::MembraneModel::create(*grid, rest, material);
+        if (!probe)
+            return report(probe.error());
+        const double stable = sim::stable_fixed_step(*probe);
+        if (opt.dt == 0.0)
+        {
+            material.fixed_dt = std::min(1e-3, 0.9 * stable);
+            spdlog::info("host: fixed step {:g} s (the grid's stable step is {:g} s)",
+                         material.fixed_dt, stable);
+        }
+        else if (opt.dt > stable)
+            spdlog::warn(
+                "host: --dt {:g} s is above this grid's stable fixed step {:g} s "
+                "(docs/physics.md §5): the session will likely blow up; use --dt {:g} "
+                "or less, or leave --dt out",
+                opt.dt, stable, 0.9 * stable);
+    }
     session::SessionSettings settings;
     settings.coupling = opt.mode == "exact" ? session::Coupling::Exact : session::Coupling::Fast;
     if (opt.clearance == "grown")
@@ -131,17 +158,6 @@ int run_host(const HostOptions& opt)
     auto s = session::Session::host(*transport, *grid, rest, material, settings);
     if (!s)
         return report(s.error());
-    if (opt.mode == "exact")
-    {
-        // Lockstep has no error control: a step above the stability bound grows without limit.
-        const double stable = sim::stable_fixed_step(*(*s)->model());
-        if (opt.dt > stable)
-            spdlog::warn(
-                "host: --dt {:g} s is above this grid's stable fixed step {:g} s "
-                "(docs/physics.md §5): the session will likely blow up; use --dt {:g} "
-                "or less",
-                opt.dt, stable, 0.9 * stable);
-    }
     spdlog::info("hosting level {} ({} mode, point clearance {}) on port {}", grid->level(),
                  opt.mode,
                  (*s)->point_clearance() == session::PointClearance::Inside ? "inside" : "grown",
@@ -149,14 +165,7 @@ int run_host(const HostOptions& opt)
     std::printf("hosting on port %u\n", static_cast<unsigned>(bound->port));
     std::fflush(stdout);
     if (!opt.record.empty())
-    {
-        if (auto ok = check_writable(opt.record, "host: --record"); !ok)
-            return report(ok.error());
         if (auto ok = (*s)->start_recording(); !ok)
-            return report(ok.error());
-    }
-    if (!opt.save.empty())
-        if (auto ok = check_writable(opt.save, "host: --save"); !ok)
             return report(ok.error());
     run.stop = install_interrupt_flag();  // Ctrl-C: leave or end cleanly
     auto summary = session::run_peer(**s, run);
@@ -235,10 +244,9 @@ void add_host_command(CLI::App& app, const GlobalOptions& global)
         ->check(CLI::ExistingFile);
     cmd->add_option("--stats", opt->stats, "Per-second statistics CSV");
     cmd->add_option("--dt", opt->dt,
-                    "Fixed step of exact mode [s]; a warning says when it is above the grid's "
-                    "stable step")
-        ->check(CLI::PositiveNumber)
-        ->capture_default_str();
+                    "Fixed step of exact mode [s]; default: the smaller of 1 ms and 0.9 x the "
+                    "grid's stable step (a warning says when a given step is above it)")
+        ->check(CLI::PositiveNumber);
     cmd->add_option("--ticks", opt->ticks,
                     "Exact mode: stop stepping at this tick (0: never) and stream on until "
                     "--duration; give the participants the same --ticks, so that all end on the "
