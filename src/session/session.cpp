@@ -548,6 +548,9 @@ struct Session::Impl
     std::uint32_t fast_epoch = 0;
     std::vector<char> fast_mine;  // fast: owned_mask of fast_mine_epoch
     double stall_since = -1.0;    // fast: our clock when the current hold began (-1: none)
+    // fast: a hold ran out (max_stall_s) and the frames since have all been stale: step on
+    // without a new hold until a frame is fresh again (a neighbour silent, not slow).
+    bool stepping_stale = false;
     std::uint32_t fast_mine_epoch = std::numeric_limits<std::uint32_t>::max();
     std::vector<core::Region> owned_regions;  // fast: own leaves
     // Fast: the coupling edges (owned node, Dirichlet neighbour) and their interface damping
@@ -1437,14 +1440,22 @@ struct Session::Impl
                     oldest = std::max(oldest, frame_end - leaf_time[l]);
             if (settings.max_halo_age_s > 0.0 && oldest > settings.max_halo_age_s)
             {
-                if (stall_since < 0.0)
-                    stall_since = last_now;
-                if (last_now - stall_since < settings.max_stall_s)
-                    break;  // hold the clock: fresher states are on their way
+                if (!stepping_stale)
+                {
+                    if (stall_since < 0.0)
+                        stall_since = last_now;
+                    if (last_now - stall_since < settings.max_stall_s)
+                        break;  // hold the clock: fresher states are on their way
+                    stepping_stale = true;
+                }
                 // A silent neighbour (gone, until the transport says so): step on with its last
-                // values rather than freeze; the interface damping grows with their age.
+                // values rather than freeze; the interface damping grows with their age. Every
+                // frame until one is fresh again: a new hold per stale frame stepped one frame
+                // per max_stall_s for the whole outage (5-30 s with ENet).
                 ++counters.stale_frames;
             }
+            else
+                stepping_stale = false;
             if (stall_since >= 0.0)
             {
                 counters.stalled_s += last_now - stall_since;
