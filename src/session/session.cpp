@@ -2045,6 +2045,7 @@ struct Session::Impl
     {
         if (master_handle && h == *master_handle && !welcomed)
         {
+            master_connected = true;
             // Asking to be admitted: reliable only (a repeat would be a second joiner).
             net::Message m;
             m.header.sender = net::k_no_peer;
@@ -2081,7 +2082,14 @@ struct Session::Impl
         if (it == handle_ids.end())
         {
             if (master_handle && h == *master_handle && !welcomed)
-                s.left_ = true;  // refused or unreachable
+            {
+                // Refused or unreachable: keep why, a joiner's user has nothing else to go on.
+                if (!join_lost)
+                    join_lost = reason;
+                spdlog::debug("session: connection to the master ended before the Welcome ({})",
+                              net::to_string(reason));
+                s.left_ = true;
+            }
             return;
         }
         const std::uint16_t id = it->second;
@@ -2769,6 +2777,10 @@ struct Session::Impl
     bool display_dirty = false;
     bool behind = false;  ///< the last advance() returned on its wall-time budget (Session::behind)
     std::string refusal;  // why this joiner left on its own (settings refused by the session)
+    // A joiner whose connection to the master ended before the Welcome: why (Session::
+    // join_failure), and whether the transport had connected it (handshake and key check done).
+    std::optional<net::DisconnectReason> join_lost;
+    bool master_connected = false;
 
     void handle(net::PeerHandle h, const net::Message& m)
     {
@@ -2778,7 +2790,11 @@ struct Session::Impl
         {
         case net::MessageType::Hello: on_hello(h, m, std::get<net::Hello>(m.body)); return;
         case net::MessageType::Welcome: on_welcome(h, m, std::get<net::Welcome>(m.body)); return;
-        case net::MessageType::Reject: close_all(net::DisconnectReason::Refused); return;
+        case net::MessageType::Reject:
+            if (!welcomed && !join_lost)
+                join_lost = std::get<net::Reject>(m.body).reason;
+            close_all(net::DisconnectReason::Refused);
+            return;
         case net::MessageType::Blob: on_blob(std::get<net::Blob>(m.body)); return;
         default: break;
         }
@@ -3225,6 +3241,13 @@ core::Result<std::unique_ptr<Session>> Session::join(net::Transport& transport,
 std::string Session::refusal() const
 {
     return impl_->refusal;
+}
+
+std::optional<JoinFailure> Session::join_failure() const
+{
+    if (!impl_->join_lost)
+        return std::nullopt;
+    return JoinFailure{*impl_->join_lost, impl_->master_connected};
 }
 
 void Session::poll()
