@@ -7,6 +7,7 @@
 #include <pliant/core/sphere_domain.h>
 #include <pliant/core/tetra_grid.h>
 #include <pliant/net/enet_transport.h>
+#include <pliant/net/secure_transport.h>
 #include <pliant/session/runner.h>
 #include <pliant/session/session.h>
 #include <pliant/sim/membrane.h>
@@ -168,6 +169,7 @@ int run_host(const HostOptions& opt)
         if (auto ok = (*s)->start_recording(); !ok)
             return report(ok.error());
     run.stop = install_interrupt_flag();  // Ctrl-C: leave or end cleanly
+    run.secure = dynamic_cast<const net::SecureTransport*>(transport.get());
     auto summary = session::run_peer(**s, run);
     if (!summary)
         return report(summary.error());
@@ -191,10 +193,12 @@ int run_host(const HostOptions& opt)
     if (!opt.save.empty())
         if (auto ok = save_peer_state(**s, opt.save); !ok)
             return report(ok.error());
-    std::printf("host: %.1f s, tick %llu, %llu bytes out, %llu bytes in\n", summary->elapsed_s,
-                static_cast<unsigned long long>(summary->final_tick),
-                static_cast<unsigned long long>(summary->stats.bytes_sent),
-                static_cast<unsigned long long>(summary->stats.bytes_received));
+    std::printf(
+        "host: %.1f s, tick %llu, %llu bytes out, %llu bytes in, %llu connections refused\n",
+        summary->elapsed_s, static_cast<unsigned long long>(summary->final_tick),
+        static_cast<unsigned long long>(summary->stats.bytes_sent),
+        static_cast<unsigned long long>(summary->stats.bytes_received),
+        static_cast<unsigned long long>(summary->auth_refused));
     return 0;
 }
 

@@ -33,6 +33,7 @@
 #include <fstream>
 #include <iterator>
 #include <map>
+#include <optional>
 #include <string>
 
 namespace pliant::net
@@ -64,6 +65,24 @@ constexpr std::size_t k_max_passphrase = 4096;
 constexpr char k_kdf_context[crypto_kdf_CONTEXTBYTES + 1] = "pliantv1";
 constexpr std::uint64_t k_subkey_hello = 1;
 constexpr std::uint64_t k_subkey_datagram = 2;
+
+// Refusals are logged as warnings at most this often, µs.
+constexpr std::int64_t k_refusal_warning_us = 10'000'000;
+
+// What a refusal's reason most likely means, for the log.
+const char* refusal_cause(DisconnectReason reason) noexcept
+{
+    switch (reason)
+    {
+    case DisconnectReason::Refused: return "its Hello does not authenticate: another secret";
+    case DisconnectReason::TooManyBadDatagrams:
+        return "too many datagrams that do not authenticate: tampering, or no secret there";
+    case DisconnectReason::TimedOut:
+        return "no authenticated datagram within the handshake timeout: no secret there, or no "
+               "path back";
+    default: return "dropped";
+    }
+}
 
 using Key = std::array<std::uint8_t, 32>;
 using Random = std::array<std::uint8_t, k_random_size>;
@@ -148,7 +167,8 @@ struct Conn
     bool closing = false;
     bool confirm_seen = false;
     std::int64_t since_us = 0;
-    std::int64_t hello_us = 0;  // the last Hello sent
+    std::int64_t hello_us = 0;      // the last Hello sent
+    std::optional<Address> remote;  // for the log: gone from the inner transport once closed
     Random mine{};
     Random theirs{};
     Key tx{};
@@ -241,6 +261,7 @@ struct SecureTransport::Impl
     std::deque<TransportEvent> pending;
     std::vector<std::uint8_t> buffer;
     SecureStats totals;
+    std::int64_t last_refusal_warning_us = -1;  // when refuse() last warned (-1: never)
 
     [[nodiscard]] std::int64_t now_us() const
     {
@@ -262,9 +283,29 @@ struct SecureTransport::Impl
         if (c.closing)
             return;
         c.closing = true;
-        ++totals.refused;
-        spdlog::debug("secure: dropping connection {}: {}", h.value, to_string(reason));
+        note_refusal(h, c, to_string(reason), refusal_cause(reason));
         inner->disconnect(h, reason);
+    }
+
+    // Counts a connection that never authenticated and ended (refused here, or closed by the
+    // peer first). That is what a user with the wrong secret, or none, causes: worth a warning,
+    // but at most one per k_refusal_warning_us, so that a flood of attempts cannot flood the log
+    // (as EnetTransport's rate-limit message); the count is in totals().refused.
+    void note_refusal(PeerHandle h, const Conn& c, std::string_view what,
+                      std::string_view cause) noexcept
+    {
+        ++totals.refused;
+        const std::int64_t now = now_us();
+        if (last_refusal_warning_us >= 0 && now - last_refusal_warning_us < k_refusal_warning_us)
+        {
+            spdlog::debug("secure: connection {} refused: {}", h.value, what);
+            return;
+        }
+        last_refusal_warning_us = now;
+        spdlog::warn("secure: refused the connection {} {} ({}: {}; {} refused so far)",
+                     c.initiated ? "to" : "from",
+                     c.remote ? to_string(*c.remote) : std::string("an unknown address"), what,
+                     cause, totals.refused);
     }
 
     // An authentication failure or a malformed datagram: held against the peer.
@@ -321,6 +362,7 @@ struct SecureTransport::Impl
     {
         Conn& c = conns[h.value];
         c.inner_connected = true;
+        c.remote = inner->remote_address(h);
         c.since_us = now_us();
         randombytes_buf(c.mine.data(), c.mine.size());
         send_hello(h, c);
@@ -331,7 +373,13 @@ struct SecureTransport::Impl
         auto it = conns.find(ev.peer.value);
         if (it == conns.end())
             return;
-        const bool tell = it->second.ready || it->second.initiated;
+        const Conn& c = it->second;
+        // The peer hung up before authenticating: a peer without our secret gives up on the
+        // datagrams it cannot read (a plaintext pliant after 16 of our Hellos, 0.8 s).
+        if (c.inner_connected && !c.ready && !c.closing)
+            note_refusal(ev.peer, c, "closed by the peer before authenticating",
+                         "it has no secret or another one");
+        const bool tell = c.ready || c.initiated;
         wipe(it->second);
         conns.erase(it);
         if (tell)

@@ -162,7 +162,7 @@ core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
                               "cannot write stats file " + options.stats_csv.string());
         csv << "time_s,bytes_in,bytes_out,packets_in,packets_out,drops,steps,step_ms,"
                "owned_nodes,halo_age_s,tick,peers,border_age_s,stalled_s,view_delay_s,"
-               "stale_states,stale_frames,peers_connected\n";
+               "stale_states,stale_frames,peers_connected,auth_refused\n";
     }
     using clock = std::chrono::steady_clock;
     const auto t0 = clock::now();
@@ -177,11 +177,15 @@ core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
     bool leave_asked = false;
     core::Result<void> script_error;
     SessionStats last{};
+    auto auth_refused = [&]
+    { return options.secure != nullptr ? options.secure->totals().refused : std::uint64_t{0}; };
+    std::uint64_t last_refused = 0;
     double next_row = 1.0;
     RunSummary summary;
     auto write_row = [&](double t)
     {
         const SessionStats s = session.stats();
+        const std::uint64_t refused = auth_refused();
         if (csv)
         {
             const double step_ms = s.steps > last.steps
@@ -196,10 +200,12 @@ core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
                 << s.halo_age_s << ',' << session.tick() << ',' << session.peers().size() << ','
                 << s.border_age_s << ',' << s.stalled_s - last.stalled_s << ',' << s.view_delay_s
                 << ',' << s.stale_states - last.stale_states << ','
-                << s.stale_frames - last.stale_frames << ',' << s.peers_connected << '\n';
+                << s.stale_frames - last.stale_frames << ',' << s.peers_connected << ','
+                << refused - last_refused << '\n';
             csv.flush();
         }
         last = s;
+        last_refused = refused;
     };
     // Bounded by the duration (wall clock) and by an iteration cap.
     for (std::uint64_t iteration = 0; iteration < 1'000'000'000ULL; ++iteration)
@@ -287,6 +293,7 @@ core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
     summary.final_tick = session.tick();
     summary.left = session.left();
     summary.stats = session.stats();
+    summary.auth_refused = auth_refused();
     return summary;
 }
 

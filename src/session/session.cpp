@@ -548,6 +548,9 @@ struct Session::Impl
     std::uint32_t fast_epoch = 0;
     std::vector<char> fast_mine;  // fast: owned_mask of fast_mine_epoch
     double stall_since = -1.0;    // fast: our clock when the current hold began (-1: none)
+    // fast: a hold ran out (max_stall_s) and the frames since have all been stale: step on
+    // without a new hold until a frame is fresh again (a neighbour silent, not slow).
+    bool stepping_stale = false;
     std::uint32_t fast_mine_epoch = std::numeric_limits<std::uint32_t>::max();
     std::vector<core::Region> owned_regions;  // fast: own leaves
     // Fast: the coupling edges (owned node, Dirichlet neighbour) and their interface damping
@@ -1437,14 +1440,22 @@ struct Session::Impl
                     oldest = std::max(oldest, frame_end - leaf_time[l]);
             if (settings.max_halo_age_s > 0.0 && oldest > settings.max_halo_age_s)
             {
-                if (stall_since < 0.0)
-                    stall_since = last_now;
-                if (last_now - stall_since < settings.max_stall_s)
-                    break;  // hold the clock: fresher states are on their way
+                if (!stepping_stale)
+                {
+                    if (stall_since < 0.0)
+                        stall_since = last_now;
+                    if (last_now - stall_since < settings.max_stall_s)
+                        break;  // hold the clock: fresher states are on their way
+                    stepping_stale = true;
+                }
                 // A silent neighbour (gone, until the transport says so): step on with its last
-                // values rather than freeze; the interface damping grows with their age.
+                // values rather than freeze; the interface damping grows with their age. Every
+                // frame until one is fresh again: a new hold per stale frame stepped one frame
+                // per max_stall_s for the whole outage (5-30 s with ENet).
                 ++counters.stale_frames;
             }
+            else
+                stepping_stale = false;
             if (stall_since >= 0.0)
             {
                 counters.stalled_s += last_now - stall_since;
@@ -2034,6 +2045,7 @@ struct Session::Impl
     {
         if (master_handle && h == *master_handle && !welcomed)
         {
+            master_connected = true;
             // Asking to be admitted: reliable only (a repeat would be a second joiner).
             net::Message m;
             m.header.sender = net::k_no_peer;
@@ -2070,7 +2082,14 @@ struct Session::Impl
         if (it == handle_ids.end())
         {
             if (master_handle && h == *master_handle && !welcomed)
-                s.left_ = true;  // refused or unreachable
+            {
+                // Refused or unreachable: keep why, a joiner's user has nothing else to go on.
+                if (!join_lost)
+                    join_lost = reason;
+                spdlog::debug("session: connection to the master ended before the Welcome ({})",
+                              net::to_string(reason));
+                s.left_ = true;
+            }
             return;
         }
         const std::uint16_t id = it->second;
@@ -2758,6 +2777,10 @@ struct Session::Impl
     bool display_dirty = false;
     bool behind = false;  ///< the last advance() returned on its wall-time budget (Session::behind)
     std::string refusal;  // why this joiner left on its own (settings refused by the session)
+    // A joiner whose connection to the master ended before the Welcome: why (Session::
+    // join_failure), and whether the transport had connected it (handshake and key check done).
+    std::optional<net::DisconnectReason> join_lost;
+    bool master_connected = false;
 
     void handle(net::PeerHandle h, const net::Message& m)
     {
@@ -2767,7 +2790,11 @@ struct Session::Impl
         {
         case net::MessageType::Hello: on_hello(h, m, std::get<net::Hello>(m.body)); return;
         case net::MessageType::Welcome: on_welcome(h, m, std::get<net::Welcome>(m.body)); return;
-        case net::MessageType::Reject: close_all(net::DisconnectReason::Refused); return;
+        case net::MessageType::Reject:
+            if (!welcomed && !join_lost)
+                join_lost = std::get<net::Reject>(m.body).reason;
+            close_all(net::DisconnectReason::Refused);
+            return;
         case net::MessageType::Blob: on_blob(std::get<net::Blob>(m.body)); return;
         default: break;
         }
@@ -3214,6 +3241,13 @@ core::Result<std::unique_ptr<Session>> Session::join(net::Transport& transport,
 std::string Session::refusal() const
 {
     return impl_->refusal;
+}
+
+std::optional<JoinFailure> Session::join_failure() const
+{
+    if (!impl_->join_lost)
+        return std::nullopt;
+    return JoinFailure{*impl_->join_lost, impl_->master_connected};
 }
 
 void Session::poll()

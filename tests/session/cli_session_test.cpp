@@ -181,6 +181,49 @@ TEST(SessionCli, InterruptLeavesAndEndsTheSessionCleanly)
     EXPECT_GE(rows(dir / "a.csv").size(), 1U) << "the stats file got its final row";
 }
 
+// A joiner with another key file, and one with no secret, cannot join a master that has one:
+// each exits 3 saying why (it used to say only "never received the model"); the master warns of
+// the first refusal (at most one line per 10 s) and counts both in its --stats column
+// auth_refused and its summary line. Bounded by the durations (about 6 s).
+TEST(SessionCli, RefusedJoinersSayWhyAndTheMasterCountsThem)
+{
+    const auto dir = pliant::test::scratch_dir("session_cli_refused");
+    const int port = 20000 + static_cast<int>((getpid() + 4409) % 19990);
+    const std::string exe = PLIANT_EXE;
+    const std::string d = dir.string();
+    const std::string p = std::to_string(port);
+    {
+        std::ofstream(dir / "good.key") << "alpha alpha alpha\n";
+        std::ofstream(dir / "other.key") << "beta beta\n";
+    }
+    const std::string join = "'" + exe + "' join 127.0.0.1:" + p + " --duration 4";
+    const std::string cmd =
+        "cd '" + d + "' && rm -f *.rc *.csv *.log; ('" + exe + "' host --level 3 --port " + p +
+        " --duration 5 --key-file good.key --stats host.csv > host.log 2>&1; echo $? > host.rc) "
+        "& sleep 1.5; (" +
+        join + " --key-file other.key > wrong.log 2>&1; echo $? > wrong.rc); (" + join +
+        " > plain.log 2>&1; echo $? > plain.rc); wait";
+    ASSERT_EQ(std::system(cmd.c_str()), 0);
+    const std::string host_log = read(dir / "host.log");
+    if (host_log.find("bind") != std::string::npos && read(dir / "host.rc") != "0\n")
+        GTEST_SKIP() << "cannot bind UDP port " << port << " on this machine: " << host_log;
+    EXPECT_EQ(read(dir / "host.rc"), "0\n") << host_log;
+    const std::string wrong = read(dir / "wrong.log");
+    EXPECT_EQ(read(dir / "wrong.rc"), "3\n") << wrong;
+    EXPECT_NE(wrong.find("refused the connection (reason refused): it has another --passphrase"),
+              std::string::npos)
+        << wrong;
+    const std::string plain = read(dir / "plain.log");
+    EXPECT_EQ(read(dir / "plain.rc"), "3\n") << plain;
+    EXPECT_NE(plain.find("the master seemingly has a --passphrase or --key-file"),
+              std::string::npos)
+        << plain;
+    EXPECT_NE(host_log.find("secure: refused the connection from 127.0.0.1:"), std::string::npos)
+        << host_log;
+    EXPECT_EQ(column_sum(dir / "host.csv", "auth_refused"), 2.0);
+    EXPECT_NE(host_log.find("2 connections refused"), std::string::npos) << host_log;
+}
+
 }  // namespace
 
 namespace

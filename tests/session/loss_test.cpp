@@ -431,6 +431,91 @@ TEST(SessionLoss, ANeighbourStillConnectingHoldsNobodysClock)
         << "the seeds must include a greeting that needed a retransmission";
 }
 
+TEST(SessionLoss, ASilentNeighbourHoldsTheClockOnceThenStepsOnUntilTheTakeOver)
+{
+    // A neighbour that goes silent (killed, cable cut) is reported lost only after the
+    // transport's timeout (ENet: 5-30 s). Fast coupling holds the clock max_stall_s (1 s) for
+    // its states, then steps on with its last values until the take-over (docs/session.md
+    // §4.3). Each stale frame used to start a new hold, so the survivors stepped one frame per
+    // second for the whole outage and then caught up in a burst. Here a participant vanishes and
+    // its links time out after 4 s: 3 s after the crash, every survivor's clock has kept up
+    // with real time, after one hold of about 1 s.
+    constexpr int level = 4;
+    net::SimulatedNetworkSettings ns;
+    ns.link.latency_s = 0.005;
+    ns.connect_timeout_s = 4.0;
+    Harness h(ns);
+    SessionSettings set;
+    set.coupling = Coupling::Fast;
+    set.name = "master";
+    Session& master = h.host(level, set);
+    master.set_forces({face_pull(50, 0.5)});
+    const core::TetraGrid grid = core::TetraGrid::create(level).value();
+    const auto faces = static_cast<std::uint32_t>(grid.face_count());
+    for (std::uint32_t k = 1; k < 3; ++k)
+    {
+        set.name = "part";
+        Session& p = h.join(net::Role::Participant, set);
+        p.set_points_of_interest(
+            {net::Target{net::TargetKind::Face, k * faces / 3U, {0, 0, 0}, 0.0}});
+    }
+    ASSERT_TRUE(pump_until_partitioned(h, 3, 200000));
+    for (int k = 0; k < 2000; ++k)  // 1 s of a running session
+        h.pump_once(0.0005);
+    const net::PeerId lost = h.peers[2]->id();
+    std::vector<double> time0;
+    std::vector<SessionStats> stats0;
+    for (std::size_t k = 0; k < 2; ++k)
+    {
+        time0.push_back(h.peers[k]->time());
+        stats0.push_back(h.peers[k]->stats());
+        EXPECT_EQ(stats0[k].stale_frames, 0U) << "peer " << k << " before the crash";
+    }
+    const double now0 = h.now;
+    h.crash(2);
+    for (int k = 0; k < 6000; ++k)  // 3 s, before the links time out
+        h.pump_once(0.0005);
+    const auto owners = master.owners();
+    ASSERT_NE(std::find(owners.begin(), owners.end(), lost), owners.end())
+        << "taken over already: the outage must outlast the test's 3 s";
+    int held = 0;
+    for (std::size_t k = 0; k < 2; ++k)
+    {
+        const SessionStats st = h.peers[k]->stats();
+        const double advanced = h.peers[k]->time() - time0[k];
+        const double stalled = st.stalled_s - stats0[k].stalled_s;
+        const std::uint64_t stale = st.stale_frames - stats0[k].stale_frames;
+        std::printf(
+            "peer %zu: clock +%.3f s in 3 s, stalled %.3f s, %llu stale frames, border "
+            "age %.3f s\n",
+            k, advanced, stalled, static_cast<unsigned long long>(stale), st.border_age_s);
+        EXPECT_GT(advanced, 2.9) << "peer " << k << ": the clock kept up with real time";
+        EXPECT_LT(stalled, 1.1) << "peer " << k << ": one hold, not one per frame";
+        if (stalled > 0.5)
+        {
+            ++held;
+            // Held from 0.5 s (max_halo_age_s) to 1.5 s after the crash, then every frame of
+            // the remaining 1.5 s on stale values (60 Hz), and the values' age follows the clock.
+            EXPECT_GT(stale, 80U) << "peer " << k;
+            EXPECT_GT(st.border_age_s, 2.8) << "peer " << k;
+        }
+    }
+    EXPECT_GT(held, 0) << "no survivor borders the lost peer: the test shows nothing";
+    // The take-over: no catch-up burst, the clocks were never behind.
+    ASSERT_TRUE(h.pump_until(
+        [&]
+        {
+            const auto o = master.owners();
+            return std::find(o.begin(), o.end(), lost) == o.end();
+        },
+        20000));
+    for (int k = 0; k < 400; ++k)  // 0.2 s
+        h.pump_once(0.0005);
+    for (std::size_t k = 0; k < 2; ++k)
+        EXPECT_GT(h.peers[k]->time() - time0[k], h.now - now0 - 0.1)
+            << "peer " << k << " fell behind real time";
+}
+
 TEST(SessionLoss, ALostHelloCostsAStreamPeriodNotARetransmission)
 {
     // A joiner dials every peer it is told of and greets it with a Hello, the only way that peer

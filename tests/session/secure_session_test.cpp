@@ -3,11 +3,15 @@
 // A two-peer exact session whose transports are wrapped in SecureTransport (issue 7 item 4)
 // reaches the single-process state bit for bit, as the unencrypted session does: the encryption
 // layer is invisible to the session. Level 3, 200 ticks, over a SimulatedNetwork.
+#include <pliant/net/enet_transport.h>
 #include <pliant/net/secure_transport.h>
 
 #include <gtest/gtest.h>
 
 #include "session_harness.h"
+
+#include <chrono>
+#include <thread>
 
 namespace pliant::session::test
 {
@@ -80,6 +84,69 @@ TEST(SecureSession, TwoPeersThroughSecureTransportEqualSingleProcess)
     const net::SecureStats totals = master_transport.totals();
     EXPECT_GT(totals.opened, 100U);
     EXPECT_EQ(totals.auth_failures + totals.malformed + totals.replayed + totals.too_old, 0U);
+}
+
+// A joiner whose connection to the master ends before the Welcome keeps why
+// (Session::join_failure), which `pliant join` turns into its message (it used to say only
+// "never received the model", whatever the cause). Over ENet on 127.0.0.1: a joiner with
+// another passphrase is refused at once, before any session traffic, and the master counts it.
+TEST(SecureSession, AJoinerWithAnotherPassphraseLearnsItWasRefused)
+{
+    const auto cheap = net::KdfLimits::cheapest_for_tests();
+    const net::SecretKey alpha =
+        net::derive_key("alpha alpha alpha", net::k_default_key_context, cheap).value();
+    const net::SecretKey beta =
+        net::derive_key("beta beta", net::k_default_key_context, cheap).value();
+    net::SecureTransport master_transport(net::make_enet_transport(), alpha);
+    net::SecureTransport joiner_transport(net::make_enet_transport(), beta);
+    const auto master_address = master_transport.open(net::Address{{127, 0, 0, 1}, 0});
+    if (!master_address || !joiner_transport.open(net::Address{{127, 0, 0, 1}, 0}))
+        GTEST_SKIP() << "cannot bind UDP on 127.0.0.1";
+    SessionSettings settings;
+    settings.coupling = Coupling::Fast;
+    const core::TetraGrid grid = core::TetraGrid::create(3).value();
+    auto master =
+        Session::host(master_transport, grid, scenes::sphere_grid(grid, 1.0), material(), settings)
+            .value();
+    auto joiner =
+        Session::join(joiner_transport, *master_address, net::Role::Participant, settings).value();
+    const auto t0 = std::chrono::steady_clock::now();
+    const auto elapsed = [&]
+    { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
+    while (!joiner->left() && elapsed() < 10.0)
+    {
+        master->poll();
+        joiner->poll();
+        master->advance(elapsed());
+        joiner->advance(elapsed());
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    ASSERT_TRUE(joiner->left());
+    EXPECT_LT(elapsed(), 2.0) << "refused at once, not after a timeout";
+    EXPECT_FALSE(joiner->ready());
+    const auto failure = joiner->join_failure();
+    ASSERT_TRUE(failure.has_value());
+    EXPECT_EQ(failure->reason, net::DisconnectReason::Refused);
+    EXPECT_FALSE(failure->connected) << "the key check never passed";
+    EXPECT_GE(master_transport.totals().refused, 1U);
+    EXPECT_FALSE(master->join_failure().has_value()) << "not a joiner";
+    EXPECT_TRUE(master->peers().empty()) << "the session never heard of it";
+}
+
+// Nobody listening: the connection attempt times out, and the joiner says so.
+TEST(SecureSession, AJoinerNobodyAnswersLearnsItTimedOut)
+{
+    net::SimulatedNetworkSettings ns;
+    ns.connect_timeout_s = 0.5;
+    Harness h(ns);
+    const net::Address nobody = h.net.create_endpoint()->open({}).value();  // closed at once
+    h.master_address = nobody;
+    Session& joiner = h.join(net::Role::Participant, SessionSettings{});
+    ASSERT_TRUE(h.pump_until([&] { return joiner.left(); }, 4000));
+    const auto failure = joiner.join_failure();
+    ASSERT_TRUE(failure.has_value());
+    EXPECT_EQ(failure->reason, net::DisconnectReason::TimedOut);
+    EXPECT_FALSE(failure->connected);
 }
 
 }  // namespace

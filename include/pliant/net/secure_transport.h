@@ -109,7 +109,11 @@ struct SecureStats
     std::uint64_t early = 0;          ///< data before the peer's Hello (unreliable only; dropped)
     std::uint64_t hello_repeats = 0;  ///< repeats of the peer's verified Hello, answered with the
                                       ///< Confirm again (a lost handshake datagram, not a failure)
-    std::uint64_t refused = 0;        ///< totals only: connections dropped for failures/timeouts
+    /// Totals only: connections that never authenticated and ended: dropped here (a Hello of
+    /// another key, too many failures, the handshake timeout) or closed by the peer first (a
+    /// peer without our secret gives up on datagrams it cannot read). Each is logged as a
+    /// warning, at most one line per 10 s.
+    std::uint64_t refused = 0;
 };
 
 /// Bytes SecureTransport adds to each datagram: type (1) + counter (8) + Poly1305 tag (16).

@@ -22,6 +22,7 @@
 
 #include <pliant/core/result.h>
 #include <pliant/net/message.h>
+#include <pliant/net/secure_transport.h>
 #include <pliant/session/session.h>
 
 #include <csignal>
@@ -73,6 +74,10 @@ struct RunOptions
     /// When set and non-zero (a signal handler's flag: Ctrl-C), the loop ends early and winds
     /// down as at the end of the duration.
     const volatile std::sig_atomic_t* stop = nullptr;
+    /// The peer's encryption layer, when it has one: its connections dropped (totals().refused:
+    /// another key, too many bad datagrams, a handshake that never completed) fill the
+    /// `auth_refused` column and RunSummary::auth_refused. Null: 0.
+    const net::SecureTransport* secure = nullptr;
 };
 
 struct RunSummary
@@ -84,6 +89,8 @@ struct RunSummary
     /// master; -1 if they never arrived), s.
     double model_s = -1.0;
     SessionStats stats;
+    /// Connections the encryption layer dropped (RunOptions::secure; 0 without one).
+    std::uint64_t auth_refused = 0;
 };
 
 /// Runs `session` in real time until the duration, the session's end or the script's `leave`,

@@ -180,6 +180,15 @@ struct SessionSettings
 
 struct Recording;
 
+/// Why a joiner never got into the session (Session::join_failure).
+struct JoinFailure
+{
+    net::DisconnectReason reason = net::DisconnectReason::None;
+    /// The transport had connected to the master (ENet's handshake, and with SecureTransport
+    /// the key check, completed) before the connection ended.
+    bool connected = false;
+};
+
 enum class SessionRole : std::uint8_t
 {
     Master,
@@ -350,6 +359,11 @@ public:
     /// a joiner learns the level and coupling only from the model (e.g. stream_coarsen in a fast
     /// session, docs/session.md §5.2).
     [[nodiscard]] std::string refusal() const;
+    /// A joiner whose connection to the master ended before it was welcomed: the reason the
+    /// transport gave (net::DisconnectReason::Refused: the master, or its SecureTransport,
+    /// turned it away; TimedOut: no answer; ...). nullopt otherwise (still joining, welcomed, or
+    /// not a joiner). `pliant join` turns it into its error message.
+    [[nodiscard]] std::optional<JoinFailure> join_failure() const;
 
     struct Impl;
 
