@@ -154,14 +154,16 @@ TEST(SessionCli, InterruptLeavesAndEndsTheSessionCleanly)
     const std::string exe = PLIANT_EXE;
     const std::string d = dir.string();
     const std::string p = std::to_string(port);
-    // A watchdog kills anything left after 20 s; the signals go to the pliant processes
-    // themselves (`timeout` in between would relay them and report its own status).
+    // A watchdog kills anything left after 20 s (its output to /dev/null: its orphaned `sleep`
+    // would otherwise hold the test's output open for 20 s after the test ends); the signals go to
+    // the pliant processes themselves (`timeout` in between would relay them and report its own
+    // status).
     const std::string cmd =
         "cd '" + d + "' && rm -f *.rc *.csv *.log; '" + exe + "' host --level 4 --port " + p +
         " --duration 30 > host.log 2>&1 & HOST=$!; sleep 0.3; '" + exe + "' join 127.0.0.1:" + p +
         " --duration 30 --stats a.csv > a.log 2>&1 & A=$!; '" + exe + "' join 127.0.0.1:" + p +
         " --viewer --duration 30 > v.log 2>&1 & V=$!; "
-        "(sleep 20; kill -9 $HOST $A $V 2>/dev/null) & W=$!; "
+        "(sleep 20; kill -9 $HOST $A $V) > /dev/null 2>&1 & W=$!; "
         "sleep 1.5; kill -INT $A; wait $A; echo $? > a.rc; sleep 0.5; "
         "kill -TERM $HOST; wait $HOST; echo $? > host.rc; wait $V; "
         "echo $? > v.rc; kill $W 2>/dev/null; wait";
