@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -146,6 +147,26 @@ std::string lower_extension(const std::filesystem::path& p)
     return ext;
 }
 
+/// docs/operations.md: 32 random bytes, as `head -c 32 /dev/urandom` writes.
+constexpr std::uintmax_t k_key_file_advised_bytes = 32;
+
+void add_secret_options(CLI::App* cmd, std::string& passphrase, std::string& key_file)
+{
+    cmd->add_option("--passphrase", passphrase,
+                    "Shared secret of the session (Argon2id); or set PLIANT_PASSPHRASE")
+        ->check(
+            [](const std::string& s)
+            {
+                return s.empty() ? std::string(
+                                       "an empty passphrase would leave the session "
+                                       "open to anyone: give one, or leave the option out")
+                                 : std::string();
+            });
+    cmd->add_option("--key-file", key_file, "File whose bytes are the shared secret")
+        ->check(CLI::ExistingFile)
+        ->excludes("--passphrase");
+}
+
 core::Result<std::unique_ptr<net::Transport>> secure_or_plain(std::unique_ptr<net::Transport> inner,
                                                               const std::string& passphrase,
                                                               const std::string& key_file)
@@ -155,8 +176,21 @@ core::Result<std::unique_ptr<net::Transport>> secure_or_plain(std::unique_ptr<ne
     if (!passphrase.empty())
         key = net::derive_key(passphrase);
     else if (!key_file.empty())
+    {
         key = net::key_from_file(key_file);
-    else if (env != nullptr && *env != '\0')
+        std::error_code ec;
+        const auto size = std::filesystem::file_size(key_file, ec);
+        if (*key && !ec && size < k_key_file_advised_bytes)
+            spdlog::warn(
+                "{}: a key of {} bytes is easy to guess; a key file should hold {} "
+                "random bytes (head -c 32 /dev/urandom > {})",
+                key_file, size, k_key_file_advised_bytes, key_file);
+    }
+    else if (env != nullptr && *env == '\0')
+        return core::fail(core::ErrorCode::InvalidArgument,
+                          "PLIANT_PASSPHRASE is set but empty: that would leave the session open "
+                          "to anyone; give it a value, or unset it");
+    else if (env != nullptr)
         key = net::derive_key(env);
     if (!key)
     {

@@ -76,6 +76,11 @@ std::filesystem::path bundled_mesh();
 /// The extension of `p` in lower case, with its dot (".ply"), or "" when it has none.
 std::string lower_extension(const std::filesystem::path& p);
 
+/// `--passphrase` and `--key-file` (exclusive), for `host` and `join`. An empty passphrase is a
+/// usage error: `--passphrase "$SECRET"` with SECRET unset would otherwise open the session to
+/// anyone.
+void add_secret_options(CLI::App* cmd, std::string& passphrase, std::string& key_file);
+
 /// Wraps `inner` in net::SecureTransport when --passphrase, --key-file or PLIANT_PASSPHRASE gives
 /// a key (in that order); otherwise warns once and returns it unencrypted (docs/operations.md).
 /// `pliant host` and `pliant join`.

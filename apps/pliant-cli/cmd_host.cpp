@@ -277,12 +277,8 @@ void add_host_command(CLI::App& app, const GlobalOptions& global)
         ->capture_default_str();
     cmd->add_option("--name", opt->name, "Peer name (printable ASCII, 1..32)")
         ->capture_default_str();
-    cmd->add_option("--passphrase", opt->passphrase,
-                    "Shared secret of the session (Argon2id); or set PLIANT_PASSPHRASE");
+    add_secret_options(cmd, opt->passphrase, opt->key_file);
     add_stream_options(cmd, opt->stream);
-    cmd->add_option("--key-file", opt->key_file, "File whose bytes are the shared secret")
-        ->check(CLI::ExistingFile)
-        ->excludes("--passphrase");
     cmd->callback(command_callback(global, [opt]() -> int { return run_host(*opt); }));
 }
 

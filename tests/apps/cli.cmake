@@ -45,5 +45,16 @@ if(TARGET pliant)
     pliant_cli_expect(cli_usage_missing_argument 2 STDERR "MASTER is required" join)
     pliant_cli_expect(cli_usage_needs 2 STDERR "--cap requires --compress" join 127.0.0.1:7777 --cap 1)
     pliant_cli_expect(cli_usage_no_command 2 STDERR "A subcommand is required")
+    # An empty secret would open the session to anyone (`--passphrase "$SECRET"`, SECRET unset).
+    add_test(NAME cli_usage_empty_passphrase
+             COMMAND ${CMAKE_COMMAND}
+                     "-DCOMMAND=sh;-c;'$<TARGET_FILE:pliant>' join 127.0.0.1:7777 --passphrase ''"
+                     -DEXIT=2 "-DSTDERR_REGEX=an empty passphrase would leave the session open"
+                     -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+    add_test(NAME cli_empty_passphrase_variable
+             COMMAND ${CMAKE_COMMAND}
+                     "-DCOMMAND=env;PLIANT_PASSPHRASE=;$<TARGET_FILE:pliant>;join;127.0.0.1:7777"
+                     -DEXIT=1 "-DSTDERR_REGEX=PLIANT_PASSPHRASE is set but empty"
+                     -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
     pliant_cli_expect(cli_help_exits_0 0 STDOUT "Subcommands:" --help)
 endif()
