@@ -135,6 +135,11 @@ int run_join(const JoinOptions& opt)
         spdlog::error("join: {}", (*s)->refusal());
         return k_exit_failure;
     }
+    if (!(*s)->ready() && run.stop != nullptr && *run.stop != 0)
+    {
+        std::printf("join: interrupted before the model arrived from %s\n", opt.master.c_str());
+        return 0;  // Ctrl-C is a clean end, as after the model
+    }
     if (!(*s)->ready())
     {
         if (const auto failure = (*s)->join_failure())

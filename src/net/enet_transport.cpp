@@ -18,6 +18,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cstring>
 #include <deque>
@@ -133,10 +134,20 @@ public:
         if (host_ != nullptr)
             return core::fail(core::ErrorCode::NetworkError, "EnetTransport::open: already open");
         const ENetAddress address = to_enet(bind);
+        errno = 0;
         host_ = enet_host_create(&address, settings_.max_peers, k_channel_count, 0, 0);
         if (host_ == nullptr)
+        {
+            // ENet keeps the socket's errno (bind's, most often EADDRINUSE).
+            const int why = errno;
+            std::string reason = why != 0 ? std::string(": ") + std::strerror(why) : "";
+            if (why == EADDRINUSE)
+                reason +=
+                    " (another program, or another pliant, has this port: choose another "
+                    "with --port)";
             return core::fail(core::ErrorCode::NetworkError,
-                              "EnetTransport::open: cannot bind " + to_string(bind));
+                              "cannot bind UDP " + to_string(bind) + reason);
+        }
         host_->intercept = &EnetTransport::intercept;
         total_.tokens = settings_.connect_burst_total;
         total_.last = Clock::now();

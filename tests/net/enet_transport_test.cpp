@@ -19,7 +19,9 @@
 #include "net/sample_messages.h"
 
 #include <array>
+#include <cerrno>
 #include <chrono>
+#include <cstring>
 #include <functional>
 #include <optional>
 #include <vector>
@@ -239,6 +241,24 @@ TEST(EnetTransport, RawUdpJunkDoesNotDisturbAConnection)
     ASSERT_TRUE(h.pump([&h] { return h.received_by_b() == 1; }));
     EXPECT_EQ(h.b.dropped(), 0u);  // ENet itself discards what is not ENet protocol
     EXPECT_EQ(h.tb->peers().size(), 1u);
+}
+
+// A port in use is refused with the system's reason and what to do about it.
+TEST(EnetTransport, APortInUseIsRefusedWithTheReason)
+{
+    auto first = make_enet_transport();
+    auto taken = first->open(Address{{127, 0, 0, 1}, 0});
+    if (!taken)
+        GTEST_SKIP() << "cannot bind UDP on 127.0.0.1: " << taken.error().message;
+    auto second = make_enet_transport();
+    auto again = second->open(Address{{127, 0, 0, 1}, taken->port});
+    ASSERT_FALSE(again);
+    EXPECT_EQ(again.error().code, core::ErrorCode::NetworkError);
+    EXPECT_NE(again.error().message.find(std::to_string(taken->port)), std::string::npos)
+        << again.error().message;
+    EXPECT_NE(again.error().message.find(std::strerror(EADDRINUSE)), std::string::npos)
+        << again.error().message;
+    EXPECT_NE(again.error().message.find("--port"), std::string::npos) << again.error().message;
 }
 
 TEST(EnetTransport, ConnectingToAClosedPortTimesOut)
