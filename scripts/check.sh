@@ -10,7 +10,8 @@
 #   5. ASan+UBSan build + the whole test suite
 #   6. a short smoke run of each fuzz target's corpus replayer (when fuzz/ exists)
 # Environment: PLIANT_CHECK_LEGS="format includes release asan fuzz" to choose legs;
-# PLIANT_JOBS (default: number of cores).
+# PLIANT_JOBS (default: number of cores). Under CI (CI=true) warnings are errors; elsewhere they
+# are printed only, so that another compiler's new warning cannot stop a user's build.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -37,7 +38,9 @@ fi
 run_preset() {
     local preset=$1
     banner "$preset build"
-    cmake --preset "$preset" >/dev/null
+    local werror=()
+    if [ "${CI:-}" = "true" ]; then werror=(-DCMAKE_COMPILE_WARNING_AS_ERROR=ON); fi
+    cmake --preset "$preset" "${werror[@]}" >/dev/null
     cmake --build --preset "$preset" -j "$jobs"
     banner "$preset tests"
     ctest --preset "$preset" -j "$jobs"

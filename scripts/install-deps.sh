@@ -10,7 +10,7 @@ set -euo pipefail
 
 packages=(
     # toolchain
-    build-essential cmake ninja-build pkg-config clang clang-format libclang-rt-14-dev python3
+    build-essential cmake ninja-build pkg-config clang clang-format libclang-rt-14-dev python3 git
     # libraries of the field
     libeigen3-dev libassimp-dev libenet-dev libzstd-dev libspdlog-dev libfmt-dev libcli11-dev
     libtomlplusplus-dev nlohmann-json3-dev libsodium-dev libomp-dev libpng-dev
