@@ -82,8 +82,9 @@ void print_text(const InfoOptions& opt, const mesh::ImportReport& r, const mesh:
     { std::printf("  %-22s %s\n", key, value.c_str()); };
     const auto n = [](std::size_t v) { return std::to_string(v); };
     std::printf("%s (%s)\n", opt.mesh.string().c_str(), r.format.c_str());
-    row("vertices", n(s.vertices) + "  (file " + n(r.file_vertices) + ", welded " + n(r.welded) +
-                        ", unreferenced dropped " + n(r.unreferenced_dropped) + ")");
+    row("vertices", n(s.vertices) + "  (file " + n(r.file_vertices) + ", " + n(r.welded) +
+                        " reader vertices welded" + ", unreferenced dropped " +
+                        n(r.unreferenced_dropped) + ")");
     row("faces", n(s.faces) + "  (" + n(r.polygons_triangulated) + " polygons triangulated)");
     row("edges", n(s.edges));
     row("components", n(s.components));

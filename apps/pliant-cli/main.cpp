@@ -5,6 +5,9 @@
 #include "commands.h"
 
 #include <algorithm>
+#include <cstdio>
+#include <string>
+#include <string_view>
 
 namespace pliant::cli
 {
@@ -32,8 +35,9 @@ int main(int argc, char** argv)
     app.set_version_flag("--version", std::string("pliant ") + PLIANT_VERSION);
 
     pliant::cli::GlobalOptions global;
-    app.add_flag("-v,--verbose", global.verbose, "Print debug details and timings");
-    app.add_flag("-q,--quiet", global.quiet, "Print only errors (no progress bars)");
+    auto* verbose = app.add_flag("-v,--verbose", global.verbose, "Print debug details and timings");
+    app.add_flag("-q,--quiet", global.quiet, "Print only errors (no progress bars)")
+        ->excludes(verbose);
 
     auto& registry = pliant::cli::command_registry();
     std::sort(registry.begin(), registry.end(),
@@ -41,6 +45,28 @@ int main(int argc, char** argv)
     for (const auto& spec : registry)
         spec.add(app, global);
 
+    // The global options are flags, so the first argument that is not one names the command;
+    // CLI11 alone would answer an unknown one with "A subcommand is required".
+    for (int i = 1; i < argc; ++i)
+    {
+        const std::string_view arg = argv[i];
+        if (arg.starts_with('-'))
+            continue;
+        const auto subs = app.get_subcommands({});
+        if (std::none_of(subs.begin(), subs.end(),
+                         [&](CLI::App* sub) { return sub->check_name(std::string(arg)); }))
+        {
+            std::string names;
+            for (const CLI::App* sub : subs)
+                names += (names.empty() ? "" : ", ") + sub->get_name();
+            std::fprintf(stderr,
+                         "pliant: unknown command '%s'; the commands are: %s\n"
+                         "Run with --help for more information.\n",
+                         argv[i], names.c_str());
+            return pliant::cli::k_exit_usage;
+        }
+        break;
+    }
     try
     {
         app.parse(argc, argv);

@@ -45,6 +45,10 @@ if(TARGET pliant)
     pliant_cli_expect(cli_usage_missing_argument 2 STDERR "MASTER is required" join)
     pliant_cli_expect(cli_usage_needs 2 STDERR "--cap requires --compress" join 127.0.0.1:7777 --cap 1)
     pliant_cli_expect(cli_usage_no_command 2 STDERR "A subcommand is required")
+    pliant_cli_expect(cli_usage_unknown_command 2 STDERR
+                      "unknown command 'nosuch'; the commands are: demo, info, remesh" nosuch)
+    pliant_cli_expect(cli_usage_verbose_and_quiet 2 STDERR "--verbose excludes --quiet"
+                      -v -q info ${PROJECT_SOURCE_DIR}/data/spot.obj)
     # An empty secret would open the session to anyone (`--passphrase "$SECRET"`, SECRET unset).
     add_test(NAME cli_usage_empty_passphrase
              COMMAND ${CMAKE_COMMAND}
