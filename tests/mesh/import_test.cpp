@@ -16,6 +16,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <ostream>
 #include <random>
 #include <string>
 
@@ -40,6 +41,13 @@ struct Expected
     ErrorCode code;
     bool ok;
 };
+
+// The test's name shows the file (gtest would print the struct's bytes, a pointer among them,
+// which changes the ctest names from build to build).
+void PrintTo(const Expected& e, std::ostream* os)
+{
+    *os << e.file;
+}
 
 // tests/data/meshes/README.md, "Positive set" and "Negative set".
 const Expected k_table[] = {
