@@ -44,6 +44,9 @@ constexpr std::uint32_t k_none = UINT32_MAX;
 /// exactly collinear points land here even after rounding to float, while the skinniest real
 /// triangles of the test meshes stay well above it (docs/mesh.md).
 constexpr double k_degenerate_ratio = 1e-6;
+/// Coordinates above this many bounding-box diagonals: far enough from the origin that float
+/// rounding (one part in 1.7e7) comes within a ten-thousandth of the mesh's size.
+constexpr double k_far_from_origin = 1e3;
 
 class UnionFind
 {
@@ -370,6 +373,13 @@ std::string point(const TriMesh& mesh, std::uint32_t v)
     return buf.data();
 }
 
+std::string fmt_number(double v)
+{
+    std::array<char, 32> buf{};
+    std::snprintf(buf.data(), buf.size(), "%g", v);
+    return buf.data();
+}
+
 std::string plural(std::size_t n, const char* one, const char* many)
 {
     return std::to_string(n) + " " + (n == 1 ? one : many);
@@ -407,11 +417,23 @@ core::Result<void> validate(const TriMesh& mesh, std::string_view source_name)
     if (s.degenerate_faces > 0)
     {
         const Face& f = mesh.faces[ex.degenerate_face];
-        return fail(ErrorCode::DegenerateFace,
-                    src + ": degenerate face " + str(ex.degenerate_face) + " (vertices " +
-                        str(f[0]) + ", " + str(f[1]) + ", " + str(f[2]) + "): " +
-                        (ex.degenerate_repeated ? "a repeated vertex" : "zero area") + " (" +
-                        plural(s.degenerate_faces, "degenerate face", "degenerate faces") + ")");
+        // Files are read in single precision (Assimp's float): far from the origin, vertices
+        // closer than a float's step there become one, and their faces degenerate.
+        const double reach =
+            std::max({std::abs(s.bbox_min.x), std::abs(s.bbox_min.y), std::abs(s.bbox_min.z),
+                      std::abs(s.bbox_max.x), std::abs(s.bbox_max.y), std::abs(s.bbox_max.z)});
+        const bool far = s.bbox_diagonal > 0.0 && reach > k_far_from_origin * s.bbox_diagonal;
+        return fail(
+            ErrorCode::DegenerateFace,
+            src + ": degenerate face " + str(ex.degenerate_face) + " (vertices " + str(f[0]) +
+                ", " + str(f[1]) + ", " + str(f[2]) + " at " + point(mesh, f[0]) +
+                "): " + (ex.degenerate_repeated ? "a repeated vertex" : "zero area") + " (" +
+                plural(s.degenerate_faces, "degenerate face", "degenerate faces") + ")" +
+                (far ? "; the mesh lies far from the origin (coordinates up to " +
+                           fmt_number(reach) + ", size " + fmt_number(s.bbox_diagonal) +
+                           ") and positions are read as 32-bit floats, which merge "
+                           "nearby vertices there: move it near the origin"
+                     : std::string()));
     }
     if (s.non_manifold_edges > 0)
         return fail(
@@ -439,9 +461,11 @@ core::Result<void> validate(const TriMesh& mesh, std::string_view source_name)
                     src + ": inconsistent orientation: " +
                         plural(s.inconsistent_edges, "edge is", "edges are") +
                         " traversed the same way by both faces (first: edge " +
-                        str(ex.inconsistent_edge[0]) + "-" + str(ex.inconsistent_edge[1]) +
-                        " of faces " + str(ex.inconsistent_faces[0]) + " and " +
-                        str(ex.inconsistent_faces[1]) + ")");
+                        str(ex.inconsistent_edge[0]) + "-" + str(ex.inconsistent_edge[1]) + " " +
+                        point(mesh, ex.inconsistent_edge[0]) + "-" +
+                        point(mesh, ex.inconsistent_edge[1]) + " of faces " +
+                        str(ex.inconsistent_faces[0]) + " and " + str(ex.inconsistent_faces[1]) +
+                        ")");
     if (s.components > 1)
     {
         std::string sizes;

@@ -184,6 +184,15 @@ TEST(Validate, DegenerateFacesRepeatedIndexAndZeroArea)
     flat.faces.push_back({0, 2, 6});  // (1,0,0), (0,1,0), (0.5,0.5,0): collinear
     EXPECT_EQ(code_of(flat), ErrorCode::DegenerateFace);
     EXPECT_NE(message_of(flat).find("zero area"), std::string::npos) << message_of(flat);
+    EXPECT_EQ(message_of(flat).find("far from the origin"), std::string::npos) << message_of(flat);
+
+    // The same far from the origin: the message points at float rounding and says where.
+    for (core::Vec3& p : repeated.positions)
+        p = p + core::Vec3{1e5, -2e5, 3e5};
+    EXPECT_EQ(code_of(repeated), ErrorCode::DegenerateFace);
+    const std::string far = message_of(repeated);
+    EXPECT_NE(far.find("far from the origin (coordinates up to 300001"), std::string::npos) << far;
+    EXPECT_NE(far.find("at (99999, -200000, 300000)"), std::string::npos) << far;
 }
 
 TEST(Validate, FlippedFaceIsInconsistentOrientation)
