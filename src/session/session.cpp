@@ -2160,7 +2160,12 @@ struct Session::Impl
             close_all(net::DisconnectReason::Quit);
             return;
         }
-        spdlog::info("session: master {} lost; peer {} takes over", master_id.value, next->value);
+        if (leaving)  // our own leave: nothing the user needs to hear about
+            spdlog::debug("session: leaving; master {} gone, following peer {}", master_id.value,
+                          next->value);
+        else
+            spdlog::info("session: master {} lost; peer {} takes over", master_id.value,
+                         next->value);
         master_id = *next;
         if (*next == s.id_)
         {
