@@ -3371,6 +3371,26 @@ std::vector<net::PeerId> Session::owners() const
     return p != nullptr ? p->owners : std::vector<net::PeerId>{};
 }
 
+double Session::shown_time() const
+{
+    if (role_ != SessionRole::Viewer)
+        return state_.time;
+    double t = state_.time;
+    for (const double leaf : impl_->leaf_time)
+        t = std::max(t, leaf);
+    return t;
+}
+
+std::uint64_t Session::shown_tick() const
+{
+    if (role_ != SessionRole::Viewer)
+        return state_.tick;
+    std::uint64_t t = state_.tick;
+    for (const std::uint64_t leaf : impl_->leaf_tick)
+        t = std::max(t, leaf);
+    return t;
+}
+
 std::vector<net::PeerId> Session::state_owners() const
 {
     const PartitionEntry* p = impl_->stream_partition();

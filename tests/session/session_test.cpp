@@ -146,6 +146,12 @@ void run_exact(int participants, bool late_viewer, bool one_leaves, int level = 
         EXPECT_LE(compare(g, v.display_u(), ref.u, {}).relative(), 1e-12);
         EXPECT_LE(compare(g, v.display_v(), ref.v, {}).relative(), 1e-12);
         EXPECT_GT(v.stats().bytes_received, 0U);
+        // What the viewer shows is of the session's last tick, though it steps nothing (its own
+        // tick stays where it joined).
+        EXPECT_EQ(v.shown_tick(), k_ticks);
+        EXPECT_EQ(v.shown_time(), h.peers[0]->time());
+        EXPECT_LT(v.tick(), k_ticks);
+        EXPECT_EQ(h.peers[0]->shown_tick(), h.peers[0]->tick());
     }
 }
 

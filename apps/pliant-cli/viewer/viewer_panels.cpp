@@ -78,7 +78,7 @@ void Viewer::draw_panels()
         ImGui::ProgressBar(static_cast<float>(fraction), ImVec2(-1.0F, 0.0F), phase.c_str());
     }
     ImGui::Text("%.1f fps, sim t = %.2f s", 1000.0 / std::max(0.01, double{frame_ms_.latest()}),
-                session_ ? session_->time() : (local_ ? local_->state().time : 0.0));
+                session_ ? session_->shown_time() : (local_ ? local_->state().time : 0.0));
 
     if (ImGui::CollapsingHeader("Load"))
     {
@@ -206,7 +206,7 @@ void Viewer::draw_panels()
                         static_cast<unsigned>(session_->id().value),
                         session_->coupling() == session::Coupling::Exact ? "exact" : "fast");
             ImGui::Text("tick %llu, partition epoch %u",
-                        static_cast<unsigned long long>(session_->tick()), session_->epoch());
+                        static_cast<unsigned long long>(session_->shown_tick()), session_->epoch());
             // Owned node counts per peer, from the newest partition.
             std::map<std::uint16_t, std::size_t> owned;
             const auto owners = session_->owners();

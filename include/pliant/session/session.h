@@ -324,6 +324,10 @@ public:
     /// The tick of the integrated state (exact mode: the lockstep tick).
     [[nodiscard]] std::uint64_t tick() const noexcept { return state_.tick; }
     [[nodiscard]] double time() const noexcept { return state_.time; }
+    /// The newest session time and tick this peer shows: its own (time(), tick()) when it
+    /// simulates, else (a viewer) those of the newest leaf state received.
+    [[nodiscard]] double shown_time() const;
+    [[nodiscard]] std::uint64_t shown_tick() const;
     /// The newest partition known (epoch 0: none).
     [[nodiscard]] std::uint32_t epoch() const noexcept;
     /// Owner of every leaf under the newest partition (empty: none).
