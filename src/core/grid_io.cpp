@@ -3,6 +3,7 @@
 #include <pliant/core/grid_io.h>
 #include <pliant/core/hash.h>
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstring>
@@ -49,6 +50,34 @@ private:
     std::size_t pos_ = 0;
 };
 
+/// The rules of a channel (docs/grid-format.md) that both save_grid and load_grid enforce, so
+/// that every file written can be read: a name of 1..15 printable ASCII characters, finite
+/// values, twin nodes equal to their canonical nodes. `where` prefixes the message.
+Result<void> check_channel(const TetraGrid& grid, const std::string& name,
+                           const Field<double>& values, const std::string& where)
+{
+    const bool printable =
+        std::all_of(name.begin(), name.end(), [](char c) { return c > 0x20 && c < 0x7f; });
+    if (name.empty() || name.size() >= k_name_bytes || !printable)
+        return fail(ErrorCode::BadGrid, where + "channel name '" + name +
+                                            "' must have 1..15 printable ASCII characters");
+    for (std::uint32_t i = 0; i < grid.node_count(); ++i)
+        if (!std::isfinite(values[NodeIndex{i}]))
+            return fail(ErrorCode::BadGrid, where + "channel '" + name +
+                                                "' has a non-finite value at node " +
+                                                std::to_string(i));
+    for (const TwinPair& t : grid.twins())
+        if (values[t.twin] != values[t.canonical])
+        {
+            const GridCoord a = grid.coord(t.twin), b = grid.coord(t.canonical);
+            return fail(ErrorCode::BadGrid,
+                        where + "channel '" + name + "': twin node (" + std::to_string(a.x) + "," +
+                            std::to_string(a.y) + ") differs from its canonical node (" +
+                            std::to_string(b.x) + "," + std::to_string(b.y) + ")");
+        }
+    return {};
+}
+
 }  // namespace
 
 const Field<double>* GridFile::find(std::string_view name) const noexcept
@@ -73,14 +102,14 @@ Result<void> save_grid(const std::filesystem::path& path, const GridFile& file)
     std::vector<double> plane(grid->node_count());
     for (const NamedField& f : file.fields)
     {
-        if (f.name.empty() || f.name.size() >= k_name_bytes)
-            return fail(ErrorCode::InvalidArgument,
-                        "save_grid: channel name '" + f.name + "' must have 1..15 characters");
         if (f.values.level() != file.level)
             return fail(ErrorCode::InvalidArgument,
                         "save_grid: channel '" + f.name + "' is of level " +
                             std::to_string(f.values.level()) + ", the file of level " +
                             std::to_string(file.level));
+        if (auto ok = check_channel(*grid, f.name, f.values, "save_grid: " + path.string() + ": ");
+            !ok)
+            return fail(ErrorCode::InvalidArgument, ok.error().message);
         char name[k_name_bytes] = {};
         std::memcpy(name, f.name.data(), f.name.size());
         out.insert(out.end(), reinterpret_cast<const std::byte*>(name),
@@ -152,21 +181,9 @@ Result<GridFile> load_grid(const std::filesystem::path& path)
         (void)r.read(name, k_name_bytes);
         (void)r.read(plane.data(), plane_bytes);
         NamedField f{std::string(name), Field<double>(*grid)};
-        for (std::size_t i = 0; i < plane.size(); ++i)
-            if (!std::isfinite(plane[i]))
-                return fail(ErrorCode::BadGrid, where + "channel '" + f.name +
-                                                    "' has a non-finite value at node " +
-                                                    std::to_string(i));
         f.values.copy_from(plane);
-        for (const TwinPair& t : grid->twins())
-            if (f.values[t.twin] != f.values[t.canonical])
-            {
-                const GridCoord a = grid->coord(t.twin), b = grid->coord(t.canonical);
-                return fail(ErrorCode::BadGrid,
-                            where + "channel '" + f.name + "': twin node (" + std::to_string(a.x) +
-                                "," + std::to_string(a.y) + ") differs from its canonical node (" +
-                                std::to_string(b.x) + "," + std::to_string(b.y) + ")");
-            }
+        if (auto ok = check_channel(*grid, f.name, f.values, where); !ok)
+            return ok.error();
         file.fields.push_back(std::move(f));
     }
     return file;

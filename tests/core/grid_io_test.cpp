@@ -1,14 +1,20 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: 2026 pliant contributors
 #include <pliant/core/grid_io.h>
+#include <pliant/core/hash.h>
 
 #include <gtest/gtest.h>
 
 #include "support/test_paths.h"
 
 #include <cmath>
+#include <cstring>
+#include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <limits>
+#include <span>
+#include <vector>
 
 namespace pliant::core
 {
@@ -95,12 +101,52 @@ TEST(GridIo, RefusesTwinsThatDiffer)
     const auto dir = test::scratch_dir("grid_io_twins");
     const TetraGrid g = TetraGrid::create(2).value();
     auto p = some_positions(g);
-    p[0].at(2 * g.w(), 1) += 1.0;  // a twin that no longer equals its canonical node
+    // save_grid writes only what load_grid reads: a twin that no longer equals its canonical
+    // node is refused on the way out.
+    auto bad = p;
+    bad[0].at(2 * g.w(), 1) += 1.0;
+    auto saved = save_grid(dir / "bad.pgrid", make_geometry_file(g, bad));
+    ASSERT_FALSE(saved);
+    EXPECT_EQ(saved.error().code, ErrorCode::InvalidArgument);
+    EXPECT_NE(saved.error().message.find("twin"), std::string::npos) << saved.error().message;
+    EXPECT_FALSE(std::filesystem::exists(dir / "bad.pgrid"));
+
+    // The same change made in a file's bytes (checksum recomputed) is refused on the way in.
     ASSERT_TRUE(save_grid(dir / "t.pgrid", make_geometry_file(g, p)));
+    std::vector<char> raw;
+    {
+        std::ifstream is(dir / "t.pgrid", std::ios::binary);
+        raw.assign(std::istreambuf_iterator<char>(is), std::istreambuf_iterator<char>());
+    }
+    // Header 20 bytes, then channel px: a 16-byte name and the plane.
+    const std::size_t at = 20 + 16 + 8 * static_cast<std::size_t>(g.index(2 * g.w(), 1).value);
+    double v = 0.0;
+    std::memcpy(&v, raw.data() + at, 8);
+    v += 1.0;
+    std::memcpy(raw.data() + at, &v, 8);
+    const std::uint64_t h =
+        hash_bytes(std::as_bytes(std::span<const char>(raw.data(), raw.size() - 8)));
+    std::memcpy(raw.data() + raw.size() - 8, &h, 8);
+    std::ofstream(dir / "t.pgrid", std::ios::binary | std::ios::trunc)
+        .write(raw.data(), static_cast<std::streamsize>(raw.size()));
     auto in = load_grid(dir / "t.pgrid");
     ASSERT_FALSE(in.has_value());
     EXPECT_EQ(in.error().code, ErrorCode::BadGrid);
-    EXPECT_NE(in.error().message.find("twin"), std::string::npos);
+    EXPECT_NE(in.error().message.find("twin"), std::string::npos) << in.error().message;
+}
+
+TEST(GridIo, ChannelNamesFollowTheFormatBothWays)
+{
+    const auto dir = test::scratch_dir("grid_io_names");
+    const TetraGrid g = TetraGrid::create(2).value();
+    GridFile file = make_geometry_file(g, some_positions(g));
+    file.fields.push_back({"", Field<double>(g)});
+    EXPECT_FALSE(save_grid(dir / "e.pgrid", file));
+    file.fields.back().name = "sixteen_chars_xx";
+    EXPECT_FALSE(save_grid(dir / "l.pgrid", file));
+    file.fields.back().name = "fifteen_chars_x";
+    ASSERT_TRUE(save_grid(dir / "ok.pgrid", file));
+    EXPECT_TRUE(load_grid(dir / "ok.pgrid"));
 }
 
 }  // namespace
