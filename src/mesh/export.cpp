@@ -30,6 +30,7 @@
 #include <assimp/config.h>
 #include <assimp/material.h>
 #include <assimp/scene.h>
+#include <nlohmann/json.hpp>
 
 #include "mesh/fp_hold_internal.h"
 
@@ -45,6 +46,7 @@
 #include <limits>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace pliant::mesh
@@ -230,6 +232,58 @@ core::Result<void> check_for_gltf(const std::filesystem::path& path, const TriMe
     return {};
 }
 
+/// Assimp 5.2's glTF exporter lists KHR_materials_volume and FB_ngon_encoding in
+/// `extensionsUsed` whatever the scene uses, which validators flag. Drops the names that appear
+/// nowhere else in the document (and the list when none is left). \return the JSON text.
+std::string without_unused_extensions(std::string_view json_text, int indent)
+{
+    nlohmann::ordered_json doc = nlohmann::ordered_json::parse(json_text);
+    auto used = doc.find("extensionsUsed");
+    if (used == doc.end() || !used->is_array())
+        return std::string(json_text);
+    nlohmann::ordered_json rest = doc;
+    rest.erase("extensionsUsed");
+    const std::string others = rest.dump();
+    nlohmann::ordered_json kept = nlohmann::ordered_json::array();
+    for (const auto& name : *used)
+        if (name.is_string() &&
+            others.find('"' + name.get<std::string>() + '"') != std::string::npos)
+            kept.push_back(name);
+    if (kept.empty())
+        doc.erase("extensionsUsed");
+    else
+        *used = kept;
+    return doc.dump(indent);
+}
+
+/// The .glb container (glTF 2.0 §4.4) with its JSON chunk replaced by `json_text` (padded with
+/// spaces to 4 bytes), the binary chunk kept. Empty if `glb` is not a well-formed container.
+std::string with_json_chunk(std::string_view glb, std::string json_text)
+{
+    const auto u32 = [&](std::size_t at)
+    {
+        std::uint32_t v = 0;
+        std::memcpy(&v, glb.data() + at, 4);
+        return v;
+    };
+    if (glb.size() < 20 || glb.substr(0, 4) != "glTF" || u32(16) != 0x4E4F534Au)  // "JSON"
+        return {};
+    const std::size_t json_end = 20 + std::size_t{u32(12)};
+    if (json_end > glb.size())
+        return {};
+    while (json_text.size() % 4 != 0)
+        json_text.push_back(' ');
+    std::string out(glb.substr(0, 12));
+    const auto put = [&](std::uint32_t v) { out.append(reinterpret_cast<const char*>(&v), 4); };
+    put(static_cast<std::uint32_t>(json_text.size()));
+    put(0x4E4F534Au);
+    out += json_text;
+    out += glb.substr(json_end);  // the BIN chunk, unchanged
+    const auto total = static_cast<std::uint32_t>(out.size());
+    std::memcpy(out.data() + 8, &total, 4);
+    return out;
+}
+
 core::Result<void> write_gltf(const std::filesystem::path& path, const TriMesh& mesh, bool binary)
 {
     if (auto ok = check_for_gltf(path, mesh); !ok)
@@ -271,7 +325,30 @@ core::Result<void> write_gltf(const std::filesystem::path& path, const TriMesh& 
             !ok)
             return ok;
     }
-    return write_file(path, static_cast<const char*>(blob->data), blob->size);
+    const std::string_view written(static_cast<const char*>(blob->data), blob->size);
+    std::string cleaned;
+    try
+    {
+        if (binary)
+        {
+            std::uint32_t json_size = 0;
+            if (written.size() >= 20)
+                std::memcpy(&json_size, written.data() + 12, 4);
+            if (written.size() >= 20 + std::size_t{json_size})
+                cleaned = with_json_chunk(
+                    written, without_unused_extensions(written.substr(20, json_size), -1));
+        }
+        else
+            cleaned = without_unused_extensions(written, 4);
+    }
+    catch (const nlohmann::json::exception& e)
+    {
+        return fail(ErrorCode::IoError,
+                    name + ": Assimp's glTF exporter wrote JSON that does not parse: " + e.what());
+    }
+    if (cleaned.empty())
+        return fail(ErrorCode::IoError, name + ": Assimp's glTF exporter wrote a malformed .glb");
+    return write_file(path, cleaned.data(), cleaned.size());
 }
 
 }  // namespace

@@ -322,6 +322,24 @@ TEST(Export, GlbReadByAnIndependentReader)
     }
 }
 
+// Assimp's exporter declares two extensions it does not use (validators warn); pliant's files
+// declare none, as the surface uses none, and the .glb container stays well formed (the reader
+// above parses it).
+TEST(Export, GltfAndGlbDeclareNoUnusedExtension)
+{
+    const auto dir = test::scratch_dir("mesh_gltf_extensions");
+    const TriMesh m = scenes::octahedron();
+    ASSERT_TRUE(export_mesh(dir / "e.gltf", m));
+    ASSERT_TRUE(export_mesh(dir / "e.glb", m));
+    EXPECT_EQ(test::read_all(dir / "e.gltf").find("extensions"), std::string::npos);
+    const std::string glb = test::read_all(dir / "e.glb");
+    EXPECT_EQ(glb.find("extensions"), std::string::npos);
+    EXPECT_EQ(read_glb(glb).faces, m.faces);
+    auto back = import_mesh(dir / "e.gltf");
+    ASSERT_TRUE(back) << back.error().message;
+    expect_same_surface_to_float(m, *back);
+}
+
 TEST(Export, GltfBufferIsASideFileNamedRelatively)
 {
     // s.gltf names its buffer "s.bin" (no folder), so the pair still imports after a move.
