@@ -112,8 +112,10 @@ void ProgressBar::update(std::string_view phase, double fraction) noexcept
     }
     else
     {
-        const int step = percent / 10;  // one line per 10 %
-        if (step == last_step_ / 10 && last_step_ >= 0)
+        // One line per 10 %, once the phase has run a second (a log of a short phase keeps
+        // only its end), and always its end.
+        const int step = percent / 10;
+        if ((step == last_step_ / 10 && last_step_ >= 0) || (percent < 100 && elapsed < 1.0))
             return;
         std::fprintf(stderr, "%s: %d%% (%.1fs)\n", phase_.c_str(), step * 10, elapsed);
         last_step_ = step * 10;
