@@ -5,7 +5,8 @@
 /// \file
 /// Contract checks (STYLE.md §5, kind 1). `PLIANT_ASSERT` is on unless `PLIANT_DISABLE_ASSERT` is
 /// defined (the release preset keeps it on outside hot loops; kernels use `PLIANT_DEBUG_ASSERT`,
-/// which is on only without NDEBUG). The handler can be replaced, e.g. by tests.
+/// which is on only without NDEBUG: in the dev and asan presets, so CI's sanitizer leg runs
+/// them). The handler can be replaced, e.g. by tests.
 
 namespace pliant::core
 {
