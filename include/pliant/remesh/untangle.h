@@ -40,7 +40,7 @@ namespace pliant::remesh
 struct UntangleSettings
 {
     bool enabled = true;  ///< false: only measure (the *_sampled and final counts agree)
-    int max_rounds = 16;  ///< rounds of smoothing and checking
+    int max_rounds = 6;   ///< rounds of smoothing and checking
     int sweeps = 3;       ///< Gauss-Seidel sweeps per round
     int rings = 2;        ///< grid rings around the bad triangles smoothed in the first round
     int patience = 4;     ///< stop after this many rounds without a lower count
