@@ -40,6 +40,7 @@ struct RemeshOptions
     int level = 7;
     std::string method = "auto";
     bool no_measure = false;
+    bool no_untangle = false;
     bool gpu = false;
     std::string domain_map = "equal-area";
 };
@@ -54,6 +55,33 @@ int run_remesh(const RemeshOptions& opt, const GlobalOptions& global)
                        "remesh: output '" + opt.output.string() +
                            "' must end in .pgrid, .obj, .ply, .gltf, .glb or .pfm"});
 
+    // fail before minutes of work, not after: a path that cannot be written is refused now (a
+    // file the check creates is removed again if the remeshing fails)
+    const bool output_existed = std::filesystem::exists(opt.output);
+    const bool report_existed = !opt.report.empty() && std::filesystem::exists(opt.report);
+    if (auto ok = check_writable(opt.output, "remesh: -o"); !ok)
+        return report(ok.error());
+    if (!opt.report.empty())
+        if (auto ok = check_writable(opt.report, "remesh: --report"); !ok)
+        {
+            if (!output_existed)
+                std::filesystem::remove(opt.output);
+            return report(ok.error());
+        }
+    struct RemoveOnFailure
+    {
+        const std::filesystem::path* path;
+        bool keep;
+        ~RemoveOnFailure()
+        {
+            std::error_code ec;
+            if (!keep && !path->empty())
+                std::filesystem::remove(*path, ec);
+        }
+    };
+    RemoveOnFailure keep_output{&opt.output, output_existed};
+    RemoveOnFailure keep_report{&opt.report, report_existed};
+
     auto m = mesh::import_mesh(input);
     if (!m)
         return report(m.error());
@@ -64,7 +92,8 @@ int run_remesh(const RemeshOptions& opt, const GlobalOptions& global)
     settings.level = opt.level;
     const bool gnomonic = opt.domain_map == "gnomonic";
     settings.domain_map = gnomonic ? core::SphereMap::Gnomonic : core::SphereMap::EqualArea;
-    settings.measure = !opt.no_measure || !opt.report.empty();
+    settings.measure = !opt.no_measure;
+    settings.untangle.enabled = !opt.no_untangle;
     settings.sphere.method = opt.method == "spring"   ? remesh::SphereMethod::SpringEmbedder
                              : opt.method == "coarse" ? remesh::SphereMethod::CoarseToFine
                                                       : remesh::SphereMethod::Auto;
@@ -131,6 +160,17 @@ int run_remesh(const RemeshOptions& opt, const GlobalOptions& global)
         return report(result.error());
     }
 
+    const remesh::QualityReport& q = result->report;
+    const std::size_t allowed = q.input_checked ? q.input_intersections : 0;
+    if (q.untangle.intersections > allowed || q.untangle.folded > 0)
+        spdlog::warn(
+            "remesh: the output has {} intersecting triangle pairs (the input {}) and {} folded "
+            "triangles: the remesher added self-intersections or folds that untangling could "
+            "not remove; try another --level (docs/remesh.md §3.2)",
+            q.untangle.intersections,
+            q.input_checked ? std::to_string(q.input_intersections) : std::string("unchecked"),
+            q.untangle.folded);
+
     core::Result<void> written;
     if (ext == ".pgrid")
         written =
@@ -142,6 +182,7 @@ int run_remesh(const RemeshOptions& opt, const GlobalOptions& global)
             mesh::export_mesh(opt.output, remesh::grid_surface(result->grid, result->positions));
     if (!written)
         return report(written.error());
+    keep_output.keep = true;
 
     const std::string json = remesh::to_json(result->report);
     if (!opt.report.empty())
@@ -152,6 +193,7 @@ int run_remesh(const RemeshOptions& opt, const GlobalOptions& global)
             return report({core::ErrorCode::IoError,
                            "remesh: cannot write report '" + opt.report.string() + "'"});
     }
+    keep_report.keep = true;
     if (!global.quiet)
         std::fputs(remesh::to_text(result->report).c_str(), stdout);
     spdlog::debug("remesh: wrote {}", opt.output.string());
@@ -169,7 +211,10 @@ void add_remesh_command(CLI::App& app, const GlobalOptions& global)
         "over a progressive mesh), the grid's tetrahedron is laid on the sphere (equal-area by\n"
         "default, so the samples spread evenly; --domain-map gnomonic for the paper's central\n"
         "projection), and the input surface is sampled at every grid node. A result with\n"
-        "inverted triangles is never written. The quality report (distances, PSNR, stretch,\n"
+        "inverted triangles is never written. Output triangles that fold over or cross\n"
+        "each other where the map is very anisotropic are untangled by moving their samples\n"
+        "along the surface (--no-untangle keeps them); a warning says when the output still\n"
+        "crosses itself more than the input. The quality report (distances, PSNR, stretch,\n"
         "area spread, times) is printed and, with --report, written as JSON (keys in\n"
         "docs/remesh.md).\n\n"
         "--gpu samples on the GPU. The sphere-mapped mesh is rendered from the sphere's centre\n"
@@ -202,7 +247,11 @@ void add_remesh_command(CLI::App& app, const GlobalOptions& global)
         ->check(CLI::IsMember({"auto", "spring", "coarse"}))
         ->capture_default_str();
     cmd->add_flag("--no-measure", opt->no_measure,
-                  "Skip the distance measurement (about as long as the remeshing itself)");
+                  "Skip the distance measurement (about as long as the remeshing itself); the "
+                  "--report JSON then has no distance keys");
+    cmd->add_flag("--no-untangle", opt->no_untangle,
+                  "Keep the samples where the domain map puts them, folds and all (the report "
+                  "still counts them; for comparison, docs/remesh.md §3.2)");
     cmd->add_option("--domain-map", opt->domain_map,
                     "Where the grid's nodes lie on the sphere: equal-area (even samples) or "
                     "gnomonic (the paper's central projection)")

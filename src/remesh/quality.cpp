@@ -236,22 +236,36 @@ std::vector<Vec3> sample_points(const mesh::TriMesh& m, std::size_t count, std::
     return pts;
 }
 
+/// `progress` gets the fraction done mapped onto [base, base + span], once per block of samples
+/// (reported between parallel loops, from the calling thread).
 DirectedDistance directed(const mesh::TriMesh& from, const Bvh& to, const DistanceSettings& s,
-                          double& sum_sq)
+                          double& sum_sq, core::ProgressSink* progress, double base, double span)
 {
     const std::size_t n =
         s.samples > 0 ? s.samples : std::clamp<std::size_t>(3 * from.faces.size(), 50'000, 300'000);
     const std::vector<Vec3> pts = sample_points(from, n, s.seed);
     double sq = 0.0, sum = 0.0, mx = 0.0;
     const auto count = static_cast<std::ptrdiff_t>(pts.size());
-#pragma omp parallel for schedule(static) reduction(+ : sq, sum) reduction(max : mx)
-    for (std::ptrdiff_t i = 0; i < count; ++i)
+    constexpr std::ptrdiff_t k_block = 32'768;
+    for (std::ptrdiff_t b0 = 0; b0 < count; b0 += k_block)
     {
-        const double d2 = to.nearest2(pts[static_cast<std::size_t>(i)]);
-        const double d = std::sqrt(d2);
-        sq += d2;
-        sum += d;
-        mx = std::max(mx, d);
+        const std::ptrdiff_t b1 = std::min(count, b0 + k_block);
+        double bsq = 0.0, bsum = 0.0, bmx = 0.0;
+#pragma omp parallel for schedule(static) reduction(+ : bsq, bsum) reduction(max : bmx)
+        for (std::ptrdiff_t i = b0; i < b1; ++i)
+        {
+            const double d2 = to.nearest2(pts[static_cast<std::size_t>(i)]);
+            const double d = std::sqrt(d2);
+            bsq += d2;
+            bsum += d;
+            bmx = std::max(bmx, d);
+        }
+        sq += bsq;
+        sum += bsum;
+        mx = std::max(mx, bmx);
+        if (progress != nullptr && b1 < count)
+            progress->update("measure",
+                             base + span * static_cast<double>(b1) / static_cast<double>(count));
     }
     sum_sq = sq;
     DirectedDistance out;
@@ -271,7 +285,7 @@ double point_triangle_distance(const core::Vec3& p, const core::Vec3& a, const c
 }
 
 SurfaceDistance surface_distance(const mesh::TriMesh& reference, const mesh::TriMesh& other,
-                                 const DistanceSettings& settings)
+                                 const DistanceSettings& settings, core::ProgressSink* progress)
 {
     SurfaceDistance out;
     if (reference.positions.empty() || other.positions.empty() || reference.faces.empty() ||
@@ -287,8 +301,10 @@ SurfaceDistance surface_distance(const mesh::TriMesh& reference, const mesh::Tri
     const Bvh ref_bvh(reference);
     const Bvh other_bvh(other);
     double sq_a = 0.0, sq_b = 0.0;
-    out.reference_to_other = directed(reference, other_bvh, settings, sq_a);
-    out.other_to_reference = directed(other, ref_bvh, settings, sq_b);
+    out.reference_to_other = directed(reference, other_bvh, settings, sq_a, progress, 0.0, 0.5);
+    if (progress != nullptr)
+        progress->update("measure", 0.5);
+    out.other_to_reference = directed(other, ref_bvh, settings, sq_b, progress, 0.5, 0.5);
     const double n =
         static_cast<double>(out.reference_to_other.samples + out.other_to_reference.samples);
     out.rms = std::sqrt((sq_a + sq_b) / n);

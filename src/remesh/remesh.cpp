@@ -4,6 +4,7 @@
 // The remesh driver: runs the phases, times them, and assembles the report. Holds no
 // algorithm of its own.
 
+#include <pliant/remesh/intersections.h>
 #include <pliant/remesh/remesh.h>
 #include <pliant/remesh/sample.h>
 
@@ -106,6 +107,22 @@ core::Result<RemeshResult> remesh(const mesh::TriMesh& input, const RemeshSettin
     if (progress != nullptr)
         progress->update("sample", 1.0);
 
+    // folds and intersections the sampling made, repaired by moving sample points
+    t0 = Clock::now();
+    if (progress != nullptr)
+        progress->update("untangle", 0.0);
+    core::Vec3Field<double> points = domain;
+    report.untangle =
+        untangle_samples(*grid, *m, map->points, points, *positions, settings.untangle);
+    if (settings.check_input)
+    {
+        report.input_intersections = count_self_intersections(*m);
+        report.input_checked = true;
+    }
+    report.phases.push_back({"untangle", seconds_since(t0)});
+    if (progress != nullptr)
+        progress->update("untangle", 1.0);
+
     const mesh::TriMesh out = grid_surface(*grid, *positions);
     report.output_vertices = out.positions.size();
     report.output_faces = out.faces.size();
@@ -115,7 +132,7 @@ core::Result<RemeshResult> remesh(const mesh::TriMesh& input, const RemeshSettin
         t0 = Clock::now();
         if (progress != nullptr)
             progress->update("measure", 0.0);
-        report.distance = surface_distance(*m, out, settings.distance);
+        report.distance = surface_distance(*m, out, settings.distance, progress);
         report.measured = true;
         report.phases.push_back({"measure", seconds_since(t0)});
         if (progress != nullptr)
@@ -144,6 +161,14 @@ std::string to_json(const QualityReport& r)
     kv("domain_map", "\"" + r.domain_map + "\"");
     kv("rms_stretch", num(r.rms_stretch));
     kv("l2_stretch_efficiency", num(r.stretch_efficiency));
+    if (r.input_checked)
+        kv("input_self_intersections", std::to_string(r.input_intersections));
+    kv("folded_triangles_sampled", std::to_string(r.untangle.folded_sampled));
+    kv("self_intersections_sampled", std::to_string(r.untangle.intersections_sampled));
+    kv("folded_triangles", std::to_string(r.untangle.folded));
+    kv("self_intersections", std::to_string(r.untangle.intersections));
+    kv("untangle_moved_nodes", std::to_string(r.untangle.moved_nodes));
+    kv("untangle_rounds", std::to_string(r.untangle.rounds));
     if (r.measured)
     {
         const SurfaceDistance& d = r.distance;
@@ -191,6 +216,18 @@ std::string to_text(const QualityReport& r)
     std::snprintf(buf, sizeof buf, "rms stretch %.4f, L2 stretch efficiency %.4f\n", r.rms_stretch,
                   r.stretch_efficiency);
     s += buf;
+    std::snprintf(buf, sizeof buf,
+                  "output: %zu folded triangles, %zu intersecting triangle pairs (as sampled %zu "
+                  "and %zu; untangling moved %zu nodes in %d rounds)",
+                  r.untangle.folded, r.untangle.intersections, r.untangle.folded_sampled,
+                  r.untangle.intersections_sampled, r.untangle.moved_nodes, r.untangle.rounds);
+    s += buf;
+    if (r.input_checked)
+    {
+        std::snprintf(buf, sizeof buf, "; input: %zu intersecting pairs", r.input_intersections);
+        s += buf;
+    }
+    s += "\n";
     if (r.measured)
     {
         std::snprintf(buf, sizeof buf,

@@ -35,6 +35,20 @@ if(TARGET pliant)
                          cli_refine_bad_extension cli_refine_not_a_grid cli_refine_too_fine
                          PROPERTIES FIXTURES_REQUIRED cli_refine)
 
+    # remesh: -o and --report are checked before any work; --no-measure is honoured with
+    # --report (no distance line, and no distance keys in the JSON); the report counts folds and
+    # self-intersections of the output and of the input.
+    pliant_cli_expect(cli_remesh_unwritable_output 1 STDERR "remesh: -o: cannot write"
+                      remesh ${PROJECT_SOURCE_DIR}/data/spot.obj --level 3
+                      -o ${cli_dir}/no-such-dir/x.obj)
+    pliant_cli_expect(cli_remesh_unwritable_report 1 STDERR "remesh: --report: cannot write"
+                      remesh ${PROJECT_SOURCE_DIR}/data/spot.obj --level 3
+                      -o ${cli_dir}/x3.obj --report ${cli_dir}/no-such-dir/x.json)
+    pliant_cli_expect(cli_remesh_no_measure_report 0 STDOUT
+                      "0 folded triangles, 0 intersecting triangle pairs.*input: 0 intersecting pairs\ntriangle areas"
+                      remesh ${PROJECT_SOURCE_DIR}/data/spot.obj --level 4 --no-measure
+                      -o ${cli_dir}/spot4.obj --report ${cli_dir}/spot4.json)
+
     # Usage errors: status 2 from every command, with CLI11's message.
     pliant_cli_expect(cli_usage_levels_out_of_range 2 STDERR "--levels: Value 0 not in range"
                       refine x.pgrid --levels 0 -o x.obj)

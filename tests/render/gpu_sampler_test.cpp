@@ -374,6 +374,9 @@ TEST_F(GpuSamplerTest, RemeshRunsThePluggedSamplerAndReportsIt)
     settings.level = 5;
     settings.measure = false;
     settings.domain_map = core::SphereMap::Gnomonic;  // the GPU sampler's views need it
+    // the samplers are compared, not the untangling that follows them: on fox it moves many
+    // nodes, and float32 differences of 1e-6 can make it choose other moves
+    settings.untangle.enabled = false;
     auto cpu = remesh::remesh(*m, settings);
     ASSERT_TRUE(cpu) << cpu.error().message;
     EXPECT_EQ(cpu->report.sampler, "cpu");

@@ -13,6 +13,7 @@
 /// distance, Ericson 2005 §5.1.5). RMS pools the squared distances of both directions; the
 /// Hausdorff distance is the larger of the two directed maxima over the samples.
 
+#include <pliant/core/progress.h>
 #include <pliant/mesh/tri_mesh.h>
 
 #include <cstddef>
@@ -51,10 +52,13 @@ struct SurfaceDistance
 };
 
 /// Two-sided distance between `reference` (the input) and `other` (the remeshed surface).
+/// `progress` (optional) gets phase "measure" once per block of 32,768 samples, with fractions
+/// below 1 (the caller reports the end).
 /// \pre both non-empty with finite positions.
 [[nodiscard]] SurfaceDistance surface_distance(const mesh::TriMesh& reference,
                                                const mesh::TriMesh& other,
-                                               const DistanceSettings& settings = {});
+                                               const DistanceSettings& settings = {},
+                                               core::ProgressSink* progress = nullptr);
 
 /// Exact distance from `p` to the closest point of triangle (a, b, c) (tests use it as the
 /// obviously-correct reference for the BVH).

@@ -15,6 +15,7 @@
 #include <pliant/mesh/tri_mesh.h>
 #include <pliant/remesh/quality.h>
 #include <pliant/remesh/sphere_map.h>
+#include <pliant/remesh/untangle.h>
 
 #include <functional>
 #include <span>
@@ -45,6 +46,12 @@ struct RemeshSettings
     /// colour look-up (render::sample_on_gpu) and any other map GPU point location with exact
     /// CPU interpolation (render::locate_on_gpu, docs/remesh.md §3.1).
     core::SphereMap domain_map = core::SphereMap::EqualArea;
+    /// Untangle folded or intersecting output triangles after sampling (untangle_samples,
+    /// docs/remesh.md §3.2); `enabled = false` still counts them for the report.
+    UntangleSettings untangle;
+    /// Count the input's own self-intersections for the report, so that the remesher's can be
+    /// told apart from the input's (`input_self_intersections`).
+    bool check_input = true;
     bool measure = true;  ///< compute the distance part of the report (takes about as long as
                           ///< the remeshing itself)
     DistanceSettings distance;
@@ -77,6 +84,14 @@ struct QualityReport
     std::string domain_map;           ///< "equal-area" or "gnomonic"
     double rms_stretch = 0.0;
     double stretch_efficiency = 0.0;
+    /// Pairs of input faces sharing no vertex that intersect (intersecting_pairs); 0 when not
+    /// checked (RemeshSettings::check_input).
+    std::size_t input_intersections = 0;
+    bool input_checked = false;
+    /// Output triangles facing against the input surface at their samples (is_folded) and
+    /// intersecting pairs of output triangles sharing no vertex: as sampled, and in the result
+    /// (after untangling).
+    UntangleStats untangle;
     bool measured = false;  ///< whether `distance` was computed
     SurfaceDistance distance;
     AreaSpread areas;

@@ -1,0 +1,79 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+#pragma once
+
+/// \file
+/// Self-intersections of a triangle mesh and folded output triangles: the checks behind issue 3's
+/// "no self-intersections added by the remesher" (docs/remesh.md §3.2, §4).
+///
+/// Intersections: every pair of faces that share no edge and have a point in common other than a
+/// shared vertex (touching counts). A fold shows up as faces around one vertex overlapping, so
+/// pairs sharing one vertex count too. Broad phase: the faces' bounding boxes in a uniform grid
+/// (cell about twice the mean box extent), sorted by cell, each pair tested once, in the cell
+/// holding the low corner of the two boxes' overlap. Narrow phase: two non-coplanar triangles meet
+/// iff an edge of one meets the other (their common segment ends on edges), decided by orientation
+/// signs; the coplanar case by edge crossings and containment in the plane the normal's dominant
+/// axis leaves. Orientations are evaluated in double with Shewchuk's static error bound and, where
+/// that cannot decide the sign, again in 113-bit floating point (`__float128`, long double where
+/// the compiler lacks it): not exact arithmetic, but the sign is wrong only for configurations
+/// within about 1e-33 (relative) of degenerate.
+///
+/// Alternatives rejected: a BVH (the grid is simpler and the remesher's triangles are nearly
+/// uniform in size); exact expansion arithmetic (Shewchuk's adaptive predicates; more code for
+/// no difference measured on real meshes).
+
+#include <pliant/core/vec3.h>
+#include <pliant/mesh/tri_mesh.h>
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace pliant::remesh
+{
+
+/// Whether triangles (a0, a1, a2) and (b0, b1, b2) have a point in common (touching included).
+/// Degenerate triangles are handled (a segment or point is tested as such).
+[[nodiscard]] bool triangles_intersect(const std::array<core::Vec3, 3>& a,
+                                       const std::array<core::Vec3, 3>& b) noexcept;
+
+/// Whether the closed segment pq and the closed triangle t have a point in common.
+[[nodiscard]] bool edge_meets_triangle(const core::Vec3& p, const core::Vec3& q,
+                                       const std::array<core::Vec3, 3>& t) noexcept;
+
+/// Whether faces f and g of `mesh` intersect by intersecting_pairs' rule: never when they share
+/// an edge; when they share one vertex, iff the edge of either opposite it meets the other.
+/// `exact` false: double arithmetic only, an orientation within its rounding bound taken as 0
+/// (touching, so the answer errs towards "intersect"), several times faster on nearly coplanar
+/// faces (the untangling's inner loop).
+[[nodiscard]] bool faces_intersect(const mesh::TriMesh& mesh, std::uint32_t f, std::uint32_t g,
+                                   bool exact = true) noexcept;
+
+/// Every pair {i, j}, i < j, of faces of `mesh` that share no edge and meet anywhere except at a
+/// shared vertex, in increasing order. Faces sharing no vertex: triangles_intersect; faces
+/// sharing one vertex meet elsewhere iff the edge of either opposite the shared vertex meets
+/// the other (the overlap is convex and contains the vertex, so its far side lies on such an
+/// edge). O(n log n) for meshes of even triangle sizes; parallel (OpenMP), and the
+/// result does not depend on the thread count.
+[[nodiscard]] std::vector<std::array<std::uint32_t, 2>> intersecting_pairs(
+    const mesh::TriMesh& mesh);
+
+/// intersecting_pairs(mesh).size().
+[[nodiscard]] std::size_t count_self_intersections(const mesh::TriMesh& mesh);
+
+/// Whether face `f` of `output` faces against the input surface at its samples: its normal makes
+/// a negative dot product with the normal of each input face its three vertices were sampled
+/// from (`sample_faces[v]`, a face of `input` per vertex of `output`). "Each", not "their sum":
+/// a face spanning a sharp edge or the rim of a thin part legitimately faces away from one side.
+/// A degenerate output face counts as not folded.
+[[nodiscard]] bool is_folded(const mesh::TriMesh& output, std::size_t f, const mesh::TriMesh& input,
+                             std::span<const std::uint32_t> sample_faces) noexcept;
+
+/// Number of folded faces of `output` (is_folded).
+/// \pre sample_faces.size() == output.positions.size(), every entry a face of `input`.
+[[nodiscard]] std::size_t count_folded(const mesh::TriMesh& output, const mesh::TriMesh& input,
+                                       std::span<const std::uint32_t> sample_faces) noexcept;
+
+}  // namespace pliant::remesh

@@ -1,0 +1,401 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+//
+// Triangle-triangle intersection and the uniform-grid broad phase (design in
+// include/pliant/remesh/intersections.h).
+
+#include <pliant/remesh/intersections.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace pliant::remesh
+{
+namespace
+{
+
+using core::Vec3;
+
+#if defined(__SIZEOF_FLOAT128__)
+using Wide = __float128;
+#else
+using Wide = long double;
+#endif
+
+/// Sign of (a − d)·((b − d) × (c − d)): positive when d lies below the plane of the
+/// counter-clockwise triangle abc. Double with Shewchuk's bound for orient3d, else 113 bits.
+template <bool Exact>
+int orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) noexcept
+{
+    const double adx = a.x - d.x, ady = a.y - d.y, adz = a.z - d.z;
+    const double bdx = b.x - d.x, bdy = b.y - d.y, bdz = b.z - d.z;
+    const double cdx = c.x - d.x, cdy = c.y - d.y, cdz = c.z - d.z;
+    const double bc = bdy * cdz - bdz * cdy, ca = cdy * adz - cdz * ady, ab = ady * bdz - adz * bdy;
+    const double det = adx * bc + bdx * ca + cdx * ab;
+    const double permanent = (std::abs(bdy * cdz) + std::abs(bdz * cdy)) * std::abs(adx) +
+                             (std::abs(cdy * adz) + std::abs(cdz * ady)) * std::abs(bdx) +
+                             (std::abs(ady * bdz) + std::abs(adz * bdy)) * std::abs(cdx);
+    constexpr double k_eps = std::numeric_limits<double>::epsilon() / 2.0;
+    constexpr double k_bound = (7.0 + 56.0 * k_eps) * k_eps;
+    if (det > k_bound * permanent)
+        return 1;
+    if (det < -k_bound * permanent)
+        return -1;
+    if constexpr (!Exact)
+        return 0;
+    const Wide wadx = Wide(a.x) - Wide(d.x), wady = Wide(a.y) - Wide(d.y),
+               wadz = Wide(a.z) - Wide(d.z);
+    const Wide wbdx = Wide(b.x) - Wide(d.x), wbdy = Wide(b.y) - Wide(d.y),
+               wbdz = Wide(b.z) - Wide(d.z);
+    const Wide wcdx = Wide(c.x) - Wide(d.x), wcdy = Wide(c.y) - Wide(d.y),
+               wcdz = Wide(c.z) - Wide(d.z);
+    const Wide w = wadx * (wbdy * wcdz - wbdz * wcdy) + wbdx * (wcdy * wadz - wcdz * wady) +
+                   wcdx * (wady * wbdz - wadz * wbdy);
+    return w > 0 ? 1 : (w < 0 ? -1 : 0);
+}
+
+struct P2
+{
+    double u = 0.0;
+    double v = 0.0;
+};
+
+template <bool Exact>
+int orient2d(const P2& a, const P2& b, const P2& c) noexcept
+{
+    const double l = (a.u - c.u) * (b.v - c.v), r = (a.v - c.v) * (b.u - c.u);
+    const double det = l - r;
+    constexpr double k_eps = std::numeric_limits<double>::epsilon() / 2.0;
+    constexpr double k_bound = (3.0 + 16.0 * k_eps) * k_eps;
+    if (std::abs(det) > k_bound * (std::abs(l) + std::abs(r)))
+        return det > 0.0 ? 1 : -1;
+    if constexpr (!Exact)
+        return 0;
+    const Wide w = (Wide(a.u) - Wide(c.u)) * (Wide(b.v) - Wide(c.v)) -
+                   (Wide(a.v) - Wide(c.v)) * (Wide(b.u) - Wide(c.u));
+    return w > 0 ? 1 : (w < 0 ? -1 : 0);
+}
+
+/// Whether c (collinear with a and b) lies within the box of segment ab.
+bool in_span(const P2& a, const P2& b, const P2& c) noexcept
+{
+    return std::min(a.u, b.u) <= c.u && c.u <= std::max(a.u, b.u) && std::min(a.v, b.v) <= c.v &&
+           c.v <= std::max(a.v, b.v);
+}
+
+/// Closed segments ab and cd share a point.
+template <bool Exact>
+bool segments_meet(const P2& a, const P2& b, const P2& c, const P2& d) noexcept
+{
+    const int o1 = orient2d<Exact>(a, b, c), o2 = orient2d<Exact>(a, b, d);
+    const int o3 = orient2d<Exact>(c, d, a), o4 = orient2d<Exact>(c, d, b);
+    if (o1 * o2 < 0 && o3 * o4 < 0)
+        return true;
+    return (o1 == 0 && in_span(a, b, c)) || (o2 == 0 && in_span(a, b, d)) ||
+           (o3 == 0 && in_span(c, d, a)) || (o4 == 0 && in_span(c, d, b));
+}
+
+/// p inside or on the closed triangle t (either orientation; a degenerate t never contains p
+/// except on its edges, which segments_meet covers).
+template <bool Exact>
+bool in_triangle(const std::array<P2, 3>& t, const P2& p) noexcept
+{
+    const int o0 = orient2d<Exact>(t[0], t[1], p), o1 = orient2d<Exact>(t[1], t[2], p),
+              o2 = orient2d<Exact>(t[2], t[0], p);
+    const bool has_neg = o0 < 0 || o1 < 0 || o2<0, has_pos = o0> 0 || o1 > 0 || o2 > 0;
+    return !(has_neg && has_pos) && (has_neg || has_pos);
+}
+
+/// The axis to drop when projecting onto the plane with normal n.
+int dominant_axis(const Vec3& n) noexcept
+{
+    const double ax = std::abs(n.x), ay = std::abs(n.y), az = std::abs(n.z);
+    return ax >= ay && ax >= az ? 0 : (ay >= az ? 1 : 2);
+}
+
+P2 project(const Vec3& p, int drop) noexcept
+{
+    return drop == 0 ? P2{p.y, p.z} : (drop == 1 ? P2{p.z, p.x} : P2{p.x, p.y});
+}
+
+/// Coplanar triangles (or a segment, as a triangle with two equal corners) overlap.
+template <bool Exact>
+bool coplanar_meet(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b) noexcept
+{
+    Vec3 n = core::cross(b[1] - b[0], b[2] - b[0]);
+    if (core::dot(n, n) == 0.0)
+        n = core::cross(a[1] - a[0], a[2] - a[0]);
+    if (core::dot(n, n) == 0.0)
+    {
+        // both degenerate: any plane through them; take the normal of the points' spread
+        const Vec3 e = core::dot(a[1] - a[0], a[1] - a[0]) > core::dot(a[2] - a[0], a[2] - a[0])
+                           ? a[1] - a[0]
+                           : a[2] - a[0];
+        n = core::cross(e, std::abs(e.x) < std::abs(e.y) ? Vec3{1, 0, 0} : Vec3{0, 1, 0});
+    }
+    const int drop = dominant_axis(n);
+    std::array<P2, 3> pa, pb;
+    for (int k = 0; k < 3; ++k)
+    {
+        pa[static_cast<std::size_t>(k)] = project(a[static_cast<std::size_t>(k)], drop);
+        pb[static_cast<std::size_t>(k)] = project(b[static_cast<std::size_t>(k)], drop);
+    }
+    for (std::size_t i = 0; i < 3; ++i)
+        for (std::size_t j = 0; j < 3; ++j)
+            if (segments_meet<Exact>(pa[i], pa[(i + 1) % 3], pb[j], pb[(j + 1) % 3]))
+                return true;
+    return in_triangle<Exact>(pb, pa[0]) || in_triangle<Exact>(pa, pb[0]);
+}
+
+/// Closed segment pq meets closed triangle t, knowing the signs of p and q against t's plane.
+template <bool Exact>
+bool segment_meets_triangle(const Vec3& p, const Vec3& q, int sp, int sq,
+                            const std::array<Vec3, 3>& t) noexcept
+{
+    if (sp * sq > 0)
+        return false;
+
+    if (sp == 0 && sq == 0)
+        return coplanar_meet<Exact>({p, q, q}, t);
+    const int o0 = orient3d<Exact>(p, q, t[0], t[1]), o1 = orient3d<Exact>(p, q, t[1], t[2]),
+              o2 = orient3d<Exact>(p, q, t[2], t[0]);
+    const bool has_neg = o0 < 0 || o1 < 0 || o2<0, has_pos = o0> 0 || o1 > 0 || o2 > 0;
+    if (has_neg && has_pos)
+        return false;
+    if (has_neg || has_pos)
+        return true;
+    // the line pq lies in... every orientation zero: t is degenerate and collinear with pq
+    return coplanar_meet<Exact>({p, q, q}, t);
+}
+
+struct Cell
+{
+    std::uint64_t key;
+    std::uint32_t face;
+};
+
+template <bool Exact>
+bool edge_meets(const Vec3& p, const Vec3& q, const std::array<Vec3, 3>& t) noexcept
+{
+    return segment_meets_triangle<Exact>(p, q, orient3d<Exact>(t[0], t[1], t[2], p),
+                                         orient3d<Exact>(t[0], t[1], t[2], q), t);
+}
+
+template <bool Exact>
+bool triangles_meet(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b) noexcept
+{
+    std::array<int, 3> sa{}, sb{};
+    for (std::size_t k = 0; k < 3; ++k)
+    {
+        sa[k] = orient3d<Exact>(b[0], b[1], b[2], a[k]);
+        sb[k] = orient3d<Exact>(a[0], a[1], a[2], b[k]);
+    }
+    const auto separated = [](const std::array<int, 3>& s)
+    { return (s[0] > 0 && s[1] > 0 && s[2] > 0) || (s[0] < 0 && s[1] < 0 && s[2] < 0); };
+    if (separated(sa) || separated(sb))
+        return false;
+    const bool flat_a = sa[0] == 0 && sa[1] == 0 && sa[2] == 0;
+    const bool flat_b = sb[0] == 0 && sb[1] == 0 && sb[2] == 0;
+    if (flat_a || flat_b)
+    {
+        // a lies in b's plane (or b in a's): if the other is not degenerate they are coplanar;
+        // a degenerate one is a segment, which the edge tests below handle as well
+        if (flat_a && flat_b)
+            return coplanar_meet<Exact>(a, b);
+    }
+    for (std::size_t k = 0; k < 3; ++k)
+    {
+        const std::size_t l = (k + 1) % 3;
+        if (segment_meets_triangle<Exact>(a[k], a[l], sa[k], sa[l], b))
+            return true;
+        if (segment_meets_triangle<Exact>(b[k], b[l], sb[k], sb[l], a))
+            return true;
+    }
+    return false;
+}
+
+template <bool Exact>
+bool faces_meet(const mesh::TriMesh& mesh, std::uint32_t f, std::uint32_t g) noexcept
+{
+    const auto& tf = mesh.faces[f];
+    const auto& tg = mesh.faces[g];
+    int shared = 0;
+    std::size_t kf = 0, kg = 0;
+    for (std::size_t i = 0; i < 3; ++i)
+        for (std::size_t j = 0; j < 3; ++j)
+            if (tf[i] == tg[j])
+            {
+                ++shared;
+                kf = i;
+                kg = j;
+            }
+    if (shared >= 2)
+        return false;
+    const std::array<Vec3, 3> a{mesh.positions[tf[0]], mesh.positions[tf[1]],
+                                mesh.positions[tf[2]]};
+    const std::array<Vec3, 3> b{mesh.positions[tg[0]], mesh.positions[tg[1]],
+                                mesh.positions[tg[2]]};
+    if (shared == 0)
+        return triangles_meet<Exact>(a, b);
+    return edge_meets<Exact>(a[(kf + 1) % 3], a[(kf + 2) % 3], b) ||
+           edge_meets<Exact>(b[(kg + 1) % 3], b[(kg + 2) % 3], a);
+}
+
+}  // namespace
+
+bool edge_meets_triangle(const Vec3& p, const Vec3& q, const std::array<Vec3, 3>& t) noexcept
+{
+    return edge_meets<true>(p, q, t);
+}
+
+bool triangles_intersect(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b) noexcept
+{
+    return triangles_meet<true>(a, b);
+}
+
+bool faces_intersect(const mesh::TriMesh& mesh, std::uint32_t f, std::uint32_t g,
+                     bool exact) noexcept
+{
+    return exact ? faces_meet<true>(mesh, f, g) : faces_meet<false>(mesh, f, g);
+}
+
+std::vector<std::array<std::uint32_t, 2>> intersecting_pairs(const mesh::TriMesh& mesh)
+{
+    const std::size_t nf = mesh.faces.size();
+    std::vector<std::array<std::uint32_t, 2>> pairs;
+    if (nf < 2)
+        return pairs;
+    // face boxes and the grid
+    std::vector<std::array<Vec3, 2>> box(nf);
+    Vec3 lo{std::numeric_limits<double>::max(), std::numeric_limits<double>::max(),
+            std::numeric_limits<double>::max()};
+    Vec3 hi = lo * -1.0;
+    double extent = 0.0;
+    for (std::size_t f = 0; f < nf; ++f)
+    {
+        const Vec3& a = mesh.positions[mesh.faces[f][0]];
+        const Vec3& b = mesh.positions[mesh.faces[f][1]];
+        const Vec3& c = mesh.positions[mesh.faces[f][2]];
+        const Vec3 bl{std::min({a.x, b.x, c.x}), std::min({a.y, b.y, c.y}),
+                      std::min({a.z, b.z, c.z})};
+        const Vec3 bh{std::max({a.x, b.x, c.x}), std::max({a.y, b.y, c.y}),
+                      std::max({a.z, b.z, c.z})};
+        box[f] = {bl, bh};
+        lo = {std::min(lo.x, bl.x), std::min(lo.y, bl.y), std::min(lo.z, bl.z)};
+        hi = {std::max(hi.x, bh.x), std::max(hi.y, bh.y), std::max(hi.z, bh.z)};
+        extent += (bh.x - bl.x) + (bh.y - bl.y) + (bh.z - bl.z);
+    }
+    const Vec3 size = hi - lo;
+    double h = 2.0 * extent / (3.0 * static_cast<double>(nf));
+    // at most about 8 cells per face overall keeps the table small on very uneven meshes
+    const double max_cells = 8.0 * static_cast<double>(nf) + 64.0;
+    const auto cells_at = [&](double s)
+    {
+        return (std::floor(size.x / s) + 1.0) * (std::floor(size.y / s) + 1.0) *
+               (std::floor(size.z / s) + 1.0);
+    };
+    if (!(h > 0.0))
+        h = std::max({size.x, size.y, size.z, 1e-300});
+    while (cells_at(h) > max_cells)
+        h *= 1.25;
+    const auto nx = static_cast<std::uint64_t>(std::floor(size.x / h)) + 1;
+    const auto ny = static_cast<std::uint64_t>(std::floor(size.y / h)) + 1;
+    const auto nz = static_cast<std::uint64_t>(std::floor(size.z / h)) + 1;
+    const auto cell_of = [&](double v, double l, std::uint64_t n)
+    {
+        const double c = std::floor((v - l) / h);
+        return std::min(static_cast<std::uint64_t>(std::max(c, 0.0)), n - 1);
+    };
+    const auto key_of = [&](std::uint64_t i, std::uint64_t j, std::uint64_t k)
+    { return (i * ny + j) * nz + k; };
+
+    std::vector<Cell> cells;
+    cells.reserve(nf * 4);
+    for (std::size_t f = 0; f < nf; ++f)
+    {
+        const auto& [bl, bh] = box[f];
+        const std::uint64_t i0 = cell_of(bl.x, lo.x, nx), i1 = cell_of(bh.x, lo.x, nx);
+        const std::uint64_t j0 = cell_of(bl.y, lo.y, ny), j1 = cell_of(bh.y, lo.y, ny);
+        const std::uint64_t k0 = cell_of(bl.z, lo.z, nz), k1 = cell_of(bh.z, lo.z, nz);
+        for (std::uint64_t i = i0; i <= i1; ++i)
+            for (std::uint64_t j = j0; j <= j1; ++j)
+                for (std::uint64_t k = k0; k <= k1; ++k)
+                    cells.push_back({key_of(i, j, k), static_cast<std::uint32_t>(f)});
+    }
+    std::sort(cells.begin(), cells.end(),
+              [](const Cell& x, const Cell& y)
+              { return x.key != y.key ? x.key < y.key : x.face < y.face; });
+    std::vector<std::size_t> runs;
+    for (std::size_t i = 0; i < cells.size(); ++i)
+        if (i == 0 || cells[i].key != cells[i - 1].key)
+            runs.push_back(i);
+    runs.push_back(cells.size());
+
+    const auto nruns = static_cast<std::int64_t>(runs.size()) - 1;
+#pragma omp parallel
+    {
+        std::vector<std::array<std::uint32_t, 2>> local;
+#pragma omp for schedule(dynamic, 64) nowait
+        for (std::int64_t r = 0; r < nruns; ++r)
+        {
+            const auto r0 = runs[static_cast<std::size_t>(r)];
+            const auto r1 = runs[static_cast<std::size_t>(r) + 1];
+            for (std::size_t i = r0; i < r1; ++i)
+                for (std::size_t j = i + 1; j < r1; ++j)
+                {
+                    const std::uint32_t f = cells[i].face, g = cells[j].face;
+                    const auto& bf = box[f];
+                    const auto& bg = box[g];
+                    if (bf[1].x < bg[0].x || bg[1].x < bf[0].x || bf[1].y < bg[0].y ||
+                        bg[1].y < bf[0].y || bf[1].z < bg[0].z || bg[1].z < bf[0].z)
+                        continue;
+                    // test each pair once: in the cell of the low corner of the boxes' overlap
+                    const std::uint64_t own = key_of(cell_of(std::max(bf[0].x, bg[0].x), lo.x, nx),
+                                                     cell_of(std::max(bf[0].y, bg[0].y), lo.y, ny),
+                                                     cell_of(std::max(bf[0].z, bg[0].z), lo.z, nz));
+                    if (own != cells[i].key)
+                        continue;
+                    if (faces_meet<true>(mesh, f, g))
+                        local.push_back({std::min(f, g), std::max(f, g)});
+                }
+        }
+#pragma omp critical(pliant_remesh_intersections)
+        pairs.insert(pairs.end(), local.begin(), local.end());
+    }
+    std::sort(pairs.begin(), pairs.end());
+    return pairs;
+}
+
+std::size_t count_self_intersections(const mesh::TriMesh& mesh)
+{
+    return intersecting_pairs(mesh).size();
+}
+
+bool is_folded(const mesh::TriMesh& output, std::size_t f, const mesh::TriMesh& input,
+               std::span<const std::uint32_t> sample_faces) noexcept
+{
+    const auto& t = output.faces[f];
+    const Vec3 n = core::cross(output.positions[t[1]] - output.positions[t[0]],
+                               output.positions[t[2]] - output.positions[t[0]]);
+    bool against_all = true;
+    for (const std::uint32_t v : t)
+    {
+        const auto& s = input.faces[sample_faces[v]];
+        const Vec3 m = core::cross(input.positions[s[1]] - input.positions[s[0]],
+                                   input.positions[s[2]] - input.positions[s[0]]);
+        against_all = against_all && core::dot(n, m) < 0.0;
+    }
+    return against_all;
+}
+
+std::size_t count_folded(const mesh::TriMesh& output, const mesh::TriMesh& input,
+                         std::span<const std::uint32_t> sample_faces) noexcept
+{
+    std::size_t n = 0;
+    for (std::size_t f = 0; f < output.faces.size(); ++f)
+        n += is_folded(output, f, input, sample_faces) ? 1 : 0;
+    return n;
+}
+
+}  // namespace pliant::remesh

@@ -1,0 +1,512 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+//
+// Untangling folded samples (design in include/pliant/remesh/untangle.h).
+
+#include <pliant/remesh/intersections.h>
+#include <pliant/remesh/untangle.h>
+
+#include "remesh/locate_internal.h"
+#include "remesh/sphere_geometry_internal.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <optional>
+
+namespace pliant::remesh
+{
+namespace
+{
+
+using core::Vec3;
+using detail::Location;
+using detail::Locator;
+
+Vec3 at(const core::Vec3Field<double>& f, core::NodeIndex n) noexcept
+{
+    return {f[0][n], f[1][n], f[2][n]};
+}
+
+/// Faces under `points`, located in blocks of unique vertices (each walk starts at face 0 and
+/// continues from the previous vertex), so the result does not depend on the thread count.
+std::vector<std::uint32_t> locate_all(const Locator& locator, std::span<const Vec3> points)
+{
+    constexpr std::size_t k_block = 512;
+    const auto n = static_cast<std::int64_t>(points.size());
+    std::vector<std::uint32_t> faces(points.size());
+#pragma omp parallel for schedule(dynamic, 1)
+    for (std::int64_t b = 0; b < n; b += static_cast<std::int64_t>(k_block))
+    {
+        SampleStats stats;
+        std::uint32_t hint = 0;
+        const auto end = std::min(n, b + static_cast<std::int64_t>(k_block));
+        for (std::int64_t i = b; i < end; ++i)
+        {
+            hint = locator.locate(points[static_cast<std::size_t>(i)], hint, stats).face;
+            faces[static_cast<std::size_t>(i)] = hint;
+        }
+    }
+    return faces;
+}
+
+/// Neighbours of every vertex of a closed triangle mesh, as CSR.
+struct Neighbours
+{
+    std::vector<std::uint32_t> offsets;
+    std::vector<std::uint32_t> ids;
+    [[nodiscard]] std::span<const std::uint32_t> of(std::uint32_t v) const noexcept
+    {
+        return {ids.data() + offsets[v], ids.data() + offsets[v + 1]};
+    }
+};
+
+Neighbours neighbours(std::size_t n, std::span<const mesh::Face> faces)
+{
+    std::vector<std::array<std::uint32_t, 2>> edges;
+    edges.reserve(faces.size() * 6);
+    for (const auto& t : faces)
+        for (std::size_t k = 0; k < 3; ++k)
+        {
+            edges.push_back({t[k], t[(k + 1) % 3]});
+            edges.push_back({t[(k + 1) % 3], t[k]});
+        }
+    std::sort(edges.begin(), edges.end());
+    edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+    Neighbours nb;
+    nb.offsets.assign(n + 1, 0);
+    for (const auto& e : edges)
+        ++nb.offsets[e[0] + 1];
+    for (std::size_t i = 0; i < n; ++i)
+        nb.offsets[i + 1] += nb.offsets[i];
+    nb.ids.reserve(edges.size());
+    for (const auto& e : edges)
+        nb.ids.push_back(e[1]);
+    return nb;
+}
+
+}  // namespace
+
+std::vector<std::uint32_t> locate_samples(const core::TetraGrid& grid,
+                                          const core::Vec3Field<double>& points,
+                                          const mesh::TriMesh& mesh,
+                                          std::span<const core::Vec3> sphere)
+{
+    const auto nodes = grid.node_of_unique();
+    std::vector<Vec3> s(nodes.size());
+    for (std::size_t u = 0; u < nodes.size(); ++u)
+        s[u] = at(points, nodes[u]);
+    return locate_all(Locator(mesh.faces, sphere), s);
+}
+
+namespace
+{
+
+/// Output faces by the cells of a uniform grid their boxes overlap (rebuilt every round; faces
+/// that moved since are found a round late, by the global check).
+class FaceHash
+{
+public:
+    FaceHash(const mesh::TriMesh& m, double cell) : h_(cell)
+    {
+        for (std::uint32_t f = 0; f < m.faces.size(); ++f)
+        {
+            const auto [lo, hi] = box(m, f);
+            for_cells(lo, hi, [&](std::uint64_t key) { cells_.push_back({key, f}); });
+        }
+        std::sort(cells_.begin(), cells_.end(),
+                  [](const Entry& a, const Entry& b)
+                  { return a.key != b.key ? a.key < b.key : a.face < b.face; });
+    }
+
+    static std::array<Vec3, 2> box(const mesh::TriMesh& m, std::uint32_t f) noexcept
+    {
+        const Vec3& a = m.positions[m.faces[f][0]];
+        const Vec3& b = m.positions[m.faces[f][1]];
+        const Vec3& c = m.positions[m.faces[f][2]];
+        return {
+            Vec3{std::min({a.x, b.x, c.x}), std::min({a.y, b.y, c.y}), std::min({a.z, b.z, c.z})},
+            Vec3{std::max({a.x, b.x, c.x}), std::max({a.y, b.y, c.y}), std::max({a.z, b.z, c.z})}};
+    }
+
+    /// Faces whose registered cells overlap the box [lo, hi], sorted, without repeats.
+    void query(const Vec3& lo, const Vec3& hi, std::vector<std::uint32_t>& out) const
+    {
+        out.clear();
+        for_cells(lo, hi,
+                  [&](std::uint64_t key)
+                  {
+                      auto it = std::lower_bound(cells_.begin(), cells_.end(), key,
+                                                 [](const Entry& e, std::uint64_t k)
+                                                 { return e.key < k; });
+                      for (; it != cells_.end() && it->key == key; ++it)
+                          out.push_back(it->face);
+                  });
+        std::sort(out.begin(), out.end());
+        out.erase(std::unique(out.begin(), out.end()), out.end());
+    }
+
+private:
+    struct Entry
+    {
+        std::uint64_t key;
+        std::uint32_t face;
+    };
+
+    template <class F>
+    void for_cells(const Vec3& lo, const Vec3& hi, F&& f) const
+    {
+        const auto c = [this](double v) { return static_cast<std::int64_t>(std::floor(v / h_)); };
+        const std::int64_t x0 = c(lo.x), x1 = c(hi.x), y0 = c(lo.y), y1 = c(hi.y), z0 = c(lo.z),
+                           z1 = c(hi.z);
+        if (x1 - x0 > 64 || y1 - y0 > 64 || z1 - z0 > 64)
+            return;  // a face far larger than the cells: left to the global check
+        for (std::int64_t x = x0; x <= x1; ++x)
+            for (std::int64_t y = y0; y <= y1; ++y)
+                for (std::int64_t z = z0; z <= z1; ++z)
+                {
+                    // a hash of the cell (collisions only add candidates)
+                    const auto ux = static_cast<std::uint64_t>(x) & 0x1fffffU;
+                    const auto uy = static_cast<std::uint64_t>(y) & 0x1fffffU;
+                    const auto uz = static_cast<std::uint64_t>(z) & 0x1fffffU;
+                    f((ux << 42) | (uy << 21) | uz);
+                }
+    }
+
+    double h_;
+    std::vector<Entry> cells_;
+};
+
+}  // namespace
+
+UntangleStats untangle_samples(const core::TetraGrid& grid, const mesh::TriMesh& mesh,
+                               std::span<const core::Vec3> sphere, core::Vec3Field<double>& points,
+                               core::Vec3Field<double>& positions, const UntangleSettings& settings)
+{
+    const auto nodes = grid.node_of_unique();
+    const std::size_t nu = nodes.size();
+    const Locator locator(mesh.faces, sphere);
+    std::vector<Vec3> s(nu);
+    mesh::TriMesh out;
+    out.positions.resize(nu);
+    out.faces = grid.triangles();
+    for (std::size_t u = 0; u < nu; ++u)
+    {
+        s[u] = at(points, nodes[u]);
+        out.positions[u] = at(positions, nodes[u]);
+    }
+    std::vector<std::uint32_t> face = locate_all(locator, s);
+    const Neighbours nb = neighbours(nu, out.faces);
+    const detail::VertexFaces star = detail::vertex_faces(nu, out.faces);
+    std::vector<Vec3> input_normal(mesh.faces.size());
+    for (std::size_t f = 0; f < mesh.faces.size(); ++f)
+    {
+        const auto& t = mesh.faces[f];
+        input_normal[f] =
+            core::normalized(core::cross(mesh.positions[t[1]] - mesh.positions[t[0]],
+                                         mesh.positions[t[2]] - mesh.positions[t[0]]));
+    }
+    double mean_edge = 0.0;
+    for (const auto& t : out.faces)
+        mean_edge += core::norm(out.positions[t[1]] - out.positions[t[0]]);
+    mean_edge /= static_cast<double>(out.faces.size());
+
+    // Quality of output face f: its signed area against the input's normal at its samples (the
+    // most favourable of the three), over the sum of its squared edges (scale-free; 0.29 for an
+    // equilateral triangle, negative when folded, as is_folded counts). A star's quality is its
+    // worst face's.
+    const auto quality = [&](std::uint32_t f)
+    {
+        const auto& t = out.faces[f];
+        const Vec3 &a = out.positions[t[0]], &b = out.positions[t[1]], &c = out.positions[t[2]];
+        const double e =
+            core::dot(b - a, b - a) + core::dot(c - b, c - b) + core::dot(a - c, a - c);
+        if (!(e > 0.0))
+            return 0.0;
+        const Vec3 n = core::cross(b - a, c - a);
+        const double d = std::max({core::dot(n, input_normal[face[t[0]]]),
+                                   core::dot(n, input_normal[face[t[1]]]),
+                                   core::dot(n, input_normal[face[t[2]]])});
+        return 0.5 * d / e;
+    };
+    // A vertex's score: crossings of its star's faces with each other and with the faces near
+    // them (fewer is better), then the star's quality (higher is better).
+    struct Score
+    {
+        std::size_t crossings = 0;
+        double quality = 0.0;
+        [[nodiscard]] bool better_than(const Score& o) const noexcept
+        {
+            return crossings != o.crossings ? crossings < o.crossings : quality > o.quality;
+        }
+    };
+    std::vector<std::uint32_t> near;
+    const auto star_quality = [&](std::uint32_t v)
+    {
+        double q = std::numeric_limits<double>::infinity();
+        for (const std::uint32_t f : star.of(v))
+            q = std::min(q, quality(f));
+        return q;
+    };
+    // counting stops above `cap`
+    const auto score = [&](std::uint32_t v, std::size_t cap)
+    {
+        Score sc{0, star_quality(v)};
+        const auto faces = star.of(v);
+        for (std::size_t i = 0; i < faces.size() && sc.crossings <= cap; ++i)
+        {
+            const auto bi = FaceHash::box(out, faces[i]);
+            for (const std::uint32_t g : near)
+            {
+                // a pair inside the star is met twice: count it from its lower face only
+                const bool in_star = std::find(faces.begin(), faces.end(), g) != faces.end();
+                if (g == faces[i] || (in_star && g < faces[i]))
+                    continue;
+                const auto bg = FaceHash::box(out, g);
+                if (bi[1].x < bg[0].x || bg[1].x < bi[0].x || bi[1].y < bg[0].y ||
+                    bg[1].y < bi[0].y || bi[1].z < bg[0].z || bg[1].z < bi[0].z)
+                    continue;
+                if (faces_intersect(out, faces[i], g, false))
+                    ++sc.crossings;
+            }
+        }
+        return sc;
+    };
+
+    std::vector<std::uint8_t> moved(nu, 0);
+    SampleStats walk;
+    std::optional<FaceHash> hash;
+    // Tries sample point sn for vertex v; keeps it if `accept(new score)` says so.
+    const auto try_move = [&](std::uint32_t v, const Vec3& sn, const auto& accept)
+    {
+        const Vec3 s_old = s[v], p_old = out.positions[v];
+        const std::uint32_t f_old = face[v];
+        const Location loc = locator.locate(sn, f_old, walk);
+        s[v] = sn;
+        face[v] = loc.face;
+        out.positions[v] = detail::interpolate(mesh, loc);
+        if (accept(v))
+        {
+            moved[v] = 1;
+            return true;
+        }
+        s[v] = s_old;
+        face[v] = f_old;
+        out.positions[v] = p_old;
+        return false;
+    };
+
+    // One step for vertex v: Laplacian smoothing on the input surface (a few Newton steps towards
+    // the mean c of its neighbours through the inverse of the affine map of the input face under
+    // the sample point, with backtracking: the map changes from face to face, by orders of
+    // magnitude where the parameterisation is anisotropic), never making its star worse; then,
+    // if the star still crosses something or is folded, a compass search on the sphere for the
+    // best score (untangling in the spirit of Freitag & Plassmann 2000).
+    const auto relax = [&](std::uint32_t v)
+    {
+        const auto ring = nb.of(v);
+        Vec3 c{};
+        double lim = std::numeric_limits<double>::infinity();
+        for (const std::uint32_t w : ring)
+        {
+            c += out.positions[w];
+            lim = std::min(lim, core::norm(s[w] - s[v]));
+        }
+        c = c / static_cast<double>(ring.size());
+        // the node stays within reach of its ring's centre
+        double reach2 = 0.0;
+        for (const std::uint32_t w : ring)
+            reach2 = std::max(reach2, core::dot(out.positions[w] - c, out.positions[w] - c));
+        reach2 *= settings.reach * settings.reach;
+        const double r = std::sqrt(reach2);
+        Vec3 lo = c - Vec3{r, r, r}, hi = c + Vec3{r, r, r};
+        for (const std::uint32_t w : ring)
+        {
+            const Vec3& p = out.positions[w];
+            lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+            hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+        }
+        hash->query(lo, hi, near);
+        std::erase_if(near,
+                      [&](std::uint32_t g)
+                      {
+                          const auto bg = FaceHash::box(out, g);
+                          return bg[1].x < lo.x || hi.x < bg[0].x || bg[1].y < lo.y ||
+                                 hi.y < bg[0].y || bg[1].z < lo.z || hi.z < bg[0].z;
+                      });
+        Score current = score(v, std::numeric_limits<std::size_t>::max());
+        for (int newton = 0; newton < 2; ++newton)
+        {
+            const Vec3 d = c - out.positions[v];
+            const double dist2 = core::dot(d, d);
+            const auto& t = mesh.faces[face[v]];
+            const Vec3 &q0 = sphere[t[0]], &q1 = sphere[t[1]], &q2 = sphere[t[2]];
+            const Vec3 n = core::cross(q1 - q0, q2 - q0);
+            const double den = core::dot(n, s[v]);
+            if (!(den > 0.0))
+                break;
+            const Vec3 x = s[v] * (core::dot(n, q0) / den);  // on the chord triangle
+            // least-squares tangent move: a E1 + b E2 closest to c − p in the face's plane
+            const Vec3 e1 = mesh.positions[t[1]] - mesh.positions[t[0]];
+            const Vec3 e2 = mesh.positions[t[2]] - mesh.positions[t[0]];
+            const double g00 = core::dot(e1, e1), g01 = core::dot(e1, e2), g11 = core::dot(e2, e2);
+            const double det = g00 * g11 - g01 * g01;
+            if (!(det > 1e-12 * g00 * g11))
+                break;
+            const double r0 = core::dot(e1, d), r1 = core::dot(e2, d);
+            const double a = (g11 * r0 - g01 * r1) / det, b = (g00 * r1 - g01 * r0) / det;
+            Vec3 dx = (q1 - q0) * a + (q2 - q0) * b;
+            const double len = core::norm(dx);
+            if (!(len > 0.0))
+                break;
+            if (len > 0.5 * lim)  // never jump over a neighbour's sphere point
+                dx *= 0.5 * lim / len;
+            bool accepted = false;
+            for (int half = 0; half < 6 && !accepted; ++half, dx *= 0.5)
+                accepted = try_move(
+                    v, core::normalized(x + dx),
+                    [&](std::uint32_t w)
+                    {
+                        const Vec3 dn = c - out.positions[w];
+                        if (!(core::dot(dn, dn) < dist2))
+                            return false;
+                        if (star_quality(w) < std::min(current.quality, settings.min_quality))
+                            return false;
+                        const Score sc = score(w, current.crossings);
+                        if (sc.crossings > current.crossings)
+                            return false;
+                        current = sc;
+                        return true;
+                    });
+            if (!accepted)
+                break;
+        }
+        // only a star that crosses something or is folded searches further
+        if (current.crossings == 0 && current.quality > 0.0)
+            return;
+        const Vec3 helper = std::abs(s[v].x) < 0.6 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
+        const Vec3 t1 = core::normalized(core::cross(s[v], helper));
+        const Vec3 t2 = core::cross(s[v], t1);
+        double h = 0.5 * lim;
+        for (int iter = 0; iter < 12 && h > lim / 128.0; ++iter)
+        {
+            if (current.crossings == 0 && current.quality >= settings.min_quality)
+                break;  // untangled, and not a sliver
+            const Vec3 s0 = s[v];
+            Score best = current;
+            Vec3 best_s = s0;
+            for (int k = 0; k < 8; ++k)
+            {
+                const double angle = 0.7853981633974483 * k;
+                const Vec3 sn =
+                    core::normalized(s0 + (t1 * std::cos(angle) + t2 * std::sin(angle)) * h);
+                try_move(v, sn,
+                         [&](std::uint32_t w)
+                         {
+                             const Vec3 dn = c - out.positions[w];
+                             if (core::dot(dn, dn) <= reach2)
+                             {
+                                 const Score sc = score(w, best.crossings);
+                                 if (sc.better_than(best))
+                                 {
+                                     best = sc;
+                                     best_s = sn;
+                                 }
+                             }
+                             return false;  // evaluated only
+                         });
+            }
+            if (best.better_than(current))
+            {
+                try_move(v, best_s, [](std::uint32_t) { return true; });
+                current = best;
+            }
+            else
+                h *= 0.5;
+        }
+    };
+
+    UntangleStats stats;
+    std::vector<std::uint8_t> active(nu, 0);
+    std::vector<std::uint32_t> list;
+    std::size_t best_total = std::numeric_limits<std::size_t>::max();
+    int since_best = 0;
+    for (int round = 0;; ++round)
+    {
+        std::fill(active.begin(), active.end(), std::uint8_t{0});
+        std::size_t folded = 0;
+        for (std::size_t f = 0; f < out.faces.size(); ++f)
+            if (is_folded(out, f, mesh, face))
+            {
+                ++folded;
+                for (const std::uint32_t v : out.faces[f])
+                    active[v] = 1;
+            }
+        const auto pairs = intersecting_pairs(out);
+        for (const auto& pr : pairs)
+            for (const std::uint32_t f : pr)
+                for (const std::uint32_t v : out.faces[f])
+                    active[v] = 1;
+        if (round == 0)
+        {
+            stats.folded_sampled = folded;
+            stats.intersections_sampled = pairs.size();
+        }
+        stats.folded = folded;
+        stats.intersections = pairs.size();
+        if (folded + pairs.size() < best_total)
+        {
+            best_total = folded + pairs.size();
+            since_best = 0;
+        }
+        else
+            ++since_best;
+        if ((folded == 0 && pairs.empty()) || !settings.enabled || round >= settings.max_rounds ||
+            since_best >= settings.patience)
+            break;
+        // grow the region by rings of grid neighbours: more rings as the rounds go on, so a
+        // fold whose surroundings are not convex enough gets a wider patch
+        const int rings = settings.rings + round / 4;
+        for (int r = 0; r < rings; ++r)
+        {
+            list.clear();
+            for (std::uint32_t v = 0; v < nu; ++v)
+                if (active[v] == 1)
+                    list.push_back(v);
+            for (const std::uint32_t v : list)
+                for (const std::uint32_t w : nb.of(v))
+                    active[w] = 1;
+        }
+        list.clear();
+        for (std::uint32_t v = 0; v < nu; ++v)
+            if (active[v] != 0)
+                list.push_back(v);
+        hash.emplace(out, 2.0 * mean_edge);
+        for (int sweep = 0; sweep < settings.sweeps; ++sweep)
+            for (const std::uint32_t v : list)
+                relax(v);
+        stats.rounds = round + 1;
+    }
+
+    for (std::size_t u = 0; u < nu; ++u)
+        if (moved[u] != 0)
+        {
+            ++stats.moved_nodes;
+            const core::NodeIndex n = nodes[u];
+            points[0][n] = s[u].x;
+            points[1][n] = s[u].y;
+            points[2][n] = s[u].z;
+            positions[0][n] = out.positions[u].x;
+            positions[1][n] = out.positions[u].y;
+            positions[2][n] = out.positions[u].z;
+        }
+    if (stats.moved_nodes > 0)
+        for (std::size_t k = 0; k < 3; ++k)
+        {
+            core::sync_twins(grid, points[k]);
+            core::sync_twins(grid, positions[k]);
+        }
+    return stats;
+}
+
+}  // namespace pliant::remesh
