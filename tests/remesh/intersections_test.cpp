@@ -21,6 +21,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <ostream>
 #include <random>
 #include <string>
 
@@ -201,6 +202,12 @@ struct MeshLevels
     int min_level;
     int max_level;
 };
+
+// Test names show the file (gtest would print the struct's bytes, a pointer among them).
+void PrintTo(const MeshLevels& c, std::ostream* os)
+{
+    *os << c.file << " levels " << c.min_level << ".." << c.max_level;
+}
 
 class RealMeshUntangled : public ::testing::TestWithParam<MeshLevels>
 {
