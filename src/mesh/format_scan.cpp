@@ -375,9 +375,12 @@ core::Result<ScanResult> scan_off(std::string_view bytes, const std::string& nam
 
 struct PlyProperty
 {
+    std::string name;
     int size = 0;        ///< bytes of a scalar, or of one list item
     int count_size = 0;  ///< bytes of the list length (0: scalar)
     bool count_signed = false;
+    bool item_signed = false;  ///< a signed integer scalar or list item
+    bool item_float = false;   ///< a float or double scalar or list item
 };
 
 struct PlyElement
@@ -387,7 +390,7 @@ struct PlyElement
     std::vector<PlyProperty> properties;
 };
 
-/// Bytes of a PLY scalar type, 0 if unknown; `is_signed` set for integer types.
+/// Bytes of a PLY scalar type, 0 if unknown; `is_signed` set for signed integer types.
 int ply_type_size(std::string_view t, bool* is_signed)
 {
     *is_signed =
@@ -404,9 +407,20 @@ int ply_type_size(std::string_view t, bool* is_signed)
     return 0;
 }
 
-/// Reads a list length of `size` bytes (1, 2 or 4), little- or big-endian. Negative -> nullopt.
-std::optional<std::uint64_t> read_count(const unsigned char* p, int size, bool is_signed,
-                                        bool big_endian)
+bool is_ply_float(std::string_view t)
+{
+    return t == "float" || t == "float32" || t == "double" || t == "float64";
+}
+
+/// The face element's list of vertex indices, under either name readers accept.
+bool is_ply_index_list(const PlyElement& e, const PlyProperty& q)
+{
+    return e.name == "face" && q.count_size != 0 &&
+           (q.name == "vertex_indices" || q.name == "vertex_index");
+}
+
+/// Reads an integer of `size` bytes (1, 2 or 4), little- or big-endian, signed or not.
+std::int64_t read_integer(const unsigned char* p, int size, bool is_signed, bool big_endian)
 {
     std::uint64_t v = 0;
     for (int i = 0; i < size; ++i)
@@ -415,8 +429,156 @@ std::optional<std::uint64_t> read_count(const unsigned char* p, int size, bool i
         v |= static_cast<std::uint64_t>(p[i]) << shift;
     }
     if (is_signed && (v >> (8 * size - 1)) != 0)
+        return static_cast<std::int64_t>(v) - (std::int64_t{1} << (8 * size));
+    return static_cast<std::int64_t>(v);
+}
+
+/// Reads a list length of `size` bytes (1, 2 or 4), little- or big-endian. Negative -> nullopt.
+std::optional<std::uint64_t> read_count(const unsigned char* p, int size, bool is_signed,
+                                        bool big_endian)
+{
+    const std::int64_t v = read_integer(p, size, is_signed, big_endian);
+    if (v < 0)
         return std::nullopt;
-    return v;
+    return static_cast<std::uint64_t>(v);
+}
+
+/// The 1-based line number of byte `offset` of `bytes`.
+std::size_t first_line_of(std::string_view bytes, std::size_t offset)
+{
+    return 1 + static_cast<std::size_t>(std::count(
+                   bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(offset), '\n'));
+}
+
+/// How a message names record `i` of element `e`: "vertex 3", "face 3", "element 'edge' record 3".
+std::string ply_record(const PlyElement& e, std::size_t i)
+{
+    if (e.name == "vertex" || e.name == "face")
+        return e.name + " " + std::to_string(i);
+    return "element '" + e.name + "' record " + std::to_string(i);
+}
+
+std::string ply_bad_index(std::string_view index, std::size_t vertices)
+{
+    return ": index " + quoted(index) + " is not a vertex (0-based, the file has " +
+           plural(vertices, "vertex") + ")";
+}
+
+/// Reads every record of an ASCII PLY body (one record per non-blank line, as the readers take
+/// it): each value a number, each list as long as its length says, nothing left over, and each
+/// face's vertex indices integers that name a vertex. Messages give the file's line.
+core::Result<ScanResult> scan_ply_ascii(const std::vector<PlyElement>& elements,
+                                        const ScanResult& r, std::string_view body,
+                                        std::size_t first_line, const std::string& name)
+{
+    std::size_t number = first_line - 1;
+    std::size_t done = 0;  // data lines read
+    auto element = elements.begin();
+    std::size_t record = 0;
+    std::optional<core::Error> error;
+    for_each_line(
+        body,
+        [&](std::string_view line)
+        {
+            ++number;
+            while (element != elements.end() && record == element->count)
+            {
+                ++element;
+                record = 0;
+            }
+            if (element == elements.end())
+                return false;
+            const std::vector<std::string_view> t = tokens(trim(line));
+            if (t.empty())
+                return true;
+            ++done;
+            const PlyElement& e = *element;
+            const std::string where =
+                name + ":" + std::to_string(number) + ": " + ply_record(e, record);
+            const auto refuse = [&](ErrorCode code, const std::string& what)
+            {
+                error = core::Error{code, where + what};
+                return false;
+            };
+            // A record that lacks values on a last line with no line end: the file was cut.
+            const bool cut = line.data() + line.size() == body.data() + body.size();
+            const auto refuse_short = [&](ErrorCode code, const std::string& what)
+            {
+                if (cut)
+                    return refuse(ErrorCode::ParseError,
+                                  ": truncated ASCII PLY file: it ends inside this record");
+                return refuse(code, what);
+            };
+            std::size_t k = 0;
+            for (const PlyProperty& q : e.properties)
+            {
+                if (k == t.size())
+                    return refuse_short(ErrorCode::ParseError, ": no value for property '" +
+                                                                   q.name + "' (the line has " +
+                                                                   plural(t.size(), "value") + ")");
+                if (q.count_size == 0)
+                {
+                    if (!is_number(t[k]))
+                        return refuse(ErrorCode::ParseError, ": property '" + q.name + "' value " +
+                                                                 quoted(t[k]) + " is not a number");
+                    ++k;
+                    continue;
+                }
+                const bool indices = is_ply_index_list(e, q);
+                const auto n = parse_integer(t[k]);
+                if (indices && (!n || *n < 3))
+                    return refuse(ErrorCode::BadIndex, ": vertex count " + quoted(t[k]) +
+                                                           " is not an integer of at least 3");
+                if (!n || *n < 0)
+                    return refuse(ErrorCode::ParseError, ": list '" + q.name + "' length " +
+                                                             quoted(t[k]) +
+                                                             " is not a non-negative integer");
+                ++k;
+                const auto count = static_cast<std::size_t>(*n);
+                if (t.size() - k < count)
+                    return refuse_short(indices ? ErrorCode::BadIndex : ErrorCode::ParseError,
+                                        indices ? " declares " + plural(count, "vertex") +
+                                                      " but lists " + std::to_string(t.size() - k)
+                                                : ": list '" + q.name + "' declares " +
+                                                      plural(count, "value") + " but " +
+                                                      std::to_string(t.size() - k) + " follow");
+                for (std::size_t j = k; j < k + count; ++j)
+                {
+                    if (!indices)
+                    {
+                        if (!is_number(t[j]))
+                            return refuse(ErrorCode::ParseError, ": list '" + q.name + "' value " +
+                                                                     quoted(t[j]) +
+                                                                     " is not a number");
+                        continue;
+                    }
+                    const auto index = parse_integer(t[j]);
+                    if (!index || *index < 0 ||
+                        static_cast<unsigned long long>(*index) >= r.vertices)
+                        return refuse(ErrorCode::BadIndex, ply_bad_index(t[j], r.vertices));
+                }
+                k += count;
+            }
+            if (k != t.size())
+                return refuse(ErrorCode::ParseError, " has " + plural(t.size(), "value") +
+                                                         " but the header's properties take " +
+                                                         std::to_string(k));
+            ++record;
+            return true;
+        });
+    if (error)
+        return *error;
+    while (element != elements.end() && record == element->count)
+    {
+        ++element;
+        record = 0;
+    }
+    if (element != elements.end())
+        return fail(ErrorCode::ParseError,
+                    name + ": truncated ASCII PLY file: the header declares " +
+                        plural(r.vertices, "vertex") + " and " + plural(r.faces, "face") +
+                        " but only " + plural(done, "data line") + " follow");
+    return r;
 }
 
 core::Result<ScanResult> scan_ply(std::string_view bytes, const std::string& name)
@@ -445,60 +607,64 @@ core::Result<ScanResult> scan_ply(std::string_view bytes, const std::string& nam
     std::string encoding;
     std::vector<PlyElement> elements;
     std::optional<core::Error> error;
-    for_each_line(header,
-                  [&](std::string_view line)
-                  {
-                      const std::vector<std::string_view> t = tokens(line);
-                      if (t.empty() || t[0] == "ply" || t[0] == "comment" || t[0] == "obj_info")
-                          return true;
-                      const auto bad = [&](const std::string& why)
-                      {
-                          error = core::Error{ErrorCode::ParseError,
-                                              name + ": bad PLY header line '" +
-                                                  std::string(line.substr(0, 60)) + "': " + why};
-                          return false;
-                      };
-                      if (t[0] == "format")
-                      {
-                          if (t.size() < 2)
-                              return bad("no encoding");
-                          encoding = std::string(t[1]);
-                          return true;
-                      }
-                      if (t[0] == "element")
-                      {
-                          const auto n = t.size() == 3 ? parse_count(t[2]) : std::nullopt;
-                          if (!n)
-                              return bad("expected 'element NAME COUNT'");
-                          elements.push_back({std::string(t[1]), *n, {}});
-                          return true;
-                      }
-                      if (t[0] == "property")
-                      {
-                          if (elements.empty())
-                              return bad("property before any element");
-                          PlyProperty p;
-                          bool is_signed = false;
-                          if (t.size() == 5 && t[1] == "list")
-                          {
-                              p.count_size = ply_type_size(t[2], &p.count_signed);
-                              p.size = ply_type_size(t[3], &is_signed);
-                              if (p.count_size == 0 || p.count_size == 8 || p.size == 0)
-                                  return bad("unknown list type");
-                          }
-                          else if (t.size() == 3)
-                          {
-                              p.size = ply_type_size(t[1], &is_signed);
-                              if (p.size == 0)
-                                  return bad("unknown type '" + std::string(t[1]) + "'");
-                          }
-                          else
-                              return bad("expected 'property TYPE NAME'");
-                          elements.back().properties.push_back(p);
-                          return true;
-                      }
-                      return bad("unknown keyword");
-                  });
+    for_each_line(
+        header,
+        [&](std::string_view line)
+        {
+            const std::vector<std::string_view> t = tokens(line);
+            if (t.empty() || t[0] == "ply" || t[0] == "comment" || t[0] == "obj_info")
+                return true;
+            const auto bad = [&](const std::string& why)
+            {
+                error = core::Error{ErrorCode::ParseError, name + ": bad PLY header line '" +
+                                                               std::string(line.substr(0, 60)) +
+                                                               "': " + why};
+                return false;
+            };
+            if (t[0] == "format")
+            {
+                if (t.size() < 2)
+                    return bad("no encoding");
+                encoding = std::string(t[1]);
+                return true;
+            }
+            if (t[0] == "element")
+            {
+                const auto n = t.size() == 3 ? parse_count(t[2]) : std::nullopt;
+                if (!n)
+                    return bad("expected 'element NAME COUNT'");
+                elements.push_back({std::string(t[1]), *n, {}});
+                return true;
+            }
+            if (t[0] == "property")
+            {
+                if (elements.empty())
+                    return bad("property before any element");
+                PlyProperty p;
+                if (t.size() == 5 && t[1] == "list")
+                {
+                    p.count_size = ply_type_size(t[2], &p.count_signed);
+                    p.size = ply_type_size(t[3], &p.item_signed);
+                    if (p.count_size == 0 || p.count_size == 8 || p.size == 0 || is_ply_float(t[2]))
+                        return bad("unknown list type");
+                    p.item_float = is_ply_float(t[3]);
+                    p.name = std::string(t[4]);
+                }
+                else if (t.size() == 3)
+                {
+                    p.size = ply_type_size(t[1], &p.item_signed);
+                    if (p.size == 0)
+                        return bad("unknown type '" + std::string(t[1]) + "'");
+                    p.item_float = is_ply_float(t[1]);
+                    p.name = std::string(t[2]);
+                }
+                else
+                    return bad("expected 'property TYPE NAME'");
+                elements.back().properties.push_back(p);
+                return true;
+            }
+            return bad("unknown keyword");
+        });
     if (error)
         return *error;
 
@@ -527,28 +693,7 @@ core::Result<ScanResult> scan_ply(std::string_view bytes, const std::string& nam
         r.format = Format::PlyAscii;
         if (auto text = check_text(body, name, "ASCII PLY"); !text)
             return text.error();
-        std::size_t needed = 0;
-        for (const PlyElement& e : elements)
-        {
-            if (e.count > bytes.size())  // each record is at least one line of >= 2 bytes
-                needed = std::numeric_limits<std::size_t>::max();
-            else
-                needed += e.count;
-        }
-        std::size_t lines = 0;
-        for_each_line(body,
-                      [&](std::string_view line)
-                      {
-                          if (!trim(line).empty())
-                              ++lines;
-                          return true;
-                      });
-        if (lines < needed)
-            return fail(ErrorCode::ParseError,
-                        name + ": truncated ASCII PLY file: the header declares " +
-                            plural(r.vertices, "vertex") + " and " + plural(r.faces, "face") +
-                            " but only " + plural(lines, "data line") + " follow");
-        return r;
+        return scan_ply_ascii(elements, r, body, first_line_of(bytes, data), name);
     }
     if (encoding != "binary_little_endian" && encoding != "binary_big_endian")
         return fail(ErrorCode::UnsupportedFormat,
@@ -604,10 +749,29 @@ core::Result<ScanResult> scan_ply(std::string_view bytes, const std::string& nam
                     return fail(ErrorCode::ParseError,
                                 name + ": bad binary PLY data: element '" + e.name + "' record " +
                                     std::to_string(i) + " has a negative list length");
+                const std::size_t record_at = data + at;
                 at += static_cast<std::size_t>(q.count_size);
                 const std::size_t room = (size - at) / static_cast<std::size_t>(q.size);
                 if (*n > room)
                     return truncated(i);
+                if (is_ply_index_list(e, q) && !q.item_float)
+                {
+                    const std::string where = name + ": face " + std::to_string(i) + " (byte " +
+                                              std::to_string(record_at) + ")";
+                    if (*n < 3)
+                        return fail(
+                            ErrorCode::BadIndex,
+                            where + ": vertex count " + std::to_string(*n) + " is less than 3");
+                    for (std::uint64_t j = 0; j < *n; ++j)
+                    {
+                        const std::int64_t index =
+                            read_integer(p + at + j * static_cast<std::size_t>(q.size), q.size,
+                                         q.item_signed, big);
+                        if (index < 0 || static_cast<std::uint64_t>(index) >= r.vertices)
+                            return fail(ErrorCode::BadIndex,
+                                        where + ply_bad_index(std::to_string(index), r.vertices));
+                    }
+                }
                 at += static_cast<std::size_t>(*n) * static_cast<std::size_t>(q.size);
             }
         }

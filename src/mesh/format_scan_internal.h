@@ -8,9 +8,11 @@
 // file shorter than its header's counts, some of its readers return the part they could read (or
 // reserve memory for the declared counts first); its OFF reader replaces a bad index with the
 // last vertex or with 0 and skips faces of more than 9 vertices, and its OBJ reader reports a bad
-// index or a bad coordinate without a line. So the scanners check record boundaries in binary
-// files, and in the text formats OBJ and OFF every vertex record's coordinates (numbers) and every
-// face's indices (integers in range), with the line number in each message. Every loop advances
+// index or a bad coordinate without a line, and its PLY reader reports an out-of-range index
+// without saying where. So the scanners check record boundaries in binary files, every face's
+// vertex indices in PLY files (binary: with the face and its byte offset), and in the text formats
+// OBJ, OFF and ASCII PLY every vertex record's values (numbers) and every face's indices
+// (integers in range), with the line number in each message. Every loop advances
 // through the buffer or stops, so they are bounded by the file size. They also count the file's
 // vertex and face records for the ImportReport (Assimp's OBJ and STL readers expand vertices per
 // face corner, so its counts do not show the file's).

@@ -16,6 +16,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <ostream>
 #include <random>
 #include <string>
@@ -472,6 +473,87 @@ TEST_F(BadFiles, TruncatedPlyIsParseError)
               ErrorCode::ParseError);
     const std::string off = test::to_off(scenes::icosphere(1));
     EXPECT_EQ(error_of("cut.off", off.substr(0, off.size() - 30)).code, ErrorCode::ParseError);
+}
+
+// PLY faces are read index by index too: Assimp's PLY reader reads a missing or non-numeric
+// index as 0, drops extra values and faces of two vertices, and reports an out-of-range index
+// without saying where, all measured with Assimp 5.2.
+TEST_F(BadFiles, PlyIndicesAndValuesNameTheirLineOrByte)
+{
+    // The tetrahedron with its last face line changed; the face lines start at line 14.
+    const std::string head =
+        "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\n"
+        "property float y\nproperty float z\nelement face 4\n"
+        "property list uchar int vertex_indices\nend_header\n"
+        "0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n";
+    const struct
+    {
+        const char* face;
+        ErrorCode code;
+        const char* says;
+    } cases[] = {
+        {"3 1 2 77", ErrorCode::BadIndex, ":17: face 3: index '77' is not a vertex"},
+        {"3 1 2 -1", ErrorCode::BadIndex, ":17: face 3: index '-1'"},
+        {"3 1 2 x", ErrorCode::BadIndex, ":17: face 3: index 'x'"},
+        {"3 1 2", ErrorCode::BadIndex, ":17: face 3 declares 3 vertices but lists 2"},
+        {"2 1 2", ErrorCode::BadIndex, ":17: face 3: vertex count '2'"},
+        {"3 1 2 3 0", ErrorCode::ParseError, ":17: face 3 has 5 values but the header's"},
+    };
+    for (const auto& c : cases)
+    {
+        const core::Error e = error_of("bad.ply", head + c.face + "\n");
+        EXPECT_EQ(e.code, c.code) << c.face << ": " << e.message;
+        EXPECT_NE(e.message.find(c.says), std::string::npos) << e.message;
+    }
+    test::write_bytes(dir_ / "good.ply", head + "3 1 2 3\n");
+    EXPECT_TRUE(import_mesh(dir_ / "good.ply"));
+    std::string coord = head + "3 1 2 3\n";
+    coord.replace(coord.find("0 1 0\n"), 5, "0 y 0");
+    const core::Error e = error_of("coord.ply", coord);
+    EXPECT_EQ(e.code, ErrorCode::ParseError);
+    EXPECT_NE(e.message.find(":12: vertex 2: property 'y' value 'y' is not a number"),
+              std::string::npos)
+        << e.message;
+
+    // Binary: the same tetrahedron, little-endian floats and a uchar/int index list.
+    const auto binary = [](std::int32_t last_index, std::uint8_t last_count)
+    {
+        std::string b =
+            "ply\nformat binary_little_endian 1.0\nelement vertex 4\n"
+            "property float x\nproperty float y\nproperty float z\n"
+            "element face 4\nproperty list uchar int vertex_indices\nend_header\n";
+        const auto put = [&b](auto value)
+        {
+            char bytes[sizeof value];
+            std::memcpy(bytes, &value, sizeof value);  // the test machines are little-endian
+            b.append(bytes, sizeof value);
+        };
+        for (const float x : {0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 1.f})
+            put(x);
+        const std::int32_t faces[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, last_index}};
+        for (int f = 0; f < 4; ++f)
+        {
+            put(f == 3 ? last_count : std::uint8_t{3});
+            for (int k = 0; k < (f == 3 ? last_count : 3); ++k)
+                put(faces[f][k]);
+        }
+        return b;
+    };
+    // Face 3 starts at byte 169 (header) + 4 * 12 (vertices) + 3 * 13 (faces) = 256.
+    test::write_bytes(dir_ / "good_binary.ply", binary(3, 3));
+    EXPECT_TRUE(import_mesh(dir_ / "good_binary.ply"));
+    const core::Error big = error_of("big.ply", binary(77, 3));
+    EXPECT_EQ(big.code, ErrorCode::BadIndex);
+    EXPECT_NE(big.message.find(": face 3 (byte 256): index '77' is not a vertex"),
+              std::string::npos)
+        << big.message;
+    const core::Error negative = error_of("negative.ply", binary(-5, 3));
+    EXPECT_NE(negative.message.find("index '-5'"), std::string::npos) << negative.message;
+    const core::Error two = error_of("two.ply", binary(3, 2));
+    EXPECT_EQ(two.code, ErrorCode::BadIndex);
+    EXPECT_NE(two.message.find("face 3 (byte 256): vertex count 2 is less than 3"),
+              std::string::npos)
+        << two.message;
 }
 
 TEST_F(BadFiles, NonFiniteCoordinatesAreReportedWithTheirFace)
