@@ -48,6 +48,7 @@ struct HostOptions
     std::uint64_t ticks = 0;  ///< exact mode: stop stepping at this tick (0: never)
     std::string record;       ///< exact mode: the recording, written at the end
     std::string save;         ///< this peer's view of the object, written at the end
+    std::string resume;       ///< a saved state to start from instead of rest
     double tension = 1.0;     ///< T [N/m]
     double density = 1.0;     ///< rho [kg/m^2]
     double damping = 0.5;     ///< beta [1/s]
@@ -67,6 +68,8 @@ int run_host(const HostOptions& opt)
         auto file = core::load_grid(opt.grid);
         if (!file)
             return report(file.error());
+        if (holds_state(*file))
+            return report(state_as_rest_error("host", opt.grid));
         auto g = core::TetraGrid::create(file->level);
         if (!g)
             return report(g.error());
@@ -108,6 +111,10 @@ int run_host(const HostOptions& opt)
     if (!opt.save.empty())
         if (auto ok = check_writable(opt.save, "host: --save"); !ok)
             return report(ok.error());
+    if (!opt.resume.empty() && !opt.record.empty())
+        return report({core::ErrorCode::InvalidArgument,
+                       "host: --record needs a session that starts at rest (`pliant replay` "
+                       "replays from rest); leave out --resume or --record"});
     if (opt.mode != "exact" && (opt.ticks != 0 || !opt.record.empty()))
         return report({core::ErrorCode::InvalidArgument,
                        "host: --ticks and --record need --mode exact (a fast session's state "
@@ -146,6 +153,19 @@ int run_host(const HostOptions& opt)
                 "or less, or leave --dt out",
                 opt.dt, stable, 0.9 * stable);
     }
+    std::optional<sim::MembraneState> start;
+    if (!opt.resume.empty())
+    {
+        auto probe = sim::MembraneModel::create(*grid, rest, material);
+        if (!probe)
+            return report(probe.error());
+        auto saved = load_saved_state(opt.resume, *probe);
+        if (!saved)
+            return report(saved.error());
+        start = std::move(*saved);
+        spdlog::info("host: starting from the state saved in {} (time and tick start at 0)",
+                     opt.resume);
+    }
     session::SessionSettings settings;
     settings.coupling = opt.mode == "exact" ? session::Coupling::Exact : session::Coupling::Fast;
     if (opt.clearance == "grown")
@@ -156,7 +176,8 @@ int run_host(const HostOptions& opt)
     settings.listen_port = bound->port;
     settings.max_ticks = opt.ticks;
     apply_stream_options(opt.stream, settings);
-    auto s = session::Session::host(*transport, *grid, rest, material, settings);
+    auto s = session::Session::host(*transport, *grid, rest, material, settings,
+                                    start ? &*start : nullptr);
     if (!s)
         return report(s.error());
     spdlog::info("hosting level {} ({} mode, point clearance {}) on port {}", grid->level(),
@@ -216,6 +237,8 @@ void add_host_command(CLI::App& app, const GlobalOptions& global)
         "  pliant host --duration 30 --stats host.csv            # sphere, level 5, port 7777\n"
         "  pliant host spot.pgrid --port 9000 --mode fast --script grab.txt\n"
         "  pliant host --key-file session.key     # head -c 32 /dev/urandom > session.key\n"
+        "  pliant host spot.pgrid --save end.pgrid ... later: pliant host spot.pgrid --resume "
+        "end.pgrid\n"
         "--passphrase / --key-file / PLIANT_PASSPHRASE: every datagram authenticated and\n"
         "encrypted; peers without the same secret are refused (docs/operations.md).\n"
         "Ctrl-C (or SIGTERM) ends the session cleanly for every peer before --duration.");
@@ -262,6 +285,11 @@ void add_host_command(CLI::App& app, const GlobalOptions& global)
     cmd->add_option("--save", opt->save,
                     "Write what this peer shows at the end to FILE.pgrid (positions, u, v and "
                     "the owner of every node: `pliant render FILE.pgrid --color owner`)");
+    cmd->add_option("--resume", opt->resume,
+                    "Start from a saved state of GRID (u and v of a --save, demo's final.pgrid, "
+                    "`replay -o` or a `simulate` frame) instead of at rest; time and tick start "
+                    "at 0; not with --record")
+        ->check(CLI::ExistingFile);
     cmd->add_option("--tension", opt->tension, "Membrane tension T [N/m]")
         ->check(CLI::PositiveNumber)
         ->capture_default_str();

@@ -18,6 +18,7 @@
 #include "../../scenes/grid_shapes.h"
 #include "cli_common.h"
 #include "commands.h"
+#include "peer_files.h"
 
 #include <algorithm>
 #include <array>
@@ -76,6 +77,7 @@ struct SimulateOptions
     double radius = 1.0;
     std::string sphere_map = "equal-area";
     int threads = -1;  ///< -j; -1: not given (the scenario's `threads`), 0: OpenMP's default
+    std::filesystem::path resume;  ///< a saved state to start from instead of rest
 };
 
 std::string fmt_number(double v)
@@ -604,6 +606,8 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
         auto g = core::TetraGrid::create(file->level);
         if (!g)
             return report(g.error());
+        if (holds_state(*file))
+            return report(state_as_rest_error("simulate", opt.grid.string()));
         auto positions = core::geometry_of(*g, *file);
         if (!positions)
             return report(
@@ -648,6 +652,14 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
         }
     }
 
+    std::optional<sim::MembraneState> resumed;
+    if (!opt.resume.empty())
+    {
+        auto saved = load_saved_state(opt.resume, *model);
+        if (!saved)
+            return report(saved.error());
+        resumed = std::move(*saved);
+    }
     warn_unreachable_points(sc, *grid, rest, centre, opt.scenario);
     warn_unstable_step(sc, *model, opt.scenario);
 
@@ -663,7 +675,7 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
     csv << "frame,time,kinetic,strain,foundation,total,steps,rejections,flags\n";
     csv.precision(17);
 
-    sim::MembraneState state = sim::MembraneState::at_rest(*grid);
+    sim::MembraneState state = resumed ? std::move(*resumed) : sim::MembraneState::at_rest(*grid);
     sim::Rkf45Workspace ws(*model, sc.settings.threads);
     const int frames = sc.frames;
     const bool fixed = sc.settings.fixed_step;
@@ -808,7 +820,9 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global)
         "rejections, flags).\n\n"
         "Examples:\n"
         "  pliant simulate --scenario scenes/pull.toml -o out/pull            # sphere, level 6\n"
-        "  pliant simulate spot.pgrid --scenario scenes/spot.toml -o out/spot --format ply");
+        "  pliant simulate spot.pgrid --scenario scenes/spot.toml -o out/spot --format ply\n"
+        "  pliant simulate spot.pgrid --scenario scenes/spot.toml -o out/more \\\n"
+        "      --resume out/spot/frame_00060.pgrid        # go on from a frame (time starts at 0)");
     cmd->add_option("GRID", opt->grid,
                     "Rest geometry (.pgrid from `pliant remesh`); omitted: a sphere of --level");
     cmd->add_option("-s,--scenario", opt->scenario, "Scenario file (.toml)")
@@ -829,6 +843,11 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global)
                     "cells, twice the stable step) or gnomonic (the paper's central projection)")
         ->check(CLI::IsMember({"equal-area", "gnomonic"}))
         ->capture_default_str();
+    cmd->add_option("--resume", opt->resume,
+                    "Start from a saved state of GRID (a frame of an earlier run, a --save of "
+                    "`host`/`join`, demo's final.pgrid, `replay -o`) instead of at rest; the "
+                    "scenario's time starts at 0")
+        ->check(CLI::ExistingFile);
     cmd->add_option("-j,--threads", opt->threads,
                     "Threads (overrides the scenario's; 0: OpenMP's default; results are "
                     "identical for any count)")

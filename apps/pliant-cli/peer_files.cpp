@@ -5,6 +5,9 @@
 #include <pliant/core/grid_io.h>
 #include <pliant/session/recording.h>
 
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <string>
 #include <utility>
 #include <vector>
@@ -39,6 +42,104 @@ core::Result<void> save_peer_state(const session::Session& peer, const std::file
     file.fields.push_back({"v", std::move(v)});
     file.fields.push_back({"owner", std::move(owner)});
     return core::save_grid(path, file);
+}
+
+bool holds_state(const core::GridFile& file)
+{
+    return file.find("u") != nullptr && file.find("v") != nullptr;
+}
+
+core::Error state_as_rest_error(const std::string& command, const std::string& path)
+{
+    return {core::ErrorCode::InvalidArgument,
+            command + ": " + path +
+                " holds a simulated state (channels u and v): its positions are the deformed "
+                "surface, not a rest shape. Give the grid it was simulated on as GRID and this "
+                "file to --resume (`pliant " +
+                command + " REST.pgrid --resume " + path + "`)"};
+}
+
+core::Result<sim::MembraneState> load_saved_state(const std::filesystem::path& path,
+                                                  const sim::MembraneModel& model)
+{
+    auto file = core::load_grid(path);
+    if (!file)
+        return file.error();
+    const core::TetraGrid& grid = model.grid();
+    const std::string name = path.string();
+    const auto bad = [&](const std::string& why)
+    { return core::fail(core::ErrorCode::BadGrid, "--resume " + name + ": " + why); };
+    if (file->level != grid.level())
+        return bad("a state of level " + std::to_string(file->level) + ", but the rest grid is " +
+                   "of level " + std::to_string(grid.level()));
+    const core::Field<double>* u = file->find("u");
+    const core::Field<double>* v = file->find("v");
+    if (u == nullptr)
+        return bad(
+            "no channel 'u' (not a saved state: `host --save`, `demo`'s final.pgrid, "
+            "`replay -o` and `simulate` frames hold one)");
+    sim::MembraneState state = sim::MembraneState::at_rest(grid);
+    for (int y = 0; y < grid.ny(); ++y)
+        for (int x = 0; x < grid.nx(); ++x)
+        {
+            state.u.at(x, y) = u->at(x, y);
+            state.v.at(x, y) = v != nullptr ? v->at(x, y) : 0.0;
+            if (!std::isfinite(state.u.at(x, y)) || !std::isfinite(state.v.at(x, y)))
+                return bad("a non-finite value at node (" + std::to_string(x) + ", " +
+                           std::to_string(y) + ")");
+        }
+    model.sync(state.u);
+    model.sync(state.v);
+    if (file->find("px") == nullptr)
+        return state;
+    auto saved = core::geometry_of(grid, *file);
+    if (!saved)
+        return bad(saved.error().message);
+    core::Vec3Field<double> expected;
+    model.positions(state.u, expected);
+    const core::Vec3Field<double>& P = model.rest_positions();
+    double lo[3] = {P[0].at(0, 0), P[1].at(0, 0), P[2].at(0, 0)};
+    double hi[3] = {lo[0], lo[1], lo[2]};
+    double worst = -1.0;
+    int wx = 0;
+    int wy = 0;
+    for (int y = 0; y < grid.ny(); ++y)
+        for (int x = 0; x < grid.nx(); ++x)
+        {
+            double d2 = 0.0;
+            for (std::size_t k = 0; k < 3; ++k)
+            {
+                const double p = P[k].at(x, y);
+                lo[k] = std::min(lo[k], p);
+                hi[k] = std::max(hi[k], p);
+                const double d = (*saved)[k].at(x, y) - expected[k].at(x, y);
+                d2 += d * d;
+            }
+            if (d2 > worst)
+            {
+                worst = d2;
+                wx = x;
+                wy = y;
+            }
+        }
+    const double size = core::norm(core::Vec3{hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]});
+    if (std::sqrt(worst) > 1e-9 * size)
+    {
+        const auto at = [&](const core::Vec3Field<double>& f)
+        {
+            char text[96];
+            std::snprintf(text, sizeof text, "(%.6g, %.6g, %.6g)", f[0].at(wx, wy), f[1].at(wx, wy),
+                          f[2].at(wx, wy));
+            return std::string(text);
+        };
+        char gap[48];
+        std::snprintf(gap, sizeof gap, "%.3g", std::sqrt(worst));
+        return bad("not a state of this rest geometry: at node (" + std::to_string(wx) + ", " +
+                   std::to_string(wy) + ") the file's surface is at " + at(*saved) +
+                   " but the rest grid displaced by the file's u puts it at " + at(expected) +
+                   ", " + gap + " away; give the grid the state was simulated on");
+    }
+    return state;
 }
 
 core::Result<RecordedHash> save_master_recording(const session::Session& master,

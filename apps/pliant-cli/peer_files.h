@@ -4,11 +4,14 @@
 // What `pliant host` and `pliant join` can write at the end of a session: a peer's view of the
 // object (--save) and the master's recording (--record), so that a session of separate
 // processes can be checked against one process (`pliant replay`, docs/session.md §9).
+#include <pliant/core/grid_io.h>
 #include <pliant/core/result.h>
 #include <pliant/session/session.h>
+#include <pliant/sim/membrane.h>
 
 #include <cstddef>
 #include <filesystem>
+#include <string>
 
 namespace pliant::cli
 {
@@ -19,6 +22,24 @@ namespace pliant::cli
 /// under its newest partition. \return InvalidArgument before the peer has the model; save_grid's
 /// errors.
 core::Result<void> save_peer_state(const session::Session& peer, const std::filesystem::path& path);
+
+/// Whether a grid file holds a simulated state (channels u and v): what `host`/`join --save`,
+/// `demo`'s final.pgrid, `replay -o` and `simulate`'s frames write. Their px/py/pz are the
+/// deformed surface P + uN, not a rest shape.
+[[nodiscard]] bool holds_state(const core::GridFile& file);
+
+/// The refusal for a state file given where a rest geometry is expected (`command`'s GRID).
+[[nodiscard]] core::Error state_as_rest_error(const std::string& command, const std::string& path);
+
+/// Reads the state saved in `path` (channels u and, when present, v; v = 0 otherwise) for
+/// `--resume`, checking it belongs to `model`: same level and, when the file has positions,
+/// P + uN of the model within 1e-9 of its size at every node (the writers compute them with the
+/// same formula, so a state of this rest geometry matches to rounding). \return IoError,
+/// ParseError, BadGrid from `load_grid`; BadGrid for another level, no u, a non-finite value,
+/// or positions that `model` displaced by u does not give (another rest geometry), naming the
+/// farthest node.
+core::Result<sim::MembraneState> load_saved_state(const std::filesystem::path& path,
+                                                  const sim::MembraneModel& model);
 
 /// What the recording's final hash covers: the master's own canonical nodes, of `total`.
 struct RecordedHash

@@ -3186,8 +3186,23 @@ core::Result<std::unique_ptr<Session>> Session::host(net::Transport& transport,
                                                      const core::TetraGrid& grid,
                                                      const core::Vec3Field<double>& rest,
                                                      const sim::MembraneSettings& material,
-                                                     const SessionSettings& settings)
+                                                     const SessionSettings& settings,
+                                                     const sim::MembraneState* start)
 {
+    if (start != nullptr)
+    {
+        if (start->u.level() != grid.level() || start->v.level() != grid.level())
+            return core::fail(core::ErrorCode::InvalidArgument,
+                              "Session::host: the start state is of level " +
+                                  std::to_string(start->u.level()) + ", the grid of level " +
+                                  std::to_string(grid.level()));
+        for (int y = 0; y < grid.ny(); ++y)
+            for (int x = 0; x < grid.nx(); ++x)
+                if (!std::isfinite(start->u.at(x, y)) || !std::isfinite(start->v.at(x, y)))
+                    return core::fail(core::ErrorCode::InvalidArgument,
+                                      "Session::host: the start state is not finite at node (" +
+                                          std::to_string(x) + ", " + std::to_string(y) + ")");
+    }
     if (auto r = check_settings(settings, "Session::host"); !r)
         return core::fail(r.error().code, r.error().message);
     if (auto r = check_coarsen(settings, "Session::host"); !r)
@@ -3219,6 +3234,18 @@ core::Result<std::unique_ptr<Session>> Session::host(net::Transport& transport,
                                "Session::host");
         !r)
         return core::fail(r.error().code, r.error().message);
+    if (start != nullptr)
+    {
+        for (int y = 0; y < grid.ny(); ++y)
+            for (int x = 0; x < grid.nx(); ++x)
+            {
+                s->state_.u.at(x, y) = start->u.at(x, y);
+                s->state_.v.at(x, y) = start->v.at(x, y);
+            }
+        s->model_->sync(s->state_.u);
+        s->model_->sync(s->state_.v);
+        s->resumed_ = true;
+    }
     im.add_partition(0, im.next_epoch++, im.compute_partition());
     im.lockstep = settings.coupling == Coupling::Exact;
     im.copy_own_to_display(im.newest());
@@ -3320,6 +3347,10 @@ core::Result<void> Session::start_recording()
         return core::fail(core::ErrorCode::InvalidArgument,
                           "recording needs the master of an exact-mode session, before its first "
                           "step");
+    if (resumed_)
+        return core::fail(core::ErrorCode::InvalidArgument,
+                          "recording needs a session that starts at rest (a replay starts there); "
+                          "this one started from a saved state");
     impl_->recording = true;
     return {};
 }

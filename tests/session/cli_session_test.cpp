@@ -411,4 +411,108 @@ TEST(SessionCli, F32AndStreamRateCutTheStream)
     EXPECT_GT(cut, 0.15 * full) << "f32 at 30 Hz: " << cut << " bytes, f64 at 60 Hz: " << full;
 }
 
+/// Largest |a - b| over the grid's nodes of channel `name` of two grid files, and max |b|.
+struct ChannelDiff
+{
+    double diff = 0.0;
+    double scale = 0.0;
+};
+
+ChannelDiff channel_diff(const std::filesystem::path& a_path, const std::filesystem::path& b_path,
+                         const char* name)
+{
+    const auto a = pliant::core::load_grid(a_path);
+    const auto b = pliant::core::load_grid(b_path);
+    EXPECT_TRUE(a && b) << a_path << " " << b_path;
+    if (!a || !b || a->find(name) == nullptr || b->find(name) == nullptr)
+        return {1e300, 0.0};
+    const pliant::core::TetraGrid grid = pliant::core::TetraGrid::create(a->level).value();
+    ChannelDiff d;
+    for (std::uint32_t i = 0; i < grid.node_count(); ++i)
+    {
+        const pliant::core::NodeIndex n{i};
+        d.diff = std::max(d.diff, std::abs((*a->find(name))[n] - (*b->find(name))[n]));
+        d.scale = std::max(d.scale, std::abs((*b->find(name))[n]));
+    }
+    return d;
+}
+
+// A saved state (`host --save`, a `simulate` frame) given as GRID is refused, pointing to
+// --resume; with --resume, host and simulate go on from it: the host's first tick stays next to
+// the saved surface (from rest it would be flat), a simulation resumed from frame 2 starts on
+// frame 2's state bit for bit and, once the forces are over, reproduces the original run's later
+// frame; a state of another rest geometry (the gnomonic sphere) or level is refused.
+TEST(SessionCli, ASavedStateResumesInHostAndSimulateAndIsRefusedAsRestGeometry)
+{
+    const auto dir = pliant::test::scratch_dir("session_cli_resume");
+    const int port = 20000 + static_cast<int>((getpid() + 9013) % 19990);
+    {
+        std::ofstream(dir / "grab.txt") << "0.05 grab face 300 force 0 0 0.6 for 0.3\n";
+        const char* material =
+            "[material]\nbeta = 0.5\nk_f = 1.0\n"
+            "[integrator]\nfixed_step = true\nfixed_dt = 0.001\n";
+        std::ofstream(dir / "pull.toml")
+            << "duration = 0.4\nframe_rate = 10.0\n"
+            << material
+            << "[[force]]\nstart = 0.0\nend = 0.1\npoint = [0.0, 0.0, 1.0]\nradius = 0.4\n"
+               "vector = [0.0, 0.0, 0.5]\n";
+        std::ofstream(dir / "free.toml") << "duration = 0.2\nframe_rate = 10.0\n" << material;
+    }
+    const std::string exe = "'" + std::string(PLIANT_EXE) + "'";
+    const std::string p = " --port " + std::to_string(port);
+    const auto run = [&](const std::string& name, const std::string& args)
+    { return "(" + exe + " " + args + " > " + name + ".log 2>&1; echo $? > " + name + ".rc); "; };
+    const std::string cmd =
+        "cd '" + dir.string() + "' && rm -rf *.rc *.pgrid o1 o2; " +
+        run("a", "host --level 4" + p + " --ticks 300 --duration 0.8 --script grab.txt --save " +
+                     "a.pgrid") +
+        run("as_rest", "host a.pgrid" + p + " --duration 0.2") +
+        run("b",
+            "host --level 4" + p + " --resume a.pgrid --ticks 1 --duration 0.3 --save b.pgrid") +
+        run("other", "host --level 4 --sphere-map gnomonic" + p + " --resume a.pgrid") +
+        run("level", "host --level 5" + p + " --resume a.pgrid") +
+        run("o1", "simulate --level 4 --scenario pull.toml -o o1") +
+        run("o2", "simulate --level 4 --scenario free.toml -o o2 --resume o1/frame_00002.pgrid") +
+        run("frame_as_rest", "simulate o1/frame_00002.pgrid --scenario free.toml -o o3");
+    ASSERT_EQ(std::system(cmd.c_str()), 0);
+    const std::string a_log = read(dir / "a.log");
+    if (a_log.find("bind") != std::string::npos && read(dir / "a.rc") != "0\n")
+        GTEST_SKIP() << "cannot bind UDP port " << port << " on this machine: " << a_log;
+    for (const char* name : {"a", "b", "o1", "o2"})
+        ASSERT_EQ(read(dir / (std::string(name) + ".rc")), "0\n")
+            << name << ": " << read(dir / (std::string(name) + ".log"));
+    for (const char* name : {"as_rest", "frame_as_rest"})
+    {
+        EXPECT_NE(read(dir / (std::string(name) + ".rc")), "0\n") << name;
+        EXPECT_NE(read(dir / (std::string(name) + ".log")).find("holds a simulated state"),
+                  std::string::npos)
+            << read(dir / (std::string(name) + ".log"));
+        EXPECT_NE(read(dir / (std::string(name) + ".log")).find("--resume"), std::string::npos);
+    }
+    EXPECT_NE(read(dir / "other.rc"), "0\n");
+    EXPECT_NE(read(dir / "other.log").find("not a state of this rest geometry"), std::string::npos)
+        << read(dir / "other.log");
+    EXPECT_NE(read(dir / "level.rc"), "0\n");
+    EXPECT_NE(read(dir / "level.log").find("a state of level 4"), std::string::npos)
+        << read(dir / "level.log");
+
+    // Host: one tick of 1 ms after the saved state.
+    const ChannelDiff host = channel_diff(dir / "b.pgrid", dir / "a.pgrid", "u");
+    EXPECT_GT(host.scale, 1e-3) << "the grab moved the surface";
+    EXPECT_LT(host.diff, 0.05 * host.scale) << "the resumed host starts where the saved one was";
+    // Simulate: frame 0 of the resumed run is the saved frame; its frame 2 (0.2 s later, no
+    // force in either run by then) is the original's frame 4.
+    for (const char* channel : {"u", "v"})
+    {
+        const ChannelDiff start = channel_diff(dir / "o2" / "frame_00000.pgrid",
+                                               dir / "o1" / "frame_00002.pgrid", channel);
+        EXPECT_GT(start.scale, 1e-4) << channel;
+        EXPECT_EQ(start.diff, 0.0) << channel;
+        const ChannelDiff later = channel_diff(dir / "o2" / "frame_00002.pgrid",
+                                               dir / "o1" / "frame_00004.pgrid", channel);
+        EXPECT_GT(later.scale, 1e-4) << channel;
+        EXPECT_LE(later.diff, 1e-12 * later.scale) << channel;
+    }
+}
+
 }  // namespace

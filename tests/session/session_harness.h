@@ -79,14 +79,15 @@ inline net::UserForce turning_drag(int k, double t)
 }
 
 /// The obvious single-process run: forces of tick t are each sender's newest list with
-/// from <= t, concatenated by increasing sender id.
+/// from <= t, concatenated by increasing sender id; from rest, or from `start`.
 inline sim::MembraneState reference_run(int level, std::uint64_t ticks,
-                                        const std::vector<Scheduled>& schedule)
+                                        const std::vector<Scheduled>& schedule,
+                                        const sim::MembraneState* start = nullptr)
 {
     const core::TetraGrid grid = core::TetraGrid::create(level).value();
     auto model =
         sim::MembraneModel::create(grid, scenes::sphere_grid(grid, 1.0), material()).value();
-    sim::MembraneState state = sim::MembraneState::at_rest(grid);
+    sim::MembraneState state = start != nullptr ? *start : sim::MembraneState::at_rest(grid);
     sim::Rkf45Workspace ws(model, 1);
     for (std::uint64_t t = 0; t < ticks; ++t)
     {
@@ -140,14 +141,15 @@ struct Harness
     net::Address master_address;
     double now = 0.0;
 
-    Session& host(int level, const SessionSettings& settings)
+    Session& host(int level, const SessionSettings& settings,
+                  const sim::MembraneState* start = nullptr)
     {
         transports.push_back(net.create_endpoint());
         master_address = transports.back()->open({}).value();
         addresses.push_back(master_address);
         const core::TetraGrid grid = core::TetraGrid::create(level).value();
         peers.push_back(Session::host(*transports.back(), grid, scenes::sphere_grid(grid, 1.0),
-                                      material(), settings)
+                                      material(), settings, start)
                             .value());
         return *peers.back();
     }

@@ -8,6 +8,7 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 #include <optional>
 #include <random>
 #include <string>
@@ -153,6 +154,67 @@ void run_exact(int participants, bool late_viewer, bool one_leaves, int level = 
         EXPECT_LT(v.tick(), k_ticks);
         EXPECT_EQ(h.peers[0]->shown_tick(), h.peers[0]->tick());
     }
+}
+
+// A session hosted from a saved state (`pliant host --resume`) goes on from it: the members'
+// owned nodes and a late viewer's display equal one process stepped from the same state, bit
+// for bit. Such a session cannot record (a replay starts at rest), and a state of another level
+// or with a non-finite value is refused.
+TEST(SessionExact, HostedFromASavedStateEqualsSingleProcessFromIt)
+{
+    // The saved state: 150 ticks of a push, then its time and tick reset as a resume does.
+    sim::MembraneState start =
+        reference_run(k_level, 150, {{0, 0, {point_push(0.0, 0.0, 1.0, 0.3, 0.4)}}});
+    start.time = 0.0;
+    start.tick = 0;
+    Harness h;
+    Session& master = h.host(k_level, settings_for(Coupling::Exact, "master"), &start);
+    EXPECT_FALSE(master.start_recording()) << "a recording replays from rest";
+    Session& p = h.join(net::Role::Participant, settings_for(Coupling::Exact, "part"));
+    p.set_points_of_interest({net::Target{net::TargetKind::Face, 3000, {0, 0, 0}, 0.0}});
+    const std::vector<Scheduled> sched = {{1, 200, {face_pull(700, 0.6)}}};
+    apply_schedule(h, sched);
+    ASSERT_TRUE(pump_until_partitioned(h, 2));
+    ASSERT_TRUE(h.pump_until([&] { return h.peers[0]->tick() >= 300; }, 20000));
+    h.join(net::Role::Viewer, settings_for(Coupling::Exact, "viewer"));
+    ASSERT_TRUE(h.pump_until([&] { return all_at(h, k_ticks, 2); }, 40000));
+    for (int k = 0; k < 200; ++k)
+        h.pump_once(0.0005);
+
+    const sim::MembraneState ref = reference_run(k_level, k_ticks, sched, &start);
+    const sim::MembraneState from_rest = reference_run(k_level, k_ticks, sched);
+    const core::TetraGrid& g = master.model()->grid();
+    EXPECT_GT(compare(g, ref.u, from_rest.u, {}).relative(), 0.1) << "the start state matters";
+    for (std::size_t k = 0; k < 2; ++k)
+    {
+        const Session& peer = *h.peers[k];
+        ASSERT_EQ(peer.tick(), k_ticks);
+        EXPECT_EQ(compare(g, peer.state().u, ref.u, owned_by(peer)).max_abs, 0.0) << k;
+        EXPECT_EQ(compare(g, peer.state().v, ref.v, owned_by(peer)).max_abs, 0.0) << k;
+    }
+    const Session& viewer = *h.peers.back();
+    ASSERT_TRUE(viewer.ready());
+    EXPECT_LE(compare(g, viewer.display_u(), ref.u, {}).relative(), 1e-12);
+    EXPECT_LE(compare(g, viewer.display_v(), ref.v, {}).relative(), 1e-12);
+
+    // Refusals.
+    net::SimulatedNetwork network;
+    auto endpoint = network.create_endpoint();
+    ASSERT_TRUE(endpoint->open({}));
+    const core::TetraGrid other = core::TetraGrid::create(k_level - 1).value();
+    const sim::MembraneState coarse = sim::MembraneState::at_rest(other);
+    const core::TetraGrid grid = core::TetraGrid::create(k_level).value();
+    const auto rest = scenes::sphere_grid(grid, 1.0);
+    const SessionSettings settings = settings_for(Coupling::Exact, "m");
+    auto wrong_level = Session::host(*endpoint, grid, rest, material(), settings, &coarse);
+    ASSERT_FALSE(wrong_level);
+    EXPECT_EQ(wrong_level.error().code, core::ErrorCode::InvalidArgument);
+    sim::MembraneState nan = start;
+    nan.v.at(3, 4) = std::numeric_limits<double>::quiet_NaN();
+    auto not_finite = Session::host(*endpoint, grid, rest, material(), settings, &nan);
+    ASSERT_FALSE(not_finite);
+    EXPECT_NE(not_finite.error().message.find("(3, 4)"), std::string::npos)
+        << not_finite.error().message;
 }
 
 TEST(SessionExact, TwoPeersEqualSingleProcess)

@@ -257,13 +257,17 @@ struct PeerStatus
 class Session
 {
 public:
-    /// Starts a session as master on an opened transport. \return InvalidArgument for bad
-    /// settings or material; the model's errors (DegenerateFace, ...).
+    /// Starts a session as master on an opened transport, at rest or, with `start`, from a
+    /// saved state (its u and v, any ghost width, of `grid`'s level; time and tick start at 0,
+    /// and a recording is then refused, since a replay starts at rest). \return InvalidArgument
+    /// for bad settings or material, or a `start` of another level or with a non-finite value;
+    /// the model's errors (DegenerateFace, ...).
     static core::Result<std::unique_ptr<Session>> host(net::Transport& transport,
                                                        const core::TetraGrid& grid,
                                                        const core::Vec3Field<double>& rest,
                                                        const sim::MembraneSettings& material,
-                                                       const SessionSettings& settings);
+                                                       const SessionSettings& settings,
+                                                       const sim::MembraneState* start = nullptr);
     /// Starts joining the master at `master` (the transport must be open). \return NetworkError
     /// if connect() fails; InvalidArgument for bad settings.
     static core::Result<std::unique_ptr<Session>> join(net::Transport& transport,
@@ -296,7 +300,7 @@ public:
     void leave();
     /// Starts recording every force list of every peer (recording.h) for deterministic replay.
     /// \return InvalidArgument unless this is the master of an exact-mode session that has not
-    /// stepped yet (a recording starts at rest).
+    /// stepped yet and started at rest (a recording replays from rest).
     core::Result<void> start_recording();
     /// The inputs recorded so far, with `final_tick` = this peer's tick (final_hash unset).
     [[nodiscard]] Recording recording() const;
@@ -384,6 +388,7 @@ private:
     sim::MembraneState state_;
     core::Field<double> display_u_;
     core::Field<double> display_v_;
+    bool resumed_ = false;  ///< hosted from a saved state, not from rest
 };
 
 /// Encodes a model (level, material, rest positions) and the master's session-wide choices
