@@ -78,7 +78,11 @@ void LoadJob::run() noexcept
         if (!positions)
             return finish(core::Error{positions.error().code,
                                       path_.string() + ": " + positions.error().message});
-        std::string what = name + " (level " + std::to_string(grid->level()) + " grid)";
+        // A saved state (u and v: a --save, a simulate frame) is shown as saved; its deformed
+        // surface then serves as the rest shape of the viewer's own simulation.
+        const bool state = file->find("u") != nullptr && file->find("v") != nullptr;
+        std::string what = name + " (level " + std::to_string(grid->level()) + " grid" +
+                           (state ? "; a saved state, shown as the rest shape" : "") + ")";
         return finish(LoadedSurface{std::move(*grid), std::move(*positions), std::move(what)});
     }
     Sink sink(*this);
