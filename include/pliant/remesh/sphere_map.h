@@ -15,7 +15,9 @@
 ///   spherical kernel of its one-ring, with vertex moves that never leave the kernel. The moves
 ///   minimise the L2 stretch plus an inverse-stretch (symmetric Dirichlet) term and a peak
 ///   term, each face measured on two chord triangles split at its longest arc, with coarse
-///   faces standing for the surface area their vertices absorbed (docs/remesh.md §1.2).
+///   faces standing for the surface area their vertices absorbed, and on the final mesh a kink
+///   term on the change of the Jacobian across each edge, which is what folds the sampled grid
+///   (docs/remesh.md §1.2).
 ///   Fold-free by construction (every move is checked).
 /// A result is returned only when every spherical triangle is positively oriented.
 ///
