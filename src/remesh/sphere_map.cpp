@@ -255,6 +255,16 @@ public:
 
     /// Kink term of one edge (see enable_kink): the shear of J_A^-1 J_B along the edge in the
     /// domain, normalised by the square root of its determinant.
+    ///
+    /// In the edge frame (j at the origin, k on the x axis) of both unfolded quadrilaterals, the
+    /// chord side has k at (lq, 0), i at (ai, hi), l at (al, -hl), and the surface side the
+    /// Kink's coordinates. Both Jacobians map the x axis to itself with scale s = lp / lq, so
+    /// J_A = [[s, uA], [0, vA]] with uA = (ci - s ai) / hi, vA = gi / hi, and J_B likewise with
+    /// uB = (s al - cl) / hl, vB = gl / hl. Then K = J_A^-1 J_B = [[1, beta], [0, gamma]] with
+    /// beta = (uB vA - uA vB) / (s vA), gamma = vB / vA, and
+    ///   mu^2 = beta^2 / gamma = (al gi + ai gl - (cl gi + ci gl) / s)^2 / (gi gl hi hl),
+    /// symmetric in A and B, 0 when the two faces share one affine map. A sampled grid
+    /// triangle across the edge can fold once mu exceeds about 3.5 (docs/remesh.md §1.2).
     [[nodiscard]] double kink_energy(const Kink& kk, const Vec3& qj, const Vec3& qk, const Vec3& qi,
                                      const Vec3& ql) const noexcept
     {
@@ -423,7 +433,11 @@ public:
                 };
                 kk.area = 0.5 * (area(t) + area(tb)) * scale2_;
                 if (!(kk.gi > 0.0) || !(kk.gl > 0.0))
-                    kk.area = 0.0, kk.gi = kk.gl = 1.0;  // degenerate surface face: no term
+                {
+                    // a degenerate surface face has no Jacobian to compare: no term
+                    kk.area = 0.0;
+                    kk.gi = kk.gl = 1.0;
+                }
             }
     }
 
