@@ -72,14 +72,22 @@ core::Result<RemeshResult> remesh(const mesh::TriMesh& input, const RemeshSettin
     }
 
     auto t0 = Clock::now();
-    auto map = map_to_sphere(*m, settings.sphere, progress);
+    // a coarse input is mapped, sampled and untangled split into more faces (the same surface)
+    mesh::TriMesh split;
+    const mesh::TriMesh* mm = m;
+    if (m->faces.size() < settings.min_map_faces)
+    {
+        split = split_for_map(*m, settings.min_map_faces);
+        mm = &split;
+    }
+    auto map = map_to_sphere(*mm, settings.sphere, progress);
     if (!map)
         return map.error();
     report.phases.push_back({"sphere map", seconds_since(t0)});
     report.sphere_method = method_name(map->method_used);
     report.gnomonic_folds = map->gnomonic_folds;
     report.spring_folds = map->spring_folds;
-    report.inverted_mesh = count_inverted(m->faces, map->points);
+    report.inverted_mesh = count_inverted(mm->faces, map->points);
     report.rms_stretch = map->rms_stretch;
     report.stretch_efficiency = map->stretch_efficiency;
 
@@ -97,8 +105,8 @@ core::Result<RemeshResult> remesh(const mesh::TriMesh& input, const RemeshSettin
 
     t0 = Clock::now();
     SampleStats stats;
-    auto positions = settings.sampler ? settings.sampler(*grid, domain, *m, map->points)
-                                      : sample_surface(*grid, domain, *m, map->points, &stats);
+    auto positions = settings.sampler ? settings.sampler(*grid, domain, *mm, map->points)
+                                      : sample_surface(*grid, domain, *mm, map->points, &stats);
     if (!positions)
         return positions.error();
     report.brute_force_locations = stats.brute_force;
@@ -113,7 +121,7 @@ core::Result<RemeshResult> remesh(const mesh::TriMesh& input, const RemeshSettin
         progress->update("untangle", 0.0);
     core::Vec3Field<double> points = domain;
     report.untangle =
-        untangle_samples(*grid, *m, map->points, points, *positions, settings.untangle);
+        untangle_samples(*grid, *mm, map->points, points, *positions, settings.untangle);
     if (settings.check_input)
     {
         report.input_intersections = count_self_intersections(*m);

@@ -13,6 +13,7 @@
 
 #include <pliant/remesh/sphere_map.h>
 
+#include "remesh/locate_internal.h"
 #include "remesh/progressive_mesh.h"
 #include "remesh/sphere_geometry_internal.h"
 
@@ -222,7 +223,66 @@ public:
             if (e == k_inf)
                 return e;
         }
+        if (kink_weight_ > 0.0 && !kink_.empty())
+            for (const std::uint32_t f : vf_[i])
+                for (std::uint32_t slot = 0; slot < 3; ++slot)
+                {
+                    const Kink& kk = kink_[3 * f + slot];
+                    const auto& tg = faces_[kk.other];
+                    // an edge between two faces of the star is met from both: count it once
+                    if ((tg[0] == i || tg[1] == i || tg[2] == i) && kk.other < f)
+                        continue;
+                    const auto& t = faces_[f];
+                    const auto at = [&](std::uint32_t v) -> const Vec3&
+                    { return v == i ? x : q_[v]; };
+                    e += kink_energy(kk, at(t[slot]), at(t[(slot + 1) % 3]), at(t[(slot + 2) % 3]),
+                                     at(kk.opposite));
+                    if (e == k_inf)
+                        return e;
+                }
         return e;
+    }
+
+    /// Surface side of the kink of the edge in slot `slot` of face f: the edge (t[slot],
+    /// t[slot+1]) of face A = f, opposite vertex t[slot+2]; face B = other, opposite vertex
+    /// `opposite`. Both surface triangles unfolded into the plane about the edge: length lp,
+    /// the opposite vertices at (ci, gi) on A's side and (cl, -gl) on B's.
+    struct Kink
+    {
+        std::uint32_t other = 0, opposite = 0;
+        double lp = 0.0, ci = 0.0, gi = 0.0, cl = 0.0, gl = 0.0, area = 0.0;
+    };
+
+    /// Kink term of one edge (see enable_kink): the shear of J_A^-1 J_B along the edge in the
+    /// domain, normalised by the square root of its determinant.
+    ///
+    /// In the edge frame (j at the origin, k on the x axis) of both unfolded quadrilaterals, the
+    /// chord side has k at (lq, 0), i at (ai, hi), l at (al, -hl), and the surface side the
+    /// Kink's coordinates. Both Jacobians map the x axis to itself with scale s = lp / lq, so
+    /// J_A = [[s, uA], [0, vA]] with uA = (ci - s ai) / hi, vA = gi / hi, and J_B likewise with
+    /// uB = (s al - cl) / hl, vB = gl / hl. Then K = J_A^-1 J_B = [[1, beta], [0, gamma]] with
+    /// beta = (uB vA - uA vB) / (s vA), gamma = vB / vA, and
+    ///   mu^2 = beta^2 / gamma = (al gi + ai gl - (cl gi + ci gl) / s)^2 / (gi gl hi hl),
+    /// symmetric in A and B, 0 when the two faces share one affine map. A sampled grid
+    /// triangle across the edge can fold once mu exceeds about 3.5 (docs/remesh.md §1.2).
+    [[nodiscard]] double kink_energy(const Kink& kk, const Vec3& qj, const Vec3& qk, const Vec3& qi,
+                                     const Vec3& ql) const noexcept
+    {
+        const Vec3 t = qk - qj;
+        const double lq2 = core::dot(t, t);
+        if (!(lq2 > 0.0))
+            return k_inf;
+        const double lq = std::sqrt(lq2);
+        const Vec3 ri = qi - qj, rl = ql - qj;
+        const double ai = core::dot(ri, t) / lq, al = core::dot(rl, t) / lq;
+        const double hi = core::norm(core::cross(ri, t)) / lq;
+        const double hl = core::norm(core::cross(rl, t)) / lq;
+        if (!(hi > 0.0) || !(hl > 0.0))
+            return k_inf;
+        const double s = kk.lp / lq;
+        const double num = al * kk.gi + ai * kk.gl - (kk.cl * kk.gi + kk.ci * kk.gl) / s;
+        const double mu2 = num * num / (kk.gi * kk.gl * hi * hl);
+        return kink_weight_ * kk.area * mu2;
     }
 
     [[nodiscard]] double face_energy(const mesh::Face& t,
@@ -323,8 +383,62 @@ public:
             {
                 const auto& t = faces_[f];
                 e += face_energy(t, {q_[t[0]], q_[t[1]], q_[t[2]]});
+                if (kink_weight_ > 0.0 && !kink_.empty())
+                    for (std::uint32_t slot = 0; slot < 3; ++slot)
+                    {
+                        const Kink& kk = kink_[3 * f + slot];
+                        if (kk.other < f)
+                            continue;
+                        e += kink_energy(kk, q_[t[slot]], q_[t[(slot + 1) % 3]],
+                                         q_[t[(slot + 2) % 3]], q_[kk.opposite]);
+                    }
             }
         return e;
+    }
+
+    /// Adds the kink term on the final mesh (faces fixed from here on).
+    void enable_kink(double weight)
+    {
+        kink_weight_ = weight;
+        const auto nb = detail::face_neighbours(faces_);
+        kink_.assign(faces_.size() * 3, Kink{});
+        const auto unfold = [](const Vec3& o, const Vec3& k, const Vec3& x, double& a, double& h)
+        {
+            const Vec3 t = core::normalized(k - o);
+            const Vec3 r = x - o;
+            a = core::dot(r, t);
+            h = core::norm(core::cross(r, t));
+        };
+        for (std::uint32_t f = 0; f < faces_.size(); ++f)
+            for (std::uint32_t slot = 0; slot < 3; ++slot)
+            {
+                const auto& t = faces_[f];
+                Kink& kk = kink_[3 * f + slot];
+                kk.other = nb[3 * f + slot];
+                const auto& tb = faces_[kk.other];
+                const std::uint32_t j = t[slot], k = t[(slot + 1) % 3], i = t[(slot + 2) % 3];
+                kk.opposite =
+                    tb[0] != j && tb[0] != k ? tb[0] : (tb[1] != j && tb[1] != k ? tb[1] : tb[2]);
+                const double sc = std::sqrt(scale2_);
+                kk.lp = core::norm(pos_[k] - pos_[j]) * sc;
+                unfold(pos_[j], pos_[k], pos_[i], kk.ci, kk.gi);
+                unfold(pos_[j], pos_[k], pos_[kk.opposite], kk.cl, kk.gl);
+                kk.ci *= sc;
+                kk.gi *= sc;
+                kk.cl *= sc;
+                kk.gl *= sc;
+                const auto area = [&](const mesh::Face& g) {
+                    return 0.5 * core::norm(
+                                     core::cross(pos_[g[1]] - pos_[g[0]], pos_[g[2]] - pos_[g[0]]));
+                };
+                kk.area = 0.5 * (area(t) + area(tb)) * scale2_;
+                if (!(kk.gi > 0.0) || !(kk.gl > 0.0))
+                {
+                    // a degenerate surface face has no Jacobian to compare: no term
+                    kk.area = 0.0;
+                    kk.gi = kk.gl = 1.0;
+                }
+            }
     }
 
     /// One descent step for vertex i: finite-difference gradient in the tangent plane, then a
@@ -444,6 +558,8 @@ private:
     double scale2_ = 1.0;
     double inverse_weight_ = 0.0;
     double peak_weight_ = 0.0;
+    double kink_weight_ = 0.0;
+    std::vector<Kink> kink_;
 
 public:
     /// Measure each face as two chord triangles split at its longest arc (see face_energy).
@@ -641,6 +757,9 @@ core::Result<std::vector<Vec3>> coarse_to_fine(const mesh::TriMesh& m, const Sph
                   "coarse_to_fine: undoing the collapses did not restore the mesh");
     // all vertices present: the faces' own geometry from here on
     opt.represented_.clear();
+    // and, from here on, the kink term (§1.2): it needs the final faces and their neighbours
+    if (s.kink_weight > 0.0)
+        opt.enable_kink(s.kink_weight);
     // anneal the inverse-stretch weight from the coarse value down to the final one: the
     // coarse value keeps the growing map isotropic (no sheared zones that local moves cannot
     // undo later), the final one trades some of that for lower L2 stretch
@@ -658,6 +777,45 @@ core::Result<std::vector<Vec3>> coarse_to_fine(const mesh::TriMesh& m, const Sph
 }
 
 }  // namespace
+
+mesh::TriMesh split_for_map(const mesh::TriMesh& mesh, std::size_t min_faces)
+{
+    mesh::TriMesh out = mesh;
+    while (out.faces.size() < min_faces && !out.faces.empty())
+    {
+        // one midpoint per undirected edge: the edges sorted by (low, high) end
+        std::vector<std::array<std::uint32_t, 3>> edges;  // low, high, face * 3 + slot
+        edges.reserve(out.faces.size() * 3);
+        for (std::uint32_t f = 0; f < out.faces.size(); ++f)
+            for (std::uint32_t k = 0; k < 3; ++k)
+            {
+                const std::uint32_t a = out.faces[f][k], b = out.faces[f][(k + 1) % 3];
+                edges.push_back({std::min(a, b), std::max(a, b), 3 * f + k});
+            }
+        std::sort(edges.begin(), edges.end());
+        std::vector<std::uint32_t> mid(out.faces.size() * 3);
+        for (std::size_t e = 0; e < edges.size(); ++e)
+        {
+            if (e == 0 || edges[e][0] != edges[e - 1][0] || edges[e][1] != edges[e - 1][1])
+                out.positions.push_back((out.positions[edges[e][0]] + out.positions[edges[e][1]]) *
+                                        0.5);
+            mid[edges[e][2]] = static_cast<std::uint32_t>(out.positions.size() - 1);
+        }
+        std::vector<mesh::Face> faces;
+        faces.reserve(out.faces.size() * 4);
+        for (std::uint32_t f = 0; f < out.faces.size(); ++f)
+        {
+            const auto& t = out.faces[f];
+            const std::uint32_t m01 = mid[3 * f], m12 = mid[3 * f + 1], m20 = mid[3 * f + 2];
+            faces.push_back({t[0], m01, m20});
+            faces.push_back({m01, t[1], m12});
+            faces.push_back({m20, m12, t[2]});
+            faces.push_back({m01, m12, m20});
+        }
+        out.faces = std::move(faces);
+    }
+    return out;
+}
 
 std::size_t count_inverted(std::span<const mesh::Face> faces,
                            std::span<const core::Vec3> sphere) noexcept
@@ -750,8 +908,8 @@ core::Result<SphereMap> map_to_sphere(const mesh::TriMesh& mesh, const SphereMap
             for (std::uint32_t i = 0; i < order.size(); ++i)
                 order[i] = i;
             // no hierarchy here: local moves need many more sweeps to spread stretch globally
-            sweeps(opt, order, settings.final_sweeps * 40, settings.tolerance * 0.01, {}, &sink,
-                   "sphere optimise");
+            sweeps(opt, order, settings.spring_optimise_sweeps, settings.tolerance * 0.01, {},
+                   &sink, "sphere optimise");
             out.method_used = SphereMethod::SpringEmbedder;
         }
     }

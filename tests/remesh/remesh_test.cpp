@@ -170,6 +170,44 @@ TEST(SphereMap, SpringEmbedderNeverReturnsFolds)
     }
 }
 
+// The split surface is the input's: same area and volume, closed and manifold, four faces per
+// face, each new face inside the plane of the face it came from; the original vertices keep
+// their indices and positions.
+TEST(SplitForMap, SameSurfaceFourTimesTheFaces)
+{
+    const mesh::TriMesh m = load("fox.ply");
+    const mesh::TriMesh s = split_for_map(m, 2000);
+    ASSERT_EQ(s.faces.size(), 4 * m.faces.size());  // 622 -> 2488
+    ASSERT_TRUE(mesh::validate(s, "split"));
+    EXPECT_EQ(s.positions.size(), m.positions.size() + 3 * m.faces.size() / 2);
+    for (std::size_t v = 0; v < m.positions.size(); ++v)
+        ASSERT_TRUE(s.positions[v].x == m.positions[v].x && s.positions[v].y == m.positions[v].y &&
+                    s.positions[v].z == m.positions[v].z);
+    const auto area = [](const mesh::TriMesh& x)
+    {
+        double a = 0.0;
+        for (const auto& f : x.faces)
+            a += 0.5 * core::norm(core::cross(x.positions[f[1]] - x.positions[f[0]],
+                                              x.positions[f[2]] - x.positions[f[0]]));
+        return a;
+    };
+    EXPECT_NEAR(area(s), area(m), 1e-12 * area(m));
+    EXPECT_NEAR(signed_volume(s), signed_volume(m), 1e-12 * std::abs(signed_volume(m)));
+    double worst = 0.0;
+    for (std::size_t f = 0; f < m.faces.size(); ++f)
+    {
+        const auto& t = m.faces[f];
+        const Vec3 n = core::normalized(core::cross(m.positions[t[1]] - m.positions[t[0]],
+                                                    m.positions[t[2]] - m.positions[t[0]]));
+        for (std::size_t k = 0; k < 4; ++k)
+            for (const std::uint32_t v : s.faces[4 * f + k])
+                worst = std::max(worst, std::abs(core::dot(s.positions[v] - m.positions[t[0]], n)));
+    }
+    EXPECT_LT(worst, 1e-12 * core::norm(m.positions[0]) + 1e-12);
+    // enough faces already: unchanged
+    EXPECT_EQ(split_for_map(m, 600).faces, m.faces);
+}
+
 TEST(SphereMap, RefusesInwardFaces)
 {
     mesh::TriMesh m = scenes::icosphere(1);

@@ -40,6 +40,12 @@ struct RemeshSettings
 {
     int level = 7;  ///< grid level 1..10 (W = 2^level)
     SphereMapSettings sphere;
+    /// The sphere map, the sampling and the untangling work on the input split 1-to-4 until it
+    /// has at least this many faces (split_for_map: the same surface, so every sample is still a
+    /// point of the input); 0 = never. Coarse inputs (fox, 622 faces) otherwise get a
+    /// piecewise-linear map too stiff to keep its kinks below what folds the sampled grid
+    /// (docs/remesh.md §1.3). The report's input counts are the input's own.
+    std::size_t min_map_faces = 2000;
     /// Where the grid's nodes lie on the sphere (core::sphere_domain). Equal-area samples the
     /// surface more evenly (docs/remesh.md §2: on spot at level 7, area cv 0.32 instead of 0.75,
     /// PSNR +1.5 dB). On the GPU (`pliant remesh --gpu`), the gnomonic map gets the paper's

@@ -15,7 +15,9 @@
 ///   spherical kernel of its one-ring, with vertex moves that never leave the kernel. The moves
 ///   minimise the L2 stretch plus an inverse-stretch (symmetric Dirichlet) term and a peak
 ///   term, each face measured on two chord triangles split at its longest arc, with coarse
-///   faces standing for the surface area their vertices absorbed (docs/remesh.md §1.2).
+///   faces standing for the surface area their vertices absorbed, and on the final mesh a kink
+///   term on the change of the Jacobian across each edge, which is what folds the sampled grid
+///   (docs/remesh.md §1.2).
 ///   Fold-free by construction (every move is checked).
 /// A result is returned only when every spherical triangle is positively oriented.
 ///
@@ -53,9 +55,14 @@ struct SphereMapSettings
     /// has grown by `level_growth`.
     int sweeps_per_level = 2;
     double level_growth = 1.3;
-    /// Stretch-optimisation sweeps on the full mesh at the end (stops early when the energy
-    /// improves by less than `tolerance`, relative).
-    int final_sweeps = 5;
+    /// Stretch-optimisation sweeps on the full mesh at the end of the coarse-to-fine route
+    /// (stops early when the energy improves by less than `tolerance`, relative). 60 rather
+    /// than the 5 used before the kink term: with it the sweeps keep improving far longer
+    /// (docs/remesh.md §1.2, §5).
+    int final_sweeps = 60;
+    /// Spring-embedder route: stretch-optimisation sweeps after a fold-free embedding (no
+    /// hierarchy there, so local moves need many sweeps; stops early at `tolerance` / 100).
+    int spring_optimise_sweeps = 200;
     /// Weight of the inverse stretch (oversampling) in the optimised energy, next to the L2
     /// stretch (undersampling); 0 = pure L2 stretch (Praun & Hoppe).
     double inverse_weight = 1.0;
@@ -73,6 +80,13 @@ struct SphereMapSettings
     /// Measure each face's stretch on two chord triangles split at its longest arc (Praun &
     /// Hoppe's remedy for spherical slivers, which a single chord triangle does not see).
     bool split_stretch = true;
+    /// Weight of the kink term on the final mesh (coarse to fine, from the annealing sweeps on):
+    /// per input edge, the surface area of its two faces times mu^2, the squared shear of
+    /// J_A^-1 J_B along the edge normalised by its determinant (J_A, J_B: the Jacobians of the
+    /// map from the sphere to the surface on either side, unfolded about the edge). A sampled
+    /// grid triangle across the edge folds once mu exceeds about 3.5, at every grid level
+    /// (the piecewise-linear map is conical at the edge); 0 = off. docs/remesh.md §1.2.
+    double kink_weight = 10.0;
     double tolerance = 1e-3;
 };
 
@@ -96,6 +110,14 @@ struct SphereMap
 core::Result<SphereMap> map_to_sphere(const mesh::TriMesh& mesh,
                                       const SphereMapSettings& settings = {},
                                       core::ProgressSink* progress = nullptr);
+
+/// The same surface with every face split 1-to-4 at its edge midpoints, repeated until it has at
+/// least `min_faces` faces (a copy when it already has). Original vertices keep their indices;
+/// each midpoint is computed once per edge, so the result is closed and manifold when `mesh` is.
+/// A coarse input gives its piecewise-linear sphere map too few vertices to turn its Jacobian
+/// gradually from face to face; the split surface is identical, so its samples are samples of
+/// the input (docs/remesh.md §1.3).
+[[nodiscard]] mesh::TriMesh split_for_map(const mesh::TriMesh& mesh, std::size_t min_faces);
 
 /// Number of faces whose spherical triangle is not positively oriented (det[a,b,c] <= 0).
 [[nodiscard]] std::size_t count_inverted(std::span<const mesh::Face> faces,
