@@ -3,8 +3,6 @@
 // `pliant host [GRID] [--port P] [--mode exact|fast] [--point-clearance auto|grown|inside]
 // [--duration S] [--script F] [--stats F.csv]`:
 // starts a collaborative session as its master over ENet (docs/session.md).
-#include <pliant/core/grid_io.h>
-#include <pliant/core/sphere_domain.h>
 #include <pliant/core/tetra_grid.h>
 #include <pliant/net/enet_transport.h>
 #include <pliant/net/secure_transport.h>
@@ -15,7 +13,6 @@
 
 #include <spdlog/spdlog.h>
 
-#include "../../scenes/grid_shapes.h"
 #include "cli_common.h"
 #include "commands.h"
 #include "peer_files.h"
@@ -61,31 +58,11 @@ struct HostOptions
 
 int run_host(const HostOptions& opt)
 {
-    std::optional<core::TetraGrid> grid;
-    core::Vec3Field<double> rest;
-    if (!opt.grid.empty())
-    {
-        auto file = core::load_grid(opt.grid);
-        if (!file)
-            return report(file.error());
-        if (holds_state(*file))
-            return report(state_as_rest_error("host", opt.grid));
-        auto g = core::TetraGrid::create(file->level);
-        if (!g)
-            return report(g.error());
-        auto positions = core::geometry_of(*g, *file);
-        if (!positions)
-            return report({positions.error().code, opt.grid + ": " + positions.error().message});
-        grid = std::move(*g);
-        rest = std::move(*positions);
-    }
-    else
-    {
-        grid = core::TetraGrid::create(opt.level).value();
-        rest = scenes::sphere_grid(
-            *grid, 1.0, 0,
-            core::sphere_map_from_string(opt.sphere_map).value_or(core::SphereMap::EqualArea));
-    }
+    auto geometry = load_rest_geometry("host", opt.grid, opt.level, 1.0, opt.sphere_map);
+    if (!geometry)
+        return report(geometry.error());
+    const core::TetraGrid& grid = geometry->grid;
+    const core::Vec3Field<double>& rest = geometry->positions;
     session::RunOptions run;
     run.duration_s = opt.duration;
     run.stats_csv = opt.stats;
@@ -97,7 +74,7 @@ int run_host(const HostOptions& opt)
         run.script = std::move(*script);
         run.script_name = opt.script;
         if (auto ok =
-                session::check_script(run.script, static_cast<std::int64_t>(grid->face_count()),
+                session::check_script(run.script, static_cast<std::int64_t>(grid.face_count()),
                                       session::SessionRole::Master, opt.script);
             !ok)
             return report(ok.error());
@@ -136,7 +113,7 @@ int run_host(const HostOptions& opt)
     if (opt.mode == "exact")
     {
         // Lockstep has no error control: a step above the stability bound grows without limit.
-        auto probe = sim::MembraneModel::create(*grid, rest, material);
+        auto probe = sim::MembraneModel::create(grid, rest, material);
         if (!probe)
             return report(probe.error());
         const double stable = sim::stable_fixed_step(*probe);
@@ -156,7 +133,7 @@ int run_host(const HostOptions& opt)
     std::optional<sim::MembraneState> start;
     if (!opt.resume.empty())
     {
-        auto probe = sim::MembraneModel::create(*grid, rest, material);
+        auto probe = sim::MembraneModel::create(grid, rest, material);
         if (!probe)
             return report(probe.error());
         auto saved = load_saved_state(opt.resume, *probe);
@@ -176,11 +153,11 @@ int run_host(const HostOptions& opt)
     settings.listen_port = bound->port;
     settings.max_ticks = opt.ticks;
     apply_stream_options(opt.stream, settings);
-    auto s = session::Session::host(*transport, *grid, rest, material, settings,
+    auto s = session::Session::host(*transport, grid, rest, material, settings,
                                     start ? &*start : nullptr);
     if (!s)
         return report(s.error());
-    spdlog::info("hosting level {} ({} mode, point clearance {}) on port {}", grid->level(),
+    spdlog::info("hosting level {} ({} mode, point clearance {}) on port {}", grid.level(),
                  opt.mode,
                  (*s)->point_clearance() == session::PointClearance::Inside ? "inside" : "grown",
                  bound->port);

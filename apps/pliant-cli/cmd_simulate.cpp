@@ -6,7 +6,6 @@
 // frame and energy.csv.
 // TOML stays in this file: the sim library knows no file formats.
 #include <pliant/core/grid_io.h>
-#include <pliant/core/sphere_domain.h>
 #include <pliant/core/tetra_grid.h>
 #include <pliant/mesh/io.h>
 #include <pliant/sim/membrane.h>
@@ -15,7 +14,6 @@
 #include <spdlog/spdlog.h>
 #include <toml++/toml.h>
 
-#include "../../scenes/grid_shapes.h"
 #include "cli_common.h"
 #include "commands.h"
 #include "peer_files.h"
@@ -596,41 +594,18 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
         sc.settings.threads = opt.threads;  // -j 0: OpenMP's default, as threads = 0 in the file
 
     // Rest geometry: a grid file, or a sphere.
-    std::optional<core::TetraGrid> grid;
-    core::Vec3Field<double> rest;
-    if (!opt.grid.empty())
-    {
-        auto file = core::load_grid(opt.grid);
-        if (!file)
-            return report(file.error());
-        auto g = core::TetraGrid::create(file->level);
-        if (!g)
-            return report(g.error());
-        if (holds_state(*file))
-            return report(state_as_rest_error("simulate", opt.grid.string()));
-        auto positions = core::geometry_of(*g, *file);
-        if (!positions)
-            return report(
-                {positions.error().code, opt.grid.string() + ": " + positions.error().message});
-        grid = std::move(*g);
-        rest = std::move(*positions);
-    }
-    else
-    {
-        auto g = core::TetraGrid::create(opt.level);
-        if (!g)
-            return report(g.error());
-        grid = std::move(*g);
-        rest = scenes::sphere_grid(
-            *grid, opt.radius, 0,
-            core::sphere_map_from_string(opt.sphere_map).value_or(core::SphereMap::EqualArea));
-    }
-    const core::Vec3 centre = rest_centroid(*grid, rest);
-    auto model = sim::MembraneModel::create(*grid, rest, sc.settings);
+    auto geometry =
+        load_rest_geometry("simulate", opt.grid.string(), opt.level, opt.radius, opt.sphere_map);
+    if (!geometry)
+        return report(geometry.error());
+    const core::TetraGrid& grid = geometry->grid;
+    const core::Vec3Field<double>& rest = geometry->positions;
+    const core::Vec3 centre = rest_centroid(grid, rest);
+    auto model = sim::MembraneModel::create(grid, rest, sc.settings);
     if (!model)
         return report(model.error());
     // Forces against this grid, each error naming its key and line like the parser's.
-    const auto faces = static_cast<std::int64_t>(grid->face_count());
+    const auto faces = static_cast<std::int64_t>(grid.face_count());
     for (std::size_t k = 0; k < sc.forces.size(); ++k)
     {
         const TimedForce& f = sc.forces[k];
@@ -640,7 +615,7 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
                            opt.scenario.string() + ":" + std::to_string(f.face_line) + ": '" +
                                name + ".face' = " + std::to_string(f.force.face) +
                                " is not below the grid's " + std::to_string(faces) +
-                               " faces (level " + std::to_string(grid->level()) + ")"});
+                               " faces (level " + std::to_string(grid.level()) + ")"});
         if (auto ok = sim::validate_forces(*model, std::span<const sim::Force>(&f.force, 1)); !ok)
         {
             // "force 0: what": keep what.
@@ -660,7 +635,7 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
             return report(saved.error());
         resumed = std::move(*saved);
     }
-    warn_unreachable_points(sc, *grid, rest, centre, opt.scenario);
+    warn_unreachable_points(sc, grid, rest, centre, opt.scenario);
     warn_unstable_step(sc, *model, opt.scenario);
 
     std::error_code ec;
@@ -675,7 +650,7 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
     csv << "frame,time,kinetic,strain,foundation,total,steps,rejections,flags\n";
     csv.precision(17);
 
-    sim::MembraneState state = resumed ? std::move(*resumed) : sim::MembraneState::at_rest(*grid);
+    sim::MembraneState state = resumed ? std::move(*resumed) : sim::MembraneState::at_rest(grid);
     sim::Rkf45Workspace ws(*model, sc.settings.threads);
     const int frames = sc.frames;
     const bool fixed = sc.settings.fixed_step;
@@ -779,8 +754,8 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
     std::printf(
         "%d frames, %.3f s simulated in %.3f s wall (%.2fx real time), level %d, %zu "
         "vertices, %llu steps, %llu rejections, %d thread(s) -> %s\n",
-        frames + 1, state.time, wall, wall > 0.0 ? state.time / wall : 0.0, grid->level(),
-        grid->unique_count(), static_cast<unsigned long long>(total_steps),
+        frames + 1, state.time, wall, wall > 0.0 ? state.time / wall : 0.0, grid.level(),
+        grid.unique_count(), static_cast<unsigned long long>(total_steps),
         static_cast<unsigned long long>(total_rejections), ws.max_threads,
         opt.out.string().c_str());
     if (total_at_min > 0)

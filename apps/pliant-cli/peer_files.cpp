@@ -3,7 +3,10 @@
 #include "peer_files.h"
 
 #include <pliant/core/grid_io.h>
+#include <pliant/core/sphere_domain.h>
 #include <pliant/session/recording.h>
+
+#include "../../scenes/grid_shapes.h"
 
 #include <algorithm>
 #include <cmath>
@@ -57,6 +60,34 @@ core::Error state_as_rest_error(const std::string& command, const std::string& p
                 "surface, not a rest shape. Give the grid it was simulated on as GRID and this "
                 "file to --resume (`pliant " +
                 command + " REST.pgrid --resume " + path + "`)"};
+}
+
+core::Result<RestGeometry> load_rest_geometry(const std::string& command, const std::string& path,
+                                              int level, double radius,
+                                              const std::string& sphere_map)
+{
+    if (path.empty())
+    {
+        auto grid = core::TetraGrid::create(level);
+        if (!grid)
+            return grid.error();
+        auto positions = scenes::sphere_grid(
+            *grid, radius, 0,
+            core::sphere_map_from_string(sphere_map).value_or(core::SphereMap::EqualArea));
+        return RestGeometry{std::move(*grid), std::move(positions)};
+    }
+    auto file = core::load_grid(path);
+    if (!file)
+        return file.error();
+    if (holds_state(*file))
+        return state_as_rest_error(command, path);
+    auto grid = core::TetraGrid::create(file->level);
+    if (!grid)
+        return grid.error();
+    auto positions = core::geometry_of(*grid, *file);
+    if (!positions)
+        return core::fail(positions.error().code, path + ": " + positions.error().message);
+    return RestGeometry{std::move(*grid), std::move(*positions)};
 }
 
 core::Result<sim::MembraneState> load_saved_state(const std::filesystem::path& path,

@@ -6,6 +6,8 @@
 // processes can be checked against one process (`pliant replay`, docs/session.md §9).
 #include <pliant/core/grid_io.h>
 #include <pliant/core/result.h>
+#include <pliant/core/tetra_grid.h>
+#include <pliant/core/vec3.h>
 #include <pliant/session/session.h>
 #include <pliant/sim/membrane.h>
 
@@ -30,6 +32,21 @@ core::Result<void> save_peer_state(const session::Session& peer, const std::file
 
 /// The refusal for a state file given where a rest geometry is expected (`command`'s GRID).
 [[nodiscard]] core::Error state_as_rest_error(const std::string& command, const std::string& path);
+
+/// The rest geometry a physics command (`host`, `simulate`) starts from.
+struct RestGeometry
+{
+    core::TetraGrid grid;
+    core::Vec3Field<double> positions;  ///< ghost 0
+};
+
+/// Loads GRID's rest positions (a state file is refused: `state_as_rest_error`), or, when `path`
+/// is empty, a sphere of `radius` at `level` laid out by `sphere_map` ("equal-area" or
+/// "gnomonic"). `command` prefixes the refusal. \return load_grid's and geometry_of's errors
+/// (the latter prefixed with the path); InvalidArgument for a state file or a bad level.
+core::Result<RestGeometry> load_rest_geometry(const std::string& command, const std::string& path,
+                                              int level, double radius,
+                                              const std::string& sphere_map);
 
 /// Reads the state saved in `path` (channels u and, when present, v; v = 0 otherwise) for
 /// `--resume`, checking it belongs to `model`: same level and, when the file has positions,
