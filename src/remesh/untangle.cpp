@@ -10,9 +10,11 @@
 #include "remesh/sphere_geometry_internal.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <utility>
 
 namespace pliant::remesh
 {
@@ -296,6 +298,83 @@ UntangleStats untangle_samples(const core::TetraGrid& grid, const mesh::TriMesh&
         return false;
     };
 
+    // Barrier energy of v's star: the number of its folded faces first (a move never folds
+    // more of them), then the sum over its faces of 1 / chi(q), q the face's quality and
+    // chi(q) = (q + sqrt(q^2 + eps^2)) / 2, a smooth stand-in for max(q, 0) (the untangling
+    // energy of Garanzha et al. 2021, "Foldover-free maps in 50 lines of code"). It is finite
+    // for a folded face (about 4|q| / eps^2, at most a few thousand for q >= -0.29), so a folded
+    // star has a slope to follow towards positive areas, and it rises steeply as a face of
+    // positive area flattens. Unlike the worst face's quality, the sum sees every face of the
+    // star, so a node can trade a little of one face for a lot of another. Measured on fox:
+    // without the fold count first (the barrier alone, eps 0.02) untangling ended with more
+    // folds than before (level 5: 11 against 6), the sum preferring slightly folded slivers to
+    // worse-shaped neighbours.
+    constexpr double k_fold_cost = 1e6;  // more than any star's barrier sum
+    const double eps = settings.barrier_epsilon;
+    const auto energy = [&](std::uint32_t v)
+    {
+        double e = 0.0;
+        for (const std::uint32_t f : star.of(v))
+        {
+            const double q = quality(f);
+            e += 2.0 / (q + std::sqrt(q * q + eps * eps)) + (q > 0.0 ? 0.0 : k_fold_cost);
+        }
+        return e;
+    };
+    // Compass search on the sphere for the lowest barrier energy of v's star, keeping it free of
+    // crossings and within reach of its ring's centre c; the energy is checked first (cheap), the
+    // crossings only for the best candidate of a step.
+    const auto descend = [&](std::uint32_t v, const Vec3& c, double reach2, double lim)
+    {
+        const Vec3 helper = std::abs(s[v].x) < 0.6 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
+        const Vec3 t1 = core::normalized(core::cross(s[v], helper));
+        const Vec3 t2 = core::cross(s[v], t1);
+        double h = 0.25 * lim;
+        double e0 = energy(v);
+        std::array<std::pair<double, int>, 8> cand{};
+        for (int iter = 0; iter < settings.barrier_steps && h > lim / 256.0; ++iter)
+        {
+            const Vec3 s0 = s[v];
+            std::size_t n = 0;
+            for (int k = 0; k < 8; ++k)
+            {
+                const double angle = 0.7853981633974483 * k;
+                const Vec3 sn =
+                    core::normalized(s0 + (t1 * std::cos(angle) + t2 * std::sin(angle)) * h);
+                try_move(v, sn,
+                         [&](std::uint32_t w)
+                         {
+                             const Vec3 dn = c - out.positions[w];
+                             if (core::dot(dn, dn) <= reach2)
+                             {
+                                 const double e = energy(w);
+                                 if (e < e0)
+                                     cand[n++] = {e, k};
+                             }
+                             return false;  // evaluated only
+                         });
+            }
+            std::sort(cand.begin(), cand.begin() + static_cast<std::ptrdiff_t>(n));
+            bool moved_here = false;
+            for (std::size_t i = 0; i < n && !moved_here; ++i)
+            {
+                const double angle = 0.7853981633974483 * cand[i].second;
+                const Vec3 sn =
+                    core::normalized(s0 + (t1 * std::cos(angle) + t2 * std::sin(angle)) * h);
+                moved_here = try_move(v, sn,
+                                      [&](std::uint32_t w)
+                                      {
+                                          if (score(w, 0).crossings != 0)
+                                              return false;
+                                          e0 = cand[i].first;
+                                          return true;
+                                      });
+            }
+            if (!moved_here)
+                h *= 0.5;
+        }
+    };
+
     // One step for vertex v: Laplacian smoothing on the input surface (a few Newton steps towards
     // the mean c of its neighbours through the inverse of the affine map of the input face under
     // the sample point, with backtracking: the map changes from face to face, by orders of
@@ -424,6 +503,12 @@ UntangleStats untangle_samples(const core::TetraGrid& grid, const mesh::TriMesh&
             else
                 h *= 0.5;
         }
+        // a star still folded (its worst face's quality is no longer a guide: moving one fold
+        // out of the way tends to fold another face) descends the barrier energy of all its
+        // faces. Only folded stars do: descending every sliver-ish star near a fold moved
+        // correct nodes far along the surface (cactus level 5: -5.5 dB, Hausdorff 3x).
+        if (settings.barrier_epsilon > 0.0 && current.crossings == 0 && current.quality <= 0.0)
+            descend(v, c, reach2, lim);
     };
 
     UntangleStats stats;

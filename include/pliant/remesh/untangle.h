@@ -20,6 +20,10 @@
 /// sphere map (the same interpolation as sample_surface), twins stay equal (the work is done on
 /// the grid's unique vertices), and the result does not depend on the thread count.
 ///
+/// A star that is still folded after that (no single position raises its worst face above 0)
+/// then descends a barrier energy of all its faces (Garanzha et al. 2021): the sum lets one face
+/// give a little so that a folded one can turn over, where the worst face alone has no slope.
+///
 /// Alternatives rejected: re-optimising the sphere map for the grid (global and slow; the folds
 /// are local); projecting smoothed points onto the nearest input face (may jump to the other side
 /// of a thin part).
@@ -50,6 +54,12 @@ struct UntangleSettings
     /// Smoothing never takes a star (a node's faces) below this quality: signed area against
     /// the input's normal over the sum of squared edges, 0.29 for an equilateral triangle.
     double min_quality = 0.02;
+    /// Width of the barrier on the faces' quality that a star still folded after the compass
+    /// search descends (its folded faces counted first, then the sum of a smoothed 1/quality);
+    /// 0: no descent.
+    double barrier_epsilon = 0.02;
+    /// Compass steps of that descent per node and sweep.
+    int barrier_steps = 12;
 };
 
 struct UntangleStats
