@@ -177,6 +177,7 @@ std::string to_json(const QualityReport& r)
     kv("self_intersections", std::to_string(r.untangle.intersections));
     kv("untangle_moved_nodes", std::to_string(r.untangle.moved_nodes));
     kv("untangle_rounds", std::to_string(r.untangle.rounds));
+    kv("untangle_patch_passes", std::to_string(r.untangle.patch_passes));
     if (r.measured)
     {
         const SurfaceDistance& d = r.distance;

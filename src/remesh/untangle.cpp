@@ -309,8 +309,8 @@ UntangleStats untangle_samples(const core::TetraGrid& grid, const mesh::TriMesh&
     // without the fold count first (the barrier alone, eps 0.02) untangling ended with more
     // folds than before (level 5: 11 against 6), the sum preferring slightly folded slivers to
     // worse-shaped neighbours.
-    constexpr double k_fold_cost = 1e6;  // more than any star's barrier sum
-    const double eps = settings.barrier_epsilon;
+    constexpr double k_fold_cost = 1e6;     // more than any star's barrier sum
+    double eps = settings.barrier_epsilon;  // the patch passes shrink it
     const auto energy = [&](std::uint32_t v)
     {
         double e = 0.0;
@@ -381,7 +381,8 @@ UntangleStats untangle_samples(const core::TetraGrid& grid, const mesh::TriMesh&
     // magnitude where the parameterisation is anisotropic), never making its star worse; then,
     // if the star still crosses something or is folded, a compass search on the sphere for the
     // best score (untangling in the spirit of Freitag & Plassmann 2000).
-    const auto relax = [&](std::uint32_t v)
+    // `patch`: the barrier descent alone (the patch passes below), else smoothing and untangling
+    const auto relax = [&](std::uint32_t v, bool patch)
     {
         const auto ring = nb.of(v);
         Vec3 c{};
@@ -413,6 +414,11 @@ UntangleStats untangle_samples(const core::TetraGrid& grid, const mesh::TriMesh&
                           return bg[1].x < lo.x || hi.x < bg[0].x || bg[1].y < lo.y ||
                                  hi.y < bg[0].y || bg[1].z < lo.z || hi.z < bg[0].z;
                       });
+        if (patch)
+        {
+            descend(v, c, reach2, lim);
+            return;
+        }
         Score current = score(v, std::numeric_limits<std::size_t>::max());
         for (int newton = 0; newton < 2; ++newton)
         {
@@ -569,8 +575,87 @@ UntangleStats untangle_samples(const core::TetraGrid& grid, const mesh::TriMesh&
         hash.emplace(out, 2.0 * mean_edge);
         for (int sweep = 0; sweep < settings.sweeps; ++sweep)
             for (const std::uint32_t v : list)
-                relax(v);
+                relax(v, false);
         stats.rounds = round + 1;
+    }
+
+    // Patch passes, for folds the rounds left (fox's saddle patch): one node at a time, the rounds
+    // stop where each star's move would fold one face to unfold another. Here the whole region of
+    // folded faces plus `patch_rings` rings descends the barrier energy together, every node of it
+    // (not only folded stars) for `patch_sweeps` Gauss-Seidel sweeps at each epsilon of a
+    // shrinking schedule (Garanzha et al. 2021 shrink it as the map untangles): a wide barrier
+    // first, so the slivers next to a fold have room to give, then a narrow one, as steep as the
+    // quality measure near zero. A pass is kept only if the whole output then has fewer folded
+    // faces plus crossing pairs and no more crossing pairs; otherwise the region gets its nodes
+    // back and the passes stop. A mesh the rounds untangled never runs them, so its output keeps
+    // its bytes. Measured on fox, levels 6 / 7 / 8: 8 / 17 / 102 folded triangles left by the
+    // rounds -> 2 / 4 / 48, no crossing, for 1.4-1.8x the untangling time. Without the fold count
+    // first (the barrier alone) every pass made more folds and was rejected (level 6: 8 -> 13).
+    if (settings.enabled && settings.patch_passes > 0 && stats.folded > 0)
+    {
+        for (int pass = 0; pass < settings.patch_passes; ++pass)
+        {
+            std::fill(active.begin(), active.end(), std::uint8_t{0});
+            for (std::size_t f = 0; f < out.faces.size(); ++f)
+                if (is_folded(out, f, mesh, face))
+                    for (const std::uint32_t v : out.faces[f])
+                        active[v] = 1;
+            for (int r = 0; r < settings.patch_rings; ++r)
+            {
+                list.clear();
+                for (std::uint32_t v = 0; v < nu; ++v)
+                    if (active[v] == 1)
+                        list.push_back(v);
+                for (const std::uint32_t v : list)
+                    for (const std::uint32_t w : nb.of(v))
+                        active[w] = 1;
+            }
+            list.clear();
+            for (std::uint32_t v = 0; v < nu; ++v)
+                if (active[v] != 0)
+                    list.push_back(v);
+            std::vector<Vec3> s0(list.size()), p0(list.size());
+            std::vector<std::uint32_t> f0(list.size());
+            std::vector<std::uint8_t> m0(list.size());
+            for (std::size_t i = 0; i < list.size(); ++i)
+            {
+                s0[i] = s[list[i]];
+                p0[i] = out.positions[list[i]];
+                f0[i] = face[list[i]];
+                m0[i] = moved[list[i]];
+            }
+            for (eps = settings.patch_epsilon_start; eps >= 0.999 * settings.patch_epsilon_end;
+                 eps *= 0.5)
+            {
+                hash.emplace(out, 2.0 * mean_edge);
+                for (int sweep = 0; sweep < settings.patch_sweeps; ++sweep)
+                    for (const std::uint32_t v : list)
+                        relax(v, true);
+            }
+            eps = settings.barrier_epsilon;
+            std::size_t folded = 0;
+            for (std::size_t f = 0; f < out.faces.size(); ++f)
+                if (is_folded(out, f, mesh, face))
+                    ++folded;
+            const std::size_t pairs = intersecting_pairs(out).size();
+            if (pairs <= stats.intersections && folded + pairs < stats.folded + stats.intersections)
+            {
+                stats.folded = folded;
+                stats.intersections = pairs;
+                ++stats.patch_passes;
+                if (folded == 0 && pairs == 0)
+                    break;
+                continue;
+            }
+            for (std::size_t i = 0; i < list.size(); ++i)
+            {
+                s[list[i]] = s0[i];
+                out.positions[list[i]] = p0[i];
+                face[list[i]] = f0[i];
+                moved[list[i]] = m0[i];
+            }
+            break;
+        }
     }
 
     for (std::size_t u = 0; u < nu; ++u)

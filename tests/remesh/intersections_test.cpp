@@ -298,9 +298,9 @@ TEST(RemeshReport, CountsFoldsAndIntersectionsAndLeavesDistancesOutUnmeasured)
 // Known limitation, measured: on fox (622 faces) untangling still leaves folded triangles at
 // levels 6-8 (docs/remesh.md §3.2; level 5 is fold-free and in the suite above). Mapped as
 // remesh() maps it (split to 2,488 faces, kink term on), level 6 samples 64 folded triangles and
-// 119 crossing pairs, and untangling leaves 8 folded (11 without the barrier descent) and no
-// crossing. This pins them so that nothing can regress unnoticed; the day the folds reach zero
-// at every level, fox joins the suite above.
+// 119 crossing pairs; the rounds leave 8 folded (11 without the barrier descent) and no
+// crossing, and the patch passes 2. This pins them so that nothing can regress unnoticed; the
+// day the folds reach zero at every level, fox joins the suite above.
 TEST(RealMeshUntangledFox, FewFoldsAsSampledAndFewAfterUntanglingAtLevel6)
 {
     const mesh::TriMesh input = load("fox.ply");
@@ -326,6 +326,22 @@ TEST(RealMeshUntangledFox, FewFoldsAsSampledAndFewAfterUntanglingAtLevel6)
     const std::size_t folded = count_folded(out, m, faces);
     EXPECT_EQ(folded, st.folded);
     EXPECT_LE(folded * 5, st.folded_sampled);
+    // the patch passes keep twins equal and every node on its input face
+    for (const core::TwinPair& t : grid.twins())
+        for (std::size_t k = 0; k < 3; ++k)
+        {
+            ASSERT_EQ((*pos)[k][t.twin], (*pos)[k][t.canonical]);
+            ASSERT_EQ(points[k][t.twin], points[k][t.canonical]);
+        }
+    double worst = 0.0;
+    for (std::size_t u = 0; u < out.positions.size(); ++u)
+    {
+        const auto& f = m.faces[faces[u]];
+        const Vec3 n = core::normalized(core::cross(m.positions[f[1]] - m.positions[f[0]],
+                                                    m.positions[f[2]] - m.positions[f[0]]));
+        worst = std::max(worst, std::abs(core::dot(out.positions[u] - m.positions[f[0]], n)));
+    }
+    EXPECT_LT(worst, 1e-9 * core::norm(m.positions[0]) + 1e-12);
 
     // without the barrier descent the compass search alone leaves more
     pos = sample_surface(grid, domain, m, map->points);
@@ -333,9 +349,25 @@ TEST(RealMeshUntangledFox, FewFoldsAsSampledAndFewAfterUntanglingAtLevel6)
     points = domain;
     UntangleSettings no_barrier;
     no_barrier.barrier_epsilon = 0.0;
+    no_barrier.patch_passes = 0;
     const UntangleStats plain_st = untangle_samples(grid, m, map->points, points, *pos, no_barrier);
     std::printf("fox.ply level 6 without the barrier descent: %zu folded\n", plain_st.folded);
     EXPECT_LT(folded, plain_st.folded);
+
+    // without the patch passes (the rounds' one-node moves only) more are left, and the passes
+    // that were kept moved no node off its input face
+    pos = sample_surface(grid, domain, m, map->points);
+    ASSERT_TRUE(pos);
+    points = domain;
+    UntangleSettings no_patch;
+    no_patch.patch_passes = 0;
+    const UntangleStats rounds_st = untangle_samples(grid, m, map->points, points, *pos, no_patch);
+    std::printf("fox.ply level 6 without the patch passes: %zu folded, %zu pairs\n",
+                rounds_st.folded, rounds_st.intersections);
+    EXPECT_EQ(rounds_st.patch_passes, 0);
+    EXPECT_GE(st.patch_passes, 1);
+    EXPECT_LT(folded, rounds_st.folded);
+    EXPECT_EQ(rounds_st.intersections, 0U);
 
     // the kink term is what removes most of them: the same split mesh mapped without it
     SphereMapSettings no_kink;

@@ -60,6 +60,16 @@ struct UntangleSettings
     double barrier_epsilon = 0.02;
     /// Compass steps of that descent per node and sweep.
     int barrier_steps = 12;
+    /// Folds left after the rounds: passes in which the region of folded faces plus
+    /// `patch_rings` grid rings descends the barrier energy together, `patch_sweeps` sweeps per
+    /// epsilon, epsilon halved from `patch_epsilon_start` down to `patch_epsilon_end`; a pass is
+    /// kept only if it lowers the count (folded plus crossing pairs) without adding crossings.
+    /// 0: no patch passes.
+    int patch_passes = 4;
+    int patch_rings = 4;
+    int patch_sweeps = 3;
+    double patch_epsilon_start = 0.02;
+    double patch_epsilon_end = 0.0005;
 };
 
 struct UntangleStats
@@ -70,6 +80,7 @@ struct UntangleStats
     std::size_t intersections = 0;          ///< after untangling
     std::size_t moved_nodes = 0;            ///< unique vertices whose sample point moved
     int rounds = 0;                         ///< rounds of smoothing run
+    int patch_passes = 0;                   ///< patch passes kept (see UntangleSettings)
 };
 
 /// Input face under each unique vertex's sample point `points` (one unit vector per grid node,
