@@ -520,6 +520,25 @@ UntangleStats untangle_samples(const core::TetraGrid& grid, const mesh::TriMesh&
     UntangleStats stats;
     std::vector<std::uint8_t> active(nu, 0);
     std::vector<std::uint32_t> list;
+    // Grows the marked nodes (`active`) by `rings` rings of grid neighbours and lists them, in
+    // node order, in `list`.
+    const auto grow_region = [&](int rings)
+    {
+        for (int r = 0; r < rings; ++r)
+        {
+            list.clear();
+            for (std::uint32_t v = 0; v < nu; ++v)
+                if (active[v] == 1)
+                    list.push_back(v);
+            for (const std::uint32_t v : list)
+                for (const std::uint32_t w : nb.of(v))
+                    active[w] = 1;
+        }
+        list.clear();
+        for (std::uint32_t v = 0; v < nu; ++v)
+            if (active[v] != 0)
+                list.push_back(v);
+    };
     std::size_t best_total = std::numeric_limits<std::size_t>::max();
     int since_best = 0;
     for (int round = 0;; ++round)
@@ -557,21 +576,7 @@ UntangleStats untangle_samples(const core::TetraGrid& grid, const mesh::TriMesh&
             break;
         // grow the region by rings of grid neighbours: more rings as the rounds go on, so a
         // fold whose surroundings are not convex enough gets a wider patch
-        const int rings = settings.rings + round / 4;
-        for (int r = 0; r < rings; ++r)
-        {
-            list.clear();
-            for (std::uint32_t v = 0; v < nu; ++v)
-                if (active[v] == 1)
-                    list.push_back(v);
-            for (const std::uint32_t v : list)
-                for (const std::uint32_t w : nb.of(v))
-                    active[w] = 1;
-        }
-        list.clear();
-        for (std::uint32_t v = 0; v < nu; ++v)
-            if (active[v] != 0)
-                list.push_back(v);
+        grow_region(settings.rings + round / 4);
         hash.emplace(out, 2.0 * mean_edge);
         for (int sweep = 0; sweep < settings.sweeps; ++sweep)
             for (const std::uint32_t v : list)
@@ -600,20 +605,7 @@ UntangleStats untangle_samples(const core::TetraGrid& grid, const mesh::TriMesh&
                 if (is_folded(out, f, mesh, face))
                     for (const std::uint32_t v : out.faces[f])
                         active[v] = 1;
-            for (int r = 0; r < settings.patch_rings; ++r)
-            {
-                list.clear();
-                for (std::uint32_t v = 0; v < nu; ++v)
-                    if (active[v] == 1)
-                        list.push_back(v);
-                for (const std::uint32_t v : list)
-                    for (const std::uint32_t w : nb.of(v))
-                        active[w] = 1;
-            }
-            list.clear();
-            for (std::uint32_t v = 0; v < nu; ++v)
-                if (active[v] != 0)
-                    list.push_back(v);
+            grow_region(settings.patch_rings);
             std::vector<Vec3> s0(list.size()), p0(list.size());
             std::vector<std::uint32_t> f0(list.size());
             std::vector<std::uint8_t> m0(list.size());
