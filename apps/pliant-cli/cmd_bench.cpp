@@ -59,13 +59,15 @@ struct Suite
 };
 
 // Cheapest first, so that a quick run shows results early.
-constexpr std::array<Suite, 8> k_suites{{
+constexpr std::array<Suite, 9> k_suites{{
     {"subdiv", "subdiv", "bench_subdiv",
      "butterfly refinement 6->7..9->10 vs OpenMesh and a STREAM copy"},
     {"net", "net", "bench_net",
      "state-streaming bandwidth per level, codec throughput, ENet round trip"},
     {"sim", "sim", "pliant_bench_sim",
      "RKF45 ns per node-step, ms per step, CPU share in real time, 1 and 2 threads"},
+    {"mixed", "sim", "pliant_bench_sim",
+     "the same in mixed precision (float increments over the double state)", "mixed"},
     {"session", "session", "pliant_bench_session",
      "per-peer compute and bandwidth for 1..4 peers, with and without partitioning"},
     {"steps", "session", "pliant_bench_session",

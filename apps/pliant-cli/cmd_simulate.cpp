@@ -74,7 +74,8 @@ struct SimulateOptions
     int level = 6;
     double radius = 1.0;
     std::string sphere_map = "equal-area";
-    int threads = -1;  ///< -j; -1: not given (the scenario's `threads`), 0: OpenMP's default
+    int threads = -1;       ///< -j; -1: not given (the scenario's `threads`), 0: OpenMP's default
+    std::string precision;  ///< --precision; empty: not given (the scenario's `precision`)
     std::filesystem::path resume;  ///< a saved state to start from instead of rest
 };
 
@@ -291,7 +292,7 @@ core::Result<Scenario> parse_scenario(const std::filesystem::path& path)
         const Reader r(path, table, "integrator.");
         PLIANT_TRY(r.unknown_keys({"rtol", "atol", "dt_min", "dt_max", "dt_initial", "safety",
                                    "max_growth", "min_shrink", "fixed_step", "fixed_dt",
-                                   "reassemble_every", "threads", "force_hold"}));
+                                   "reassemble_every", "threads", "force_hold", "precision"}));
         PLIANT_TRY(r.number("rtol", s.rtol, 0.0, 0.5));
         PLIANT_TRY(r.number("atol", s.atol, 1e-300, 1e6));
         PLIANT_TRY(r.number("dt_min", s.dt_min, 1e-300, 1e6));
@@ -309,6 +310,11 @@ core::Result<Scenario> parse_scenario(const std::filesystem::path& path)
         PLIANT_TRY(r.choice("force_hold", hold,
                             {linear, std::string(sim::to_string(sim::ForceHold::Step))}));
         s.force_hold = hold == linear ? sim::ForceHold::Linear : sim::ForceHold::Step;
+        const std::string mixed(sim::to_string(sim::Precision::Mixed));
+        std::string precision(sim::to_string(s.precision));
+        PLIANT_TRY(r.choice("precision", precision,
+                            {std::string(sim::to_string(sim::Precision::Double)), mixed}));
+        s.precision = precision == mixed ? sim::Precision::Mixed : sim::Precision::Double;
         r.record_lines(sc.lines);
         // Each message names the key the file gives and says which value is a default.
         const auto given = [&](const char* key) { return r.has(key); };
@@ -592,6 +598,10 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
     Scenario& sc = *scenario;
     if (opt.threads >= 0)
         sc.settings.threads = opt.threads;  // -j 0: OpenMP's default, as threads = 0 in the file
+    if (!opt.precision.empty())
+        sc.settings.precision = opt.precision == sim::to_string(sim::Precision::Mixed)
+                                    ? sim::Precision::Mixed
+                                    : sim::Precision::Double;
 
     // Rest geometry: a grid file, or a sphere.
     auto geometry =
@@ -753,11 +763,11 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::printf(
         "%d frames, %.3f s simulated in %.3f s wall (%.2fx real time), level %d, %zu "
-        "vertices, %llu steps, %llu rejections, %d thread(s) -> %s\n",
+        "vertices, %llu steps, %llu rejections, %d thread(s), %s precision -> %s\n",
         frames + 1, state.time, wall, wall > 0.0 ? state.time / wall : 0.0, grid.level(),
         grid.unique_count(), static_cast<unsigned long long>(total_steps),
         static_cast<unsigned long long>(total_rejections), ws.max_threads,
-        opt.out.string().c_str());
+        std::string(sim::to_string(sc.settings.precision)).c_str(), opt.out.string().c_str());
     if (total_at_min > 0)
         spdlog::warn(
             "{} = {:.3g} s{}: {} of {} steps were taken at dt_min with the error above "
@@ -779,9 +789,10 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global)
         "The scenario (TOML) sets the material (T N/m, rho kg/m^2, beta 1/s, k_f 1/s^2), the\n"
         "integrator (adaptive: rtol, atol, dt_min, dt_max, dt_initial [s], safety, max_growth,\n"
         "min_shrink; or fixed_step = true with fixed_dt [s]; reassemble_every, threads,\n"
-        "force_hold), duration [s], frame_rate [1/s] and timed forces ([[force]]: start, end\n"
-        "(default: the duration), face, or point + radius [m] with an optional 'to' for a point\n"
-        "sliding over the surface, vector [N]); see scenes/pull.toml and docs/physics.md.\n"
+        "force_hold, precision = \"double\" or \"mixed\"), duration [s], frame_rate [1/s] and\n"
+        "timed forces ([[force]]: start, end (default: the duration), face, or point + radius\n"
+        "[m] with an optional 'to' for a point sliding over the surface, vector [N]); see\n"
+        "scenes/pull.toml and docs/physics.md.\n"
         "Errors name the key and its line. Forces are sampled at frame times and ramp linearly\n"
         "between samples (force_hold = \"linear\", the default: a force acts for\n"
         "start < t <= end, ramping up over the frame after its start and down over the frame\n"
@@ -827,6 +838,11 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global)
                     "Threads (overrides the scenario's; 0: OpenMP's default; results are "
                     "identical for any count)")
         ->check(CLI::Range(0, 1024));
+    cmd->add_option("--precision", opt->precision,
+                    "Arithmetic of the steps (overrides the scenario's): double, or mixed (float "
+                    "increments over the double state, ~1.6x faster on big grids; "
+                    "docs/physics.md §9)")
+        ->check(CLI::IsMember({"double", "mixed"}));
     cmd->callback(
         command_callback(global, [opt, &global]() -> int { return run_simulate(*opt, global); }));
 }

@@ -6,7 +6,8 @@
 //   realtime,<level>,<threads>,<simulated s>,<wall s>,<ratio>,<steps>
 //   largest real-time level, <threads> thread(s): <level> (ran the whole scenario in real time)
 // Usage: pliant_bench_sim [max_level=10] [realtime_seconds=4] [min_level=6]
-//                         [kernel] [gnomonic] [step] [--quick] [--json FILE] [--csv FILE]
+//                         [kernel] [gnomonic] [step] [mixed] [--quick] [--json FILE]
+//                         [--csv FILE]
 //   "kernel" runs only the step timing, 1 thread, 10 steps per level (for callgrind, whose
 //   instruction counts are exactly repeatable on a shared machine).
 //   The sphere is the equal-area grid (core::SphereMap::EqualArea, the CLI's built-in sphere);
@@ -14,6 +15,7 @@
 //   The scenario's force is sampled once per frame and held linearly between frames
 //   (sim::ForceHold::Linear, as `pliant simulate` does); "step" holds it constant
 //   over each frame instead (the zero-order hold every run used until 2026-12-02).
+//   "mixed" runs every step in mixed precision (sim::Precision::Mixed, docs/physics.md §9).
 //   --help prints the usage (k_usage); an unknown option or a level out of range exits 2.
 // The moving force slides from (1,0,0) to (0,0,1) along the great circle over 2 s (0.785 m/s),
 // staying on the surface. (Until 2026-12-02 it slid along the chord: from 0.45 s to 1.55 s the
@@ -108,8 +110,10 @@ sim::MembraneSettings bench_material()
 // Doubles moved to and from memory per node per step by the integrator's fused row pipeline
 // (docs/physics.md §8): it reads u, v, three weights, 1/m and the force plane once and writes
 // u_new and v_new once (plus their write-allocate reads); the slopes stay in per-thread ring
-// rows: 7 + 2 + 2 = 11 doubles. (The stage-by-stage pass it replaced moved 64.)
+// rows: 7 + 2 + 2 = 11 doubles. (The stage-by-stage pass it replaced moved 64.) In mixed
+// precision the weights and 1/m are read as floats: 2 + 2 + 1 + 2 + 2 = 9.
 constexpr double k_doubles_per_node_step = 11.0;
+constexpr double k_doubles_per_node_step_mixed = 9.0;
 
 // The benchmark scenario (scenes/bench.toml) lasts 2 s, the finger's slide: 120 frames of 1/60 s.
 // (Until 2026-12-02 a real-time run went on for its whole wall-time window, past the scenario's
@@ -118,7 +122,7 @@ constexpr int k_scenario_frames = 120;
 
 constexpr const char* k_usage =
     "usage: pliant_bench_sim [max_level] [realtime_seconds] [min_level] [kernel] [gnomonic]\n"
-    "                        [step] [--quick] [--json FILE] [--csv FILE]\n"
+    "                        [step] [mixed] [--quick] [--json FILE] [--csv FILE]\n"
     "RKF45 ns per node-step at levels min_level..max_level on 1 and 2 threads, a STREAM triad in\n"
     "the same run, and the largest level that runs the benchmark scenario (a point force sliding\n"
     "over the unit sphere for 2 s) in real time. Numbers are positional, in this order.\n"
@@ -130,6 +134,7 @@ constexpr const char* k_usage =
     "  kernel            only the step timing, 1 thread, 10 steps per level (for callgrind)\n"
     "  gnomonic          the gnomonic sphere instead of the equal-area one\n"
     "  step              hold the force constant over each frame instead of linearly\n"
+    "  mixed             mixed precision: float increments over the double state\n"
     "  --quick           levels 5..8, real-time runs cut at 0.6 s, 3 repetitions\n"
     "  --json FILE, --csv FILE\n"
     "                    also write the figures as rows (bench/common/bench_report.h)\n"
@@ -147,6 +152,7 @@ int main(int argc, char** argv)
     bool kernel_only = false;
     core::SphereMap sphere_map = core::SphereMap::EqualArea;
     sim::ForceHold hold = sim::ForceHold::Linear;
+    sim::Precision precision = sim::Precision::Double;
     // The positional numbers in order (max_level, realtime_seconds, min_level); the words may
     // stand anywhere.
     std::vector<const char*> numbers;
@@ -159,6 +165,8 @@ int main(int argc, char** argv)
             sphere_map = core::SphereMap::Gnomonic;
         else if (a == sim::to_string(sim::ForceHold::Step))
             hold = sim::ForceHold::Step;
+        else if (a == sim::to_string(sim::Precision::Mixed))
+            precision = sim::Precision::Mixed;
         else if (numbers.size() == 3 || (a.starts_with('-') && !bench::parse_number(a)))
             return usage.unexpected(a);
         else
@@ -207,6 +215,12 @@ int main(int argc, char** argv)
                 "rtol=1e-4, one point force sliding on the surface, frames of 1/60 s");
     report.meta("sphere_map", std::string(core::to_string(sphere_map)));
     std::printf("sphere: %s grid\n", std::string(core::to_string(sphere_map)).c_str());
+    const std::string precision_name(sim::to_string(precision));
+    report.meta("precision", precision_name);
+    std::printf("precision of full steps: %s\n", precision_name.c_str());
+    const double bytes_per_node_step =
+        8.0 * (precision == sim::Precision::Mixed ? k_doubles_per_node_step_mixed
+                                                  : k_doubles_per_node_step);
     const std::string hold_name(sim::to_string(hold));
     report.meta("force_hold", hold_name);
     std::printf("force hold between frames: %s\n", hold_name.c_str());
@@ -232,6 +246,7 @@ int main(int argc, char** argv)
             set.fixed_step = true;
             set.fixed_dt = 1e-4;
             set.threads = threads;
+            set.precision = precision;
             sim::MembraneModel model =
                 sim::MembraneModel::create(grid, scenes::sphere_grid(grid, 1.0, 0, sphere_map), set)
                     .value();
@@ -264,7 +279,7 @@ int main(int argc, char** argv)
             const double t = median(per);
             const double ns = t / nodes * 1e9;
             std::printf("step,%d,%d,%.0f,%.2f,%.3e,%.2f\n", level, threads, nodes, ns, nodes / t,
-                        k_doubles_per_node_step * 8.0 * nodes / t / 1e9);
+                        bytes_per_node_step * nodes / t / 1e9);
             const std::string c = std::to_string(threads) + (threads == 1 ? " thread" : " threads");
             report.add(c, level, nodes, "nodes", "ns_per_node_step", ns, "ns");
             report.add(c, level, nodes, "nodes", "ms_per_step", t * 1e3, "ms");
@@ -272,7 +287,7 @@ int main(int argc, char** argv)
                        median(per_cpu) / nodes * 1e9, "ns");
             report.add(c, level, nodes, "nodes", "node_steps_per_s", nodes / t, "1/s");
             report.add(c, level, nodes, "nodes", "effective_bandwidth",
-                       k_doubles_per_node_step * 8.0 * nodes / t, "B/s");
+                       bytes_per_node_step * nodes / t, "B/s");
             if (threads == 1)
                 ms_per_step_1[static_cast<std::size_t>(level)] = t * 1e3;
             std::fflush(stdout);
@@ -291,6 +306,7 @@ int main(int argc, char** argv)
             sim::MembraneSettings set = bench_material();
             set.threads = threads;
             set.force_hold = hold;
+            set.precision = precision;
             sim::MembraneModel model =
                 sim::MembraneModel::create(grid, scenes::sphere_grid(grid, 1.0, 0, sphere_map), set)
                     .value();

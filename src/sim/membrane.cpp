@@ -6,7 +6,9 @@
 #include "sim/stencil_internal.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <cstdint>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -17,6 +19,11 @@ namespace pliant::sim
 std::string_view to_string(ForceHold hold) noexcept
 {
     return hold == ForceHold::Linear ? "linear" : "step";
+}
+
+std::string_view to_string(Precision precision) noexcept
+{
+    return precision == Precision::Mixed ? "mixed" : "double";
 }
 
 namespace
@@ -315,6 +322,8 @@ core::Result<void> MembraneModel::assemble(const Vec3Field<double>& X)
     std::swap(wd_, wd);
     std::swap(mass_, mass);
     std::swap(inv_mass_, inv);
+    static std::atomic<std::uint64_t> next_id{0};
+    assembly_id_ = ++next_id;
     return {};
 }
 

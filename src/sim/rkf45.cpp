@@ -222,7 +222,8 @@ TrialResult trial(const MembraneModel& model, const MembraneState& state, Rkf45W
     const detail::StageConstants k{set.beta, set.k_f, set.rtol, set.atol, model.grid().w()};
     std::size_t parts = last.size();
     if (ws.pipeline_ok && ws.use_pipeline)
-        parts = detail::pipeline_trial(model, state, ws, c, k, threads, restricted);
+        parts = detail::pipeline_trial(model, state, ws, c, k, threads, restricted,
+                                       set.precision == Precision::Mixed);
     else
         stage_trial(model, state, ws, regions, last, c, k, threads, restricted);
     TrialResult t;
@@ -417,6 +418,8 @@ Rkf45Workspace::Rkf45Workspace(const MembraneModel& model, int threads)
     leaf_error.assign(parts, 0.0);
     leaf_probe.assign(parts, 0.0);
     detail::plan_pipeline(model, *this);
+    if (model.settings().precision == Precision::Mixed)
+        detail::prepare_mixed(model, *this);
     touched.reserve(4096);
     next_dt_ = model.settings().dt_initial;
 }

@@ -274,6 +274,10 @@ inline double stage_row(const StageConstants& k, const Coeffs& c, const StageRow
 // false when a copy of the model's sync table does not fit the pipeline's row rules).
 void plan_pipeline(const MembraneModel& model, Rkf45Workspace& ws);
 
+// Mixed precision (Precision::Mixed): makes ws's float copies of the model's weights and 1/m
+// when they are not those of its current assembly, and allocates the float rows once.
+void prepare_mixed(const MembraneModel& model, Rkf45Workspace& ws);
+
 // Plans restricted steps over `owned` (with `needed`, StepOptions::needed) on the pipeline (the
 // per-row segments of `ws`); nothing to do when both equal the regions of the last plan.
 void plan_restricted(const MembraneModel& model, std::span<const core::Region> owned,
@@ -294,11 +298,12 @@ void sync_live(const Rkf45Workspace& ws, core::Field<double>& f) noexcept;
 
 // One trial step with the fused row pipeline (row_pipeline.cpp) into ws.u_out / v_out: a full
 // one, or a restricted one over the owned set of the last plan_restricted (only its rows and
-// segments are computed and written). \return the number of bands: their error norms and NaN
-// probes are ws.leaf_error / leaf_probe [0, bands).
+// segments are computed and written); `mixed`: a full one in mixed precision (Precision::Mixed;
+// restricted steps ignore it). \return the number of bands: their error norms and NaN probes
+// are ws.leaf_error / leaf_probe [0, bands).
 std::size_t pipeline_trial(const MembraneModel& model, const MembraneState& state,
                            Rkf45Workspace& ws, const Coeffs& c, const StageConstants& k,
-                           int threads, bool restricted);
+                           int threads, bool restricted, bool mixed);
 
 // Sets FTZ and DAZ for the current thread for its lifetime (x86 SSE; elsewhere a no-op): the
 // far tails of a wave decay into denormal numbers, which cost ~100x per operation on x86.

@@ -59,6 +59,7 @@
 #include <cstdint>
 #include <limits>
 #include <span>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -75,19 +76,27 @@ constexpr int k_kv_ghost_row = k_stored * k_ring;
 constexpr int k_U_row = k_kv_ghost_row + 2 * k_stored;
 constexpr int k_rows_per_thread = k_U_row + 3 * 6;
 
-// Rows start k_pad doubles before grid x = 0, so that x = 0 of every buffered row is 64-byte
-// aligned (one cache line: AVX-512 loads of x .. x + 7 then touch one line, not two).
+// Rows start 64 bytes (k_pad doubles, or twice as many floats) before grid x = 0, so that x = 0
+// of every buffered row is 64-byte aligned (one cache line: AVX-512 loads of x .. x + 7 then
+// touch one line, not two).
 constexpr std::size_t k_pad = 8;
 
-// One thread's rows (64-byte aligned); row pointers point at grid x = 0 (x = -1 .. nx are
-// valid).
-struct BandBuffers
+// A mixed-precision step (rkf45.h) also keeps the rows of K u (written by the first pair, read
+// by the later ones at their own node) in a ring after the others.
+constexpr int k_ku_row = k_rows_per_thread;
+constexpr int k_rows_per_thread_mixed = k_rows_per_thread + k_ring;
+
+// One thread's rows (64-byte aligned) of doubles, or of floats in a mixed-precision step; row
+// pointers point at grid x = 0 (x = -1 .. nx are valid).
+template <class T>
+struct BandRows
 {
-    double* base;
+    static constexpr std::size_t pad = 64 / sizeof(T);
+    T* base;
     std::size_t len;
     int ny;
 
-    [[nodiscard]] double* kv_row(int m, int y) const noexcept
+    [[nodiscard]] T* kv_row(int m, int y) const noexcept
     {
         std::size_t r = 0;
         if (y < 0)
@@ -96,14 +105,19 @@ struct BandBuffers
             r = static_cast<std::size_t>(k_kv_ghost_row + k_stored + m);
         else
             r = static_cast<std::size_t>(m * k_ring + (y & (k_ring - 1)));
-        return base + r * len + k_pad;
+        return base + r * len + pad;
     }
-    [[nodiscard]] double* U_row(int stage, int y) const noexcept
+    [[nodiscard]] T* U_row(int stage, int y) const noexcept
     {
         const int slot = (y + 3) % 3;  // y >= -1
-        return base + static_cast<std::size_t>(k_U_row + 3 * stage + slot) * len + k_pad;
+        return base + static_cast<std::size_t>(k_U_row + 3 * stage + slot) * len + pad;
+    }
+    [[nodiscard]] T* ku_row(int y) const noexcept
+    {
+        return base + static_cast<std::size_t>(k_ku_row + (y & (k_ring - 1))) * len + pad;
     }
 };
+using BandBuffers = BandRows<double>;
 
 // The planes of one trial (ghost-ring-1 origins, one stride).
 struct Inputs
@@ -119,34 +133,41 @@ struct Inputs
     const char* forced;  // [y]: row y has a non-zero force acceleration or rate
     double* u_out;
     double* v_out;
+    // Mixed precision: the float copies of wx, wy, wd and 1/m (same layout).
+    const float* fwx;
+    const float* fwy;
+    const float* fwd;
+    const float* finv_m;
     std::ptrdiff_t s;
     int nx;
     int ny;
     const Rkf45Workspace* ws;
 
-    [[nodiscard]] const double* row(const double* plane, int y) const noexcept
+    template <class T>
+    [[nodiscard]] const T* row(const T* plane, int y) const noexcept
     {
         return plane + static_cast<std::ptrdiff_t>(y) * s;
     }
 };
 
 // Applies the model's twin and ghost copies that read slope row y of kv_m.
-void copy_row(const Inputs& in, const BandBuffers& b, int m, int y) noexcept
+template <class T>
+void copy_row(const Inputs& in, const BandRows<T>& b, int m, int y) noexcept
 {
     const Rkf45Workspace& ws = *in.ws;
-    double* row = b.kv_row(m, y) - 1;  // indexed by x + 1, as the copies
+    T* row = b.kv_row(m, y) - 1;  // indexed by x + 1, as the copies
     const auto ys = static_cast<std::size_t>(y);
     for (std::size_t i = ws.row_copy_start[ys]; i < ws.row_copy_start[ys + 1]; ++i)
         row[ws.row_copies[i].dst] = row[ws.row_copies[i].src];
     if (y == 1)
     {
-        double* dst = b.kv_row(m, -1) - 1;
+        T* dst = b.kv_row(m, -1) - 1;
         for (const core::GhostCopy& cp : ws.below_copies)
             dst[cp.dst] = row[cp.src];
     }
     if (y == in.ny - 2)
     {
-        double* dst = b.kv_row(m, in.ny) - 1;
+        T* dst = b.kv_row(m, in.ny) - 1;
         for (const core::GhostCopy& cp : ws.above_copies)
             dst[cp.dst] = row[cp.src];
     }
@@ -418,35 +439,360 @@ double stage_pair(const Inputs& in, const Coeffs& c, const StageConstants& k, co
 }
 
 // Rows [y0, y1) of the new state: the wavefront, with the slope rows beyond the band that its
-// stages read recomputed here.
+// stages read recomputed here. pair(std::integral_constant<int, P>, y, first) runs stages P and
+// P + 1 at row y (`first`: the band's first row of that pair) and returns the row's error norm.
+template <class Pair>
+void sweep_band(int ny, int y0, int y1, const Pair& pair, double& err) noexcept
+{
+    const int lo01 = std::max(0, y0 - 2);
+    const int hi01 = std::min(ny, y1 + 2);
+    const int lo23 = std::max(0, y0 - 1);
+    const int hi23 = std::min(ny, y1 + 1);
+    for (int j = lo01; j <= y1 + 1; ++j)
+    {
+        if (j < hi01)
+            (void)pair(std::integral_constant<int, 0>{}, j, lo01);
+        if (const int y = j - 1; y >= lo23 && y < hi23)
+            (void)pair(std::integral_constant<int, 2>{}, y, lo23);
+        if (const int y = j - 2; y >= y0 && y < y1)
+            err = std::max(err, pair(std::integral_constant<int, 4>{}, y, y0));
+    }
+}
+
 template <bool Restricted>
 void run_band(const Inputs& in, const Coeffs& c, const StageConstants& k, const BandBuffers& b,
               int y0, int y1, double& err, double& probe) noexcept
 {
-    const int lo01 = std::max(0, y0 - 2);
-    const int hi01 = std::min(in.ny, y1 + 2);
-    const int lo23 = std::max(0, y0 - 1);
-    const int hi23 = std::min(in.ny, y1 + 1);
-    for (int j = lo01; j <= y1 + 1; ++j)
+    sweep_band(
+        in.ny, y0, y1,
+        [&](auto pair, int y, int first)
+        { return stage_pair<decltype(pair)::value, Restricted>(in, c, k, b, y, first, probe); },
+        err);
+}
+
+// ---- Mixed precision (MembraneSettings::precision, docs/physics.md §9) ----------------------
+// The same sweep, with the stage displacements kept as increments D_S = U_S - u (float) and
+// K U_S = K u + K D_S: K u is the stencil of the double state, taken once per trial (the first
+// pair, in double, then rounded to float and kept in a ring row for the later pairs, which read
+// it at their own node only, so it needs no twin copies); everything else a stage computes is
+// an increment over the step-start state, in float. The update adds the float increments to the
+// double u and v. In single precision K U_S itself would lose most of its digits on a fine grid
+// (the differences of neighbouring U are ~ 1/nx of U); K D_S loses as many digits of D_S, which
+// is ~ h v, so the rounding stays ~ 1e-7 of a step's change.
+
+// Coefficients and constants rounded to float once per trial.
+struct MixedCoeffs
+{
+    float cu[6];
+    float ck[6][6];
+    float cv[6][6];
+    float ub[6];
+    float vb[6];
+    float ue[6];
+    float ve[6];
+    float h;
+    float beta;
+    float k_f;
+    float rtol;
+    float atol;
+};
+
+MixedCoeffs mixed_coeffs(const Coeffs& c, const StageConstants& k) noexcept
+{
+    MixedCoeffs f{};
+    for (int s = 0; s < 6; ++s)
     {
-        if (j < hi01)
-            (void)stage_pair<0, Restricted>(in, c, k, b, j, lo01, probe);
-        if (const int y = j - 1; y >= lo23 && y < hi23)
-            (void)stage_pair<2, Restricted>(in, c, k, b, y, lo23, probe);
-        if (const int y = j - 2; y >= y0 && y < y1)
-            err = std::max(err, stage_pair<4, Restricted>(in, c, k, b, y, y0, probe));
+        f.cu[s] = static_cast<float>(c.cu[s]);
+        f.ub[s] = static_cast<float>(c.ub[s]);
+        f.vb[s] = static_cast<float>(c.vb[s]);
+        f.ue[s] = static_cast<float>(c.ue[s]);
+        f.ve[s] = static_cast<float>(c.ve[s]);
+        for (int m = 0; m < 6; ++m)
+        {
+            f.ck[s][m] = static_cast<float>(c.ck[s][m]);
+            f.cv[s][m] = static_cast<float>(c.cv[s][m]);
+        }
+    }
+    f.h = static_cast<float>(c.h);
+    f.beta = static_cast<float>(k.beta);
+    f.k_f = static_cast<float>(k.k_f);
+    f.rtol = static_cast<float>(k.rtol);
+    f.atol = static_cast<float>(k.atol);
+    return f;
+}
+
+// D_S = h c_S v + h^2 sum_m (A^2)_{S,m} kv_m (stage_displacement less u).
+template <int S>
+[[gnu::always_inline]] inline float mixed_increment(const MixedCoeffs& c, float v,
+                                                    const float (&kk)[5]) noexcept
+{
+    float d = c.cu[S] * v;
+    for (int m = 0; m + 1 < S; ++m)
+        d = d + c.ck[S][m] * kk[m];
+    return d;
+}
+
+template <int S>
+[[gnu::always_inline]] inline float mixed_velocity(const MixedCoeffs& c, float v,
+                                                   const float (&kk)[5]) noexcept
+{
+    float vel = v;
+    for (int m = 0; m < S; ++m)
+        vel = vel + c.cv[S][m] * kk[m];
+    return vel;
+}
+
+// The slope kv_S = -beta V_S - k_f (u + D_S) - (K u + K D_S) / m + f.
+[[gnu::always_inline]] inline float mixed_slope(const MixedCoeffs& c, float vel, float uc,
+                                                float inv_m, float ku, float f) noexcept
+{
+    return ((-c.beta * vel - c.k_f * uc) - inv_m * ku) + f;
+}
+
+// update_node with float slopes: the increments of u and v and the error estimate in float,
+// u_new and v_new in double; the error norm's max kept as the bits of a non-negative float.
+[[gnu::always_inline]] inline void mixed_update(const MixedCoeffs& c, double u0, double v0,
+                                                float u0f, float v0f, const float (&kk)[5], float a,
+                                                bool canonical, double& u_new, double& v_new,
+                                                std::int32_t& err_bits, std::int32_t& bad) noexcept
+{
+    float du = c.h * v0f;
+    float dv = 0.0F;
+    float eu = 0.0F;
+    float ev = 0.0F;
+    for (int m = 0; m < 5; ++m)
+    {
+        du = du + c.ub[m] * kk[m];
+        dv = dv + c.vb[m] * kk[m];
+        eu = eu + c.ue[m] * kk[m];
+        ev = ev + c.ve[m] * kk[m];
+    }
+    dv = dv + c.vb[5] * a;
+    ev = ev + c.ve[5] * a;
+    const double un = u0 + static_cast<double>(du);
+    const double vn = v0 + static_cast<double>(dv);
+    u_new = un;
+    v_new = vn;
+    const float unf = static_cast<float>(un);
+    const float vnf = static_cast<float>(vn);
+    const float su = std::fabs(eu) / (c.atol + c.rtol * std::max(std::fabs(u0f), std::fabs(unf)));
+    const float sv = std::fabs(ev) / (c.atol + c.rtol * std::max(std::fabs(v0f), std::fabs(vnf)));
+    const float e = canonical ? std::max(su, sv) : 0.0F;
+    err_bits = std::max(err_bits, std::bit_cast<std::int32_t>(e > 0.0F ? e : 0.0F));
+    const double nan_probe = (un - un) + (vn - vn);
+    bad |= nan_probe != 0.0 ? 1 : 0;
+}
+
+// D rows of stages P, P + 1 at row yy, x = -1 .. nx (stage 0 needs none: it reads u).
+template <int P>
+void mixed_fill_pair(const Inputs& in, const MixedCoeffs& c, const BandRows<float>& b,
+                     int yy) noexcept
+{
+    constexpr int A = P;
+    constexpr int B = P + 1;
+    const double* __restrict v = in.row(in.v, yy);
+    const float* __restrict k0 = B > 2 ? b.kv_row(0, yy) : nullptr;
+    const float* __restrict k1 = B > 2 ? b.kv_row(1, yy) : nullptr;
+    const float* __restrict k2 = B > 4 ? b.kv_row(2, yy) : nullptr;
+    const float* __restrict k3 = B > 4 ? b.kv_row(3, yy) : nullptr;
+    [[maybe_unused]] float* __restrict da = A > 0 ? b.U_row(A, yy) : nullptr;
+    float* __restrict db = b.U_row(B, yy);
+    const int x1 = in.nx + 1;
+#pragma GCC ivdep
+    for (int x = -1; x < x1; ++x)
+    {
+        float kk[5] = {};
+        if constexpr (B > 2)
+        {
+            kk[0] = k0[x];
+            kk[1] = k1[x];
+        }
+        if constexpr (B > 4)
+        {
+            kk[2] = k2[x];
+            kk[3] = k3[x];
+        }
+        const auto vf = static_cast<float>(v[x]);
+        if constexpr (A > 0)
+            da[x] = mixed_increment<A>(c, vf, kk);
+        db[x] = mixed_increment<B>(c, vf, kk);
     }
 }
 
-// The first 64-byte boundary in the pipeline buffers (they hold 8 spare doubles for it).
-double* aligned_rows(Rkf45Workspace& ws) noexcept
+// Stages P and P + 1 of row y, x = 0 .. nx - 1 (pair_row's mixed twin). P = 0 takes K u of the
+// double state and keeps it (float) in the ring for the later pairs.
+template <int P, bool Forced>
+double mixed_pair_row(const Inputs& in, const Coeffs& cd, const MixedCoeffs& c, int w,
+                      const BandRows<float>& b, int y, double& probe) noexcept
 {
-    double* p = ws.pipeline_buffers.data();
+    constexpr int A = P;
+    constexpr int B = P + 1;
+    const double* __restrict v = in.row(in.v, y);
+    const double* __restrict u = in.row(in.u, y);
+    [[maybe_unused]] const double* __restrict u_below = in.row(in.u, y - 1);
+    [[maybe_unused]] const double* __restrict u_above = in.row(in.u, y + 1);
+    const float* __restrict k0 = A > 0 ? b.kv_row(0, y) : nullptr;
+    const float* __restrict k1 = A > 1 ? b.kv_row(1, y) : nullptr;
+    const float* __restrict k2 = A > 2 ? b.kv_row(2, y) : nullptr;
+    const float* __restrict k3 = A > 3 ? b.kv_row(3, y) : nullptr;
+    const float* __restrict wx = in.row(in.fwx, y);
+    const float* __restrict wy = in.row(in.fwy, y);
+    const float* __restrict wd = in.row(in.fwd, y);
+    const float* __restrict wyb = in.row(in.fwy, y - 1);
+    const float* __restrict wdb = in.row(in.fwd, y - 1);
+    const float* __restrict inv_m = in.row(in.finv_m, y);
+    const double* __restrict acc = Forced ? in.row(in.acc, y) : nullptr;
+    const double* __restrict rate = Forced ? in.row(in.acc_rate, y) : nullptr;
+    [[maybe_unused]] const float* __restrict ap = A > 0 ? b.U_row(A, y - 1) : nullptr;
+    [[maybe_unused]] const float* __restrict ac = A > 0 ? b.U_row(A, y) : nullptr;
+    [[maybe_unused]] const float* __restrict an = A > 0 ? b.U_row(A, y + 1) : nullptr;
+    const float* __restrict bp = b.U_row(B, y - 1);
+    const float* __restrict bc = b.U_row(B, y);
+    const float* __restrict bn = b.U_row(B, y + 1);
+    [[maybe_unused]] float* __restrict ku_out = P == 0 ? b.ku_row(y) : nullptr;
+    [[maybe_unused]] const float* __restrict ku_in = P > 0 ? b.ku_row(y) : nullptr;
+    [[maybe_unused]] float* __restrict out_a = P < 4 ? b.kv_row(A, y) : nullptr;
+    [[maybe_unused]] float* __restrict out_b = P < 4 ? b.kv_row(B, y) : nullptr;
+    [[maybe_unused]] double* __restrict u_out = in.u_out + static_cast<std::ptrdiff_t>(y) * in.s;
+    [[maybe_unused]] double* __restrict v_out = in.v_out + static_cast<std::ptrdiff_t>(y) * in.s;
+    std::int32_t err_bits = 0;
+    std::int32_t bad = 0;
+    const int x_canon = (y == 0 || y == w) ? w + 1 : 2 * w;
+    const int x1 = in.nx;
+#pragma GCC ivdep
+    for (int x = 0; x < x1; ++x)
+    {
+        float kk[5] = {};
+        if constexpr (A > 0)
+            kk[0] = k0[x];
+        if constexpr (A > 1)
+            kk[1] = k1[x];
+        if constexpr (A > 2)
+            kk[2] = k2[x];
+        if constexpr (A > 3)
+            kk[3] = k3[x];
+        const auto vf = static_cast<float>(v[x]);
+        const auto uf = static_cast<float>(u[x]);
+        float ku = 0.0F;
+        if constexpr (P == 0)
+        {
+            const auto d = [](float f) { return static_cast<double>(f); };
+            ku = static_cast<float>(stencil(u[x], u[x + 1], u[x - 1], u_above[x], u_below[x],
+                                            u_above[x + 1], u_below[x - 1], d(wx[x]), d(wx[x - 1]),
+                                            d(wy[x]), d(wyb[x]), d(wd[x]), d(wdb[x - 1])));
+            ku_out[x] = ku;
+        }
+        else
+            ku = ku_in[x];
+        float fa = 0.0F;
+        float fb = 0.0F;
+        if constexpr (Forced)
+        {
+            fa = static_cast<float>(acc[x] + cd.ft[A] * rate[x]);
+            fb = static_cast<float>(acc[x] + cd.ft[B] * rate[x]);
+        }
+        float sa = 0.0F;
+        if constexpr (A == 0)
+            sa = mixed_slope(c, vf, uf, inv_m[x], ku, fa);
+        else
+        {
+            const float vel = mixed_velocity<A>(c, vf, kk);
+            const float dc = ac[x];
+            const float kd = stencil(dc, ac[x + 1], ac[x - 1], an[x], ap[x], an[x + 1], ap[x - 1],
+                                     wx[x], wx[x - 1], wy[x], wyb[x], wd[x], wdb[x - 1]);
+            sa = mixed_slope(c, vel, uf + dc, inv_m[x], ku + kd, fa);
+        }
+        kk[A] = sa;
+        const float vel_b = mixed_velocity<B>(c, vf, kk);
+        const float dcb = bc[x];
+        const float kdb = stencil(dcb, bc[x + 1], bc[x - 1], bn[x], bp[x], bn[x + 1], bp[x - 1],
+                                  wx[x], wx[x - 1], wy[x], wyb[x], wd[x], wdb[x - 1]);
+        const float sb = mixed_slope(c, vel_b, uf + dcb, inv_m[x], ku + kdb, fb);
+        if constexpr (P < 4)
+        {
+            out_a[x] = sa;
+            out_b[x] = sb;
+        }
+        else
+        {
+            mixed_update(c, u[x], v[x], uf, vf, kk, sb, x < x_canon, u_out[x], v_out[x], err_bits,
+                         bad);
+        }
+    }
+    if (bad != 0)
+        probe = std::numeric_limits<double>::quiet_NaN();
+    return static_cast<double>(std::bit_cast<float>(err_bits));
+}
+
+// stage_pair's mixed twin (full steps only).
+template <int P>
+double mixed_stage_pair(const Inputs& in, const Coeffs& cd, const MixedCoeffs& c, int w,
+                        const BandRows<float>& b, int y, int first, double& probe) noexcept
+{
+    if (y == first)
+    {
+        mixed_fill_pair<P>(in, c, b, y - 1);
+        mixed_fill_pair<P>(in, c, b, y);
+    }
+    mixed_fill_pair<P>(in, c, b, y + 1);
+    const double err = in.forced[y] != 0 ? mixed_pair_row<P, true>(in, cd, c, w, b, y, probe)
+                                         : mixed_pair_row<P, false>(in, cd, c, w, b, y, probe);
+    if constexpr (P < 4)
+    {
+        copy_row(in, b, P, y);
+        copy_row(in, b, P + 1, y);
+    }
+    return err;
+}
+
+// run_band's mixed twin.
+void mixed_run_band(const Inputs& in, const Coeffs& cd, const MixedCoeffs& c, int w,
+                    const BandRows<float>& b, int y0, int y1, double& err, double& probe) noexcept
+{
+    sweep_band(
+        in.ny, y0, y1,
+        [&](auto pair, int y, int first)
+        { return mixed_stage_pair<decltype(pair)::value>(in, cd, c, w, b, y, first, probe); },
+        err);
+}
+
+// The first 64-byte boundary in a thread-row buffer (it holds 64 spare bytes for it).
+template <class T>
+T* aligned_rows(std::vector<T>& buffers) noexcept
+{
+    T* p = buffers.data();
     const auto misalign = reinterpret_cast<std::uintptr_t>(p) % 64U;
-    return misalign == 0 ? p : p + (64U - misalign) / sizeof(double);
+    return misalign == 0 ? p : p + (64U - misalign) / sizeof(T);
 }
 
 }  // namespace
+
+void prepare_mixed(const MembraneModel& model, Rkf45Workspace& ws)
+{
+    const core::Field<double>* planes[4] = {&model.weight_x(), &model.weight_y(), &model.weight_d(),
+                                            &model.inverse_mass()};
+    const std::size_t n = planes[0]->padded().size();
+    if (ws.mixed_assembly != model.assembly_id() || ws.mixed_plane_len != n)
+    {
+        ws.mixed_plane_len = n;
+        ws.mixed_model.resize(4 * n);
+        for (std::size_t p = 0; p < 4; ++p)
+            std::transform(planes[p]->padded().begin(), planes[p]->padded().end(),
+                           ws.mixed_model.begin() + static_cast<std::ptrdiff_t>(p * n),
+                           [](double x) { return static_cast<float>(x); });
+        ws.mixed_assembly = model.assembly_id();
+    }
+    if (ws.mixed_buffers.empty())
+    {
+        constexpr std::size_t pad = BandRows<float>::pad;
+        ws.mixed_row_len =
+            (pad + static_cast<std::size_t>(model.grid().nx()) + 1 + pad - 1) / pad * pad;
+        ws.mixed_buffer_len = static_cast<std::size_t>(k_rows_per_thread_mixed) * ws.mixed_row_len;
+        // + pad: room to align the first row to 64 bytes.
+        ws.mixed_buffers.assign(
+            ws.mixed_buffer_len * static_cast<std::size_t>(ws.max_threads) + pad, 0.0F);
+    }
+}
 
 void plan_pipeline(const MembraneModel& model, Rkf45Workspace& ws)
 {
@@ -764,8 +1110,11 @@ void accept_swapping(Rkf45Workspace& ws, MembraneState& state) noexcept
 
 std::size_t pipeline_trial(const MembraneModel& model, const MembraneState& state,
                            Rkf45Workspace& ws, const Coeffs& c, const StageConstants& k,
-                           int threads, bool restricted)
+                           int threads, bool restricted, bool mixed)
 {
+    mixed = mixed && !restricted;
+    if (mixed)
+        prepare_mixed(model, ws);
     const core::TetraGrid& g = model.grid();
     Inputs in{};
     in.u = state.u.origin();
@@ -779,6 +1128,15 @@ std::size_t pipeline_trial(const MembraneModel& model, const MembraneState& stat
     in.forced = ws.forced_rows.data();
     in.u_out = ws.u_out.origin();
     in.v_out = ws.v_out.origin();
+    if (mixed)
+    {
+        const float* f = ws.mixed_model.data() + (in.wx - model.weight_x().padded().data());
+        const auto n = static_cast<std::ptrdiff_t>(ws.mixed_plane_len);
+        in.fwx = f;
+        in.fwy = f + n;
+        in.fwd = f + 2 * n;
+        in.finv_m = f + 3 * n;
+    }
     in.s = state.u.stride();
     in.nx = g.nx();
     in.ny = g.ny();
@@ -803,7 +1161,9 @@ std::size_t pipeline_trial(const MembraneModel& model, const MembraneState& stat
                                          ws.restricted_work.begin() + yhi, target);
         return static_cast<int>(it - ws.restricted_work.begin());
     };
-    double* const rows = aligned_rows(ws);
+    double* const rows = aligned_rows(ws.pipeline_buffers);
+    float* const mixed_rows = mixed ? aligned_rows(ws.mixed_buffers) : nullptr;
+    const MixedCoeffs mc = mixed ? mixed_coeffs(c, k) : MixedCoeffs{};
     // Band `band` on the thread whose buffers start at `thread`.
     const auto run = [&](int band, int thread)
     {
@@ -813,7 +1173,14 @@ std::size_t pipeline_trial(const MembraneModel& model, const MembraneState& stat
         const int y1 = band_start(band + 1);
         double err = 0.0;
         double probe = 0.0;
-        if (restricted)
+        if (mixed)
+        {
+            const BandRows<float> fb{
+                mixed_rows + static_cast<std::size_t>(thread) * ws.mixed_buffer_len,
+                ws.mixed_row_len, in.ny};
+            mixed_run_band(in, c, mc, k.w, fb, y0, y1, err, probe);
+        }
+        else if (restricted)
         {
             if (y0 < y1)
                 run_band<true>(in, c, k, b, y0, y1, err, probe);

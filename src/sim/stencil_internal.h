@@ -14,10 +14,11 @@ namespace pliant::sim::detail
 {
 
 /// (K u)_c from the centre value c and the six neighbour values; w* are the edge weights of the
-/// edges to +x, -x, +y, -y, +(1,1), -(1,1).
-inline double stencil(double c, double xp, double xm, double yp, double ym, double dp, double dm,
-                      double wxp, double wxm, double wyp, double wym, double wdp,
-                      double wdm) noexcept
+/// edges to +x, -x, +y, -y, +(1,1), -(1,1). T is double, or float for the increments of a
+/// mixed-precision step (rkf45.h).
+template <class T>
+inline T stencil(T c, T xp, T xm, T yp, T ym, T dp, T dm, T wxp, T wxm, T wyp, T wym, T wdp,
+                 T wdm) noexcept
 {
     return ((wxp * (c - xp) + wxm * (c - xm)) + (wyp * (c - yp) + wym * (c - ym))) +
            (wdp * (c - dp) + wdm * (c - dm));

@@ -4,7 +4,8 @@
 # writes every frame and the energy table, and its finger slides over the surface (no vertex is
 # ever out of its reach: the chord it used to follow passed 0.29 m below the surface); a point
 # force out of every vertex's reach is warned about, naming the file, line and distance; a
-# misspelt key or an unknown force hold is refused, naming the file, line and key. The audit of
+# misspelt key, an unknown force hold or precision is refused, naming the file, line and key;
+# --precision mixed reaches the run. The audit of
 # simulate (fixed steps, divergence, messages): a fixed step that does not divide the frame
 # interval runs to the end (it hung); an unstable fixed_dt or dt_min is warned about and the steps
 # at dt_min are counted; a run that becomes non-finite stops with exit 3; a face index beyond the
@@ -48,6 +49,21 @@ if(TARGET pliant)
                      "-DREGEX=bad_hold.toml:8: 'integrator.force_hold' must be one of: linear, step"
                      -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_failure.cmake)
     set_tests_properties(cli_simulate_refuses_unknown_force_hold PROPERTIES TIMEOUT 60)
+    add_test(NAME cli_simulate_refuses_unknown_precision
+             COMMAND ${CMAKE_COMMAND}
+                     "-DCOMMAND=$<TARGET_FILE:pliant>;simulate;--scenario;${PROJECT_SOURCE_DIR}/tests/data/scenarios/bad_precision.toml;-o;${CMAKE_CURRENT_BINARY_DIR}/simulate-bad-precision;--level;3"
+                     "-DREGEX=bad_precision.toml:8: 'integrator.precision' must be one of: double, mixed"
+                     -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_failure.cmake)
+    set_tests_properties(cli_simulate_refuses_unknown_precision PROPERTIES TIMEOUT 60)
+    # --precision mixed reaches the integrator (the summary names the precision the run used).
+    add_test(NAME cli_simulate_pull_mixed
+             COMMAND pliant simulate --scenario ${PROJECT_SOURCE_DIR}/scenes/pull.toml
+                     -o ${CMAKE_CURRENT_BINARY_DIR}/simulate-pull-mixed --level 4 -j 1
+                     --precision mixed)
+    set_tests_properties(cli_simulate_pull_mixed PROPERTIES
+        TIMEOUT 120
+        PASS_REGULAR_EXPRESSION "101 frames, 4.000 s simulated.* mixed precision"
+        FAIL_REGULAR_EXPRESSION "beyond its radius;error")
     set(scenarios ${PROJECT_SOURCE_DIR}/tests/data/scenarios)
     # 166 whole steps of 3 ms in 0.5 s, frames at the last step before each 100 ms.
     add_test(NAME cli_simulate_fixed_step_remainder
@@ -103,7 +119,7 @@ if(TARGET pliant)
 
     # -j 0 overrides the scenario's threads = 1 with OpenMP's default (here OMP_NUM_THREADS).
     pliant_cli_expect(cli_simulate_threads_zero_is_openmp_default 0 STDOUT
-                      ", 3 thread\\(s\\) -> "
+                      ", 3 thread\\(s\\), double precision -> "
                       simulate --scenario ${scenarios}/ignored_keys.toml -o ${CMAKE_CURRENT_BINARY_DIR}/simulate-j0 --level 3 -j 0)
     set_tests_properties(cli_simulate_threads_zero_is_openmp_default PROPERTIES ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0;OMP_NUM_THREADS=3")
 

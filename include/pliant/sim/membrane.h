@@ -57,6 +57,24 @@ enum class ForceHold : std::uint8_t
 /// "step" or "linear": the names `pliant simulate`'s scenarios and the benchmarks use.
 [[nodiscard]] std::string_view to_string(ForceHold hold) noexcept;
 
+/// The arithmetic of a full RKF45 step (docs/physics.md §9).
+enum class Precision : std::uint8_t
+{
+    /// Every operation in double precision. Restricted steps (sessions), the stage-by-stage
+    /// pass and the tests' references always run this way.
+    Double,
+    /// The state u, v and the step's result stay double; the stencil of the step-start
+    /// displacement K u is taken in double, the six stages' increments over it (K (U_s - u),
+    /// the stage velocities, the slopes, the error estimate) in single precision, from
+    /// single-precision copies of the weights and 1/m. Rounding then scales with the
+    /// increment of a step, not with u (K U_s in single precision would cancel most of its
+    /// digits on a fine grid). Full steps on the row pipeline only; otherwise Double.
+    Mixed,
+};
+
+/// "double" or "mixed".
+[[nodiscard]] std::string_view to_string(Precision precision) noexcept;
+
 /// Material, integrator and threading settings (SI units). Validated by `MembraneModel::create`.
 struct MembraneSettings
 {
@@ -76,8 +94,9 @@ struct MembraneSettings
     double min_shrink = 0.2;   ///< smallest step factor after a rejection, in (0, 1)
     bool fixed_step = false;   ///< lockstep mode: every step is exactly `fixed_dt`, never rejected
     double fixed_dt = 1e-3;    ///< step of the fixed-step mode [s], > 0
-    ForceHold force_hold = ForceHold::Step;  ///< how `advance_to` holds forces between calls
-    int threads = 0;                         ///< OpenMP threads for a step; 0 = OpenMP's default
+    ForceHold force_hold = ForceHold::Step;   ///< how `advance_to` holds forces between calls
+    Precision precision = Precision::Double;  ///< arithmetic of full steps
+    int threads = 0;                          ///< OpenMP threads for a step; 0 = OpenMP's default
     int leaf_depth = -1;  ///< quad-tree depth of the parallel work split; -1 = level - 6 (64 x 64
                           ///< node leaves), clamped to 0..level
 };
@@ -160,6 +179,9 @@ public:
     /// The tick of the last re-assembly (0 after `create`).
     [[nodiscard]] std::uint64_t assembled_tick() const noexcept { return assembled_tick_; }
     void set_assembled_tick(std::uint64_t tick) noexcept { assembled_tick_ = tick; }
+    /// An id of the current weights and masses, unique over every assembly of every model in
+    /// the process (a workspace's single-precision copies follow it).
+    [[nodiscard]] std::uint64_t assembly_id() const noexcept { return assembly_id_; }
 
     /// Deformed positions p = P + u N for every in-range node (`out` is resized to ghost 0).
     void positions(const core::Field<double>& u, core::Vec3Field<double>& out) const;
@@ -182,6 +204,7 @@ private:
     std::vector<core::Vec3> bounds_;
     std::vector<core::GhostCopy> sync_;
     std::uint64_t assembled_tick_ = 0;
+    std::uint64_t assembly_id_ = 0;
 };
 
 /// Checks a settings aggregate. \return InvalidArgument naming the field and its range.

@@ -225,6 +225,18 @@ public:
     /// copies such a step syncs (those whose node it reads or keeps).
     std::vector<core::Region> keep_runs;
     std::vector<core::GhostCopy> live_sync;
+    // Full steps in mixed precision (MembraneSettings::precision, docs/physics.md §9): float
+    // copies of the model's wx, wy, wd and 1/m planes (`mixed_plane_len` floats each, the
+    // model's padded layout, in that order), made for the model's assembly `mixed_assembly`
+    // (0: none yet); and per thread the pipeline's rows in float plus a ring of K u rows. Made
+    // by the first mixed step (and after each re-assembly), by the constructor when the model
+    // asks for mixed precision.
+    std::vector<float> mixed_model;
+    std::size_t mixed_plane_len = 0;
+    std::uint64_t mixed_assembly = 0;
+    std::vector<float> mixed_buffers;
+    std::size_t mixed_buffer_len = 0;   ///< floats per thread
+    std::size_t mixed_row_len = 0;      ///< floats per buffered row
     bool use_pipeline = true;           ///< false: all steps run stage by stage (tests, benchmarks)
     std::vector<std::int64_t> touched;  ///< accel offsets written by the last force set
     std::vector<std::int64_t> end_touched;   ///< accel_end offsets written (linear hold)
