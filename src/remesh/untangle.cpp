@@ -87,6 +87,27 @@ Neighbours neighbours(std::size_t n, std::span<const mesh::Face> faces)
     return nb;
 }
 
+/// The eight directions of a compass search in the sphere's tangent plane at a point, and the
+/// trial points a step h along them.
+struct Compass
+{
+    Vec3 t1;
+    Vec3 t2;
+
+    explicit Compass(const Vec3& at)
+    {
+        const Vec3 helper = std::abs(at.x) < 0.6 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
+        t1 = core::normalized(core::cross(at, helper));
+        t2 = core::cross(at, t1);
+    }
+    /// The point a step h from s0 in direction k (0..7, 45 degrees apart), back on the sphere.
+    [[nodiscard]] Vec3 point(const Vec3& s0, int k, double h) const
+    {
+        const double angle = 0.7853981633974483 * k;
+        return core::normalized(s0 + (t1 * std::cos(angle) + t2 * std::sin(angle)) * h);
+    }
+};
+
 }  // namespace
 
 std::vector<std::uint32_t> locate_samples(const core::TetraGrid& grid,
@@ -326,9 +347,7 @@ UntangleStats untangle_samples(const core::TetraGrid& grid, const mesh::TriMesh&
     // crossings only for the best candidate of a step.
     const auto descend = [&](std::uint32_t v, const Vec3& c, double reach2, double lim)
     {
-        const Vec3 helper = std::abs(s[v].x) < 0.6 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
-        const Vec3 t1 = core::normalized(core::cross(s[v], helper));
-        const Vec3 t2 = core::cross(s[v], t1);
+        const Compass compass(s[v]);
         double h = 0.25 * lim;
         double e0 = energy(v);
         std::array<std::pair<double, int>, 8> cand{};
@@ -338,9 +357,7 @@ UntangleStats untangle_samples(const core::TetraGrid& grid, const mesh::TriMesh&
             std::size_t n = 0;
             for (int k = 0; k < 8; ++k)
             {
-                const double angle = 0.7853981633974483 * k;
-                const Vec3 sn =
-                    core::normalized(s0 + (t1 * std::cos(angle) + t2 * std::sin(angle)) * h);
+                const Vec3 sn = compass.point(s0, k, h);
                 try_move(v, sn,
                          [&](std::uint32_t w)
                          {
@@ -358,9 +375,7 @@ UntangleStats untangle_samples(const core::TetraGrid& grid, const mesh::TriMesh&
             bool moved_here = false;
             for (std::size_t i = 0; i < n && !moved_here; ++i)
             {
-                const double angle = 0.7853981633974483 * cand[i].second;
-                const Vec3 sn =
-                    core::normalized(s0 + (t1 * std::cos(angle) + t2 * std::sin(angle)) * h);
+                const Vec3 sn = compass.point(s0, cand[i].second, h);
                 moved_here = try_move(v, sn,
                                       [&](std::uint32_t w)
                                       {
@@ -469,9 +484,7 @@ UntangleStats untangle_samples(const core::TetraGrid& grid, const mesh::TriMesh&
         // only a star that crosses something or is folded searches further
         if (current.crossings == 0 && current.quality > 0.0)
             return;
-        const Vec3 helper = std::abs(s[v].x) < 0.6 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
-        const Vec3 t1 = core::normalized(core::cross(s[v], helper));
-        const Vec3 t2 = core::cross(s[v], t1);
+        const Compass compass(s[v]);
         double h = 0.5 * lim;
         for (int iter = 0; iter < 12 && h > lim / 128.0; ++iter)
         {
@@ -482,9 +495,7 @@ UntangleStats untangle_samples(const core::TetraGrid& grid, const mesh::TriMesh&
             Vec3 best_s = s0;
             for (int k = 0; k < 8; ++k)
             {
-                const double angle = 0.7853981633974483 * k;
-                const Vec3 sn =
-                    core::normalized(s0 + (t1 * std::cos(angle) + t2 * std::sin(angle)) * h);
+                const Vec3 sn = compass.point(s0, k, h);
                 try_move(v, sn,
                          [&](std::uint32_t w)
                          {

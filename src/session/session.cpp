@@ -3209,6 +3209,9 @@ core::Result<std::unique_ptr<Session>> Session::host(net::Transport& transport,
         return core::fail(r.error().code, r.error().message);
     sim::MembraneSettings m = material;
     m.threads = settings.threads;
+    // Every peer steps in double (docs/physics.md §9): the model blob carries no precision, and
+    // exact coupling equals one process's double steps bit for bit.
+    m.precision = sim::Precision::Double;
     if (settings.coupling == Coupling::Exact)
     {
         // Lockstep needs a common fixed step, and re-assembly would need the whole state.

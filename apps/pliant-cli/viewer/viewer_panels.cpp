@@ -143,6 +143,10 @@ void Viewer::draw_panels()
                 ImGui::InputDouble("dt [s]", &material_.fixed_dt, 1e-4, 1e-3, "%.2e");
             else
                 ImGui::InputDouble("rtol", &material_.rtol, 1e-5, 1e-4, "%.1e");
+            // Float increments over the double state: ~1.6x faster steps (docs/physics.md §9).
+            bool mixed = material_.precision == sim::Precision::Mixed;
+            if (ImGui::Checkbox("mixed precision", &mixed))
+                material_.precision = mixed ? sim::Precision::Mixed : sim::Precision::Double;
             if (ImGui::Button("apply"))
             {
                 if (auto ok = local_->set_settings(material_); !ok)
