@@ -8,7 +8,7 @@ if(TARGET pliant)
     add_test(NAME cli_bench_unknown_suite
              COMMAND pliant bench subdiv nosuch --out ${CMAKE_CURRENT_BINARY_DIR}/bench-unknown)
     set_tests_properties(cli_bench_unknown_suite PROPERTIES
-        PASS_REGULAR_EXPRESSION "unknown suite 'nosuch' \\(suites: subdiv net sim session")
+        PASS_REGULAR_EXPRESSION "unknown suite 'nosuch' \\(suites: subdiv net sim mixed session")
     add_test(NAME cli_bench_missing_program
              COMMAND pliant bench net --bench-dir ${CMAKE_CURRENT_BINARY_DIR}/no-such-bench-dir
                      --out ${CMAKE_CURRENT_BINARY_DIR}/bench-missing)

@@ -41,8 +41,8 @@ class DynamicsIn : public ::testing::TestWithParam<Precision>
 
 INSTANTIATE_TEST_SUITE_P(Precision, DynamicsIn,
                          ::testing::Values(Precision::Double, Precision::Mixed),
-                         [](const ::testing::TestParamInfo<Precision>& info)
-                         { return std::string(to_string(info.param)); });
+                         [](const ::testing::TestParamInfo<Precision>& p)
+                         { return std::string(to_string(p.param)); });
 
 TEST_P(DynamicsIn, SphericalHarmonicFrequencies)
 {
