@@ -6,16 +6,20 @@
 // still exists and says what to install.
 #include "cli_common.h"
 #include "commands.h"
+#include "peer_files.h"
 
 #ifdef PLIANT_HAVE_VIEWER
+#include "viewer/sim_scene.h"
 #include "viewer/viewer.h"
 #endif
 
 #include <spdlog/spdlog.h>
 
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <string>
+#include <utility>
 
 namespace pliant::cli
 {
@@ -36,6 +40,7 @@ struct ViewOptions
     std::uint16_t port = 0;
     bool no_vsync = false;
     bool hide_panels = false;
+    std::string resume;  ///< a saved state of INPUT to start the local simulation from
 };
 
 int run_view(const ViewOptions& opt)
@@ -48,8 +53,32 @@ int run_view(const ViewOptions& opt)
         w < 64 || h < 64 || w > 8192 || h > 8192)
         return report({core::ErrorCode::InvalidArgument,
                        "view: --size " + opt.size + " is not WxH with 64 <= W, H <= 8192"});
+    std::shared_ptr<const sim::MembraneState> resume_state;
+    if (!opt.resume.empty())
+    {
+        // Checked before any window opens: INPUT must be the rest grid the state belongs to.
+        if (std::filesystem::path(opt.input).extension() != ".pgrid")
+            return report(
+                {core::ErrorCode::InvalidArgument,
+                 "view: --resume needs INPUT to be the rest grid (.pgrid) the state "
+                 "was simulated on" +
+                     (opt.input.empty() ? std::string() : std::string(", not ") + opt.input)});
+        auto rest = load_rest_geometry("view", opt.input, opt.level, 1.0, "equal-area");
+        if (!rest)
+            return report(rest.error());
+        auto model = sim::MembraneModel::create(rest->grid, rest->positions,
+                                                viewer::default_material(rest->grid.level()));
+        if (!model)
+            return report(model.error());
+        auto saved = load_saved_state(opt.resume, *model);
+        if (!saved)
+            return report(saved.error());
+        resume_state = std::make_shared<const sim::MembraneState>(std::move(*saved));
+    }
     viewer::ViewerOptions v;
     v.input = opt.input;
+    v.resume = opt.resume;
+    v.resume_state = std::move(resume_state);
     v.bundled_mesh = bundled_mesh();
     v.level = opt.level;
     v.display_level = opt.display_level;
@@ -92,6 +121,7 @@ void add_view_command(CLI::App& app, const GlobalOptions& global)
         "  pliant view                                   # the bundled cow, level 6\n"
         "  pliant view spot.pgrid --display-level 8\n"
         "  pliant view 127.0.0.1:7777 --participant\n"
+        "  pliant view spot.pgrid --resume end.pgrid     # go on from a saved state\n"
         "  xvfb-run -a pliant view grid.pgrid --script drag.txt --screenshot v.png "
         "--exit-after 3");
     cmd->add_option("INPUT", opt->input, "GRID (.pgrid), MESH, or HOST:PORT");
@@ -119,6 +149,11 @@ void add_view_command(CLI::App& app, const GlobalOptions& global)
         ->capture_default_str();
     cmd->add_flag("--no-vsync", opt->no_vsync, "Draw as fast as possible (for measuring fps)");
     cmd->add_flag("--hide-panels", opt->hide_panels, "Start with the panels hidden (H toggles)");
+    cmd->add_option("--resume", opt->resume,
+                    "Start the simulation of INPUT (its rest grid, .pgrid) from a saved state "
+                    "(a --save of `host`/`join`, a `simulate` frame, demo's final.pgrid, "
+                    "`replay -o`) instead of at rest")
+        ->check(CLI::ExistingFile);
     cmd->callback(command_callback(global, [opt]() -> int { return run_view(*opt); }));
 }
 

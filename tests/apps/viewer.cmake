@@ -67,6 +67,62 @@ if(TARGET pliant AND PLIANT_HAVE_VIEWER AND PLIANT_XVFB)
              COMMAND ${CMAKE_COMMAND} -DPNG=${_demo_view_png} -DMIN_BYTES=8000
                      -P ${CMAKE_CURRENT_SOURCE_DIR}/viewer_check_png.cmake)
     set_tests_properties(cli_demo_view_png PROPERTIES FIXTURES_REQUIRED demo_view_png)
+    # --resume (docs/viewer.md): a level-3 spot grid, simulated with the spot scenario; the viewer
+    # started from frame 30 (spot.toml's first pull has just ended) shows a surface displaced by
+    # more than 0.5 % of its radius from its first frame, where the same grid alone starts at
+    # rest (0.000 %, the drag test's runs before their drag). Refused before any window opens:
+    # the state given as INPUT (it would become the rest shape), a mesh as INPUT, a rest grid of
+    # another level.
+    set(_resume_dir ${CMAKE_CURRENT_BINARY_DIR}/view-resume)
+    add_test(NAME cli_view_resume_prepare_grid
+             COMMAND pliant remesh ${PROJECT_SOURCE_DIR}/data/spot.obj --level 3
+                     -o ${_resume_dir}-spot3.pgrid)
+    set_tests_properties(cli_view_resume_prepare_grid PROPERTIES
+        TIMEOUT 120 FIXTURES_SETUP view_resume_grid)
+    add_test(NAME cli_view_resume_prepare_state
+             COMMAND pliant simulate ${_resume_dir}-spot3.pgrid
+                     --scenario ${PROJECT_SOURCE_DIR}/scenes/spot.toml -o ${_resume_dir}-sim -j 1)
+    set_tests_properties(cli_view_resume_prepare_state PROPERTIES
+        TIMEOUT 120 FIXTURES_REQUIRED view_resume_grid FIXTURES_SETUP view_resume_state)
+    set(_resume_state ${_resume_dir}-sim/frame_00030.pgrid)
+    add_test(NAME cli_view_resume_starts_from_the_state
+             COMMAND ${CMAKE_COMMAND}
+                     "-DCOMMAND=${_xvfb};$<TARGET_FILE:pliant>;view;${_resume_dir}-spot3.pgrid;--resume;${_resume_state};--size;320x240;--exit-after;0.5"
+                     -DEXIT=0
+                     "-DSTDOUT_REGEX=largest \\|u\\| reached [0-9.e+-]+ m = ([1-9][0-9]*|0\\.[5-9][0-9]*)\\.?[0-9]* % of the object radius"
+                     "-DSTDERR_REGEX=spot3.pgrid \\(level 3 grid\\), resumed from frame_00030.pgrid"
+                     -DTIMEOUT=110 -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+    set_tests_properties(cli_view_resume_starts_from_the_state PROPERTIES
+        TIMEOUT 120
+        FIXTURES_REQUIRED view_resume_state
+        ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0;LIBGL_ALWAYS_SOFTWARE=1;OMP_NUM_THREADS=1")
+    set(_resume_refusals
+        state_as_input "${_resume_state}" "holds a simulated state \\(channels u and v\\).*pliant view REST.pgrid --resume"
+        mesh_as_input "${PROJECT_SOURCE_DIR}/data/spot.obj" "--resume needs INPUT to be the rest grid \\(.pgrid\\) the state was simulated on, not .*spot.obj"
+        other_level "${_resume_dir}-spot4.pgrid" "a state of level 3, but the rest grid is of level 4")
+    add_test(NAME cli_view_resume_prepare_other_level
+             COMMAND pliant remesh ${PROJECT_SOURCE_DIR}/data/spot.obj --level 4
+                     -o ${_resume_dir}-spot4.pgrid)
+    set_tests_properties(cli_view_resume_prepare_other_level PROPERTIES
+        TIMEOUT 120 FIXTURES_SETUP view_resume_other_level)
+    list(LENGTH _resume_refusals _n)
+    math(EXPR _last "${_n} - 1")
+    foreach(_i RANGE 0 ${_last} 3)
+        math(EXPR _j "${_i} + 1")
+        math(EXPR _k "${_i} + 2")
+        list(GET _resume_refusals ${_i} _name)
+        list(GET _resume_refusals ${_j} _input)
+        list(GET _resume_refusals ${_k} _regex)
+        add_test(NAME cli_view_resume_refuses_${_name}
+                 COMMAND ${CMAKE_COMMAND}
+                         "-DCOMMAND=$<TARGET_FILE:pliant>;view;${_input};--resume;${_resume_state}"
+                         -DEXIT=1 "-DSTDERR_REGEX=${_regex}" -DTIMEOUT=50
+                         -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+        set_tests_properties(cli_view_resume_refuses_${_name} PROPERTIES
+            TIMEOUT 60
+            FIXTURES_REQUIRED "view_resume_state;view_resume_other_level"
+            ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0")
+    endforeach()
     # A join that cannot reach its master (UDP port 9 on this machine: nothing answers) must say
     # so and, in a scripted run, exit with status 1 within ENet's connection timeout (about 5 s),
     # not wait for --exit-after's 300 s grace.

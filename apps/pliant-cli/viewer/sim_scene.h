@@ -27,6 +27,7 @@
 #include <memory>
 #include <optional>
 #include <span>
+#include <utility>
 #include <vector>
 
 namespace pliant::viewer
@@ -53,6 +54,8 @@ public:
     core::Result<void> set_settings(const sim::MembraneSettings& settings);
     /// Back to rest.
     void reset();
+    /// Goes on from `state` (of this model's grid, ghosts synced).
+    void set_state(sim::MembraneState state) { state_ = std::move(state); }
 
     [[nodiscard]] const sim::MembraneModel& model() const noexcept { return *model_; }
     [[nodiscard]] const sim::MembraneState& state() const noexcept { return state_; }

@@ -300,6 +300,16 @@ void Viewer::start_local(LoadedSurface surface)
     local_.emplace(std::move(*sim));
     surface_name_ = surface.description;
     set_status(surface.description, false);
+    // --resume: the first surface (the rest grid the caller checked the state against) goes on
+    // from the saved state; a surface loaded later starts at rest.
+    if (options_.resume_state && !resume_applied_ &&
+        options_.resume_state->u.level() == surface.grid.level())
+    {
+        local_->set_state(*options_.resume_state);
+        resume_applied_ = true;
+        surface_name_ += ", resumed from " + options_.resume.filename().string();
+        set_status(surface_name_, false);
+    }
     surface_.emplace(std::move(surface));
     rest_bounds_.reset();
     shown_owner_level_ = -1;

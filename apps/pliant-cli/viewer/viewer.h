@@ -7,7 +7,13 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <string>
+
+namespace pliant::sim
+{
+struct MembraneState;
+}
 
 namespace pliant::viewer
 {
@@ -31,6 +37,10 @@ struct ViewerOptions
     bool vsync = true;
     bool hide_panels = false;
     bool owner_colors = false;  ///< start in owner colours (default: displacement; C cycles)
+    /// A saved state of `input` (its rest grid), checked by the caller, that the first local
+    /// simulation starts from; `resume` names its file.
+    std::shared_ptr<const sim::MembraneState> resume_state;
+    std::filesystem::path resume;
 };
 
 /// Runs the viewer until the window closes or `exit_after`. \return the process exit code.
