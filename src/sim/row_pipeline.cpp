@@ -772,6 +772,9 @@ void prepare_mixed(const MembraneModel& model, Rkf45Workspace& ws)
     const core::Field<double>* planes[4] = {&model.weight_x(), &model.weight_y(), &model.weight_d(),
                                             &model.inverse_mass()};
     const std::size_t n = planes[0]->padded().size();
+    for (const core::Field<double>* plane : planes)
+        PLIANT_ASSERT(plane->padded().size() == n && plane->stride() == planes[0]->stride(),
+                      "prepare_mixed: the model's planes differ in layout");
     if (ws.mixed_assembly != model.assembly_id() || ws.mixed_plane_len != n)
     {
         ws.mixed_plane_len = n;

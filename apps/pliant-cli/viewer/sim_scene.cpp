@@ -23,6 +23,9 @@ sim::MembraneSettings default_material(int level)
     ms.rtol = 1e-4;
     // Below level 8 a step is too short to share between threads (cmd_demo.cpp measured it).
     ms.threads = level >= 8 ? 0 : 1;
+    // From level 8 on a step costs milliseconds: float increments make it ~1.6x faster
+    // (docs/physics.md §9); the panel's switch turns them off.
+    ms.precision = level >= 8 ? sim::Precision::Mixed : sim::Precision::Double;
     return ms;
 }
 
