@@ -121,12 +121,12 @@ template <int S>
     return value;
 }
 
-// V_S = v + h sum_{m < S} a_{S,m} kv_m at one node, from its slopes kk[0..S-1].
-template <int S>
-[[gnu::always_inline]] inline double stage_velocity(const Coeffs& c, double v,
-                                                    const double (&kk)[5]) noexcept
+// V_S = v + h sum_{m < S} a_{S,m} kv_m at one node, from its slopes kk[0..S-1]. C is Coeffs with
+// T = double, or the float coefficients of a mixed-precision step (row_pipeline.cpp).
+template <int S, class C, class T>
+[[gnu::always_inline]] inline T stage_velocity(const C& c, T v, const T (&kk)[5]) noexcept
 {
-    double vel = v;
+    T vel = v;
     for (int m = 0; m < S; ++m)
         vel = vel + c.cv[S][m] * kk[m];
     return vel;
@@ -134,8 +134,9 @@ template <int S>
 
 // The slope kv_S = -beta V_S - k_f U_S - (K U_S) / m + f at one node, from V_S, U_S, 1/m, the
 // stencil's K U_S and the force acceleration f (acc + ft_S rate, or +0.0 where there is none).
-[[gnu::always_inline]] inline double stage_slope(const StageConstants& k, double vel, double uc,
-                                                 double inv_m, double ku, double f) noexcept
+// K is StageConstants with T = double, or a mixed-precision step's float constants.
+template <class K, class T>
+[[gnu::always_inline]] inline T stage_slope(const K& k, T vel, T uc, T inv_m, T ku, T f) noexcept
 {
     return ((-k.beta * vel - k.k_f * uc) - inv_m * ku) + f;
 }

@@ -532,23 +532,6 @@ template <int S>
     return d;
 }
 
-template <int S>
-[[gnu::always_inline]] inline float mixed_velocity(const MixedCoeffs& c, float v,
-                                                   const float (&kk)[5]) noexcept
-{
-    float vel = v;
-    for (int m = 0; m < S; ++m)
-        vel = vel + c.cv[S][m] * kk[m];
-    return vel;
-}
-
-// The slope kv_S = -beta V_S - k_f (u + D_S) - (K u + K D_S) / m + f.
-[[gnu::always_inline]] inline float mixed_slope(const MixedCoeffs& c, float vel, float uc,
-                                                float inv_m, float ku, float f) noexcept
-{
-    return ((-c.beta * vel - c.k_f * uc) - inv_m * ku) + f;
-}
-
 // update_node with float slopes: the increments of u and v and the error estimate in float,
 // u_new and v_new in double; the error norm's max kept as the bits of a non-negative float.
 [[gnu::always_inline]] inline void mixed_update(const MixedCoeffs& c, double u0, double v0,
@@ -693,21 +676,21 @@ double mixed_pair_row(const Inputs& in, const Coeffs& cd, const MixedCoeffs& c, 
         }
         float sa = 0.0F;
         if constexpr (A == 0)
-            sa = mixed_slope(c, vf, uf, inv_m[x], ku, fa);
+            sa = stage_slope(c, vf, uf, inv_m[x], ku, fa);
         else
         {
-            const float vel = mixed_velocity<A>(c, vf, kk);
+            const float vel = stage_velocity<A>(c, vf, kk);
             const float dc = ac[x];
             const float kd = stencil(dc, ac[x + 1], ac[x - 1], an[x], ap[x], an[x + 1], ap[x - 1],
                                      wx[x], wx[x - 1], wy[x], wyb[x], wd[x], wdb[x - 1]);
-            sa = mixed_slope(c, vel, uf + dc, inv_m[x], ku + kd, fa);
+            sa = stage_slope(c, vel, uf + dc, inv_m[x], ku + kd, fa);
         }
         kk[A] = sa;
-        const float vel_b = mixed_velocity<B>(c, vf, kk);
+        const float vel_b = stage_velocity<B>(c, vf, kk);
         const float dcb = bc[x];
         const float kdb = stencil(dcb, bc[x + 1], bc[x - 1], bn[x], bp[x], bn[x + 1], bp[x - 1],
                                   wx[x], wx[x - 1], wy[x], wyb[x], wd[x], wdb[x - 1]);
-        const float sb = mixed_slope(c, vel_b, uf + dcb, inv_m[x], ku + kdb, fb);
+        const float sb = stage_slope(c, vel_b, uf + dcb, inv_m[x], ku + kdb, fb);
         if constexpr (P < 4)
         {
             out_a[x] = sa;
