@@ -128,6 +128,38 @@ TEST(Precision, OneMixedStepIsTheDoubleStepToTheRoundingOfItsChange)
             }
 }
 
+TEST(Precision, SmallGridsToo)
+{
+    // The coarsest grids (3 to 33 rows) on one and two threads: the ring rows, the band split and
+    // the twin and ghost copies at their smallest.
+    for (int level = 1; level <= 5; ++level)
+        for (const int threads : {1, 2})
+        {
+            MembraneSettings set = material(Precision::Double);
+            set.fixed_step = true;
+            set.fixed_dt = 1e-3;
+            set.threads = threads;
+            MembraneModel md = test::sphere_model(level, set);
+            set.precision = Precision::Mixed;
+            MembraneModel mm = test::sphere_model(level, set);
+            const MembraneState start = moving_state(md);
+            MembraneState sd = start;
+            MembraneState sm = start;
+            Rkf45Workspace wd(md, threads);
+            Rkf45Workspace wm(mm, threads);
+            // The point force and a face every level has (level 1: 16 faces).
+            const Force forces[2] = {k_forces[0], {3, {}, 0.0, {1.0, 0.0, 0.5}}};
+            for (int k = 0; k < 5; ++k)
+            {
+                (void)step(md, sd, wd, forces);
+                (void)step(mm, sm, wm, forces);
+            }
+            const Gap g = gap(md, sm.u, sd.u, start.u);
+            EXPECT_LT(g.diff, 1e-5 * g.change) << "level " << level << ", threads " << threads;
+            EXPECT_GT(g.change, 0.0) << "level " << level;
+        }
+}
+
 TEST(Precision, MixedRunWithReassemblyFollowsTheDoubleRun)
 {
     MembraneSettings set = material(Precision::Double);
