@@ -79,6 +79,19 @@ core::Result<void> validate(const MembraneSettings& s)
         return r;
     if (auto r = check(s.atol > 0.0 && std::isfinite(s.atol), "atol must be > 0"); !r)
         return r;
+    // A mixed step computes in float, whose smallest normal number is 1.2e-38 (denormals flush
+    // to zero during a step): its error norm divides by atol + rtol |y|, and its coefficients
+    // scale with h^2.
+    if (auto r = check(s.precision != Precision::Mixed || s.atol >= 1e-30,
+                       "atol must be >= 1e-30 with precision mixed (its error norm is a float)");
+        !r)
+        return r;
+    if (auto r =
+            check(s.precision != Precision::Mixed || (s.dt_min >= 1e-12 && s.fixed_dt >= 1e-12),
+                  "dt_min and fixed_dt must be >= 1e-12 s with precision mixed (its "
+                  "coefficients, h^2 times the tableau's, are floats)");
+        !r)
+        return r;
     if (auto r = check(s.dt_min > 0.0 && s.dt_max >= s.dt_min && std::isfinite(s.dt_max),
                        "need 0 < dt_min <= dt_max");
         !r)

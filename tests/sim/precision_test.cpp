@@ -17,6 +17,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <string>
 #include <vector>
 
 namespace pliant::sim
@@ -126,6 +127,27 @@ TEST(Precision, OneMixedStepIsTheDoubleStepToTheRoundingOfItsChange)
                 EXPECT_LT(std::fabs(rm.error - rd.error), 1e-3 * rd.error + floor)
                     << "h " << h << ", ramp " << ramp;
             }
+}
+
+TEST(Precision, MixedRefusesTolerancesAndStepsBelowFloatRange)
+{
+    MembraneSettings set = material(Precision::Mixed);
+    set.atol = 1e-35;
+    const auto refused = validate(set);
+    ASSERT_FALSE(refused.has_value());
+    EXPECT_NE(refused.error().message.find("atol must be >= 1e-30 with precision mixed"),
+              std::string::npos)
+        << refused.error().message;
+    set.precision = Precision::Double;
+    EXPECT_TRUE(validate(set).has_value());
+    set.precision = Precision::Mixed;
+    set.atol = 1e-30;
+    EXPECT_TRUE(validate(set).has_value());
+    set.dt_min = 1e-13;
+    const auto tiny_step = validate(set);
+    ASSERT_FALSE(tiny_step.has_value());
+    EXPECT_NE(tiny_step.error().message.find("dt_min and fixed_dt must be >= 1e-12 s"),
+              std::string::npos);
 }
 
 TEST(Precision, SmallGridsToo)
