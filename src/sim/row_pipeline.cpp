@@ -76,11 +76,6 @@ constexpr int k_kv_ghost_row = k_stored * k_ring;
 constexpr int k_U_row = k_kv_ghost_row + 2 * k_stored;
 constexpr int k_rows_per_thread = k_U_row + 3 * 6;
 
-// Rows start 64 bytes (k_pad doubles, or twice as many floats) before grid x = 0, so that x = 0
-// of every buffered row is 64-byte aligned (one cache line: AVX-512 loads of x .. x + 7 then
-// touch one line, not two).
-constexpr std::size_t k_pad = 8;
-
 // A mixed-precision step (rkf45.h) also keeps the rows of K u (written by the first pair, read
 // by the later ones at their own node) in a ring after the others.
 constexpr int k_ku_row = k_rows_per_thread;
@@ -91,6 +86,9 @@ constexpr int k_rows_per_thread_mixed = k_rows_per_thread + k_ring;
 template <class T>
 struct BandRows
 {
+    // Rows start `pad` values (64 bytes) before grid x = 0, so that x = 0 of every buffered row
+    // is 64-byte aligned (one cache line: AVX-512 loads of x .. x + 7 then touch one line, not
+    // two).
     static constexpr std::size_t pad = 64 / sizeof(T);
     T* base;
     std::size_t len;
@@ -786,7 +784,8 @@ void plan_pipeline(const MembraneModel& model, Rkf45Workspace& ws)
     const int nx = g.nx();
     const int ny = g.ny();
     const std::ptrdiff_t stride = nx + 2;
-    ws.pipeline_row_len = (k_pad + static_cast<std::size_t>(nx) + 1 + 7) / 8 * 8;
+    constexpr std::size_t pad = BandBuffers::pad;
+    ws.pipeline_row_len = (pad + static_cast<std::size_t>(nx) + 1 + pad - 1) / pad * pad;
     ws.pipeline_buffer_len = static_cast<std::size_t>(k_rows_per_thread) * ws.pipeline_row_len;
     // + 8: room to align the first row to 64 bytes (aligned_rows).
     ws.pipeline_buffers.assign(
