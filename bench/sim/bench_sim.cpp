@@ -166,7 +166,10 @@ int main(int argc, char** argv)
         else if (a == sim::to_string(sim::ForceHold::Step))
             hold = sim::ForceHold::Step;
         else if (a == sim::to_string(sim::Precision::Mixed))
+        {
             precision = sim::Precision::Mixed;
+            report.set_suite("mixed");  // `pliant bench mixed`
+        }
         else if (numbers.size() == 3 || (a.starts_with('-') && !bench::parse_number(a)))
             return usage.unexpected(a);
         else

@@ -67,6 +67,9 @@ if(PLIANT_BUILD_BENCH AND EXISTS ${PROJECT_SOURCE_DIR}/bench/CMakeLists.txt)
                           8 1 9)
         pliant_bench_args(bench_args_sim_unknown_option pliant_bench_sim 2 STDERR
                           "^pliant_bench_sim: unknown option '--levels'" --levels 8)
+        # `mixed` runs the steps in mixed precision and says so (levels 3..3, timing only).
+        pliant_bench_args(bench_args_sim_mixed pliant_bench_sim 0 STDOUT
+                          "precision of full steps: mixed.*step,3,1," 3 0 3 mixed kernel)
     endif()
     if(EXISTS ${PROJECT_SOURCE_DIR}/bench/net/CMakeLists.txt)
         pliant_bench_args(bench_args_net_help bench_net 0 STDOUT
