@@ -590,6 +590,46 @@ void warn_unstable_step(const Scenario& sc, const sim::MembraneModel& model,
             s.dt_min / stable, stable, stable);
 }
 
+// Mixed precision (docs/physics.md §9): the values of the step mode in use below the float
+// range are refused here, naming the key and its line (the library refuses them too, without
+// them); tolerances tight enough for the float rounding of the slopes to steer the step size
+// are warned about.
+core::Result<void> check_mixed_precision(const Scenario& sc, const std::filesystem::path& path,
+                                         bool from_command_line)
+{
+    const sim::MembraneSettings& s = sc.settings;
+    if (s.precision != sim::Precision::Mixed)
+        return {};
+    const std::string why = from_command_line ? "--precision mixed" : "precision = \"mixed\"";
+    const auto below =
+        [&](const char* key, double value, double least, const char* unit, const char* reason)
+    {
+        const std::string name = std::string("integrator.") + key;
+        return core::Error{core::ErrorCode::BadScenario,
+                           key_at(sc, path, name) + " = " + fmt_number(value) + unit +
+                               default_note(sc, name) + " is below " + fmt_number(least) + unit +
+                               ", the least " + why + " allows (" + reason +
+                               "); raise it, or use precision = \"double\""};
+    };
+    const char* coefficients = "its coefficients, h^2 times the tableau's, are floats";
+    if (s.fixed_step && s.fixed_dt < 1e-12)
+        return below("fixed_dt", s.fixed_dt, 1e-12, " s", coefficients);
+    if (!s.fixed_step && s.dt_min < 1e-12)
+        return below("dt_min", s.dt_min, 1e-12, " s", coefficients);
+    if (!s.fixed_step && s.atol < 1e-30)
+        return below("atol", s.atol, 1e-30, "", "its error norm is a float");
+    if (!s.fixed_step && s.rtol < 1e-9)
+        spdlog::warn(
+            "{} = {}{} with {}: the error estimate comes from float slopes, whose "
+            "rounding (~1e-7 of a step's change) the step-size control follows below "
+            "rtol ~1e-9: such runs can take 10-1000x the steps of precision \"double\" "
+            "for no better result; use \"double\" for tolerances this tight "
+            "(docs/physics.md §9)",
+            key_at(sc, path, "integrator.rtol"), fmt_number(s.rtol),
+            default_note(sc, "integrator.rtol"), why);
+    return {};
+}
+
 int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
 {
     auto scenario = parse_scenario(opt.scenario);
@@ -602,6 +642,8 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
         sc.settings.precision = opt.precision == sim::to_string(sim::Precision::Mixed)
                                     ? sim::Precision::Mixed
                                     : sim::Precision::Double;
+    if (auto ok = check_mixed_precision(sc, opt.scenario, !opt.precision.empty()); !ok)
+        return report(ok.error());
 
     // Rest geometry: a grid file, or a sphere.
     auto geometry =
@@ -772,9 +814,14 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
         spdlog::warn(
             "{} = {:.3g} s{}: {} of {} steps were taken at dt_min with the error above "
             "the tolerance (flag 2 in energy.csv): the results may be inaccurate, or "
-            "diverging; lower dt_min",
+            "diverging; {}",
             key_at(sc, opt.scenario, "integrator.dt_min"), sc.settings.dt_min,
-            default_note(sc, "integrator.dt_min"), total_at_min, total_steps);
+            default_note(sc, "integrator.dt_min"), total_at_min, total_steps,
+            sc.settings.precision == sim::Precision::Mixed
+                ? "with precision \"mixed\" a tight rtol makes the float rounding of the "
+                  "slopes look like error (docs/physics.md §9): use precision \"double\", or "
+                  "lower dt_min (down to 1e-12 s)"
+                : "lower dt_min");
     return 0;
 }
 

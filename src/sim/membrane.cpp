@@ -81,15 +81,21 @@ core::Result<void> validate(const MembraneSettings& s)
         return r;
     // A mixed step computes in float, whose smallest normal number is 1.2e-38 (denormals flush
     // to zero during a step): its error norm divides by atol + rtol |y|, and its coefficients
-    // scale with h^2.
-    if (auto r = check(s.precision != Precision::Mixed || s.atol >= 1e-30,
+    // scale with h^2. Only the values the step mode uses are checked.
+    const bool mixed = s.precision == Precision::Mixed;
+    const bool adaptive = !s.fixed_step;
+    if (auto r = check(!mixed || !adaptive || s.atol >= 1e-30,
                        "atol must be >= 1e-30 with precision mixed (its error norm is a float)");
         !r)
         return r;
-    if (auto r =
-            check(s.precision != Precision::Mixed || (s.dt_min >= 1e-12 && s.fixed_dt >= 1e-12),
-                  "dt_min and fixed_dt must be >= 1e-12 s with precision mixed (its "
-                  "coefficients, h^2 times the tableau's, are floats)");
+    if (auto r = check(!mixed || !adaptive || s.dt_min >= 1e-12,
+                       "dt_min must be >= 1e-12 s with precision mixed (its coefficients, h^2 "
+                       "times the tableau's, are floats)");
+        !r)
+        return r;
+    if (auto r = check(!mixed || adaptive || s.fixed_dt >= 1e-12,
+                       "fixed_dt must be >= 1e-12 s with precision mixed (its coefficients, h^2 "
+                       "times the tableau's, are floats)");
         !r)
         return r;
     if (auto r = check(s.dt_min > 0.0 && s.dt_max >= s.dt_min && std::isfinite(s.dt_max),

@@ -55,6 +55,22 @@ if(TARGET pliant)
                      "-DREGEX=bad_precision.toml:8: 'integrator.precision' must be one of: double, mixed"
                      -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_failure.cmake)
     set_tests_properties(cli_simulate_refuses_unknown_precision PROPERTIES TIMEOUT 60)
+    # Mixed precision's float range: an atol below it is refused naming the key, its line and the
+    # way out; with fixed steps atol and dt_min are not used, so the run only warns that they have
+    # no effect; a tolerance tight enough for the slopes' float rounding to steer the steps is
+    # warned about (docs/physics.md §9).
+    add_test(NAME cli_simulate_refuses_mixed_atol_below_float
+             COMMAND ${CMAKE_COMMAND}
+                     "-DCOMMAND=$<TARGET_FILE:pliant>;simulate;--scenario;${PROJECT_SOURCE_DIR}/tests/data/scenarios/mixed_atol.toml;-o;${CMAKE_CURRENT_BINARY_DIR}/simulate-mixed-atol;--level;3"
+                     "-DREGEX=mixed_atol.toml:8: 'integrator.atol' = 1e-35 is below 1e-30, the least precision = \"mixed\" allows .*use precision = \"double\""
+                     -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_failure.cmake)
+    set_tests_properties(cli_simulate_refuses_mixed_atol_below_float PROPERTIES TIMEOUT 60)
+    pliant_cli_expect(cli_simulate_mixed_fixed_steps_ignore_atol 0 STDERR
+                      "mixed_fixed_ignores_atol.toml:10: 'integrator.atol' has no effect with 'fixed_step = true'"
+                      simulate --scenario ${PROJECT_SOURCE_DIR}/tests/data/scenarios/mixed_fixed_ignores_atol.toml -o ${CMAKE_CURRENT_BINARY_DIR}/simulate-mixed-fixed --level 3 -j 1)
+    pliant_cli_expect(cli_simulate_mixed_warns_tight_rtol 0 STDERR
+                      "mixed_tight.toml:8: 'integrator.rtol' = 1e-10 with precision = \"mixed\": the error estimate comes from float slopes"
+                      simulate --scenario ${PROJECT_SOURCE_DIR}/tests/data/scenarios/mixed_tight.toml -o ${CMAKE_CURRENT_BINARY_DIR}/simulate-mixed-tight --level 3 -j 1)
     # --precision mixed reaches the integrator (the summary names the precision the run used).
     add_test(NAME cli_simulate_pull_mixed
              COMMAND pliant simulate --scenario ${PROJECT_SOURCE_DIR}/scenes/pull.toml

@@ -146,8 +146,20 @@ TEST(Precision, MixedRefusesTolerancesAndStepsBelowFloatRange)
     set.dt_min = 1e-13;
     const auto tiny_step = validate(set);
     ASSERT_FALSE(tiny_step.has_value());
-    EXPECT_NE(tiny_step.error().message.find("dt_min and fixed_dt must be >= 1e-12 s"),
-              std::string::npos);
+    EXPECT_NE(tiny_step.error().message.find("dt_min must be >= 1e-12 s"), std::string::npos);
+    // Only the values the step mode uses: fixed steps ignore atol and dt_min, adaptive ones
+    // fixed_dt.
+    set.fixed_step = true;
+    set.atol = 1e-35;
+    EXPECT_TRUE(validate(set).has_value());
+    set.fixed_dt = 1e-13;
+    const auto tiny_fixed = validate(set);
+    ASSERT_FALSE(tiny_fixed.has_value());
+    EXPECT_NE(tiny_fixed.error().message.find("fixed_dt must be >= 1e-12 s"), std::string::npos);
+    set.fixed_step = false;
+    set.atol = 1e-8;
+    set.dt_min = 1e-7;
+    EXPECT_TRUE(validate(set).has_value());
 }
 
 TEST(Precision, SmallGridsToo)
