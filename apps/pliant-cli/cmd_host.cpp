@@ -58,7 +58,8 @@ struct HostOptions
 
 int run_host(const HostOptions& opt)
 {
-    auto geometry = load_rest_geometry("host", opt.grid, opt.level, 1.0, opt.sphere_map);
+    auto geometry =
+        load_rest_geometry("host", opt.grid, opt.level, 1.0, opt.sphere_map, opt.resume);
     if (!geometry)
         return report(geometry.error());
     const core::TetraGrid& grid = geometry->grid;

@@ -646,8 +646,8 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
         return report(ok.error());
 
     // Rest geometry: a grid file, or a sphere.
-    auto geometry =
-        load_rest_geometry("simulate", opt.grid.string(), opt.level, opt.radius, opt.sphere_map);
+    auto geometry = load_rest_geometry("simulate", opt.grid.string(), opt.level, opt.radius,
+                                       opt.sphere_map, opt.resume.string());
     if (!geometry)
         return report(geometry.error());
     const core::TetraGrid& grid = geometry->grid;

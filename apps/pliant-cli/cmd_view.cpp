@@ -63,7 +63,7 @@ int run_view(const ViewOptions& opt)
                  "view: --resume needs INPUT to be the rest grid (.pgrid) the state "
                  "was simulated on" +
                      (opt.input.empty() ? std::string() : std::string(", not ") + opt.input)});
-        auto rest = load_rest_geometry("view", opt.input, opt.level, 1.0, "equal-area");
+        auto rest = load_rest_geometry("view", opt.input, opt.level, 1.0, "equal-area", opt.resume);
         if (!rest)
             return report(rest.error());
         auto model = sim::MembraneModel::create(rest->grid, rest->positions,

@@ -6,6 +6,8 @@
 #include <pliant/core/sphere_domain.h>
 #include <pliant/session/recording.h>
 
+#include <spdlog/spdlog.h>
+
 #include "../../scenes/grid_shapes.h"
 
 #include <algorithm>
@@ -52,19 +54,22 @@ bool holds_state(const core::GridFile& file)
     return file.find("u") != nullptr && file.find("v") != nullptr;
 }
 
-core::Error state_as_rest_error(const std::string& command, const std::string& path)
+core::Error state_as_rest_error(const std::string& command, const std::string& path,
+                                const std::string& resume)
 {
+    const std::string what = resume.empty() ? "this file" : "your state";
     return {core::ErrorCode::InvalidArgument,
             command + ": " + path +
                 " holds a simulated state (channels u and v): its positions are the deformed "
-                "surface, not a rest shape. Give the grid it was simulated on as GRID and this "
-                "file to --resume (`pliant " +
-                command + " REST.pgrid --resume " + path + "`)"};
+                "surface, not a rest shape. Give the grid it was simulated on as GRID and " +
+                what + " to --resume (`pliant " + command + " REST.pgrid --resume " +
+                (resume.empty() ? path : resume) + "`)"};
 }
 
 core::Result<RestGeometry> load_rest_geometry(const std::string& command, const std::string& path,
                                               int level, double radius,
-                                              const std::string& sphere_map)
+                                              const std::string& sphere_map,
+                                              const std::string& resume)
 {
     if (path.empty())
     {
@@ -80,7 +85,7 @@ core::Result<RestGeometry> load_rest_geometry(const std::string& command, const 
     if (!file)
         return file.error();
     if (holds_state(*file))
-        return state_as_rest_error(command, path);
+        return state_as_rest_error(command, path, resume);
     auto grid = core::TetraGrid::create(file->level);
     if (!grid)
         return grid.error();
@@ -122,7 +127,14 @@ core::Result<sim::MembraneState> load_saved_state(const std::filesystem::path& p
     model.sync(state.u);
     model.sync(state.v);
     if (file->find("px") == nullptr)
+    {
+        // pliant's own states always hold positions; a file of u and v alone is taken on trust.
+        spdlog::warn(
+            "--resume {}: no positions (channels px, py, pz), so the state cannot be "
+            "checked against the rest shape of GRID; taken as it is",
+            name);
         return state;
+    }
     auto saved = core::geometry_of(grid, *file);
     if (!saved)
         return bad(saved.error().message);

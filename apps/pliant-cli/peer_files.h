@@ -30,8 +30,10 @@ core::Result<void> save_peer_state(const session::Session& peer, const std::file
 /// deformed surface P + uN, not a rest shape.
 [[nodiscard]] bool holds_state(const core::GridFile& file);
 
-/// The refusal for a state file given where a rest geometry is expected (`command`'s GRID).
-[[nodiscard]] core::Error state_as_rest_error(const std::string& command, const std::string& path);
+/// The refusal for a state file given where a rest geometry is expected (`command`'s GRID). Its
+/// suggested command resumes from `resume` when the user gave one, else from `path`.
+[[nodiscard]] core::Error state_as_rest_error(const std::string& command, const std::string& path,
+                                              const std::string& resume = {});
 
 /// The rest geometry a physics command (`host`, `simulate`) starts from.
 struct RestGeometry
@@ -42,11 +44,13 @@ struct RestGeometry
 
 /// Loads GRID's rest positions (a state file is refused: `state_as_rest_error`), or, when `path`
 /// is empty, a sphere of `radius` at `level` laid out by `sphere_map` ("equal-area" or
-/// "gnomonic"). `command` prefixes the refusal. \return load_grid's and geometry_of's errors
-/// (the latter prefixed with the path); InvalidArgument for a state file or a bad level.
+/// "gnomonic"). `command` prefixes the refusal; `resume` is the command's --resume file, if any
+/// (for the refusal's suggestion). \return load_grid's and geometry_of's errors (the latter
+/// prefixed with the path); InvalidArgument for a state file or a bad level.
 core::Result<RestGeometry> load_rest_geometry(const std::string& command, const std::string& path,
                                               int level, double radius,
-                                              const std::string& sphere_map);
+                                              const std::string& sphere_map,
+                                              const std::string& resume = {});
 
 /// Reads the state saved in `path` (channels u and, when present, v; v = 0 otherwise) for
 /// `--resume`, checking it belongs to `model`: same level and, when the file has positions,

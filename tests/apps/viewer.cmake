@@ -97,7 +97,7 @@ if(TARGET pliant AND PLIANT_HAVE_VIEWER AND PLIANT_XVFB)
         FIXTURES_REQUIRED view_resume_state
         ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0;LIBGL_ALWAYS_SOFTWARE=1;OMP_NUM_THREADS=1")
     set(_resume_refusals
-        state_as_input "${_resume_state}" "holds a simulated state \\(channels u and v\\).*pliant view REST.pgrid --resume"
+        state_as_input "${_resume_dir}-sim/frame_00010.pgrid" "frame_00010.pgrid holds a simulated state \\(channels u and v\\).*your state to --resume \\(`pliant view REST.pgrid --resume [^`]*frame_00030.pgrid`\\)"
         mesh_as_input "${PROJECT_SOURCE_DIR}/data/spot.obj" "--resume needs INPUT to be the rest grid \\(.pgrid\\) the state was simulated on, not .*spot.obj"
         other_level "${_resume_dir}-spot4.pgrid" "a state of level 3, but the rest grid is of level 4")
     add_test(NAME cli_view_resume_prepare_other_level

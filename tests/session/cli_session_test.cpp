@@ -513,6 +513,28 @@ TEST(SessionCli, ASavedStateResumesInHostAndSimulateAndIsRefusedAsRestGeometry)
         EXPECT_GT(later.scale, 1e-4) << channel;
         EXPECT_LE(later.diff, 1e-12 * later.scale) << channel;
     }
+    // A state of u and v alone (no positions: pliant never writes one) cannot be checked against
+    // the rest shape: it is taken as it is, with a warning that says so.
+    auto frame = pliant::core::load_grid(dir / "o1" / "frame_00002.pgrid");
+    ASSERT_TRUE(frame.has_value());
+    std::erase_if(frame->fields,
+                  [](const pliant::core::NamedField& f) { return f.name != "u" && f.name != "v"; });
+    ASSERT_EQ(frame->fields.size(), 2U);
+    ASSERT_TRUE(pliant::core::save_grid(dir / "uv.pgrid", *frame).has_value());
+    const std::string uv_cmd = "cd '" + dir.string() + "' && rm -rf o4; " +
+                               run("uv",
+                                   "simulate --level 4 --scenario free.toml -o o4 --resume "
+                                   "uv.pgrid");
+    ASSERT_EQ(std::system(uv_cmd.c_str()), 0);
+    ASSERT_EQ(read(dir / "uv.rc"), "0\n") << read(dir / "uv.log");
+    EXPECT_NE(read(dir / "uv.log")
+                  .find("--resume uv.pgrid: no positions (channels px, py, pz), "
+                        "so the state cannot be checked against the rest shape"),
+              std::string::npos)
+        << read(dir / "uv.log");
+    EXPECT_EQ(
+        channel_diff(dir / "o4" / "frame_00000.pgrid", dir / "o1" / "frame_00002.pgrid", "u").diff,
+        0.0);
 }
 
 }  // namespace

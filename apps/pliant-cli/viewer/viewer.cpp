@@ -26,6 +26,7 @@
 #include <malloc.h>
 #endif
 #include <thread>
+#include <vector>
 
 namespace pliant::viewer
 {
@@ -615,7 +616,16 @@ void Viewer::update_surface()
     gpu_surface_valid_ = true;
     if (!rest_bounds_)
     {
-        rest_bounds_ = renderer_->bounds();
+        // The rest surface's nodes, not the first surface drawn: a resumed state or a session
+        // joined mid-pull is already deformed.
+        const core::TetraGrid& g = m->grid();
+        const core::Vec3Field<double>& rest = m->rest_positions();
+        std::vector<core::Vec3> points;
+        points.reserve(static_cast<std::size_t>(g.nx()) * static_cast<std::size_t>(g.ny()));
+        for (int y = 0; y < g.ny(); ++y)
+            for (int x = 0; x < g.nx(); ++x)
+                points.push_back({rest[0].at(x, y), rest[1].at(x, y), rest[2].at(x, y)});
+        rest_bounds_ = render::bounds_of(points);
         object_radius_ = rest_bounds_->radius();
         draw_.camera.fit_to = rest_bounds_;
     }
