@@ -59,7 +59,7 @@ struct Suite
 };
 
 // Cheapest first, so that a quick run shows results early.
-constexpr std::array<Suite, 9> k_suites{{
+constexpr std::array<Suite, 10> k_suites{{
     {"subdiv", "subdiv", "bench_subdiv",
      "butterfly refinement 6->7..9->10 vs OpenMesh and a STREAM copy"},
     {"net", "net", "bench_net",
@@ -76,6 +76,9 @@ constexpr std::array<Suite, 9> k_suites{{
     {"latency", "session", "pliant_bench_session",
      "grab to change on the other peers (held and drawn), exact and fast, levels 6..8",
      "--latency"},
+    {"cpu", "session", "pliant_bench_session",
+     "all the work of each peer per simulated second against one peer alone, levels 6..8",
+     "--cpu"},
     {"render", "render", "bench_render",
      "fps at 1280x720, texture path vs vertex buffers (offscreen OpenGL)"},
     {"remesh", "remesh", "bench_remesh", "PSNR and seconds per phase per mesh and level"},

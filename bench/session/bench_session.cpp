@@ -14,6 +14,8 @@
 //   pliant_bench_session --latency [levels...] [--enet]   (from a grab to the change appearing
 //   on the other peers, virtual time; --enet: real time over ENet on 127.0.0.1; default levels
 //   6 7 8)
+//   pliant_bench_session --cpu [levels...]   (all the work of each peer per simulated second
+//   against one peer alone, on a 0.5 ms LAN; default levels 6 7 8)
 //   --help prints the usage (k_usage); an unknown option or a level out of range exits 2.
 // --json/--csv rows (bench/common/bench_report.h), sized by the number of peers (1..4): per
 // coupling ("exact", "fast", "fast 1 kHz") the step seconds per simulated second of the busiest
@@ -61,6 +63,7 @@ constexpr const char* k_usage =
     "       pliant_bench_session --coarse [levels...] [--seconds S]\n"
     "       pliant_bench_session --steps [levels...] [--copy-accept] [--random-points N]\n"
     "       pliant_bench_session --latency [levels...] [--enet]\n"
+    "       pliant_bench_session --cpu [levels...]\n"
     "Session numbers for docs/session.md: all peers in one thread over a simulated network (5 ms\n"
     "one-way latency), one thread per peer.\n"
     "  levels...    grid levels 1..10 (--coarse: 3..10). Without a mode, per level and peer count\n"
@@ -90,6 +93,10 @@ constexpr const char* k_usage =
     "               2..4 participants, exact and fast coupling, in virtual time (default levels\n"
     "               6 7 8; --quick: 6)\n"
     "  --enet       with --latency: in real time over ENet on 127.0.0.1, a thread per peer\n"
+    "  --cpu        all the work of each peer (steps, halos, streams, display) per simulated\n"
+    "               second in the steady state, against one peer alone in its session, 1..4\n"
+    "               participants, exact and fast coupling, on a 0.5 ms LAN (default levels\n"
+    "               6 7 8; --quick: 6)\n"
     "  --seconds S  seconds measured by --stream and --coarse after 0.5 s of warm-up,\n"
     "               > 0 and <= 3600 (default 2)\n"
     "  --quick      short runs: the default suite at levels 5 6, --steps and --latency at 6\n"
@@ -119,6 +126,12 @@ struct RunResult
 {
     std::vector<double> step_s;  // per peer
     std::vector<double> bytes_out;
+    // Steady state (every peer in the partition, 20 ticks on), per peer: the wall time of its
+    // poll() and advance() calls (all its work: steps, halos, streams, display), of its steps
+    // alone, and its simulated seconds.
+    std::vector<double> steady_busy_s;
+    std::vector<double> steady_step_s;
+    std::vector<double> steady_sim_s;
     double max_u_diff = 0.0;
     double max_u = 0.0;
 
@@ -183,9 +196,12 @@ void pump_sessions(std::vector<std::unique_ptr<session::Session>>& s,
 /// One run: `peers` participants (master included), `ticks` steps after everyone is in.
 RunResult run(int level, int peers, session::Coupling coupling, std::uint64_t ticks,
               const sim::MembraneState* reference_state, double rate_hz = 60.0,
-              std::optional<session::PointClearance> clearance = std::nullopt)
+              std::optional<session::PointClearance> clearance = std::nullopt,
+              double latency_s = 0.005)
 {
-    net::SimulatedNetwork network;
+    net::SimulatedNetworkSettings network_settings;
+    network_settings.link.latency_s = latency_s;
+    net::SimulatedNetwork network(network_settings);
     std::vector<std::unique_ptr<net::Transport>> tr;
     std::vector<std::unique_ptr<session::Session>> s;
     const core::TetraGrid grid = core::TetraGrid::create(level).value();
@@ -226,14 +242,67 @@ RunResult run(int level, int peers, session::Coupling coupling, std::uint64_t ti
                 return false;
         return true;
     };
-    for (int it = 0; it < 4'000'000 && !all_done(); ++it)
-        pump_sessions(s, network, now, 0.0005);
-    RunResult r;
-    for (const auto& p : s)
+    // Steady state: every peer ready, in the master's partition and of its epoch; 20 ticks on.
+    const auto settled = [&]
     {
-        const auto st = p->stats();
+        const auto owners = s[0]->owners();
+        return std::all_of(s.begin(), s.end(),
+                           [&](const auto& p)
+                           {
+                               return p->ready() && p->epoch() == s[0]->epoch() &&
+                                      std::find(owners.begin(), owners.end(), p->id()) !=
+                                          owners.end();
+                           });
+    };
+    std::uint64_t steady_from = 0;  // the master's tick at which the steady state starts
+    std::vector<double> busy(s.size(), 0.0);
+    std::vector<double> busy0;
+    std::vector<session::SessionStats> stats0;
+    std::vector<double> time0;
+    const auto timed = [&](std::size_t k, auto&& call)
+    {
+        const auto t0 = std::chrono::steady_clock::now();
+        call();
+        busy[k] +=
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    };
+    const double pump_dt = 0.0005;
+    for (int it = 0; it < 4'000'000 && !all_done(); ++it)
+    {
+        // pump_sessions, each peer's calls timed.
+        for (std::size_t k = 0; k < s.size(); ++k)
+            timed(k, [&] { s[k]->poll(); });
+        for (std::size_t k = 0; k < s.size(); ++k)
+            timed(k, [&] { s[k]->advance(now); });
+        network.advance(pump_dt);
+        now += pump_dt;
+        if (busy0.empty())
+        {
+            if (steady_from == 0 && settled())
+                steady_from = s[0]->tick() + 20;
+            else if (steady_from != 0 && s[0]->tick() >= steady_from)
+            {
+                busy0 = busy;
+                for (const auto& p : s)
+                {
+                    stats0.push_back(p->stats());
+                    time0.push_back(p->state().time);
+                }
+            }
+        }
+    }
+    RunResult r;
+    for (std::size_t k = 0; k < s.size(); ++k)
+    {
+        const auto st = s[k]->stats();
         r.step_s.push_back(st.step_seconds);
         r.bytes_out.push_back(static_cast<double>(st.bytes_sent));
+        if (!busy0.empty())
+        {
+            r.steady_busy_s.push_back(busy[k] - busy0[k]);
+            r.steady_step_s.push_back(st.step_seconds - stats0[k].step_seconds);
+            r.steady_sim_s.push_back(s[k]->state().time - time0[k]);
+        }
     }
     if (reference_state != nullptr)
         for (const auto& p : s)
@@ -1248,6 +1317,83 @@ std::vector<GrabSeen> run_latency_enet(int level, int peers, session::Coupling c
     return seen;
 }
 
+/// --cpu: all the work of each peer (its poll() and advance() calls: steps, halos, heartbeats,
+/// streams, display and view) per simulated second, in the steady state (every peer in the
+/// partition), against one peer alone in its own session; 1..4 participants with the session
+/// runs' points and pulls, exact and fast coupling, a LAN (0.5 ms one-way, so the exact lockstep
+/// keeps its 1 kHz), 1,000 ticks of 1 ms, 60 Hz frames and streams, one thread per peer. All
+/// peers share this one thread and its caches, so the figures include what the others' traffic
+/// evicts; wall time of the calls (the machine's other load shows in them).
+void cpu_suite(bench::Report& report, const std::vector<int>& levels)
+{
+    report.meta("network", "SimulatedNetwork, 0.5 ms one-way latency, all peers in one thread");
+    report.meta("material", "unit sphere, T=1, rho=1, beta=0.5, k_f=1, fixed dt 1 ms");
+    constexpr std::uint64_t ticks = 1000;
+    constexpr double lan_s = 0.0005;
+    std::printf(
+        "# all work per peer (poll + advance) per simulated second, steady state, LAN 0.5 ms, "
+        "%llu ticks, 1 thread per peer\n"
+        "level coupling peers | work ms/s busiest mean | / alone: busiest mean | steps / "
+        "alone's: busiest | not steps, busiest\n",
+        static_cast<unsigned long long>(ticks));
+    for (const int level : levels)
+        for (const session::Coupling coupling : {session::Coupling::Exact, session::Coupling::Fast})
+        {
+            const char* name = coupling == session::Coupling::Exact ? "exact" : "fast";
+            double alone_work = 0.0;
+            double alone_step = 0.0;
+            for (int peers = 1; peers <= 4; ++peers)
+            {
+                const RunResult r =
+                    run(level, peers, coupling, ticks, nullptr, 60.0, std::nullopt, lan_s);
+                if (r.steady_sim_s.size() != static_cast<std::size_t>(peers))
+                {
+                    std::printf("%5d %-8s %5d | no steady state within %llu ticks\n", level, name,
+                                peers, static_cast<unsigned long long>(ticks));
+                    continue;
+                }
+                double work_max = 0.0;
+                double work_sum = 0.0;
+                double step_max = 0.0;
+                double rest_of_max = 0.0;
+                for (int k = 0; k < peers; ++k)
+                {
+                    const auto i = static_cast<std::size_t>(k);
+                    const double w = r.steady_busy_s[i] / r.steady_sim_s[i];
+                    const double st = r.steady_step_s[i] / r.steady_sim_s[i];
+                    work_sum += w;
+                    step_max = std::max(step_max, st);
+                    if (w > work_max)
+                    {
+                        work_max = w;
+                        rest_of_max = w > 0.0 ? (w - st) / w : 0.0;
+                    }
+                }
+                if (peers == 1)
+                {
+                    alone_work = work_max;
+                    alone_step = step_max;
+                }
+                const double n = static_cast<double>(peers);
+                const double work_mean = work_sum / n;
+                report.add(name, level, n, "peers", "work_s_per_sim_s_max", work_max, "s/s");
+                report.add(name, level, n, "peers", "work_s_per_sim_s_mean", work_mean, "s/s");
+                report.add(name, level, n, "peers", "work_vs_alone_max", work_max / alone_work,
+                           "1");
+                report.add(name, level, n, "peers", "work_vs_alone_mean", work_mean / alone_work,
+                           "1");
+                report.add(name, level, n, "peers", "step_vs_alone_max", step_max / alone_step,
+                           "1");
+                report.add(name, level, n, "peers", "not_steps_share_max", rest_of_max, "1");
+                std::printf("%5d %-8s %5d | %9.1f %6.1f | %13.2f %5.2f | %22.2f | %17.2f\n",
+                            level, name, peers, 1e3 * work_max, 1e3 * work_mean,
+                            work_max / alone_work, work_mean / alone_work, step_max / alone_step,
+                            rest_of_max);
+                std::fflush(stdout);
+            }
+        }
+}
+
 /// --latency: from a grab to the change appearing on the other peers, per one-way latency,
 /// level, peer count (2..4 participants plus a viewer) and coupling, in virtual time (compute is
 /// not timed: all peers share one thread); each figure over four grabs a quarter of a stream
@@ -1371,7 +1517,8 @@ int main(int argc, char** argv)
         Stream,
         Coarse,
         Steps,
-        Latency
+        Latency,
+        Cpu
     };
     Mode mode = Mode::Sessions;
     const char* mode_option = nullptr;
@@ -1387,6 +1534,7 @@ int main(int argc, char** argv)
                        : a == "--coarse"  ? Mode::Coarse
                        : a == "--steps"   ? Mode::Steps
                        : a == "--latency" ? Mode::Latency
+                       : a == "--cpu"     ? Mode::Cpu
                                           : Mode::Sessions;
         if (m != Mode::Sessions)
         {
@@ -1466,6 +1614,14 @@ int main(int argc, char** argv)
             random_steps_suite(report, levels, random_layouts, /*keep_outside=*/copy_accept);
         else
             steps_suite(report, levels, /*keep_outside=*/copy_accept);
+        return report.write() ? 0 : 1;
+    }
+    if (mode == Mode::Cpu)
+    {
+        if (levels.empty())
+            levels = report.quick() ? std::vector<int>{6} : std::vector<int>{6, 7, 8};
+        report.set_suite("cpu");  // `pliant bench cpu`
+        cpu_suite(report, levels);
         return report.write() ? 0 : 1;
     }
     if (mode == Mode::Latency)

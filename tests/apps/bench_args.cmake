@@ -51,6 +51,11 @@ if(PLIANT_BUILD_BENCH AND EXISTS ${PROJECT_SOURCE_DIR}/bench/CMakeLists.txt)
         pliant_bench_args(bench_session_steps_random_points_level_4 pliant_bench_session 0 STDOUT
                           "\n +4 +4 \\| [0-9.]+ [0-9.]+ +[0-9]+ [0-9gsrtwb]+ \\| [0-9.]+ [0-9.]+ +[0-9]+ [0-9gsrtwb]+ \\| [0-9.]+ [0-9.]+ +[0-9]+ [0-9gsrtwb]+\n"
                           --steps 4 --random-points 1)
+        # Each peer's whole work at level 4 (under a second): every row reaches its steady
+        # state, the 4-peer fast row closes the table.
+        pliant_bench_args(bench_session_cpu_level_4 pliant_bench_session 0 STDOUT
+                          "\n +4 fast +4 \\| +[0-9.]+ +[0-9.]+ \\| +[0-9.]+ +[0-9.]+ \\| +[0-9.]+ \\| +[0-9.]+\n$"
+                          --cpu 4)
         pliant_bench_args(bench_args_session_coarse_level_too_low pliant_bench_session 2 STDERR
                           "^pliant_bench_session: --coarse level '2' is out of range \\(expected 3\\.\\.10\\)"
                           --coarse 2)
