@@ -263,8 +263,7 @@ RunResult run(int level, int peers, session::Coupling coupling, std::uint64_t ti
     {
         const auto t0 = std::chrono::steady_clock::now();
         call();
-        busy[k] +=
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        busy[k] += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     };
     const double pump_dt = 0.0005;
     for (int it = 0; it < 4'000'000 && !all_done(); ++it)
@@ -1385,10 +1384,9 @@ void cpu_suite(bench::Report& report, const std::vector<int>& levels)
                 report.add(name, level, n, "peers", "step_vs_alone_max", step_max / alone_step,
                            "1");
                 report.add(name, level, n, "peers", "not_steps_share_max", rest_of_max, "1");
-                std::printf("%5d %-8s %5d | %9.1f %6.1f | %13.2f %5.2f | %22.2f | %17.2f\n",
-                            level, name, peers, 1e3 * work_max, 1e3 * work_mean,
-                            work_max / alone_work, work_mean / alone_work, step_max / alone_step,
-                            rest_of_max);
+                std::printf("%5d %-8s %5d | %9.1f %6.1f | %13.2f %5.2f | %22.2f | %17.2f\n", level,
+                            name, peers, 1e3 * work_max, 1e3 * work_mean, work_max / alone_work,
+                            work_mean / alone_work, step_max / alone_step, rest_of_max);
                 std::fflush(stdout);
             }
         }
