@@ -268,7 +268,8 @@ RunResult run(int level, int peers, session::Coupling coupling, std::uint64_t ti
     const double pump_dt = 0.0005;
     for (int it = 0; it < 4'000'000 && !all_done(); ++it)
     {
-        // pump_sessions, each peer's calls timed.
+        // pump_sessions, each peer's calls timed; the network's deliveries are not theirs.
+        network.deliver_due();
         for (std::size_t k = 0; k < s.size(); ++k)
             timed(k, [&] { s[k]->poll(); });
         for (std::size_t k = 0; k < s.size(); ++k)

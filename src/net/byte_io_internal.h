@@ -8,6 +8,7 @@
 
 #include <pliant/core/assert.h>
 
+#include <algorithm>
 #include <bit>
 #include <cstddef>
 #include <cstdint>
@@ -44,6 +45,26 @@ public:
         if (((bits >> 23) & 0xFFu) == 0xFFu)
             return std::bit_cast<double>(std::uint64_t{0x7FF0000000000000ULL});
         return static_cast<double>(std::bit_cast<float>(bits));
+    }
+    /// Reads `n` f64 values into `out`; on a short read sets every one to 0.
+    void f64s(double* out, std::size_t n) noexcept
+    {
+        if (n > remaining() / 8)
+        {
+            short_ = true;
+            pos_ = bytes_.size();
+            std::fill_n(out, n, 0.0);
+            return;
+        }
+        if constexpr (std::endian::native == std::endian::little)
+        {
+            if (n > 0)
+                std::memcpy(out, bytes_.data() + pos_, 8 * n);
+            pos_ += 8 * n;
+        }
+        else
+            for (std::size_t i = 0; i < n; ++i)
+                out[i] = f64();
     }
     /// Copies `n` bytes to `out`; on a short read copies nothing.
     void bytes(std::byte* out, std::size_t n) noexcept
@@ -105,6 +126,15 @@ public:
     void f64(double v) noexcept { put(std::bit_cast<std::uint64_t>(v), 8); }
     /// \pre v is finite and |v| <= FLT_MAX (validate() checked it).
     void f32(double v) noexcept { put(std::bit_cast<std::uint32_t>(static_cast<float>(v)), 4); }
+    /// Writes `n` f64 values (their bit patterns, little-endian).
+    void f64s(const double* in, std::size_t n) noexcept
+    {
+        if constexpr (std::endian::native == std::endian::little)
+            bytes(reinterpret_cast<const std::byte*>(in), 8 * n);
+        else
+            for (std::size_t i = 0; i < n; ++i)
+                f64(in[i]);
+    }
     void bytes(const std::byte* in, std::size_t n) noexcept
     {
         PLIANT_DEBUG_ASSERT(pos_ + n <= out_.size(), "ByteWriter overrun");

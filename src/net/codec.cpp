@@ -631,8 +631,7 @@ void write_values(ByteWriter& w, const std::vector<double>& values, ValueEncodin
         for (double x : values)
             w.f32(x);
     else
-        for (double x : values)
-            w.f64(x);
+        w.f64s(values.data(), values.size());
 }
 
 void write_body(ByteWriter& w, const Hello& m) noexcept
@@ -926,8 +925,7 @@ void read_values(ByteReader& r, std::vector<double>& out, std::size_t n, ValueEn
         for (double& x : out)
             x = r.f32();
     else
-        for (double& x : out)
-            x = r.f64();
+        r.f64s(out.data(), n);
 }
 
 Err read_body(ByteReader& r, Hello& m) noexcept

@@ -66,6 +66,27 @@ core::Result<void> Messenger::send(PeerHandle peer, const Message& message, Send
     return send_encoded(peer, message.type(), *size, mode);
 }
 
+core::Result<void> Messenger::send(std::span<const PeerHandle> peers, const Message& message,
+                                   SendMode mode) noexcept
+{
+    if (peers.empty())
+        return {};
+    auto size = encode(message, buffer_);
+    if (!size)
+        return core::fail(core::ErrorCode::InvalidArgument,
+                          std::string("Messenger::send: cannot encode ") +
+                              std::string(to_string(message.type())) + ": " +
+                              std::string(to_string(size.error())));
+    core::Result<void> first;
+    for (const PeerHandle peer : peers)
+    {
+        auto r = send_encoded(peer, message.type(), *size, mode);
+        if (!r && first)
+            first = r;
+    }
+    return first;
+}
+
 core::Result<void> Messenger::broadcast(const Message& message, SendMode mode) noexcept
 {
     auto size = encode(message, buffer_);

@@ -639,6 +639,12 @@ void SimulatedNetwork::advance(double seconds)
     impl_->now += to_us(seconds);
 }
 
+void SimulatedNetwork::deliver_due()
+{
+    const std::lock_guard lock(impl_->mutex);
+    impl_->deliver_due();
+}
+
 bool SimulatedNetwork::advance_to_next_arrival()
 {
     const std::lock_guard lock(impl_->mutex);

@@ -486,6 +486,8 @@ struct Session::Impl
     bool state_exact = true;  // exact: joiner before its first halos
     std::uint64_t exact_from = 0;
     std::deque<HaloBuffer> halos;
+    std::vector<HaloBuffer> spare_halos;  // applied halos' buffers, reused by on_halo
+    net::Message halo_message;            // send_halos' message, reused
     // Per leaf: the state shown (display): partition epoch, tick and owner's time of the newest
     // state (received states older than it are ignored, docs/protocol.md §2), and its sender.
     std::vector<std::uint32_t> leaf_epoch;
@@ -500,8 +502,16 @@ struct Session::Impl
     {
         std::uint16_t sender = 0;
         int count = 0;  // states held, <= k_view_history
-        std::array<double, k_view_history> time{};
-        std::vector<double> u, v;  // k_view_history x nodes, state k at [k n, (k + 1) n)
+        int first = 0;  // the slot of the oldest state: state k (0 = oldest) is in slot
+                        // (first + k) % k_view_history
+        std::array<double, k_view_history> time{};  // per slot
+        std::vector<double> u, v;  // k_view_history x nodes, slot j at [j n, (j + 1) n)
+
+        [[nodiscard]] int slot(int k) const noexcept { return (first + k) % k_view_history; }
+        [[nodiscard]] double time_of(int k) const noexcept
+        {
+            return time[static_cast<std::size_t>(slot(k))];
+        }
     };
     struct Playout
     {
@@ -547,7 +557,17 @@ struct Session::Impl
     std::map<std::uint16_t, std::vector<std::uint32_t>> halo_out;  // receiver -> nodes
     std::uint32_t fast_epoch = 0;
     std::vector<char> fast_mine;  // fast: owned_mask of fast_mine_epoch
-    double stall_since = -1.0;    // fast: our clock when the current hold began (-1: none)
+    // Fast: the x-runs of in-range positions whose canonical node fast_mine does not own, as
+    // {padded offset, length}: the Dirichlet values copied from the display before each frame.
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> fast_fill_runs;
+    // Every node's offset in the padded plane of a ghost-ring-1 field of the grid (the state,
+    // the display, the view): the per-node loops of the display, the streams and the halos
+    // index the planes with it instead of dividing the node index by the row length.
+    std::vector<std::uint32_t> pad;
+    std::vector<net::PeerHandle> stream_to;  // stream(): the receivers of a leaf state
+    // Our leaves' nodes in the display are older than the state (flush_display).
+    bool own_display_pending = false;
+    double stall_since = -1.0;  // fast: our clock when the current hold began (-1: none)
     // fast: a hold ran out (max_stall_s) and the frames since have all been stale: step on
     // without a new hold until a frame is fresh again (a neighbour silent, not slow).
     bool stepping_stale = false;
@@ -694,6 +714,12 @@ struct Session::Impl
         s.state_ = sim::MembraneState::at_rest(g);
         s.display_u_ = core::Field<double>(g, 1);
         s.display_v_ = core::Field<double>(g, 1);
+        pad.resize(g.node_count());
+        for (std::size_t n = 0; n < pad.size(); ++n)
+        {
+            const core::GridCoord c = g.coord(core::NodeIndex{static_cast<std::uint32_t>(n)});
+            pad[n] = static_cast<std::uint32_t>(s.display_u_.padded_offset(c.x, c.y));
+        }
         leaf_epoch.assign(s.graph_->size(), 0);
         leaf_tick.assign(s.graph_->size(), 0);
         leaf_time.assign(s.graph_->size(), 0.0);
@@ -960,6 +986,7 @@ struct Session::Impl
         const std::uint32_t e = p != nullptr ? p->epoch : 0;
         if (e == my_leaves_epoch)
             return;
+        flush_display();  // a pending copy is of the leaves we owned until now
         my_leaves_epoch = e;
         const std::vector<std::uint32_t> before = std::move(my_leaves);
         my_leaves.clear();
@@ -1048,15 +1075,23 @@ struct Session::Impl
     {
         const PartitionEntry* next = partition_at(t);
         const std::uint32_t epoch = next != nullptr ? next->epoch : 0;
-        const core::TetraGrid& g = s.model_->grid();
+        // One message, filled in place: its vectors keep their capacity from tick to tick.
+        if (!std::holds_alternative<net::Halo>(halo_message.body))
+            halo_message.body = net::Halo{};
+        halo_message.header.session = session_id;
+        halo_message.header.sender = s.id_;
+        halo_message.header.tick = t;
+        net::Halo& h = std::get<net::Halo>(halo_message.body);
         for (const auto& [rid, nodes] : halo_out)
         {
-            net::Halo h;
+            h.ranges.clear();
+            h.u.clear();
+            h.v.clear();
             auto flush = [&]
             {
                 if (h.ranges.empty())
                     return;
-                send_to(rid, make(h, t), net::SendMode::Reliable);
+                send_to(rid, halo_message, net::SendMode::Reliable);
                 h.ranges.clear();
                 h.u.clear();
                 h.v.clear();
@@ -1083,9 +1118,8 @@ struct Session::Impl
                     ++h.ranges.back().count;
                 else
                     h.ranges.push_back(net::NodeRange{n, 1});
-                const core::GridCoord c = g.coord(core::NodeIndex{n});
-                h.u.push_back(s.state_.u.at(c.x, c.y));
-                h.v.push_back(s.state_.v.at(c.x, c.y));
+                h.u.push_back(s.state_.u.padded()[pad[n]]);
+                h.v.push_back(s.state_.v.padded()[pad[n]]);
             }
             flush();
         }
@@ -1147,25 +1181,29 @@ struct Session::Impl
 
     void apply_halos(std::uint64_t t)
     {
-        const core::TetraGrid& g = s.model_->grid();
         while (!halos.empty() && halos.front().tick < t)
+        {
+            spare_halos.push_back(std::move(halos.front()));  // kept for their capacity
             halos.pop_front();
+        }
+        double* su = s.state_.u.padded().data();
+        double* sv = s.state_.v.padded().data();
         for (const HaloBuffer& h : halos)
         {
             if (h.tick != t)
                 continue;
             for (std::size_t k = 0; k < h.nodes.size(); ++k)
             {
-                const core::GridCoord c = g.coord(core::NodeIndex{h.nodes[k]});
-                s.state_.u.at(c.x, c.y) = h.u[k];
-                s.state_.v.at(c.x, c.y) = h.v[k];
+                su[pad[h.nodes[k]]] = h.u[k];
+                sv[pad[h.nodes[k]]] = h.v[k];
             }
             if (!state_exact)
                 s.state_.time = h.time;
         }
         state_exact = true;
-        s.model_->sync(s.state_.u);
-        s.model_->sync(s.state_.v);
+        // No whole-plane sync of the state: the halo nodes lie in the set the step integrates,
+        // and a swapping step (keep_outside = false) copies every twin and ghost it reads first
+        // (sim::detail::sync_live).
     }
 
     bool may_step(std::uint64_t t) const
@@ -1269,6 +1307,7 @@ struct Session::Impl
             if (it != peers.end() &&
                 (!it->second.departed || (it->second.has_heartbeat && it->second.heartbeat >= t)))
                 continue;
+            flush_display();
             for (const core::NodeIndex n : s.graph_->nodes(l))
             {
                 const core::GridCoord c = g.coord(n);
@@ -1410,6 +1449,7 @@ struct Session::Impl
             if (fast_mine_epoch != (p != nullptr ? p->epoch : 0))
             {
                 std::vector<char> now_mine = owned_mask(p, s.id_);
+                flush_display();
                 // Leaves we gain continue from the newest state streamed for them (what we
                 // displayed), not from whatever our integrated state held there.
                 for (int y = 0; y < g.ny(); ++y)
@@ -1424,6 +1464,24 @@ struct Session::Impl
                     }
                 fast_mine = std::move(now_mine);
                 fast_mine_epoch = p != nullptr ? p->epoch : 0;
+                fast_fill_runs.clear();
+                for (int y = 0; y < g.ny(); ++y)
+                    for (int x = 0; x < g.nx();)
+                    {
+                        const auto foreign = [&](int xx)
+                        { return fast_mine[g.canonical(g.index(xx, y)).value] == 0; };
+                        if (!foreign(x))
+                        {
+                            ++x;
+                            continue;
+                        }
+                        const int x0 = x;
+                        while (x < g.nx() && foreign(x))
+                            ++x;
+                        fast_fill_runs.emplace_back(
+                            static_cast<std::uint32_t>(s.display_u_.padded_offset(x0, y)),
+                            static_cast<std::uint32_t>(x - x0));
+                    }
             }
             const std::vector<char>& mine = fast_mine;
             refresh_border(p, mine);
@@ -1463,13 +1521,13 @@ struct Session::Impl
             }
             counters.border_age_s = oldest;
             counters.max_border_age_s = std::max(counters.max_border_age_s, oldest);
-            for (int y = 0; y < g.ny(); ++y)
-                for (int x = 0; x < g.nx(); ++x)
-                    if (mine[g.canonical(g.index(x, y)).value] == 0)
-                    {
-                        s.state_.u.at(x, y) = s.display_u_.at(x, y);
-                        s.state_.v.at(x, y) = s.display_v_.at(x, y);
-                    }
+            for (const auto& [offset, length] : fast_fill_runs)
+            {
+                std::copy_n(s.display_u_.padded().data() + offset, length,
+                            s.state_.u.padded().data() + offset);
+                std::copy_n(s.display_v_.padded().data() + offset, length,
+                            s.state_.v.padded().data() + offset);
+            }
             const double target = next_frame + clock_offset;
             sim::StepOptions opt;
             opt.owned = owned_regions;
@@ -1512,12 +1570,12 @@ struct Session::Impl
     {
         const auto nodes = s.graph_->nodes(l);
         const std::size_t n = nodes.size();
-        const core::TetraGrid& g = s.model_->grid();
+        const double* state_u = s.state_.u.padded().data();
+        const double* state_v = s.state_.v.padded().data();
         for (std::size_t k = 0; k < n; ++k)
         {
-            const core::GridCoord c = g.coord(nodes[k]);
-            xu[k] = s.state_.u.at(c.x, c.y);
-            xv[k] = s.state_.v.at(c.x, c.y);
+            xu[k] = state_u[pad[nodes[k].value]];
+            xv[k] = state_v[pad[nodes[k].value]];
         }
         const auto su = std::span(qu.data(), n);
         const auto sv = std::span(qv.data(), n);
@@ -1554,7 +1612,32 @@ struct Session::Impl
     void copy_own_to_display(const PartitionEntry* p)
     {
         refresh_my_leaves(p);
-        const core::TetraGrid& g = s.model_->grid();
+        for (const std::uint32_t l : my_leaves)
+        {
+            leaf_epoch[l] = p != nullptr ? p->epoch : 0;
+            leaf_tick[l] = s.state_.tick;
+            leaf_time[l] = s.state_.time;
+            leaf_sender[l] = s.id_.value;
+            leaf_coarsen[l] = 0;
+            history[l].count = 0;
+        }
+        // The nodes themselves when the display is next read (flush_display): an exact-coupling
+        // peer steps 1,000 times a second and its display is read at the frame rate.
+        own_display_pending = true;
+    }
+
+    /// Writes our leaves' nodes of the state into the display (copy_own_to_display), if a step
+    /// since the last flush left them behind. Every reader of display_u_/display_v_ calls it
+    /// first; the other leaves' nodes are written as their states arrive.
+    void flush_display()
+    {
+        if (!own_display_pending || !s.model_)
+            return;
+        own_display_pending = false;
+        const double* su = s.state_.u.padded().data();
+        const double* sv = s.state_.v.padded().data();
+        double* du = s.display_u_.padded().data();
+        double* dv = s.display_v_.padded().data();
         for (const std::uint32_t l : my_leaves)
         {
             const auto nodes = s.graph_->nodes(l);
@@ -1562,16 +1645,10 @@ struct Session::Impl
             const std::size_t n = quantised_stream() ? quantise_leaf(l) : 0;
             for (std::size_t k = 0; k < nodes.size(); ++k)
             {
-                const core::GridCoord c = g.coord(nodes[k]);
-                s.display_u_.at(c.x, c.y) = n != 0 ? xu[k] : s.state_.u.at(c.x, c.y);
-                s.display_v_.at(c.x, c.y) = n != 0 ? xv[k] : s.state_.v.at(c.x, c.y);
+                const std::uint32_t o = pad[nodes[k].value];
+                du[o] = n != 0 ? xu[k] : su[o];
+                dv[o] = n != 0 ? xv[k] : sv[o];
             }
-            leaf_epoch[l] = p != nullptr ? p->epoch : 0;
-            leaf_tick[l] = s.state_.tick;
-            leaf_time[l] = s.state_.time;
-            leaf_sender[l] = s.id_.value;
-            leaf_coarsen[l] = 0;
-            history[l].count = 0;
         }
         s.model_->sync(s.display_u_);
         s.model_->sync(s.display_v_);
@@ -1592,6 +1669,7 @@ struct Session::Impl
         if (std::all_of(leaf_coarsen.begin(), leaf_coarsen.end(),
                         [](std::uint8_t k) { return k == 0; }))
             return;
+        flush_display();
         // Our leaves as stream() sees them (read only: my_leaves is stream()'s to update).
         const PartitionEntry* p = stream_partition();
         std::fill(leaf_mine.begin(), leaf_mine.end(), 0);
@@ -1994,7 +2072,7 @@ struct Session::Impl
             // Coarse leaves are a few nodes each: they go several to a datagram (ValueBatch,
             // docs/protocol.md §6) rather than each with a LeafState's 48 fixed bytes.
             const bool batched = settings.batch_leaves && m.coarsen > 0;
-            const net::Message msg = batched ? net::Message{} : make(m, s.state_.tick);
+            stream_to.clear();
             for (const auto& [pid, peer] : peers)
                 if (!peer.departed && peer.handle && peer.has_model)
                 {
@@ -2002,8 +2080,15 @@ struct Session::Impl
                     if (batched)
                         batch_values(pid, m, s.state_.tick);
                     else
-                        send_to(pid, msg, net::SendMode::Unsequenced);
+                        stream_to.push_back(*peer.handle);
                 }
+            if (!stream_to.empty())
+            {
+                // Encoded once for every receiver.
+                const net::Message msg = make(m, s.state_.tick);
+                if (auto r = messenger.send(stream_to, msg, net::SendMode::Unsequenced); !r)
+                    spdlog::debug("session: stream send failed: {}", r.error().message);
+            }
             leaf_sent_time[l] = s.state_.time;
         }
         flush_batches();
@@ -2212,6 +2297,7 @@ struct Session::Impl
             published = false;
             state_exact = true;
             exact_from = s.state_.tick;
+            flush_display();
             const core::TetraGrid& g = s.model_->grid();
             for (int y = 0; y < g.ny(); ++y)
                 for (int x = 0; x < g.nx(); ++x)
@@ -2303,6 +2389,7 @@ struct Session::Impl
     {
         const core::TetraGrid& g = s.model_->grid();
         const auto model = encode_model(*s.model_, s.coupling_, s.clearance_);
+        flush_display();
         const auto state =
             encode_state(g, s.display_u_, s.display_v_, s.state_.tick, s.state_.time);
         net::Welcome w;
@@ -2524,19 +2611,24 @@ struct Session::Impl
         if (!h.has_u || !h.has_v)
             return;
         const core::TetraGrid& g = s.model_->grid();
+        for (const net::NodeRange& r : h.ranges)
+            if (r.count > 0 && (r.first >= g.node_count() || r.count > g.node_count() - r.first))
+                return;  // not our grid: ignore the whole message
+        // A buffer of an applied tick, with its capacity: no allocation per halo.
         HaloBuffer buf;
+        if (!spare_halos.empty())
+        {
+            buf = std::move(spare_halos.back());
+            spare_halos.pop_back();
+        }
         buf.tick = m.header.tick;
         buf.time = h.time;
+        buf.nodes.clear();
         for (const net::NodeRange& r : h.ranges)
             for (std::uint32_t k = 0; k < r.count; ++k)
-            {
-                const std::uint32_t n = r.first + k;
-                if (n >= g.node_count())
-                    return;  // not our grid: ignore the whole message
-                buf.nodes.push_back(n);
-            }
-        buf.u = h.u;
-        buf.v = h.v;
+                buf.nodes.push_back(r.first + k);
+        buf.u.assign(h.u.begin(), h.u.end());
+        buf.v.assign(h.v.begin(), h.v.end());
         // Keep the buffer ordered by tick (arrivals per sender are in order; merge by tick).
         auto it = std::upper_bound(halos.begin(), halos.end(), buf.tick,
                                    [](std::uint64_t t, const HaloBuffer& b) { return t < b.tick; });
@@ -2740,11 +2832,15 @@ struct Session::Impl
             return;
         }
         const std::size_t count = ls.node_count();
+        double* du = s.display_u_.padded().data();
+        double* dv = s.display_v_.padded().data();
+        const double* from_u = quantised ? xu.data() : ls.u.data();
+        const double* from_v = quantised ? xv.data() : ls.v.data();
         for (std::size_t k = 0; k < count; ++k)
         {
-            const core::GridCoord c = g.coord(nodes[ls.node_offset + k]);
-            s.display_u_.at(c.x, c.y) = quantised ? xu[k] : ls.u[k];
-            s.display_v_.at(c.x, c.y) = quantised ? xv[k] : ls.v[k];
+            const std::uint32_t o = pad[nodes[ls.node_offset + k].value];
+            du[o] = from_u[k];
+            dv[o] = from_v[k];
         }
         display_dirty = true;
     }
@@ -2986,16 +3082,18 @@ struct Session::Impl
             updated.clear();
             return;
         }
-        const core::TetraGrid& g = s.model_->grid();
+        const double* du = s.display_u_.padded().data();
+        const double* dv = s.display_v_.padded().data();
         for (const std::uint32_t l : updated)
         {
             updated_flag[l] = 0;
             const auto nodes = s.graph_->nodes(l);
             const std::size_t n = nodes.size();
             ViewHistory& h = history[l];
-            if (h.sender == leaf_sender[l] && h.count > 0 && leaf_time[l] == h.time[h.count - 1])
+            if (h.sender == leaf_sender[l] && h.count > 0 && leaf_time[l] == h.time_of(h.count - 1))
                 continue;  // the same state again (a duplicate, or re-sent unchanged)
-            if (h.sender != leaf_sender[l] || (h.count > 0 && leaf_time[l] < h.time[h.count - 1]))
+            if (h.sender != leaf_sender[l] ||
+                (h.count > 0 && leaf_time[l] < h.time_of(h.count - 1)))
                 h.count = 0;  // another sender's clock: start over
             h.sender = leaf_sender[l];
             if (h.u.size() != k_view_history * n)
@@ -3005,18 +3103,15 @@ struct Session::Impl
             }
             if (h.count == k_view_history)
             {
-                // Drop the oldest.
-                std::copy(h.u.begin() + static_cast<std::ptrdiff_t>(n), h.u.end(), h.u.begin());
-                std::copy(h.v.begin() + static_cast<std::ptrdiff_t>(n), h.v.end(), h.v.begin());
-                std::copy(h.time.begin() + 1, h.time.end(), h.time.begin());
+                // Drop the oldest: its slot takes the new state.
+                h.first = (h.first + 1) % k_view_history;
                 --h.count;
             }
-            const auto k = static_cast<std::size_t>(h.count);
+            const auto k = static_cast<std::size_t>(h.slot(h.count));
             for (std::size_t i = 0; i < n; ++i)
             {
-                const core::GridCoord c = g.coord(nodes[i]);
-                h.u[k * n + i] = s.display_u_.at(c.x, c.y);
-                h.v[k * n + i] = s.display_v_.at(c.x, c.y);
+                h.u[k * n + i] = du[pad[nodes[i].value]];
+                h.v[k * n + i] = dv[pad[nodes[i].value]];
             }
             h.time[k] = leaf_time[l];
             ++h.count;
@@ -3041,6 +3136,7 @@ struct Session::Impl
     /// times a stream period would overshoot by more than |u|.
     void update_view(double now)
     {
+        flush_display();
         if (!settings.interpolate_view)
         {
             view_u = s.display_u_;
@@ -3083,7 +3179,8 @@ struct Session::Impl
         counters.view_delay_s = delay;
         view_u = s.display_u_;
         view_v = s.display_v_;
-        const core::TetraGrid& g = s.model_->grid();
+        double* vu = view_u.padded().data();
+        double* vv = view_v.padded().data();
         for (std::size_t l = 0; l < s.graph_->size(); ++l)
         {
             const ViewHistory& h = history[l];
@@ -3094,25 +3191,25 @@ struct Session::Impl
             int a = 0;  // states a and b = a + 1 bracket t, or a = b at either end
             int b = 0;
             double w = 0.0;
-            if (t >= h.time[h.count - 1])
+            if (t >= h.time_of(h.count - 1))
                 a = b = h.count - 1;
-            else if (t > h.time[0])
+            else if (t > h.time_of(0))
             {
-                while (h.time[b] <= t)
+                while (h.time_of(b) <= t)
                     ++b;
                 a = b - 1;
-                w = (t - h.time[a]) / (h.time[b] - h.time[a]);
+                w = (t - h.time_of(a)) / (h.time_of(b) - h.time_of(a));
             }
-            view_time[l] = (1.0 - w) * h.time[a] + w * h.time[b];
+            view_time[l] = (1.0 - w) * h.time_of(a) + w * h.time_of(b);
             const auto nodes = s.graph_->nodes(l);
             const std::size_t n = nodes.size();
-            const auto ia = static_cast<std::size_t>(a) * n;
-            const auto ib = static_cast<std::size_t>(b) * n;
+            const auto ia = static_cast<std::size_t>(h.slot(a)) * n;
+            const auto ib = static_cast<std::size_t>(h.slot(b)) * n;
             for (std::size_t i = 0; i < n; ++i)
             {
-                const core::GridCoord c = g.coord(nodes[i]);
-                view_u.at(c.x, c.y) = h.u[ia + i] + w * (h.u[ib + i] - h.u[ia + i]);
-                view_v.at(c.x, c.y) = h.v[ia + i] + w * (h.v[ib + i] - h.v[ia + i]);
+                const std::uint32_t o = pad[nodes[i].value];
+                vu[o] = h.u[ia + i] + w * (h.u[ib + i] - h.u[ia + i]);
+                vv[o] = h.v[ia + i] + w * (h.v[ib + i] - h.v[ia + i]);
             }
         }
         s.model_->sync(view_u);
@@ -3371,6 +3468,18 @@ Recording Session::recording() const
 void Session::shutdown()
 {
     impl_->close_all(net::DisconnectReason::Shutdown);
+}
+
+const core::Field<double>& Session::display_u() const noexcept
+{
+    impl_->flush_display();
+    return display_u_;
+}
+
+const core::Field<double>& Session::display_v() const noexcept
+{
+    impl_->flush_display();
+    return display_v_;
 }
 
 const core::Field<double>& Session::view_u() const noexcept

@@ -256,6 +256,71 @@ TEST(Messenger, BroadcastReachesEveryPeer)
     EXPECT_EQ(got, 3);
 }
 
+// The session streams each leaf state to a chosen set of peers (those holding the model), encoded
+// once: exactly those peers receive it, bit for bit; no peer is no send; an invalid message is
+// refused before anything goes out.
+TEST(Messenger, SendToAChosenSetReachesExactlyThoseItNames)
+{
+    SimulatedNetwork net;
+    auto hub_t = net.create_endpoint();
+    const Address hub_addr = hub_t->open({}).value();
+    Messenger hub(*hub_t);
+    std::vector<std::unique_ptr<Transport>> leaves_t;
+    std::vector<std::unique_ptr<Messenger>> leaves;
+    std::vector<Address> leaf_addr;
+    for (int i = 0; i < 3; ++i)
+    {
+        leaves_t.push_back(net.create_endpoint());
+        leaf_addr.push_back(leaves_t.back()->open({}).value());
+        ASSERT_TRUE(leaves_t.back()->connect(hub_addr));
+        leaves.push_back(std::make_unique<Messenger>(*leaves_t.back()));
+    }
+    std::vector<PeerHandle> handles;  // in the order the leaves connected
+    for (int i = 0; i < 100; ++i)
+    {
+        net.advance(0.001);
+        while (auto ev = hub.poll())
+            if (ev->kind == MessengerEvent::Kind::Connected)
+                handles.push_back(ev->peer);
+        for (auto& l : leaves)
+            while (l->poll())
+            {
+            }
+    }
+    ASSERT_EQ(handles.size(), 3U);
+    // Which leaf each handle is: the address the hub sees is the leaf's own.
+    std::vector<int> leaf_of(3, -1);
+    for (int h = 0; h < 3; ++h)
+        for (int k = 0; k < 3; ++k)
+            if (hub_t->remote_address(handles[static_cast<std::size_t>(h)]) ==
+                leaf_addr[static_cast<std::size_t>(k)])
+                leaf_of[static_cast<std::size_t>(h)] = k;
+    ASSERT_TRUE(std::all_of(leaf_of.begin(), leaf_of.end(), [](int k) { return k >= 0; }));
+
+    const Message state{samples::header(), samples::halo(ValueEncoding::F64, true, true)};
+    const std::vector<PeerHandle> chosen{handles[0], handles[2]};
+    ASSERT_TRUE(hub.send(chosen, state, SendMode::Unsequenced));
+    ASSERT_TRUE(hub.send(std::span<const PeerHandle>{}, state));  // nobody: nothing sent
+    Message bad = state;
+    std::get<Halo>(bad.body).ranges.clear();  // a halo covers at least one node range
+    EXPECT_FALSE(hub.send(chosen, bad));
+    std::vector<int> got(3, 0);
+    for (int i = 0; i < 100; ++i)
+    {
+        net.advance(0.001);
+        for (std::size_t k = 0; k < leaves.size(); ++k)
+            while (auto ev = leaves[k]->poll())
+                if (ev->kind == MessengerEvent::Kind::Received)
+                {
+                    EXPECT_EQ(ev->message.body, state.body);
+                    ++got[k];
+                }
+    }
+    EXPECT_EQ(got[static_cast<std::size_t>(leaf_of[0])], 1);
+    EXPECT_EQ(got[static_cast<std::size_t>(leaf_of[1])], 0);
+    EXPECT_EQ(got[static_cast<std::size_t>(leaf_of[2])], 1);
+}
+
 // Leaf states are sent unsequenced (docs/protocol.md §2): with jitter, a burst of state datagrams
 // arrives out of order; the default (ENet's sequenced unreliable delivery) drops every one older
 // than one already delivered, Unsequenced delivers them all and leaves the ordering to the

@@ -6,6 +6,7 @@
 
 #include "session_harness.h"
 
+#include <bit>
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
@@ -215,6 +216,63 @@ TEST(SessionExact, HostedFromASavedStateEqualsSingleProcessFromIt)
     ASSERT_FALSE(not_finite);
     EXPECT_NE(not_finite.error().message.find("(3, 4)"), std::string::npos)
         << not_finite.error().message;
+}
+
+// An exact-coupling peer steps 1,000 times a second and copies its own leaves into the display
+// only when the display is read (Session::display_u, flush_display). Read at any moment, the
+// display holds the state of the peer's own nodes bit for bit, and every twin equals its
+// canonical node.
+TEST(SessionExact, TheDisplayHoldsTheOwnStateWheneverItIsRead)
+{
+    Harness h;
+    h.host(k_level, settings_for(Coupling::Exact, "master"));
+    Session& p = h.join(net::Role::Participant, settings_for(Coupling::Exact, "part"));
+    p.set_points_of_interest({net::Target{net::TargetKind::Face, 3000, {0, 0, 0}, 0.0}});
+    apply_schedule(h, schedule(1));
+    ASSERT_TRUE(pump_until_partitioned(h, 2));
+    const core::TetraGrid& g = p.model()->grid();
+    int reads = 0;
+    for (int k = 0; k < 20000 && h.peers[0]->tick() < k_ticks; ++k)
+    {
+        h.pump_once(0.0005);
+        if (k % 31 != 0)
+            continue;  // steps in between go unread
+        for (std::size_t m = 0; m < 2; ++m)
+        {
+            const Session& peer = *h.peers[m];
+            const auto owners = peer.state_owners();  // the partition state() was stepped with
+            if (owners.empty())
+                continue;
+            const auto mine = [&](core::NodeIndex n)
+            { return owners[peer.leaf_graph()->leaf_of(n)] == peer.id(); };
+            const core::Field<double>& du = peer.display_u();
+            const core::Field<double>& dv = peer.display_v();
+            std::size_t own = 0;
+            for (const core::NodeIndex n : g.node_of_unique())
+            {
+                if (!mine(n))
+                    continue;
+                ++own;
+                const core::GridCoord c = g.coord(n);
+                ASSERT_EQ(std::bit_cast<std::uint64_t>(du.at(c.x, c.y)),
+                          std::bit_cast<std::uint64_t>(peer.state().u.at(c.x, c.y)))
+                    << "peer " << m << " tick " << peer.tick();
+                ASSERT_EQ(std::bit_cast<std::uint64_t>(dv.at(c.x, c.y)),
+                          std::bit_cast<std::uint64_t>(peer.state().v.at(c.x, c.y)));
+            }
+            ASSERT_GT(own, 0U);
+            for (const core::TwinPair& t : g.twins())
+            {
+                const core::GridCoord a = g.coord(t.twin);
+                const core::GridCoord b = g.coord(t.canonical);
+                ASSERT_EQ(du.at(a.x, a.y), du.at(b.x, b.y));
+                ASSERT_EQ(dv.at(a.x, a.y), dv.at(b.x, b.y));
+            }
+            ++reads;
+        }
+    }
+    EXPECT_GT(reads, 50);
+    EXPECT_GT(h.peers[0]->tick(), 150U) << "the pulls of the schedule acted";
 }
 
 TEST(SessionExact, TwoPeersEqualSingleProcess)

@@ -23,6 +23,7 @@
 #include <cstdint>
 #include <map>
 #include <optional>
+#include <span>
 #include <vector>
 
 namespace pliant::net
@@ -133,6 +134,10 @@ public:
     /// the caller, reported rather than asserted so a session can log it); the transport's error
     /// otherwise.
     core::Result<void> send(PeerHandle peer, const Message& message,
+                            SendMode mode = SendMode::Default) noexcept;
+
+    /// Sends the same message to each of `peers`; encodes once. \return the first error.
+    core::Result<void> send(std::span<const PeerHandle> peers, const Message& message,
                             SendMode mode = SendMode::Default) noexcept;
 
     /// Sends to every connected peer; encodes once. \return the first error.

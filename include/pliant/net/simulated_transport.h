@@ -85,6 +85,10 @@ public:
 
     /// Advances the virtual clock by `seconds` (>= 0).
     void advance(double seconds);
+    /// Moves every packet due by now into its endpoint's queue. Each transport's poll() does
+    /// this first; a harness that times its peers' polls calls it before them, so that the
+    /// first to poll is not charged for everyone's deliveries.
+    void deliver_due();
     /// Advances the clock to the next pending arrival. \return false if nothing is in flight.
     bool advance_to_next_arrival();
     [[nodiscard]] std::int64_t now_us() const;

@@ -345,9 +345,10 @@ public:
     /// The integrated state (valid on the nodes this peer owns).
     [[nodiscard]] const sim::MembraneState& state() const noexcept { return state_; }
     /// What this peer shows: the whole object, its own leaves and the newest received ones
-    /// (ghost ring 1, twins synced).
-    [[nodiscard]] const core::Field<double>& display_u() const noexcept { return display_u_; }
-    [[nodiscard]] const core::Field<double>& display_v() const noexcept { return display_v_; }
+    /// (ghost ring 1, twins synced). Our own leaves are copied from the state when the display
+    /// is read, not at every step (an exact-coupling peer steps 1,000 times a second).
+    [[nodiscard]] const core::Field<double>& display_u() const noexcept;
+    [[nodiscard]] const core::Field<double>& display_v() const noexcept;
     /// What to draw: display_u/v with the leaves this peer does not compute interpolated in
     /// time between the states received (SessionSettings::interpolate_view; equal to the display
     /// when off). Updated by advance(), at most frame_rate_hz times per second. The display holds
