@@ -95,8 +95,8 @@ constexpr const char* k_usage =
     "  --enet       with --latency: in real time over ENet on 127.0.0.1, a thread per peer\n"
     "  --cpu        all the work of each peer (steps, halos, streams, display) per simulated\n"
     "               second in the steady state, against one peer alone in its session, 1..4\n"
-    "               participants, exact and fast coupling, on a 0.5 ms LAN (default levels\n"
-    "               6 7 8; --quick: 6)\n"
+    "               participants, exact and fast coupling, on a 0.5 ms LAN, best of 3 runs\n"
+    "               (default levels 6 7 8; --quick: level 6, one run)\n"
     "  --seconds S  seconds measured by --stream and --coarse after 0.5 s of warm-up,\n"
     "               > 0 and <= 3600 (default 2)\n"
     "  --quick      short runs: the default suite at levels 5 6, --steps and --latency at 6\n"
@@ -1326,16 +1326,17 @@ std::vector<GrabSeen> run_latency_enet(int level, int peers, session::Coupling c
 /// evicts; wall time of the calls (the machine's other load shows in them).
 void cpu_suite(bench::Report& report, const std::vector<int>& levels)
 {
+    const int rounds = report.quick() ? 1 : 3;
     report.meta("network", "SimulatedNetwork, 0.5 ms one-way latency, all peers in one thread");
     report.meta("material", "unit sphere, T=1, rho=1, beta=0.5, k_f=1, fixed dt 1 ms");
     constexpr std::uint64_t ticks = 1000;
     constexpr double lan_s = 0.0005;
     std::printf(
         "# all work per peer (poll + advance) per simulated second, steady state, LAN 0.5 ms, "
-        "%llu ticks, 1 thread per peer\n"
+        "%llu ticks, 1 thread per peer, best of %d runs\n"
         "level coupling peers | work ms/s busiest mean | / alone: busiest mean | steps / "
         "alone's: busiest | not steps, busiest\n",
-        static_cast<unsigned long long>(ticks));
+        static_cast<unsigned long long>(ticks), rounds);
     for (const int level : levels)
         for (const session::Coupling coupling : {session::Coupling::Exact, session::Coupling::Fast})
         {
@@ -1344,8 +1345,34 @@ void cpu_suite(bench::Report& report, const std::vector<int>& levels)
             double alone_step = 0.0;
             for (int peers = 1; peers <= 4; ++peers)
             {
-                const RunResult r =
-                    run(level, peers, coupling, ticks, nullptr, 60.0, std::nullopt, lan_s);
+                // Best of `rounds` runs, per peer (the same seats every run): the wall time of
+                // one run scatters by +-25 % on a shared machine.
+                RunResult r;
+                for (int round = 0; round < rounds; ++round)
+                {
+                    const RunResult one =
+                        run(level, peers, coupling, ticks, nullptr, 60.0, std::nullopt, lan_s);
+                    if (one.steady_sim_s.size() != static_cast<std::size_t>(peers))
+                    {
+                        r = one;
+                        break;
+                    }
+                    if (round == 0)
+                    {
+                        r = one;
+                        continue;
+                    }
+                    for (std::size_t k = 0; k < one.steady_sim_s.size(); ++k)
+                    {
+                        if (one.steady_busy_s[k] / one.steady_sim_s[k] <
+                            r.steady_busy_s[k] / r.steady_sim_s[k])
+                        {
+                            r.steady_busy_s[k] = one.steady_busy_s[k];
+                            r.steady_sim_s[k] = one.steady_sim_s[k];
+                            r.steady_step_s[k] = one.steady_step_s[k];
+                        }
+                    }
+                }
                 if (r.steady_sim_s.size() != static_cast<std::size_t>(peers))
                 {
                     std::printf("%5d %-8s %5d | no steady state within %llu ticks\n", level, name,

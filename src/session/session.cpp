@@ -3177,16 +3177,26 @@ struct Session::Impl
             delay = std::max(delay, pl.newest - pl.render);
         }
         counters.view_delay_s = delay;
-        view_u = s.display_u_;
-        view_v = s.display_v_;
+        // Leaf by leaf, the display's nodes or the interpolated ones; then the twins and ghosts
+        // (a copy of the whole display first cost as much as the rest together at level 8).
         double* vu = view_u.padded().data();
         double* vv = view_v.padded().data();
+        const double* du = s.display_u_.padded().data();
+        const double* dv = s.display_v_.padded().data();
         for (std::size_t l = 0; l < s.graph_->size(); ++l)
         {
             const ViewHistory& h = history[l];
             view_time[l] = leaf_time[l];
             if (h.count == 0 || leaf_sender[l] == s.id_.value || h.sender != leaf_sender[l])
+            {
+                for (const core::NodeIndex node : s.graph_->nodes(l))
+                {
+                    const std::uint32_t o = pad[node.value];
+                    vu[o] = du[o];
+                    vv[o] = dv[o];
+                }
                 continue;
+            }
             const double t = playout[h.sender].render;
             int a = 0;  // states a and b = a + 1 bracket t, or a = b at either end
             int b = 0;
