@@ -3,7 +3,7 @@
 // `pliant simulate [GRID] --scenario FILE.toml -o DIR`: runs a membrane scenario headless
 // (docs/physics.md). The scenario (TOML) names the material, the integrator, the duration, the
 // frame rate and timed forces; the run writes one .pgrid (or a .ply/.obj/.gltf/.glb surface) per
-// frame and energy.csv.
+// frame, energy.csv, and run.json (the inputs, every setting in effect, and how the run ended).
 // TOML stays in this file: the sim library knows no file formats.
 #include <pliant/core/grid_io.h>
 #include <pliant/core/tetra_grid.h>
@@ -11,6 +11,7 @@
 #include <pliant/sim/membrane.h>
 #include <pliant/sim/rkf45.h>
 
+#include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 #include <toml++/toml.h>
 
@@ -630,6 +631,94 @@ core::Result<void> check_mixed_precision(const Scenario& sc, const std::filesyst
     return {};
 }
 
+/// run.json in the output folder: what was run (the inputs and every setting in effect, the
+/// command line's and the scenario's merged) and how it ended. Written before the first step
+/// with status "running", and again when the run completes or diverges, each time through a
+/// temporary file renamed over it, so the file is always whole.
+class RunRecord
+{
+public:
+    RunRecord(const SimulateOptions& opt, const Scenario& sc, const core::TetraGrid& grid)
+        : path_(opt.out / "run.json")
+    {
+        const sim::MembraneSettings& m = sc.settings;
+        json_["program"] = "pliant simulate";
+        json_["scenario"] = opt.scenario.string();
+        json_["grid"] = opt.grid.empty() ? nlohmann::ordered_json(nullptr)
+                                         : nlohmann::ordered_json(opt.grid.string());
+        if (opt.grid.empty())
+            json_["sphere"] = {{"radius", opt.radius}, {"map", opt.sphere_map}};
+        json_["level"] = grid.level();
+        json_["vertices"] = grid.unique_count();
+        json_["resume"] = opt.resume.empty() ? nlohmann::ordered_json(nullptr)
+                                             : nlohmann::ordered_json(opt.resume.string());
+        json_["format"] = opt.format;
+        json_["material"] = {{"T", m.T}, {"rho", m.rho}, {"beta", m.beta}, {"k_f", m.k_f}};
+        nlohmann::ordered_json integrator;
+        integrator["precision"] = std::string(sim::to_string(m.precision));
+        integrator["fixed_step"] = m.fixed_step;
+        if (m.fixed_step)
+            integrator["fixed_dt"] = m.fixed_dt;
+        else
+        {
+            integrator["rtol"] = m.rtol;
+            integrator["atol"] = m.atol;
+            integrator["dt_min"] = m.dt_min;
+            integrator["dt_max"] = m.dt_max;
+            integrator["dt_initial"] = m.dt_initial;
+            integrator["safety"] = m.safety;
+            integrator["max_growth"] = m.max_growth;
+            integrator["min_shrink"] = m.min_shrink;
+        }
+        integrator["reassemble_every"] = m.reassemble_every;
+        integrator["force_hold"] = std::string(sim::to_string(m.force_hold));
+        integrator["threads"] = m.threads;
+        json_["integrator"] = integrator;
+        json_["duration_s"] = sc.duration;
+        json_["frame_rate"] = sc.frame_rate;
+        json_["frames"] = sc.frames + 1;
+        json_["forces"] = sc.forces.size();
+        end("running", 0, 0.0, 0.0, {});
+    }
+
+    /// Sets the result: the status, the frames written, the simulated and wall seconds, and the
+    /// step counts.
+    void end(const char* status, int frames_written, double simulated_s, double wall_s,
+             const std::array<std::uint64_t, 3>& steps_rejections_at_min)
+    {
+        json_["result"] = {{"status", status},
+                           {"frames_written", frames_written},
+                           {"simulated_s", simulated_s},
+                           {"wall_s", wall_s},
+                           {"steps", steps_rejections_at_min[0]},
+                           {"rejections", steps_rejections_at_min[1]},
+                           {"steps_at_dt_min", steps_rejections_at_min[2]}};
+    }
+    void set_reason(const std::string& reason) { json_["result"]["reason"] = reason; }
+
+    [[nodiscard]] core::Result<void> write() const
+    {
+        const std::filesystem::path tmp = path_.string() + ".tmp";
+        {
+            std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
+            f << json_.dump(2) << '\n';
+            if (!f)
+                return core::fail(core::ErrorCode::IoError,
+                                  "simulate: cannot write " + tmp.string());
+        }
+        std::error_code ec;
+        std::filesystem::rename(tmp, path_, ec);
+        if (ec)
+            return core::fail(core::ErrorCode::IoError,
+                              "simulate: cannot write " + path_.string() + ": " + ec.message());
+        return {};
+    }
+
+private:
+    std::filesystem::path path_;
+    nlohmann::ordered_json json_;
+};
+
 int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
 {
     auto scenario = parse_scenario(opt.scenario);
@@ -701,6 +790,9 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
                        "simulate: cannot write " + (opt.out / "energy.csv").string()});
     csv << "frame,time,kinetic,strain,foundation,total,steps,rejections,flags\n";
     csv.precision(17);
+    RunRecord record(opt, sc, grid);
+    if (auto ok = record.write(); !ok)
+        return report(ok.error());
 
     sim::MembraneState state = resumed ? std::move(*resumed) : sim::MembraneState::at_rest(grid);
     sim::Rkf45Workspace ws(*model, sc.settings.threads);
@@ -712,9 +804,17 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
     std::uint64_t total_steps = 0;
     std::uint64_t total_rejections = 0;
     std::uint64_t total_at_min = 0;
+    const auto start = std::chrono::steady_clock::now();
+    const auto seconds_since_start = [&]
+    { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
     // A diverged run stops with the frames written so far (energy.csv keeps their rows).
     const auto diverged = [&](const std::string& what, int frame)
     {
+        record.end("diverged", frame + 1, state.time, seconds_since_start(),
+                   {total_steps, total_rejections, total_at_min});
+        record.set_reason(what);
+        if (auto ok = record.write(); !ok)
+            spdlog::warn("{}", ok.error().message);
         spdlog::error(
             "{}: {} at t = {} s: the run diverged and stops (frames 0 to {} are in {}); "
             "lower {} or the forces",
@@ -722,7 +822,6 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
             fixed ? "fixed_dt" : "dt_min and dt_max");
         return k_exit_failure;
     };
-    const auto start = std::chrono::steady_clock::now();
     for (int frame = 0; frame <= frames; ++frame)
     {
         const double t_frame = frame / sc.frame_rate;
@@ -801,8 +900,11 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
             return diverged("the energy became non-finite", frame);
         bar.update("simulate", frames > 0 ? static_cast<double>(frame) / frames : 1.0);
     }
-    const double wall =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double wall = seconds_since_start();
+    record.end("complete", frames + 1, state.time, wall,
+               {total_steps, total_rejections, total_at_min});
+    if (auto ok = record.write(); !ok)
+        return report(ok.error());
     std::printf(
         "%d frames, %.3f s simulated in %.3f s wall (%.2fx real time), level %d, %zu "
         "vertices, %llu steps, %llu rejections, %d thread(s), %s precision -> %s\n",
@@ -850,7 +952,9 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global)
         "DIR receives frame_NNNNN.pgrid per frame (channels px py pz = deformed positions\n"
         "P + u N, u [m], v [m/s]; or surfaces with --format ply, obj, gltf or glb) and\n"
         "energy.csv (frame, time, kinetic, strain, foundation, total energy [J], steps,\n"
-        "rejections, flags).\n\n"
+        "rejections, flags), and run.json: the inputs, every setting in effect (the command\n"
+        "line's and the scenario's), and the result (status running, complete or diverged,\n"
+        "frames written, simulated and wall seconds, steps).\n\n"
         "Examples:\n"
         "  pliant simulate --scenario scenes/pull.toml -o out/pull            # sphere, level 6\n"
         "  pliant simulate spot.pgrid --scenario scenes/spot.toml -o out/spot --format ply\n"

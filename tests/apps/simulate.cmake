@@ -26,6 +26,10 @@ if(TARGET pliant)
              COMMAND ${CMAKE_COMMAND} -DDIR=${sim_out}
                      -P ${CMAKE_CURRENT_SOURCE_DIR}/check_simulate_outputs.cmake)
     set_tests_properties(cli_simulate_pull_outputs PROPERTIES DEPENDS cli_simulate_pull)
+    add_test(NAME cli_simulate_pull_run_json
+             COMMAND ${CMAKE_COMMAND} -DDIR=${sim_out} -DSTATUS=complete -DFRAMES=101 -DLEVEL=4
+                     -DPRECISION=double -P ${CMAKE_CURRENT_SOURCE_DIR}/check_run_json.cmake)
+    set_tests_properties(cli_simulate_pull_run_json PROPERTIES DEPENDS cli_simulate_pull)
 
     add_test(NAME cli_simulate_warns_unreachable_point
              COMMAND pliant simulate
@@ -80,6 +84,12 @@ if(TARGET pliant)
         TIMEOUT 120
         PASS_REGULAR_EXPRESSION "101 frames, 4.000 s simulated.* mixed precision"
         FAIL_REGULAR_EXPRESSION "beyond its radius;error")
+    add_test(NAME cli_simulate_pull_mixed_run_json
+             COMMAND ${CMAKE_COMMAND} -DDIR=${CMAKE_CURRENT_BINARY_DIR}/simulate-pull-mixed
+                     -DSTATUS=complete -DFRAMES=101 -DLEVEL=4 -DPRECISION=mixed
+                     -P ${CMAKE_CURRENT_SOURCE_DIR}/check_run_json.cmake)
+    set_tests_properties(cli_simulate_pull_mixed_run_json PROPERTIES
+        DEPENDS cli_simulate_pull_mixed)
     set(scenarios ${PROJECT_SOURCE_DIR}/tests/data/scenarios)
     # 166 whole steps of 3 ms in 0.5 s, frames at the last step before each 100 ms.
     add_test(NAME cli_simulate_fixed_step_remainder
@@ -101,6 +111,12 @@ if(TARGET pliant)
     pliant_cli_expect(cli_simulate_stops_when_non_finite 3 STDERR
                       "diverges.toml: the state became non-finite at t = [0-9.]+ s: the run diverged and stops \\(frames 0 to 0 are in "
                       simulate --scenario ${scenarios}/diverges.toml -o ${CMAKE_CURRENT_BINARY_DIR}/simulate-diverges --level 3 -j 1)
+    add_test(NAME cli_simulate_diverged_run_json
+             COMMAND ${CMAKE_COMMAND} -DDIR=${CMAKE_CURRENT_BINARY_DIR}/simulate-diverges
+                     -DSTATUS=diverged -DFRAMES=1 -DLEVEL=3 -DPRECISION=double
+                     -P ${CMAKE_CURRENT_SOURCE_DIR}/check_run_json.cmake)
+    set_tests_properties(cli_simulate_diverged_run_json PROPERTIES
+        DEPENDS cli_simulate_stops_when_non_finite)
 
     set(refusals
         bad_face "bad_face.toml:7: 'force\\[0\\].face' = 999999 is not below the grid's 256 faces \\(level 3\\)"

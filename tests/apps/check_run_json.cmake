@@ -1,0 +1,28 @@
+# SPDX-License-Identifier: MIT
+# SPDX-FileCopyrightText: 2026 pliant contributors
+# What `pliant simulate` records in DIR/run.json (docs/physics.md §7, "Output"): the result's STATUS and
+# FRAMES written, the level and the precision in effect, and no temporary file left beside it.
+file(READ ${DIR}/run.json json)
+string(JSON status GET "${json}" result status)
+string(JSON frames GET "${json}" result frames_written)
+string(JSON level GET "${json}" level)
+string(JSON precision GET "${json}" integrator precision)
+string(JSON program GET "${json}" program)
+if(NOT program STREQUAL "pliant simulate")
+    message(FATAL_ERROR "run.json: program '${program}'")
+endif()
+if(NOT status STREQUAL "${STATUS}")
+    message(FATAL_ERROR "run.json: status '${status}', expected '${STATUS}'")
+endif()
+if(NOT frames EQUAL FRAMES)
+    message(FATAL_ERROR "run.json: ${frames} frames written, expected ${FRAMES}")
+endif()
+if(NOT level EQUAL LEVEL)
+    message(FATAL_ERROR "run.json: level ${level}, expected ${LEVEL}")
+endif()
+if(NOT precision STREQUAL "${PRECISION}")
+    message(FATAL_ERROR "run.json: precision '${precision}', expected '${PRECISION}'")
+endif()
+if(EXISTS ${DIR}/run.json.tmp)
+    message(FATAL_ERROR "run.json.tmp left in ${DIR}")
+endif()
