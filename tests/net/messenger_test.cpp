@@ -214,39 +214,52 @@ TEST(Messenger, SpoofedSenderAndForeignSessionAreDropped)
     EXPECT_EQ(n.b.dropped(), 2u);
 }
 
-TEST(Messenger, BroadcastReachesEveryPeer)
+/// A hub and three leaves connected to it over a simulated network, every connection event
+/// polled; `handles`: the hub's handle of each leaf, `leaf_addr`: each leaf's address.
+struct Star
 {
     SimulatedNetwork net;
-    auto hub_t = net.create_endpoint();
-    const Address hub_addr = hub_t->open({}).value();
-    Messenger hub(*hub_t);
+    std::unique_ptr<Transport> hub_t = net.create_endpoint();
+    Address hub_addr = hub_t->open({}).value();
+    Messenger hub{*hub_t};
     std::vector<std::unique_ptr<Transport>> leaves_t;
     std::vector<std::unique_ptr<Messenger>> leaves;
-    for (int i = 0; i < 3; ++i)
+    std::vector<Address> leaf_addr;
+    std::vector<PeerHandle> handles;  // in the order the hub saw them connect
+
+    Star()
     {
-        leaves_t.push_back(net.create_endpoint());
-        ASSERT_TRUE(leaves_t.back()->open({}));
-        ASSERT_TRUE(leaves_t.back()->connect(hub_addr));
-        leaves.push_back(std::make_unique<Messenger>(*leaves_t.back()));
+        for (int i = 0; i < 3; ++i)
+        {
+            leaves_t.push_back(net.create_endpoint());
+            leaf_addr.push_back(leaves_t.back()->open({}).value());
+            EXPECT_TRUE(leaves_t.back()->connect(hub_addr));
+            leaves.push_back(std::make_unique<Messenger>(*leaves_t.back()));
+        }
+        for (int i = 0; i < 100; ++i)
+        {
+            net.advance(0.001);
+            while (auto ev = hub.poll())
+                if (ev->kind == MessengerEvent::Kind::Connected)
+                    handles.push_back(ev->peer);
+            for (auto& l : leaves)
+                while (l->poll())
+                {
+                }
+        }
     }
-    int connected = 0;
-    for (int i = 0; i < 100; ++i)
-    {
-        net.advance(0.001);
-        while (auto ev = hub.poll())
-            connected += ev->kind == MessengerEvent::Kind::Connected ? 1 : 0;
-        for (auto& l : leaves)
-            while (l->poll())
-            {
-            }
-    }
-    ASSERT_EQ(connected, 3);
-    ASSERT_TRUE(hub.broadcast(Message{samples::header(), Heartbeat{.epoch = 5}}));
+};
+
+TEST(Messenger, BroadcastReachesEveryPeer)
+{
+    Star star;
+    ASSERT_EQ(star.handles.size(), 3U);
+    ASSERT_TRUE(star.hub.broadcast(Message{samples::header(), Heartbeat{.epoch = 5}}));
     int got = 0;
     for (int i = 0; i < 100; ++i)
     {
-        net.advance(0.001);
-        for (auto& l : leaves)
+        star.net.advance(0.001);
+        for (auto& l : star.leaves)
             while (auto ev = l->poll())
                 got += ev->kind == MessengerEvent::Kind::Received &&
                                std::get<Heartbeat>(ev->message.body).epoch == 5
@@ -261,55 +274,29 @@ TEST(Messenger, BroadcastReachesEveryPeer)
 // refused before anything goes out.
 TEST(Messenger, SendToAChosenSetReachesExactlyThoseItNames)
 {
-    SimulatedNetwork net;
-    auto hub_t = net.create_endpoint();
-    const Address hub_addr = hub_t->open({}).value();
-    Messenger hub(*hub_t);
-    std::vector<std::unique_ptr<Transport>> leaves_t;
-    std::vector<std::unique_ptr<Messenger>> leaves;
-    std::vector<Address> leaf_addr;
-    for (int i = 0; i < 3; ++i)
-    {
-        leaves_t.push_back(net.create_endpoint());
-        leaf_addr.push_back(leaves_t.back()->open({}).value());
-        ASSERT_TRUE(leaves_t.back()->connect(hub_addr));
-        leaves.push_back(std::make_unique<Messenger>(*leaves_t.back()));
-    }
-    std::vector<PeerHandle> handles;  // in the order the leaves connected
-    for (int i = 0; i < 100; ++i)
-    {
-        net.advance(0.001);
-        while (auto ev = hub.poll())
-            if (ev->kind == MessengerEvent::Kind::Connected)
-                handles.push_back(ev->peer);
-        for (auto& l : leaves)
-            while (l->poll())
-            {
-            }
-    }
-    ASSERT_EQ(handles.size(), 3U);
+    Star star;
+    ASSERT_EQ(star.handles.size(), 3U);
     // Which leaf each handle is: the address the hub sees is the leaf's own.
     std::vector<int> leaf_of(3, -1);
-    for (int h = 0; h < 3; ++h)
-        for (int k = 0; k < 3; ++k)
-            if (hub_t->remote_address(handles[static_cast<std::size_t>(h)]) ==
-                leaf_addr[static_cast<std::size_t>(k)])
-                leaf_of[static_cast<std::size_t>(h)] = k;
+    for (std::size_t h = 0; h < 3; ++h)
+        for (std::size_t k = 0; k < 3; ++k)
+            if (star.hub_t->remote_address(star.handles[h]) == star.leaf_addr[k])
+                leaf_of[h] = static_cast<int>(k);
     ASSERT_TRUE(std::all_of(leaf_of.begin(), leaf_of.end(), [](int k) { return k >= 0; }));
 
     const Message state{samples::header(), samples::halo(ValueEncoding::F64, true, true)};
-    const std::vector<PeerHandle> chosen{handles[0], handles[2]};
-    ASSERT_TRUE(hub.send(chosen, state, SendMode::Unsequenced));
-    ASSERT_TRUE(hub.send(std::span<const PeerHandle>{}, state));  // nobody: nothing sent
+    const std::vector<PeerHandle> chosen{star.handles[0], star.handles[2]};
+    ASSERT_TRUE(star.hub.send(chosen, state, SendMode::Unsequenced));
+    ASSERT_TRUE(star.hub.send(std::span<const PeerHandle>{}, state));  // nobody: nothing sent
     Message bad = state;
     std::get<Halo>(bad.body).ranges.clear();  // a halo covers at least one node range
-    EXPECT_FALSE(hub.send(chosen, bad));
+    EXPECT_FALSE(star.hub.send(chosen, bad));
     std::vector<int> got(3, 0);
     for (int i = 0; i < 100; ++i)
     {
-        net.advance(0.001);
-        for (std::size_t k = 0; k < leaves.size(); ++k)
-            while (auto ev = leaves[k]->poll())
+        star.net.advance(0.001);
+        for (std::size_t k = 0; k < star.leaves.size(); ++k)
+            while (auto ev = star.leaves[k]->poll())
                 if (ev->kind == MessengerEvent::Kind::Received)
                 {
                     EXPECT_EQ(ev->message.body, state.body);
