@@ -273,7 +273,14 @@ RunResult run(int level, int peers, session::Coupling coupling, std::uint64_t ti
         for (std::size_t k = 0; k < s.size(); ++k)
             timed(k, [&] { s[k]->poll(); });
         for (std::size_t k = 0; k < s.size(); ++k)
-            timed(k, [&] { s[k]->advance(now); });
+            timed(k,
+                  [&]
+                  {
+                      s[k]->advance(now);
+                      // A peer that shows the object reads its view after every advance (the
+                      // session computes the view's nodes when it is read, once per frame).
+                      (void)s[k]->view_u();
+                  });
         network.advance(pump_dt);
         now += pump_dt;
         if (busy0.empty())

@@ -567,6 +567,8 @@ struct Session::Impl
     std::vector<net::PeerHandle> stream_to;  // stream(): the receivers of a leaf state
     // Our leaves' nodes in the display are older than the state (flush_display).
     bool own_display_pending = false;
+    // A frame's update_view has not been written into view_u/v yet (materialize_view).
+    bool view_due = false;
     double stall_since = -1.0;  // fast: our clock when the current hold began (-1: none)
     // fast: a hold ran out (max_stall_s) and the frames since have all been stale: step on
     // without a new hold until a frame is fresh again (a neighbour silent, not slow).
@@ -3134,16 +3136,14 @@ struct Session::Impl
     /// real time, such as a lockstep, is then shown at its newest states). Linear, not cubic
     /// Hermite with the received v: the grid's fastest modes have |v| / |u| up to ~150/s, and v
     /// times a stream period would overshoot by more than |u|.
+    /// At the frame rate: the playout times (and the view delay they give); the view's nodes
+    /// follow when the view is next read (materialize_view), so a peer that draws nothing (a
+    /// headless `pliant host` or `join`) does not compute them.
     void update_view(double now)
     {
-        flush_display();
+        view_due = true;
         if (!settings.interpolate_view)
-        {
-            view_u = s.display_u_;
-            view_v = s.display_v_;
-            std::copy(leaf_time.begin(), leaf_time.end(), view_time.begin());
             return;
-        }
         double delay = 0.0;
         const double margin = k_view_periods / settings.stream_rate_hz;
         for (auto& [sender, pl] : playout)
@@ -3177,6 +3177,24 @@ struct Session::Impl
             delay = std::max(delay, pl.newest - pl.render);
         }
         counters.view_delay_s = delay;
+    }
+
+    /// The view of the last update_view's playout times, from the display and the states
+    /// received up to now; once per update_view, when the view is read (Session::view_u/v,
+    /// view_time).
+    void materialize_view()
+    {
+        if (!view_due || !s.model_)
+            return;
+        view_due = false;
+        flush_display();
+        if (!settings.interpolate_view)
+        {
+            view_u = s.display_u_;
+            view_v = s.display_v_;
+            std::copy(leaf_time.begin(), leaf_time.end(), view_time.begin());
+            return;
+        }
         // Leaf by leaf, the display's nodes or the interpolated ones; then the twins and ghosts
         // (a copy of the whole display first cost as much as the rest together at level 8).
         double* vu = view_u.padded().data();
@@ -3494,16 +3512,19 @@ const core::Field<double>& Session::display_v() const noexcept
 
 const core::Field<double>& Session::view_u() const noexcept
 {
+    impl_->materialize_view();
     return impl_->view_u;
 }
 
 const core::Field<double>& Session::view_v() const noexcept
 {
+    impl_->materialize_view();
     return impl_->view_v;
 }
 
 std::span<const double> Session::view_time() const noexcept
 {
+    impl_->materialize_view();
     return impl_->view_time;
 }
 

@@ -351,7 +351,9 @@ public:
     [[nodiscard]] const core::Field<double>& display_v() const noexcept;
     /// What to draw: display_u/v with the leaves this peer does not compute interpolated in
     /// time between the states received (SessionSettings::interpolate_view; equal to the display
-    /// when off). Updated by advance(), at most frame_rate_hz times per second. The display holds
+    /// when off). Updated at most frame_rate_hz times per second: advance() sets the playout
+    /// times, and the nodes are computed when the view is first read after it (a peer that
+    /// draws nothing does not compute them). The display holds
     /// the newest values, which fast coupling uses as Dirichlet values; the view lags them by
     /// view_delay_s and moves smoothly.
     [[nodiscard]] const core::Field<double>& view_u() const noexcept;
