@@ -27,10 +27,20 @@ namespace
 
 using namespace pliant::session::test;  // read, rows, value, column_sum (stats_csv.h)
 
+/// The UDP port of test `slot` (0..11) in this process: below Linux's ephemeral range (32768 and
+/// up), so that no joiner's OS-chosen port, in this test or one running beside it, can take it
+/// (the range up to 39,990 used before overlapped it: a host that cannot bind skips its test);
+/// slots 1,000 apart, so that tests running at once (close process ids) differ.
+/// A test may also use the port above its own.
+int test_port(int slot)
+{
+    return 20000 + static_cast<int>((getpid() + 1000 * slot) % 12000);
+}
+
 TEST(SessionCli, HostAndTwoJoinsAsProcessesExchangeTraffic)
 {
     const auto dir = pliant::test::scratch_dir("session_cli");
-    const int port = 20000 + static_cast<int>(getpid() % 20000);
+    const int port = test_port(0);
     {
         std::ofstream(dir / "grab.txt") << "0.3 grab face 700 force 0 0 0.5 for 1.0\n";
     }
@@ -67,7 +77,7 @@ TEST(SessionCli, HostAndTwoJoinsAsProcessesExchangeTraffic)
 TEST(SessionCli, HostTakesAPointClearanceAndRefusesAnUnknownOne)
 {
     const auto dir = pliant::test::scratch_dir("session_cli_clearance");
-    const int port = 20000 + static_cast<int>((getpid() + 7) % 20000);
+    const int port = test_port(1);
     const std::string exe = PLIANT_EXE;
     const auto host = [&](const std::string& args, const char* log)
     {
@@ -101,7 +111,7 @@ TEST(SessionCli, HostTakesAPointClearanceAndRefusesAnUnknownOne)
 TEST(SessionCli, KillingAParticipantThenTheMasterLeavesTheOthersRunning)
 {
     const auto dir = pliant::test::scratch_dir("session_cli_kill");
-    const int port = 20000 + static_cast<int>((getpid() + 7919) % 20000);
+    const int port = test_port(2);
     const std::string exe = PLIANT_EXE;
     const std::string d = dir.string();
     const std::string p = std::to_string(port);
@@ -150,7 +160,7 @@ TEST(SessionCli, KillingAParticipantThenTheMasterLeavesTheOthersRunning)
 TEST(SessionCli, InterruptLeavesAndEndsTheSessionCleanly)
 {
     const auto dir = pliant::test::scratch_dir("session_cli_interrupt");
-    const int port = 20000 + static_cast<int>((getpid() + 3001) % 19990);
+    const int port = test_port(3);
     const std::string exe = PLIANT_EXE;
     const std::string d = dir.string();
     const std::string p = std::to_string(port);
@@ -190,7 +200,7 @@ TEST(SessionCli, InterruptLeavesAndEndsTheSessionCleanly)
 TEST(SessionCli, RefusedJoinersSayWhyAndTheMasterCountsThem)
 {
     const auto dir = pliant::test::scratch_dir("session_cli_refused");
-    const int port = 20000 + static_cast<int>((getpid() + 4409) % 19990);
+    const int port = test_port(4);
     const std::string exe = PLIANT_EXE;
     const std::string d = dir.string();
     const std::string p = std::to_string(port);
@@ -237,7 +247,7 @@ namespace
 TEST(SessionCli, StreamCoarsenFeedsAViewerAndIsRefusedInFastMode)
 {
     const auto dir = pliant::test::scratch_dir("session_cli_coarse");
-    const int port = 20000 + static_cast<int>((getpid() + 4001) % 19990);
+    const int port = test_port(5);
     const std::string exe = PLIANT_EXE;
     const std::string d = dir.string();
     const std::string p = std::to_string(port);
@@ -272,7 +282,7 @@ void run_exact_processes(int participants)
 {
     const auto dir = pliant::test::scratch_dir(participants == 1 ? "session_cli_exact_2"
                                                                  : "session_cli_exact_3");
-    const int port = 20000 + static_cast<int>((getpid() + 6007 + 13 * participants) % 19990);
+    const int port = test_port(5 + participants);
     {
         std::ofstream(dir / "g1.txt") << "0.2 grab face 700 force 0 0 0.5 for 0.6\n";
         std::ofstream(dir / "g2.txt") << "0.3 grab point 0 0 1 radius 0.4 force 0 0 -0.4 for 0.5\n";
@@ -344,7 +354,7 @@ void run_exact_processes(int participants)
 TEST(SessionCli, ARecordingWithoutCommonTicksReplaysBitForBitOnTheMastersNodes)
 {
     const auto dir = pliant::test::scratch_dir("session_cli_record_no_ticks");
-    const int port = 20000 + static_cast<int>((getpid() + 9013) % 19990);
+    const int port = test_port(8);
     std::ofstream(dir / "g1.txt") << "0.2 grab face 700 force 0 0 0.5 for 1.5\n";
     const std::string exe = PLIANT_EXE;
     const std::string d = dir.string();
@@ -383,7 +393,7 @@ TEST(SessionCli, ExactThreeProcessesEqualOneProcessBitForBit)
 TEST(SessionCli, F32AndStreamRateCutTheStream)
 {
     const auto dir = pliant::test::scratch_dir("session_cli_stream_options");
-    const int port = 20000 + static_cast<int>((getpid() + 8011) % 19990);
+    const int port = test_port(9);
     const std::string exe = PLIANT_EXE;
     const std::string d = dir.string();
     const std::string p = std::to_string(port);
@@ -445,7 +455,7 @@ ChannelDiff channel_diff(const std::filesystem::path& a_path, const std::filesys
 TEST(SessionCli, ASavedStateResumesInHostAndSimulateAndIsRefusedAsRestGeometry)
 {
     const auto dir = pliant::test::scratch_dir("session_cli_resume");
-    const int port = 20000 + static_cast<int>((getpid() + 9013) % 19990);
+    const int port = test_port(10);
     {
         std::ofstream(dir / "grab.txt") << "0.05 grab face 300 force 0 0 0.6 for 0.3\n";
         const char* material =
