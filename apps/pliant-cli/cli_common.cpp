@@ -38,6 +38,7 @@ int report(const core::Error& error)
     {
     case core::ErrorCode::NotConverged:
     case core::ErrorCode::NetworkError: return k_exit_failure;
+    case core::ErrorCode::Cancelled: return k_exit_interrupted;
     default: return k_exit_bad_input;
     }
 }

@@ -37,14 +37,18 @@ struct GlobalOptions
 inline constexpr int k_exit_bad_input = 1;
 inline constexpr int k_exit_usage = 2;
 inline constexpr int k_exit_failure = 3;
+/// Stopped by Ctrl-C (SIGINT) or SIGTERM after winding down cleanly (128 + SIGINT, as a shell
+/// reports a process the signal ended).
+inline constexpr int k_exit_interrupted = 130;
 
 /// Sets spdlog's level from the global options (warn by default, debug with --verbose, error
 /// with --quiet). Messages go to stderr; results go to stdout.
 void configure_logging(const GlobalOptions& options);
 
 /// Makes SIGINT (Ctrl-C) and SIGTERM set the returned flag instead of killing the process, so a
-/// long-running command (host, join) can wind down cleanly: a participant hands its leaves over,
-/// the master ends the session for everyone. A second signal kills as usual.
+/// long-running command can wind down cleanly: a participant hands its leaves over, the master
+/// ends the session for everyone, `simulate` keeps the frames written and says so in run.json,
+/// `remesh` stops and writes nothing. A second signal kills as usual.
 const volatile std::sig_atomic_t* install_interrupt_flag();
 
 /// Logs an error and returns its exit code.
@@ -98,8 +102,15 @@ public:
     ProgressBar(const ProgressBar&) = delete;
     ProgressBar& operator=(const ProgressBar&) = delete;
     void update(std::string_view phase, double fraction) noexcept override;
+    /// The work stops (ErrorCode::Cancelled) once `*flag` is set (install_interrupt_flag).
+    void stop_on(const volatile std::sig_atomic_t* flag) noexcept { stop_ = flag; }
+    [[nodiscard]] bool stop_requested() const noexcept override
+    {
+        return stop_ != nullptr && *stop_ != 0;
+    }
 
 private:
+    const volatile std::sig_atomic_t* stop_ = nullptr;
     bool enabled_;
     bool tty_;
     std::string phase_;

@@ -148,9 +148,15 @@ int run_remesh(const RemeshOptions& opt, const GlobalOptions& global)
         };
     }
     ProgressBar bar(global);
+    bar.stop_on(install_interrupt_flag());  // Ctrl-C: stop, write nothing
     auto result = remesh::remesh(*m, settings, &bar);
     if (!result)
     {
+        if (result.error().code == core::ErrorCode::Cancelled)
+        {
+            spdlog::error("{}; nothing written", result.error().message);
+            return k_exit_interrupted;
+        }
         if (opt.gpu && result.error().code == core::ErrorCode::GraphicsError)
         {
             spdlog::error("remesh --gpu: {} [{}]", result.error().message,
@@ -230,7 +236,8 @@ void add_remesh_command(CLI::App& app, const GlobalOptions& global)
         "Exit codes: 0 written; 1 invalid input mesh, unwritable output or no fold-free map\n"
         "(inverted-triangles; the message says which rule, file or count); 3 the simplification\n"
         "did not converge, or --gpu found no OpenGL 3.3 context or the GPU sampling failed;\n"
-        "2 usage error.\n\n"
+        "2 usage error; 130 stopped by Ctrl-C (within a fraction of a second in any phase;\n"
+        "nothing is written, an earlier file at -o stays as it was).\n\n"
         "Examples:\n"
         "  pliant remesh data/spot.obj --level 7 -o spot.pgrid --report spot.json\n"
         "  pliant remesh scan.ply -o scan.obj\n"

@@ -23,6 +23,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -633,8 +634,8 @@ core::Result<void> check_mixed_precision(const Scenario& sc, const std::filesyst
 
 /// run.json in the output folder: what was run (the inputs and every setting in effect, the
 /// command line's and the scenario's merged) and how it ended. Written before the first step
-/// with status "running", and again when the run completes or diverges, each time through a
-/// temporary file renamed over it, so the file is always whole.
+/// with status "running", and again when the run completes, diverges or is interrupted, each
+/// time through a temporary file renamed over it, so the file is always whole.
 class RunRecord
 {
 public:
@@ -800,6 +801,8 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
     const bool fixed = sc.settings.fixed_step;
     const double h = sc.settings.fixed_dt;
     ProgressBar bar(global);
+    // Ctrl-C or SIGTERM: stop after the frame being computed, keeping every frame written.
+    const volatile std::sig_atomic_t* interrupted = install_interrupt_flag();
     std::vector<sim::Force> forces;
     std::uint64_t total_steps = 0;
     std::uint64_t total_rejections = 0;
@@ -899,6 +902,17 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
         if (!std::isfinite(e.total()))
             return diverged("the energy became non-finite", frame);
         bar.update("simulate", frames > 0 ? static_cast<double>(frame) / frames : 1.0);
+        if (*interrupted != 0 && frame < frames)
+        {
+            record.end("interrupted", frame + 1, state.time, seconds_since_start(),
+                       {total_steps, total_rejections, total_at_min});
+            if (auto ok = record.write(); !ok)
+                spdlog::warn("{}", ok.error().message);
+            spdlog::error("{}: interrupted at t = {} s; frames 0 to {} of 0 to {} are in {}",
+                          opt.scenario.string(), fmt_number(state.time), frame, frames,
+                          opt.out.string());
+            return k_exit_interrupted;
+        }
     }
     const double wall = seconds_since_start();
     record.end("complete", frames + 1, state.time, wall,
@@ -953,8 +967,9 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global)
         "P + u N, u [m], v [m/s]; or surfaces with --format ply, obj, gltf or glb) and\n"
         "energy.csv (frame, time, kinetic, strain, foundation, total energy [J], steps,\n"
         "rejections, flags), and run.json: the inputs, every setting in effect (the command\n"
-        "line's and the scenario's), and the result (status running, complete or diverged,\n"
-        "frames written, simulated and wall seconds, steps).\n\n"
+        "line's and the scenario's), and the result (status running, complete, diverged or\n"
+        "interrupted, frames written, simulated and wall seconds, steps). Ctrl-C stops after\n"
+        "the frame being computed, keeps the frames written and exits with status 130.\n\n"
         "Examples:\n"
         "  pliant simulate --scenario scenes/pull.toml -o out/pull            # sphere, level 6\n"
         "  pliant simulate spot.pgrid --scenario scenes/spot.toml -o out/spot --format ply\n"

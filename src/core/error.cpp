@@ -14,6 +14,7 @@ std::string_view to_string(ErrorCode code) noexcept
     case ErrorCode::UnsupportedFormat: return "unsupported-format";
     case ErrorCode::ParseError: return "parse-error";
     case ErrorCode::EmptyInput: return "empty-input";
+    case ErrorCode::Cancelled: return "cancelled";
     case ErrorCode::NonFiniteCoordinate: return "non-finite-coordinate";
     case ErrorCode::DegenerateFace: return "degenerate-face";
     case ErrorCode::NotConnected: return "not-connected";

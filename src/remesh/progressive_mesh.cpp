@@ -138,8 +138,12 @@ public:
                 if (!geometric)
                     ++pm.forced_collapses;
                 if ((alive_count_ & 1023U) == 0)
+                {
+                    if (progress.stop_requested())
+                        return core::cancelled("remesh", "simplify");
                     progress.update("simplify", static_cast<double>(pm.collapses.size()) /
                                                     static_cast<double>(total));
+                }
             }
             if (alive_count_ == before || pass >= 3)
             {

@@ -247,7 +247,7 @@ DirectedDistance directed(const mesh::TriMesh& from, const Bvh& to, const Distan
     double sq = 0.0, sum = 0.0, mx = 0.0;
     const auto count = static_cast<std::ptrdiff_t>(pts.size());
     constexpr std::ptrdiff_t k_block = 32'768;
-    for (std::ptrdiff_t b0 = 0; b0 < count; b0 += k_block)
+    for (std::ptrdiff_t b0 = 0; b0 < count && !core::stop_requested(progress); b0 += k_block)
     {
         const std::ptrdiff_t b1 = std::min(count, b0 + k_block);
         double bsq = 0.0, bsum = 0.0, bmx = 0.0;
@@ -302,6 +302,8 @@ SurfaceDistance surface_distance(const mesh::TriMesh& reference, const mesh::Tri
     const Bvh other_bvh(other);
     double sq_a = 0.0, sq_b = 0.0;
     out.reference_to_other = directed(reference, other_bvh, settings, sq_a, progress, 0.0, 0.5);
+    if (core::stop_requested(progress))
+        return out;  // the caller was stopped: its result is not used
     if (progress != nullptr)
         progress->update("measure", 0.5);
     out.other_to_reference = directed(other, ref_bvh, settings, sq_b, progress, 0.5, 0.5);

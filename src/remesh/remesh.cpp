@@ -103,6 +103,8 @@ core::Result<RemeshResult> remesh(const mesh::TriMesh& input, const RemeshSettin
                               std::to_string(report.inverted_domain) +
                               " inverted domain triangles on the sphere");
 
+    if (core::stop_requested(progress))
+        return core::cancelled("remesh", "domain map");
     t0 = Clock::now();
     SampleStats stats;
     auto positions = settings.sampler ? settings.sampler(*grid, domain, *mm, map->points)
@@ -120,13 +122,18 @@ core::Result<RemeshResult> remesh(const mesh::TriMesh& input, const RemeshSettin
     if (progress != nullptr)
         progress->update("untangle", 0.0);
     core::Vec3Field<double> points = domain;
-    report.untangle =
-        untangle_samples(*grid, *mm, map->points, points, *positions, settings.untangle);
+    auto untangled =
+        untangle_samples(*grid, *mm, map->points, points, *positions, settings.untangle, progress);
+    if (!untangled)
+        return untangled.error();
+    report.untangle = *untangled;
     if (settings.check_input)
     {
         report.input_intersections = count_self_intersections(*m);
         report.input_checked = true;
     }
+    if (core::stop_requested(progress))
+        return core::cancelled("remesh", "untangle");
     report.phases.push_back({"untangle", seconds_since(t0)});
     if (progress != nullptr)
         progress->update("untangle", 1.0);
@@ -141,6 +148,8 @@ core::Result<RemeshResult> remesh(const mesh::TriMesh& input, const RemeshSettin
         if (progress != nullptr)
             progress->update("measure", 0.0);
         report.distance = surface_distance(*m, out, settings.distance, progress);
+        if (core::stop_requested(progress))
+            return core::cancelled("remesh", "measure");
         report.measured = true;
         report.phases.push_back({"measure", seconds_since(t0)});
         if (progress != nullptr)

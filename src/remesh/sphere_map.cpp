@@ -123,6 +123,8 @@ std::size_t spring_embed(const mesh::TriMesh& m, const SphereMapSettings& s,
         }
         if (it % 10 == 9)
         {
+            if (progress.stop_requested())
+                break;  // map_to_sphere returns Cancelled
             folds = count_inverted(m.faces, q);
             progress.update("spring embedder",
                             static_cast<double>(it + 1) / static_cast<double>(s.spring_iterations));
@@ -590,7 +592,7 @@ void sweeps(StretchOptimizer& opt, std::span<const std::uint32_t> order, int cou
             std::string_view phase)
 {
     double before = tol > 0.0 ? opt.total(alive) : 0.0;
-    for (int k = 0; k < count; ++k)
+    for (int k = 0; k < count && !core::stop_requested(progress); ++k)
     {
         for (const std::uint32_t v : order)
             opt.optimize(v);
@@ -663,6 +665,8 @@ core::Result<std::vector<Vec3>> coarse_to_fine(const mesh::TriMesh& m, const Sph
     const std::size_t total = pm.collapses.size();
     for (std::size_t k = total; k-- > 0;)
     {
+        if ((k & 1023U) == 0 && progress.stop_requested())
+            return core::cancelled("remesh", "sphere map");
         const detail::Collapse& c = pm.collapses[k];
         const std::uint32_t u = c.removed, v = c.kept;
         if (!opt.represented_.empty())
@@ -747,6 +751,8 @@ core::Result<std::vector<Vec3>> coarse_to_fine(const mesh::TriMesh& m, const Sph
         opt.optimize(u);
         if (static_cast<double>(present.size()) >= next_level)
         {
+            if (progress.stop_requested())
+                return core::cancelled("remesh", "sphere map");
             sweeps(opt, present, s.sweeps_per_level, 0.0, {}, nullptr, {});
             next_level *= s.level_growth;
             progress.update("sphere map",
@@ -765,6 +771,8 @@ core::Result<std::vector<Vec3>> coarse_to_fine(const mesh::TriMesh& m, const Sph
     // undo later), the final one trades some of that for lower L2 stretch
     for (double w = s.coarse_inverse_weight; w > s.inverse_weight;)
     {
+        if (progress.stop_requested())
+            return core::cancelled("remesh", "sphere map");
         w = std::max(s.inverse_weight, w * 0.5);
         opt.set_metric(area, w, s.peak_weight);
         sweeps(opt, present, s.sweeps_per_level, 0.0, {}, nullptr, {});
@@ -772,6 +780,8 @@ core::Result<std::vector<Vec3>> coarse_to_fine(const mesh::TriMesh& m, const Sph
     opt.set_metric(area, s.inverse_weight, s.peak_weight);
     progress.update("sphere map", 1.0);
     sweeps(opt, present, s.final_sweeps, s.tolerance, {}, &progress, "sphere optimise");
+    if (progress.stop_requested())
+        return core::cancelled("remesh", "sphere optimise");
     progress.update("sphere optimise", 1.0);
     return q;
 }
@@ -883,6 +893,8 @@ core::Result<SphereMap> map_to_sphere(const mesh::TriMesh& mesh, const SphereMap
     {
         const detail::VertexFaces vf = detail::vertex_faces(mesh.positions.size(), mesh.faces);
         out.spring_folds = spring_embed(mesh, settings, vf, out.points, sink);
+        if (sink.stop_requested())
+            return core::cancelled("remesh", "spring embedder");
         if (out.spring_folds > 0)
         {
             if (settings.method == SphereMethod::SpringEmbedder)
@@ -910,6 +922,8 @@ core::Result<SphereMap> map_to_sphere(const mesh::TriMesh& mesh, const SphereMap
             // no hierarchy here: local moves need many more sweeps to spread stretch globally
             sweeps(opt, order, settings.spring_optimise_sweeps, settings.tolerance * 0.01, {},
                    &sink, "sphere optimise");
+            if (sink.stop_requested())
+                return core::cancelled("remesh", "sphere optimise");
             out.method_used = SphereMethod::SpringEmbedder;
         }
     }

@@ -202,9 +202,12 @@ private:
 
 }  // namespace
 
-UntangleStats untangle_samples(const core::TetraGrid& grid, const mesh::TriMesh& mesh,
-                               std::span<const core::Vec3> sphere, core::Vec3Field<double>& points,
-                               core::Vec3Field<double>& positions, const UntangleSettings& settings)
+core::Result<UntangleStats> untangle_samples(const core::TetraGrid& grid, const mesh::TriMesh& mesh,
+                                             std::span<const core::Vec3> sphere,
+                                             core::Vec3Field<double>& points,
+                                             core::Vec3Field<double>& positions,
+                                             const UntangleSettings& settings,
+                                             core::ProgressSink* progress)
 {
     const auto nodes = grid.node_of_unique();
     const std::size_t nu = nodes.size();
@@ -531,6 +534,37 @@ UntangleStats untangle_samples(const core::TetraGrid& grid, const mesh::TriMesh&
     UntangleStats stats;
     std::vector<std::uint8_t> active(nu, 0);
     std::vector<std::uint32_t> list;
+    // Progress: a sweep over the region (a round's or a patch pass's) is the unit, counted
+    // against the most sweeps the settings allow (the bar jumps to the end when the surface is
+    // untangled sooner); a stop is looked for every 64 nodes.
+    int epsilons = 0;
+    for (double e = settings.patch_epsilon_start; e >= 0.999 * settings.patch_epsilon_end; e *= 0.5)
+        ++epsilons;
+    const double units = std::max(1, settings.max_rounds * settings.sweeps +
+                                         settings.patch_passes * epsilons * settings.patch_sweeps);
+    double units_done = 0.0;
+    bool stopped = false;
+    // One Gauss-Seidel sweep over `list`; false when stopped.
+    const auto sweep = [&](bool patch)
+    {
+        const auto n = static_cast<double>(list.size());
+        for (std::size_t i = 0; i < list.size(); ++i)
+        {
+            if ((i & 63U) == 0 && progress != nullptr)
+            {
+                if (progress->stop_requested())
+                {
+                    stopped = true;
+                    return false;
+                }
+                progress->update("untangle",
+                                 std::min(0.99, (units_done + static_cast<double>(i) / n) / units));
+            }
+            relax(list[i], patch);
+        }
+        units_done += 1.0;
+        return true;
+    };
     // Grows the marked nodes (`active`) by `rings` rings of grid neighbours and lists them, in
     // node order, in `list`.
     const auto grow_region = [&](int rings)
@@ -589,9 +623,10 @@ UntangleStats untangle_samples(const core::TetraGrid& grid, const mesh::TriMesh&
         // fold whose surroundings are not convex enough gets a wider patch
         grow_region(settings.rings + round / 4);
         hash.emplace(out, 2.0 * mean_edge);
-        for (int sweep = 0; sweep < settings.sweeps; ++sweep)
-            for (const std::uint32_t v : list)
-                relax(v, false);
+        for (int k = 0; k < settings.sweeps && !stopped; ++k)
+            sweep(false);
+        if (stopped)
+            return core::cancelled("remesh", "untangle");
         stats.rounds = round + 1;
     }
 
@@ -631,9 +666,10 @@ UntangleStats untangle_samples(const core::TetraGrid& grid, const mesh::TriMesh&
                  eps *= 0.5)
             {
                 hash.emplace(out, 2.0 * mean_edge);
-                for (int sweep = 0; sweep < settings.patch_sweeps; ++sweep)
-                    for (const std::uint32_t v : list)
-                        relax(v, true);
+                for (int k = 0; k < settings.patch_sweeps && !stopped; ++k)
+                    sweep(true);
+                if (stopped)
+                    return core::cancelled("remesh", "untangle");
             }
             eps = settings.barrier_epsilon;
             std::size_t folded = 0;

@@ -174,3 +174,9 @@ if(TARGET pliant_render AND TARGET pliant_test_support)
                 ${PROJECT_SOURCE_DIR}/apps/pliant-cli/viewer/sim_scene.cpp
         LIBS pliant::render pliant::sim pliant::subdiv pliant::core)
 endif()
+# Its background load: cancelling a remeshing, and quitting during one.
+if(TARGET pliant_remesh AND TARGET pliant_test_support)
+    pliant_add_test(viewer_load_test
+        SOURCES viewer_load_test.cpp ${PROJECT_SOURCE_DIR}/apps/pliant-cli/viewer/mesh_loader.cpp
+        LIBS pliant::remesh pliant::mesh pliant::core)
+endif()

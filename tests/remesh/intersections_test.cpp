@@ -229,7 +229,7 @@ TEST_P(RealMeshUntangled, NoFoldsNoIntersectionsTwinsEqualOnTheSurface)
         auto pos = sample_surface(grid, domain, m, map->points);
         ASSERT_TRUE(pos);
         core::Vec3Field<double> points = domain;
-        const UntangleStats st = untangle_samples(grid, m, map->points, points, *pos);
+        const UntangleStats st = untangle_samples(grid, m, map->points, points, *pos).value();
         std::printf(
             "%s level %d: sampled %zu folded, %zu pairs; after %zu, %zu (%zu nodes moved, "
             "%d rounds)\n",
@@ -314,7 +314,7 @@ TEST(RealMeshUntangledFox, FewFoldsAsSampledAndFewAfterUntanglingAtLevel6)
     auto pos = sample_surface(grid, domain, m, map->points);
     ASSERT_TRUE(pos);
     core::Vec3Field<double> points = domain;
-    const UntangleStats st = untangle_samples(grid, m, map->points, points, *pos);
+    const UntangleStats st = untangle_samples(grid, m, map->points, points, *pos).value();
     std::printf("fox.ply level 6: sampled %zu folded, %zu pairs; after %zu, %zu\n",
                 st.folded_sampled, st.intersections_sampled, st.folded, st.intersections);
     EXPECT_LT(st.folded_sampled, 130U);
@@ -350,7 +350,8 @@ TEST(RealMeshUntangledFox, FewFoldsAsSampledAndFewAfterUntanglingAtLevel6)
     UntangleSettings no_barrier;
     no_barrier.barrier_epsilon = 0.0;
     no_barrier.patch_passes = 0;
-    const UntangleStats plain_st = untangle_samples(grid, m, map->points, points, *pos, no_barrier);
+    const UntangleStats plain_st =
+        untangle_samples(grid, m, map->points, points, *pos, no_barrier).value();
     std::printf("fox.ply level 6 without the barrier descent: %zu folded\n", plain_st.folded);
     EXPECT_LT(folded, plain_st.folded);
 
@@ -361,7 +362,8 @@ TEST(RealMeshUntangledFox, FewFoldsAsSampledAndFewAfterUntanglingAtLevel6)
     points = domain;
     UntangleSettings no_patch;
     no_patch.patch_passes = 0;
-    const UntangleStats rounds_st = untangle_samples(grid, m, map->points, points, *pos, no_patch);
+    const UntangleStats rounds_st =
+        untangle_samples(grid, m, map->points, points, *pos, no_patch).value();
     std::printf("fox.ply level 6 without the patch passes: %zu folded, %zu pairs\n",
                 rounds_st.folded, rounds_st.intersections);
     EXPECT_EQ(rounds_st.patch_passes, 0);

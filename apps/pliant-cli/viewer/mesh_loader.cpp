@@ -23,6 +23,7 @@ public:
         job_.phase_.assign(phase);
         job_.fraction_ = fraction;
     }
+    [[nodiscard]] bool stop_requested() const noexcept override { return job_.cancelling(); }
 
 private:
     LoadJob& job_;
@@ -35,6 +36,7 @@ LoadJob::LoadJob(std::filesystem::path path, int level) : path_(std::move(path))
 
 LoadJob::~LoadJob()
 {
+    cancel();
     if (thread_.joinable())
         thread_.join();
 }
@@ -92,6 +94,8 @@ void LoadJob::run() noexcept
         return finish(mesh.error());
     if (auto ok = mesh::validate(*mesh, name); !ok)
         return finish(ok.error());
+    if (cancelling())
+        return finish(core::cancelled("view: loading " + name, "import"));
     remesh::RemeshSettings settings;
     settings.level = level_;
     settings.measure = false;  // the quality report is not shown; it would double the wait

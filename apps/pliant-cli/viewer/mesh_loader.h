@@ -7,8 +7,10 @@
 // minutes at level 9). The work runs on a std::thread of its own; the window polls `done()` and
 // draws `progress()` each frame. The worker touches nothing but its own members: the result is
 // handed over once, by `take()`, after `done()` returned true (an acquire of the flag the worker
-// released), so no lock is held while remeshing. A remeshing cannot be interrupted: destroying a
-// LoadJob waits for the worker (the viewer asks before quitting during a load).
+// released), so no lock is held while remeshing. `cancel()` asks the worker to stop: the
+// remeshing polls it at every progress report (core::ProgressSink::stop_requested) and ends
+// within a fraction of a second with ErrorCode::Cancelled; destroying a LoadJob cancels it and
+// waits for the worker, so quitting during a load does not wait for the remeshing.
 
 #include <pliant/core/field.h>
 #include <pliant/core/progress.h>
@@ -49,6 +51,13 @@ public:
     [[nodiscard]] const std::filesystem::path& path() const noexcept { return path_; }
     /// The result (once). \pre done().
     [[nodiscard]] core::Result<LoadedSurface> take();
+    /// Asks the worker to stop; done() follows soon, with ErrorCode::Cancelled unless the work
+    /// had already ended. Safe from any thread, any number of times.
+    void cancel() noexcept { cancel_.store(true, std::memory_order_relaxed); }
+    [[nodiscard]] bool cancelling() const noexcept
+    {
+        return cancel_.load(std::memory_order_relaxed);
+    }
 
 private:
     class Sink;
@@ -61,6 +70,7 @@ private:
     double fraction_ = 0.0;
     std::optional<core::Result<LoadedSurface>> result_;
     std::atomic<bool> done_{false};
+    std::atomic<bool> cancel_{false};
     std::thread thread_;
 };
 

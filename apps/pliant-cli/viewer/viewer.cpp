@@ -214,7 +214,7 @@ Viewer::Viewer(const ViewerOptions& options) : options_(options)
 
 Viewer::~Viewer()
 {
-    load_.reset();  // waits for a remeshing in progress
+    load_.reset();  // cancels a remeshing in progress and waits for its worker to stop
     session_.reset();
     transport_.reset();
     renderer_.reset();
@@ -277,10 +277,14 @@ void Viewer::finish_load()
     if (!load_ || !load_->done())
         return;
     auto result = load_->take();
+    const std::string name = load_->path().filename().string();
     load_.reset();
     if (!result)
     {
-        set_status(result.error().message, true);
+        if (result.error().code == core::ErrorCode::Cancelled)
+            set_status("loading " + name + " cancelled (" + result.error().message + ")", false);
+        else
+            set_status(result.error().message, true);
         return;
     }
     if (session_)

@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <map>
+#include <string>
 
 namespace pliant::viewer
 {
@@ -75,7 +76,13 @@ void Viewer::draw_panels()
     if (load_)
     {
         const auto [phase, fraction] = load_->progress();
-        ImGui::ProgressBar(static_cast<float>(fraction), ImVec2(-1.0F, 0.0F), phase.c_str());
+        const std::string label = load_->cancelling() ? "cancelling" : phase;
+        ImGui::ProgressBar(static_cast<float>(fraction), ImVec2(-70.0F, 0.0F), label.c_str());
+        ImGui::SameLine();
+        ImGui::BeginDisabled(load_->cancelling());
+        if (ImGui::Button("Cancel"))
+            load_->cancel();
+        ImGui::EndDisabled();
     }
     ImGui::Text("%.1f fps, sim t = %.2f s", 1000.0 / std::max(0.01, double{frame_ms_.latest()}),
                 session_ ? session_->shown_time() : (local_ ? local_->state().time : 0.0));

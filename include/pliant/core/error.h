@@ -24,6 +24,7 @@ enum class ErrorCode : std::uint16_t
     UnsupportedFormat = 3,  ///< file extension / content not a format pliant reads or writes
     ParseError = 4,         ///< a file's content is malformed (truncated, bad header, bad number)
     EmptyInput = 5,         ///< a file with no vertices or no faces
+    Cancelled = 6,          ///< long work stopped on request (core::ProgressSink)
 
     // mesh validation (DESIGN §2.1)
     NonFiniteCoordinate = 20,      ///< a vertex coordinate is NaN or infinite

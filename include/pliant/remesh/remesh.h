@@ -119,7 +119,9 @@ struct RemeshResult
 /// accepted and reoriented.
 /// \return InvalidArgument for a level outside 1..10; InvertedTriangles (with the count) when a
 /// fold-free sphere map cannot be built (never a folded result); NotConverged when the
-/// simplification does not reach a tetrahedron.
+/// simplification does not reach a tetrahedron; Cancelled when `progress` asked to stop
+/// (core::ProgressSink::stop_requested; polled at every progress report and between phases,
+/// so a stop is honoured within a fraction of a second at any level).
 core::Result<RemeshResult> remesh(const mesh::TriMesh& mesh, const RemeshSettings& settings = {},
                                   core::ProgressSink* progress = nullptr);
 

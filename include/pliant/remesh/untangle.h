@@ -29,6 +29,8 @@
 /// of a thin part).
 
 #include <pliant/core/field.h>
+#include <pliant/core/progress.h>
+#include <pliant/core/result.h>
 #include <pliant/core/tetra_grid.h>
 #include <pliant/core/vec3.h>
 #include <pliant/mesh/tri_mesh.h>
@@ -95,11 +97,16 @@ struct UntangleStats
 /// `points`, e.g. the domain map) and, if `settings.enabled`, untangles them by moving the sample
 /// points of nearby nodes: `points` and `positions` are updated in place (canonical nodes and
 /// their twins). Nodes far from any bad triangle are left untouched, bit for bit.
+/// `progress` (optional) gets phase "untangle" with fractions below 1 as the sweeps go (the
+/// caller reports the phase's end); if it asks to stop, the work ends within 64 nodes and
+/// returns ErrorCode::Cancelled with `points` and `positions` untouched.
 /// \pre `sphere` is a fold-free spherical map of `mesh` (outward faces); `positions` samples
 /// `mesh` at `points` (any sampler).
-UntangleStats untangle_samples(const core::TetraGrid& grid, const mesh::TriMesh& mesh,
-                               std::span<const core::Vec3> sphere, core::Vec3Field<double>& points,
-                               core::Vec3Field<double>& positions,
-                               const UntangleSettings& settings = {});
+core::Result<UntangleStats> untangle_samples(const core::TetraGrid& grid, const mesh::TriMesh& mesh,
+                                             std::span<const core::Vec3> sphere,
+                                             core::Vec3Field<double>& points,
+                                             core::Vec3Field<double>& positions,
+                                             const UntangleSettings& settings = {},
+                                             core::ProgressSink* progress = nullptr);
 
 }  // namespace pliant::remesh
