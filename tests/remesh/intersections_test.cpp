@@ -18,12 +18,15 @@
 #include "support/fp_traps.h"
 #include "support/test_paths.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
 #include <ostream>
 #include <random>
+#include <span>
 #include <string>
+#include <vector>
 
 namespace pliant::remesh
 {
@@ -161,6 +164,66 @@ TEST(SelfIntersections, BroadPhaseMatchesBruteForce)
     const std::size_t dent = brute_force_pairs(dented);
     EXPECT_GT(dent, 0U);
     EXPECT_EQ(count_self_intersections(dented), dent);
+}
+
+// The recount the untangling does after some vertices moved: the pairs touching the faces
+// around them, joined to the earlier pairs of untouched faces, are exactly a whole count; and for
+// any flags, intersecting_pairs_touching is the whole count's pairs with a flagged face.
+TEST(SelfIntersections, PairsTouchingMovedFacesCompleteTheEarlierCount)
+{
+    mesh::TriMesh two = scenes::icosphere(3);
+    const mesh::TriMesh other = scenes::icosphere(2);
+    const auto base = static_cast<std::uint32_t>(two.positions.size());
+    for (const Vec3& p : other.positions)
+        two.positions.push_back(p * 0.8 + Vec3{0.5, 0.1, 0.05});
+    for (const auto& f : other.faces)
+        two.faces.push_back({f[0] + base, f[1] + base, f[2] + base});
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> jitter(-0.15, 0.15);
+    std::uniform_int_distribution<std::uint32_t> pick(
+        0, static_cast<std::uint32_t>(two.positions.size() - 1));
+    const auto faces_of = [&](std::span<const std::uint32_t> moved)
+    {
+        std::vector<std::uint8_t> touched(two.faces.size(), 0);
+        for (std::size_t f = 0; f < two.faces.size(); ++f)
+            for (const std::uint32_t v : two.faces[f])
+                if (std::find(moved.begin(), moved.end(), v) != moved.end())
+                    touched[f] = 1;
+        return touched;
+    };
+    for (int trial = 0; trial < 20; ++trial)
+    {
+        const auto before = intersecting_pairs(two);
+        // a local change (one vertex and its neighbourhood) or a scattered one
+        std::vector<std::uint32_t> moved;
+        const std::uint32_t centre = pick(rng);
+        for (std::uint32_t k = 0; k < 1 + static_cast<std::uint32_t>(trial % 7); ++k)
+            moved.push_back(trial % 2 == 0 ? pick(rng)
+                                           : two.faces[centre % two.faces.size()][k % 3]);
+        for (const std::uint32_t v : moved)
+            two.positions[v] += Vec3{jitter(rng), jitter(rng), jitter(rng)};
+        const auto touched = faces_of(moved);
+        const auto after = intersecting_pairs(two);
+        const auto fresh = intersecting_pairs_touching(two, touched);
+        std::vector<std::array<std::uint32_t, 2>> expected_fresh;
+        for (const auto& pr : after)
+            if (touched[pr[0]] != 0 || touched[pr[1]] != 0)
+                expected_fresh.push_back(pr);
+        EXPECT_EQ(fresh, expected_fresh) << "trial " << trial;
+        std::vector<std::array<std::uint32_t, 2>> joined;
+        for (const auto& pr : before)
+            if (touched[pr[0]] == 0 && touched[pr[1]] == 0)
+                joined.push_back(pr);
+        joined.insert(joined.end(), fresh.begin(), fresh.end());
+        std::sort(joined.begin(), joined.end());
+        EXPECT_EQ(joined, after) << "trial " << trial;
+    }
+    EXPECT_GT(intersecting_pairs(two).size(), 50U);
+    // no flag: nothing; every flag: the whole count
+    EXPECT_TRUE(
+        intersecting_pairs_touching(two, std::vector<std::uint8_t>(two.faces.size(), 0)).empty());
+    EXPECT_EQ(intersecting_pairs_touching(two, std::vector<std::uint8_t>(two.faces.size(), 1)),
+              intersecting_pairs(two));
 }
 
 TEST(SelfIntersections, FacesSharingAVertexCountOnlyWhenTheyOverlap)

@@ -60,6 +60,13 @@ namespace pliant::remesh
 [[nodiscard]] std::vector<std::array<std::uint32_t, 2>> intersecting_pairs(
     const mesh::TriMesh& mesh);
 
+/// The pairs of intersecting_pairs(mesh) that have a face f with `touched[f] != 0` (one flag per
+/// face), in the same order. After some vertices moved, these are the pairs to recount: a pair
+/// of two untouched faces keeps its answer (the untangling's rounds recount this way). Tests
+/// only the faces whose boxes meet the touched faces' bounding box.
+[[nodiscard]] std::vector<std::array<std::uint32_t, 2>> intersecting_pairs_touching(
+    const mesh::TriMesh& mesh, std::span<const std::uint8_t> touched);
+
 /// intersecting_pairs(mesh).size().
 [[nodiscard]] std::size_t count_self_intersections(const mesh::TriMesh& mesh);
 
