@@ -26,6 +26,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -304,8 +305,20 @@ int run_frames(const RenderOptions& opt, render::DrawSettings settings, Target& 
     const fs::path dir = opt.out.parent_path();
     const std::string stem = opt.out.stem().string();
     ProgressBar progress(global);
+    // Ctrl-C or SIGTERM: stop after the frame being written (every PNG written stays whole).
+    const volatile std::sig_atomic_t* interrupted = install_interrupt_flag();
     for (std::size_t i = 0; i < files.size(); ++i)
     {
+        if (*interrupted != 0)
+        {
+            std::array<char, 32> last{};
+            std::snprintf(last.data(), last.size(), "_%04zu.png", i - 1);
+            spdlog::error("render: interrupted after {} of {} frames{}", i, files.size(),
+                          i == 0 ? std::string()
+                                 : " (" + (dir / (stem + "_0000.png")).string() + " to " +
+                                       (dir / (stem + last.data())).string() + ")");
+            return k_exit_interrupted;
+        }
         auto scene = load_grid_scene(files[i], opt, rest ? &*rest : nullptr);
         if (!scene)
             return report(scene.error());
@@ -469,6 +482,7 @@ void add_render_command(CLI::App& app, const GlobalOptions& global)
         "with the camera of the first frame and one displacement colour range for them all: the\n"
         "largest |u| of any frame (read in a first pass), or --color-range. GRID, if given,\n"
         "supplies the rest positions P of frames that carry only \"u\" (drawn at P + u N).\n"
+        "Ctrl-C stops after the frame being written (exit status 130).\n"
         "Owner colours come from a channel \"owner\" (the owning peer per node: `pliant demo`\n"
         "writes it into final.pgrid) or, without one, from the quad-tree leaves at\n"
         "--owner-depth as stand-ins; the summary line says which.\n\n"

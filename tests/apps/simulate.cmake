@@ -19,6 +19,7 @@ if(TARGET pliant)
              COMMAND pliant simulate --scenario ${PROJECT_SOURCE_DIR}/scenes/pull.toml
                      -o ${sim_out} --level 4 -j 1)
     set_tests_properties(cli_simulate_pull PROPERTIES
+        FIXTURES_SETUP simulate_pull_frames
         TIMEOUT 120
         PASS_REGULAR_EXPRESSION "101 frames, 4.000 s simulated"
         FAIL_REGULAR_EXPRESSION "beyond its radius;error")
