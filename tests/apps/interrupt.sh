@@ -22,6 +22,15 @@ ready() {
         grep -Eq -- "$what" "$dir/stderr"
     fi
 }
+# Stops the command, shows its stderr and exits with status $1 after saying $2.
+give_up() {
+    kill -KILL "$pid" 2>/dev/null
+    wait "$pid" 2>/dev/null
+    echo "interrupt.sh: $2" >&2
+    cat "$dir/stderr" >&2
+    rm -rf "$dir"
+    exit "$1"
+}
 tries=0
 while ! ready; do
     if ! kill -0 "$pid" 2>/dev/null; then
@@ -33,12 +42,7 @@ while ! ready; do
     fi
     tries=$((tries + 1))
     if [ "$tries" -gt 3000 ]; then
-        kill -KILL "$pid" 2>/dev/null
-        wait "$pid" 2>/dev/null
-        echo "interrupt.sh: the condition ($kind $what) did not hold within 300 s" >&2
-        cat "$dir/stderr" >&2
-        rm -rf "$dir"
-        exit 97
+        give_up 97 "the condition ($kind $what) did not hold within 300 s"
     fi
     sleep 0.1
 done
@@ -47,12 +51,7 @@ tries=0
 while kill -0 "$pid" 2>/dev/null; do
     tries=$((tries + 1))
     if [ "$tries" -gt 1200 ]; then
-        kill -KILL "$pid" 2>/dev/null
-        wait "$pid" 2>/dev/null
-        echo "interrupt.sh: the command did not end within 120 s of SIGINT" >&2
-        cat "$dir/stderr" >&2
-        rm -rf "$dir"
-        exit 95
+        give_up 95 "the command did not end within 120 s of SIGINT"
     fi
     sleep 0.1
 done

@@ -141,13 +141,9 @@ std::size_t brute_force_pairs(const mesh::TriMesh& m)
     return n;
 }
 
-TEST(SelfIntersections, BroadPhaseMatchesBruteForce)
+/// Two overlapping spheres of different sizes in one mesh: their faces cross along a circle.
+mesh::TriMesh two_spheres()
 {
-    // a closed sphere: none
-    const mesh::TriMesh ico = scenes::icosphere(2);
-    EXPECT_EQ(count_self_intersections(ico), 0U);
-    EXPECT_EQ(brute_force_pairs(ico), 0U);
-    // two overlapping spheres of different sizes in one mesh: their faces cross along a circle
     mesh::TriMesh two = scenes::icosphere(3);
     const mesh::TriMesh other = scenes::icosphere(2);
     const auto base = static_cast<std::uint32_t>(two.positions.size());
@@ -155,6 +151,17 @@ TEST(SelfIntersections, BroadPhaseMatchesBruteForce)
         two.positions.push_back(p * 0.8 + Vec3{0.5, 0.1, 0.05});
     for (const auto& f : other.faces)
         two.faces.push_back({f[0] + base, f[1] + base, f[2] + base});
+    return two;
+}
+
+TEST(SelfIntersections, BroadPhaseMatchesBruteForce)
+{
+    // a closed sphere: none
+    const mesh::TriMesh ico = scenes::icosphere(2);
+    EXPECT_EQ(count_self_intersections(ico), 0U);
+    EXPECT_EQ(brute_force_pairs(ico), 0U);
+    // two overlapping spheres: their faces cross along a circle
+    const mesh::TriMesh two = two_spheres();
     const std::size_t brute = brute_force_pairs(two);
     EXPECT_GT(brute, 50U);
     EXPECT_EQ(count_self_intersections(two), brute);
@@ -171,13 +178,7 @@ TEST(SelfIntersections, BroadPhaseMatchesBruteForce)
 // any flags, intersecting_pairs_touching is the whole count's pairs with a flagged face.
 TEST(SelfIntersections, PairsTouchingMovedFacesCompleteTheEarlierCount)
 {
-    mesh::TriMesh two = scenes::icosphere(3);
-    const mesh::TriMesh other = scenes::icosphere(2);
-    const auto base = static_cast<std::uint32_t>(two.positions.size());
-    for (const Vec3& p : other.positions)
-        two.positions.push_back(p * 0.8 + Vec3{0.5, 0.1, 0.05});
-    for (const auto& f : other.faces)
-        two.faces.push_back({f[0] + base, f[1] + base, f[2] + base});
+    mesh::TriMesh two = two_spheres();
     std::mt19937 rng(7);
     std::uniform_real_distribution<double> jitter(-0.15, 0.15);
     std::uniform_int_distribution<std::uint32_t> pick(
