@@ -14,7 +14,9 @@
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <span>
 #include <utility>
+#include <vector>
 
 namespace pliant::remesh
 {
@@ -125,21 +127,32 @@ std::vector<std::uint32_t> locate_samples(const core::TetraGrid& grid,
 namespace
 {
 
-/// Output faces by the cells of a uniform grid their boxes overlap (rebuilt every round; faces
-/// that moved since are found a round late, by the global check).
+/// Output faces by the cells of a uniform grid their boxes overlap (brought up to date every
+/// round; faces that moved since are found a round late, by the global check).
 class FaceHash
 {
 public:
     FaceHash(const mesh::TriMesh& m, double cell) : h_(cell)
     {
         for (std::uint32_t f = 0; f < m.faces.size(); ++f)
-        {
-            const auto [lo, hi] = box(m, f);
-            for_cells(lo, hi, [&](std::uint64_t key) { cells_.push_back({key, f}); });
-        }
-        std::sort(cells_.begin(), cells_.end(),
-                  [](const Entry& a, const Entry& b)
-                  { return a.key != b.key ? a.key < b.key : a.face < b.face; });
+            add(m, f, cells_);
+        std::sort(cells_.begin(), cells_.end(), before);
+    }
+
+    /// As if built again from `m`, where only the faces with `moved[f] != 0` changed: their
+    /// entries are replaced, the others kept (the same entries in the same order as a new
+    /// build, for a fraction of its sort).
+    void update(const mesh::TriMesh& m, std::span<const std::uint8_t> moved)
+    {
+        std::erase_if(cells_, [&](const Entry& e) { return moved[e.face] != 0; });
+        std::vector<Entry> fresh;
+        for (std::uint32_t f = 0; f < m.faces.size(); ++f)
+            if (moved[f] != 0)
+                add(m, f, fresh);
+        std::sort(fresh.begin(), fresh.end(), before);
+        const auto middle = static_cast<std::ptrdiff_t>(cells_.size());
+        cells_.insert(cells_.end(), fresh.begin(), fresh.end());
+        std::inplace_merge(cells_.begin(), cells_.begin() + middle, cells_.end(), before);
     }
 
     static std::array<Vec3, 2> box(const mesh::TriMesh& m, std::uint32_t f) noexcept
@@ -175,6 +188,15 @@ private:
         std::uint64_t key;
         std::uint32_t face;
     };
+    static bool before(const Entry& a, const Entry& b) noexcept
+    {
+        return a.key != b.key ? a.key < b.key : a.face < b.face;
+    }
+    void add(const mesh::TriMesh& m, std::uint32_t f, std::vector<Entry>& to) const
+    {
+        const auto [lo, hi] = box(m, f);
+        for_cells(lo, hi, [&](std::uint64_t key) { to.push_back({key, f}); });
+    }
 
     template <class F>
     void for_cells(const Vec3& lo, const Vec3& hi, F&& f) const
@@ -619,9 +641,25 @@ core::Result<UntangleStats> untangle_samples(const core::TetraGrid& grid, const 
     // (intersecting_pairs_touching); the others' answers cannot have changed. The same pairs
     // as a whole count, for a fraction of its time on large grids (a count of fox at level 9,
     // 1M faces, took 6.7 s; the rounds and passes count up to 11 times).
+    std::vector<std::uint8_t> touched(out.faces.size(), 0);
+    // Flags in `touched` the faces with a vertex moved since `at` was taken, and brings `at` up
+    // to date; whether any moved.
+    const auto moved_since = [&](std::vector<Vec3>& at)
+    {
+        std::fill(touched.begin(), touched.end(), std::uint8_t{0});
+        bool any = false;
+        for (std::size_t u = 0; u < nu; ++u)
+            if (!(out.positions[u] == at[u]))
+            {
+                any = true;
+                at[u] = out.positions[u];
+                for (const std::uint32_t f : star.of(static_cast<std::uint32_t>(u)))
+                    touched[f] = 1;
+            }
+        return any;
+    };
     std::vector<std::array<std::uint32_t, 2>> pairs;
     std::vector<Vec3> counted_at;  // the positions of the last count
-    std::vector<std::uint8_t> touched(out.faces.size(), 0);
     const auto recount_pairs = [&]
     {
         if (counted_at.empty())
@@ -630,17 +668,7 @@ core::Result<UntangleStats> untangle_samples(const core::TetraGrid& grid, const 
             counted_at = out.positions;
             return;
         }
-        std::fill(touched.begin(), touched.end(), std::uint8_t{0});
-        bool any = false;
-        for (std::size_t u = 0; u < nu; ++u)
-            if (!(out.positions[u] == counted_at[u]))
-            {
-                any = true;
-                counted_at[u] = out.positions[u];
-                for (const std::uint32_t f : star.of(static_cast<std::uint32_t>(u)))
-                    touched[f] = 1;
-            }
-        if (!any)
+        if (!moved_since(counted_at))
             return;
         std::erase_if(pairs, [&](const std::array<std::uint32_t, 2>& pr)
                       { return touched[pr[0]] != 0 || touched[pr[1]] != 0; });
@@ -648,6 +676,19 @@ core::Result<UntangleStats> untangle_samples(const core::TetraGrid& grid, const 
         const auto middle = static_cast<std::ptrdiff_t>(pairs.size());
         pairs.insert(pairs.end(), fresh.begin(), fresh.end());
         std::inplace_merge(pairs.begin(), pairs.begin() + middle, pairs.end());
+    };
+    // The hash of faces for the near-face queries, likewise brought up to date around what moved
+    // (a new build sorted the entries of every face, 8 % of fox's level-7 untangling).
+    std::vector<Vec3> hashed_at;  // the positions of the hash
+    const auto refresh_hash = [&]
+    {
+        if (!hash)
+        {
+            hash.emplace(out, 2.0 * mean_edge);
+            hashed_at = out.positions;
+        }
+        else if (moved_since(hashed_at))
+            hash->update(out, touched);
     };
     std::size_t best_total = std::numeric_limits<std::size_t>::max();
     int since_best = 0;
@@ -687,7 +728,7 @@ core::Result<UntangleStats> untangle_samples(const core::TetraGrid& grid, const 
         // grow the region by rings of grid neighbours: more rings as the rounds go on, so a
         // fold whose surroundings are not convex enough gets a wider patch
         grow_region(settings.rings + round / 4);
-        hash.emplace(out, 2.0 * mean_edge);
+        refresh_hash();
         for (int k = 0; k < settings.sweeps && !stopped; ++k)
             sweep(false);
         if (stopped)
@@ -730,7 +771,7 @@ core::Result<UntangleStats> untangle_samples(const core::TetraGrid& grid, const 
             for (eps = settings.patch_epsilon_start; eps >= 0.999 * settings.patch_epsilon_end;
                  eps *= 0.5)
             {
-                hash.emplace(out, 2.0 * mean_edge);
+                refresh_hash();
                 for (int k = 0; k < settings.patch_sweeps && !stopped; ++k)
                     sweep(true);
                 if (stopped)
