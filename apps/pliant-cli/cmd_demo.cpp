@@ -50,6 +50,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -377,6 +378,12 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
     spdlog::info("demo: {} ({} vertices, {} faces) is a closed genus-0 surface",
                  mesh_path.filename().string(), mesh->vertex_count(), mesh->face_count());
     ProgressBar progress(global);
+    // Ctrl-C or SIGTERM (not with --view, whose window ends the run): the remeshing stops and
+    // nothing is written; the session stops after the frame being shown and the run ends as
+    // usual with what ran (final state, recording and its replay check, summary), exit 130.
+    const volatile std::sig_atomic_t* interrupt = live ? nullptr : install_interrupt_flag();
+    const auto interrupted = [interrupt] { return interrupt != nullptr && *interrupt != 0; };
+    progress.stop_on(interrupt);
     remesh::RemeshSettings rs;
     rs.level = opt.level;
     auto remeshed = remesh::remesh(*mesh, rs, &progress);
@@ -486,7 +493,7 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
         return true;
     };
     // Everyone joins and is partitioned before the clock starts.
-    while (!out_of_time())
+    while (!out_of_time() && !interrupted())
     {
         pump(0.0);
         auto owners = peers[0].session->owners();
@@ -495,6 +502,8 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
             std::unique(owners.begin(), owners.end()) - owners.begin() == 3)
             break;
     }
+    if (interrupted())
+        return report(core::cancelled("demo", "the participants' join"));
     if (out_of_time())
         return report({core::ErrorCode::NetworkError,
                        "demo: the participants were not partitioned within the time limit"});
@@ -526,7 +535,7 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
     int frames_run = 0;
     double reached = 0.0;  // session time reached, s
     const auto t_clock = Clock::now();
-    for (int frame = 1; live ? !live_link->stop.load() : frame <= frames; ++frame)
+    for (int frame = 1; live ? !live_link->stop.load() : frame <= frames && !interrupted(); ++frame)
     {
         for (int sub = 1; sub <= substeps; ++sub)
         {
@@ -779,6 +788,12 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
     if (!identical)
         return report({core::ErrorCode::NotConverged,
                        "demo: replaying the recording did not reproduce the session's state"});
+    if (interrupted() && frames_run < frames)
+    {
+        spdlog::error("demo: interrupted after {} of {} frames; {} holds what ran", frames_run,
+                      frames, opt.out.string());
+        return k_exit_interrupted;
+    }
     return 0;
 }
 
@@ -852,7 +867,9 @@ void add_demo_command(CLI::App& app, const GlobalOptions& global)
         "With a display, --view opens the viewer (`pliant view`) on the running session instead\n"
         "of rendering frames: the peers run in real time on a second thread, the two users'\n"
         "grabs repeat every --duration seconds, and closing the window ends the session (the\n"
-        "summary and session.prec are still written; `pliant replay` checks the recording).\n\n"
+        "summary and session.prec are still written; `pliant replay` checks the recording).\n"
+        "Without --view, Ctrl-C stops after the frame being shown and the run ends with what\n"
+        "ran (every output, the replay check), exit status 130.\n\n"
         "Examples:\n"
         "  pliant demo                      # the bundled cow, level 6, 3 s at 12 fps\n"
         "  pliant demo --view               # watch it live in a window\n"
