@@ -18,6 +18,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <limits>
 #include <set>
 
@@ -564,7 +565,20 @@ struct Session::Impl
     // the display, the view): the per-node loops of the display, the streams and the halos
     // index the planes with it instead of dividing the node index by the row length.
     std::vector<std::uint32_t> pad;
-    std::vector<net::PeerHandle> stream_to;  // stream(): the receivers of a leaf state
+    // Per leaf, its nodes (LeafGraph order) as runs of consecutive padded offsets: a leaf is a
+    // block of grid rows listed row-major, so a run is one of its rows (cut where the canonical
+    // nodes stop). The whole-object copies of every frame (the display, the view history, the
+    // view, the stream) move these spans instead of indexing node by node.
+    struct NodeRun
+    {
+        std::uint32_t first;   // index of the run's first node in the leaf's node list
+        std::uint32_t offset;  // its padded offset
+        std::uint32_t count;
+    };
+    std::vector<NodeRun> node_runs;
+    std::vector<std::uint32_t> node_run_begin;  // per leaf, and one past the last
+    std::vector<net::PeerHandle> stream_to;     // stream(): the receivers of a leaf state
+    net::Message stream_msg;                    // stream(): the leaf state being sent
     // Our leaves' nodes in the display are older than the state (flush_display).
     bool own_display_pending = false;
     // A frame's update_view has not been written into view_u/v yet (materialize_view).
@@ -618,6 +632,37 @@ struct Session::Impl
     }
 
     // --- sending -------------------------------------------------------------------------------
+
+    /// Copies a run of c values. Runs are a leaf's rows, mostly 8 nodes: blocks of 8 as
+    /// fixed-size copies (a few vector moves) rather than a call to memmove per run.
+    static void copy_run(const double* src, std::size_t c, double* dst) noexcept
+    {
+        for (; c >= 8; c -= 8, src += 8, dst += 8)
+            std::memcpy(dst, src, 8 * sizeof(double));
+        for (; c > 0; --c)
+            *dst++ = *src++;
+    }
+    /// Calls f(offset, first, count) for each run of leaf l's nodes [lo, hi) (leaf order):
+    /// nodes first .. first + count - 1 lie at padded offsets offset .. offset + count - 1.
+    template <class F>
+    void for_node_runs(std::size_t l, std::size_t lo, std::size_t hi, F&& f) const
+    {
+        for (std::uint32_t r = node_run_begin[l]; r < node_run_begin[l + 1]; ++r)
+        {
+            const NodeRun& run = node_runs[r];
+            const std::size_t a = std::max<std::size_t>(run.first, lo);
+            const std::size_t b = std::min<std::size_t>(std::size_t{run.first} + run.count, hi);
+            if (a < b)
+                f(run.offset + (a - run.first), a, b - a);
+        }
+    }
+    template <class F>
+    void for_node_runs(std::size_t l, F&& f) const
+    {
+        for (std::uint32_t r = node_run_begin[l]; r < node_run_begin[l + 1]; ++r)
+            f(std::size_t{node_runs[r].offset}, std::size_t{node_runs[r].first},
+              std::size_t{node_runs[r].count});
+    }
 
     net::Message make(net::Body body, std::uint64_t tick) const
     {
@@ -721,6 +766,21 @@ struct Session::Impl
         {
             const core::GridCoord c = g.coord(core::NodeIndex{static_cast<std::uint32_t>(n)});
             pad[n] = static_cast<std::uint32_t>(s.display_u_.padded_offset(c.x, c.y));
+        }
+        node_runs.clear();
+        node_run_begin.assign(1, 0);
+        for (std::size_t l = 0; l < s.graph_->size(); ++l)
+        {
+            const auto nodes = s.graph_->nodes(l);
+            for (std::size_t k = 0; k < nodes.size(); ++k)
+            {
+                const std::uint32_t o = pad[nodes[k].value];
+                if (k > 0 && node_runs.back().offset + node_runs.back().count == o)
+                    ++node_runs.back().count;
+                else
+                    node_runs.push_back({static_cast<std::uint32_t>(k), o, 1});
+            }
+            node_run_begin.push_back(static_cast<std::uint32_t>(node_runs.size()));
         }
         leaf_epoch.assign(s.graph_->size(), 0);
         leaf_tick.assign(s.graph_->size(), 0);
@@ -1570,15 +1630,15 @@ struct Session::Impl
     /// into xu, xv. \return the node count, or 0 if a value does not fit the int32 range.
     std::size_t quantise_leaf(std::uint32_t l)
     {
-        const auto nodes = s.graph_->nodes(l);
-        const std::size_t n = nodes.size();
+        const std::size_t n = s.graph_->node_count(l);
         const double* state_u = s.state_.u.padded().data();
         const double* state_v = s.state_.v.padded().data();
-        for (std::size_t k = 0; k < n; ++k)
-        {
-            xu[k] = state_u[pad[nodes[k].value]];
-            xv[k] = state_v[pad[nodes[k].value]];
-        }
+        for_node_runs(l,
+                      [&](std::size_t o, std::size_t i, std::size_t c)
+                      {
+                          copy_run(state_u + o, c, xu.data() + i);
+                          copy_run(state_v + o, c, xv.data() + i);
+                      });
         const auto su = std::span(qu.data(), n);
         const auto sv = std::span(qv.data(), n);
         if (!net::quantise(std::span(xu.data(), n), settings.u_step_exponent, su) ||
@@ -1642,15 +1702,14 @@ struct Session::Impl
         double* dv = s.display_v_.padded().data();
         for (const std::uint32_t l : my_leaves)
         {
-            const auto nodes = s.graph_->nodes(l);
             // With quantised streaming every peer, this one included, shows the dequantised bits.
             const std::size_t n = quantised_stream() ? quantise_leaf(l) : 0;
-            for (std::size_t k = 0; k < nodes.size(); ++k)
-            {
-                const std::uint32_t o = pad[nodes[k].value];
-                du[o] = n != 0 ? xu[k] : su[o];
-                dv[o] = n != 0 ? xv[k] : sv[o];
-            }
+            for_node_runs(l,
+                          [&](std::size_t o, std::size_t i, std::size_t c)
+                          {
+                              copy_run(n != 0 ? xu.data() + i : su + o, c, du + o);
+                              copy_run(n != 0 ? xv.data() + i : sv + o, c, dv + o);
+                          });
         }
         s.model_->sync(s.display_u_);
         s.model_->sync(s.display_v_);
@@ -2053,22 +2112,45 @@ struct Session::Impl
         {
             if (quantised_stream() && stream_quantised(p, l))
                 continue;
-            net::LeafState m;
+            // One message for every leaf and period: its vectors keep their capacity.
+            if (!std::holds_alternative<net::LeafState>(stream_msg.body))
+                stream_msg.body = net::LeafState{};
+            stream_msg.header.session = session_id;
+            stream_msg.header.sender = s.id_;
+            stream_msg.header.tick = s.state_.tick;
+            net::LeafState& m = std::get<net::LeafState>(stream_msg.body);
             m.epoch = p->epoch;
             const core::LeafId id = s.graph_->leaves()[l];
             m.leaf = net::WireLeafId{id.square, id.depth, id.ix, id.iy};
             m.encoding = settings.stream_encoding;
             m.coarsen = static_cast<std::uint8_t>(settings.stream_coarsen);
+            m.node_offset = 0;
             m.time = s.state_.time;
-            // Coarse streaming: the leaf's canonical nodes on level n - k, row-major.
-            for (const core::NodeIndex n : s.graph_->nodes(l))
+            m.u.clear();
+            m.v.clear();
+            if (settings.stream_coarsen == 0)
             {
-                const core::GridCoord c = g.coord(n);
-                if (!on_coarse_level(c, settings.stream_coarsen))
-                    continue;
-                m.u.push_back(s.state_.u.at(c.x, c.y));
-                m.v.push_back(s.state_.v.at(c.x, c.y));
+                const double* su = s.state_.u.padded().data();
+                const double* sv = s.state_.v.padded().data();
+                m.u.resize(s.graph_->node_count(l));
+                m.v.resize(m.u.size());
+                for_node_runs(l,
+                              [&](std::size_t o, std::size_t i, std::size_t c)
+                              {
+                                  copy_run(su + o, c, m.u.data() + i);
+                                  copy_run(sv + o, c, m.v.data() + i);
+                              });
             }
+            else
+                // Coarse streaming: the leaf's canonical nodes on level n - k, row-major.
+                for (const core::NodeIndex n : s.graph_->nodes(l))
+                {
+                    const core::GridCoord c = g.coord(n);
+                    if (!on_coarse_level(c, settings.stream_coarsen))
+                        continue;
+                    m.u.push_back(s.state_.u.at(c.x, c.y));
+                    m.v.push_back(s.state_.v.at(c.x, c.y));
+                }
             if (quantised_stream())
                 m.encoding = net::ValueEncoding::F64;
             // Coarse leaves are a few nodes each: they go several to a datagram (ValueBatch,
@@ -2087,8 +2169,7 @@ struct Session::Impl
             if (!stream_to.empty())
             {
                 // Encoded once for every receiver.
-                const net::Message msg = make(m, s.state_.tick);
-                if (auto r = messenger.send(stream_to, msg, net::SendMode::Unsequenced); !r)
+                if (auto r = messenger.send(stream_to, stream_msg, net::SendMode::Unsequenced); !r)
                     spdlog::debug("session: stream send failed: {}", r.error().message);
             }
             leaf_sent_time[l] = s.state_.time;
@@ -2838,12 +2919,12 @@ struct Session::Impl
         double* dv = s.display_v_.padded().data();
         const double* from_u = quantised ? xu.data() : ls.u.data();
         const double* from_v = quantised ? xv.data() : ls.v.data();
-        for (std::size_t k = 0; k < count; ++k)
-        {
-            const std::uint32_t o = pad[nodes[ls.node_offset + k].value];
-            du[o] = from_u[k];
-            dv[o] = from_v[k];
-        }
+        for_node_runs(l, ls.node_offset, ls.node_offset + count,
+                      [&](std::size_t o, std::size_t i, std::size_t c)
+                      {
+                          copy_run(from_u + (i - ls.node_offset), c, du + o);
+                          copy_run(from_v + (i - ls.node_offset), c, dv + o);
+                      });
         display_dirty = true;
     }
 
@@ -3089,8 +3170,7 @@ struct Session::Impl
         for (const std::uint32_t l : updated)
         {
             updated_flag[l] = 0;
-            const auto nodes = s.graph_->nodes(l);
-            const std::size_t n = nodes.size();
+            const std::size_t n = s.graph_->node_count(l);
             ViewHistory& h = history[l];
             if (h.sender == leaf_sender[l] && h.count > 0 && leaf_time[l] == h.time_of(h.count - 1))
                 continue;  // the same state again (a duplicate, or re-sent unchanged)
@@ -3110,11 +3190,12 @@ struct Session::Impl
                 --h.count;
             }
             const auto k = static_cast<std::size_t>(h.slot(h.count));
-            for (std::size_t i = 0; i < n; ++i)
-            {
-                h.u[k * n + i] = du[pad[nodes[i].value]];
-                h.v[k * n + i] = dv[pad[nodes[i].value]];
-            }
+            for_node_runs(l,
+                          [&](std::size_t o, std::size_t i, std::size_t c)
+                          {
+                              copy_run(du + o, c, h.u.data() + k * n + i);
+                              copy_run(dv + o, c, h.v.data() + k * n + i);
+                          });
             h.time[k] = leaf_time[l];
             ++h.count;
             Playout& pl = playout[h.sender];
@@ -3207,12 +3288,12 @@ struct Session::Impl
             view_time[l] = leaf_time[l];
             if (h.count == 0 || leaf_sender[l] == s.id_.value || h.sender != leaf_sender[l])
             {
-                for (const core::NodeIndex node : s.graph_->nodes(l))
-                {
-                    const std::uint32_t o = pad[node.value];
-                    vu[o] = du[o];
-                    vv[o] = dv[o];
-                }
+                for_node_runs(l,
+                              [&](std::size_t o, std::size_t, std::size_t c)
+                              {
+                                  copy_run(du + o, c, vu + o);
+                                  copy_run(dv + o, c, vv + o);
+                              });
                 continue;
             }
             const double t = playout[h.sender].render;
@@ -3229,16 +3310,20 @@ struct Session::Impl
                 w = (t - h.time_of(a)) / (h.time_of(b) - h.time_of(a));
             }
             view_time[l] = (1.0 - w) * h.time_of(a) + w * h.time_of(b);
-            const auto nodes = s.graph_->nodes(l);
-            const std::size_t n = nodes.size();
-            const auto ia = static_cast<std::size_t>(h.slot(a)) * n;
-            const auto ib = static_cast<std::size_t>(h.slot(b)) * n;
-            for (std::size_t i = 0; i < n; ++i)
-            {
-                const std::uint32_t o = pad[nodes[i].value];
-                vu[o] = h.u[ia + i] + w * (h.u[ib + i] - h.u[ia + i]);
-                vv[o] = h.v[ia + i] + w * (h.v[ib + i] - h.v[ia + i]);
-            }
+            const std::size_t n = s.graph_->node_count(l);
+            const double* ua = h.u.data() + static_cast<std::size_t>(h.slot(a)) * n;
+            const double* ub = h.u.data() + static_cast<std::size_t>(h.slot(b)) * n;
+            const double* va = h.v.data() + static_cast<std::size_t>(h.slot(a)) * n;
+            const double* vb = h.v.data() + static_cast<std::size_t>(h.slot(b)) * n;
+            for_node_runs(l,
+                          [&](std::size_t o, std::size_t i, std::size_t c)
+                          {
+                              for (std::size_t j = 0; j < c; ++j)
+                              {
+                                  vu[o + j] = ua[i + j] + w * (ub[i + j] - ua[i + j]);
+                                  vv[o + j] = va[i + j] + w * (vb[i + j] - va[i + j]);
+                              }
+                          });
         }
         s.model_->sync(view_u);
         s.model_->sync(view_v);
