@@ -13,10 +13,12 @@
 
 #include <algorithm>
 #include <bit>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <random>
 #include <set>
 
@@ -550,6 +552,32 @@ TEST(Codec, EncoderRefusesWhatTheDecoderWouldRefuse)
     m = first_of(MessageType::Ping);
     std::vector<std::byte> small(encoded_size(m) - 1);
     EXPECT_EQ(encode(m, small).error(), EncodeError::BufferTooSmall);
+}
+
+TEST(Codec, AValueOutOfItsEncodingAnywhereIsRefused)
+{
+    // Every position of u and v of a full leaf state, in both encodings: a NaN, an infinity
+    // and, in f32, a finite value beyond FLT_MAX (the checks run over whole vectors at once).
+    std::vector<std::byte> buf(k_max_datagram_size);
+    const double nan = std::bit_cast<double>(0x7FF8000000000001ULL);
+    const double inf = -std::numeric_limits<double>::infinity();
+    for (const ValueEncoding e : {ValueEncoding::F64, ValueEncoding::F32})
+    {
+        const std::size_t n = e == ValueEncoding::F64 ? k_max_leaf_nodes_f64 : k_max_leaf_nodes_f32;
+        const Message good{samples::header(), samples::leaf_state(e, n)};
+        ASSERT_TRUE(encode(good, buf).has_value());
+        for (std::size_t k = 0; k < 2 * n; ++k)
+            for (const double bad : {nan, inf, 1e39})
+            {
+                if (e == ValueEncoding::F64 && std::isfinite(bad))
+                    continue;  // any finite double is an f64 value
+                Message m = good;
+                auto& ls = std::get<LeafState>(m.body);
+                (k < n ? ls.u[k] : ls.v[k - n]) = bad;
+                ASSERT_EQ(validate(m), DecodeError::NonFinite) << "value " << k << " = " << bad;
+                ASSERT_EQ(encode(m, buf).error(), EncodeError::InvalidMessage);
+            }
+    }
 }
 
 TEST(Codec, F32EncodingRoundsToNearest)
