@@ -53,9 +53,18 @@ int run_replay(const ReplayOptions& opt, const GlobalOptions& global)
                                                    "last tick " +
                                                    std::to_string(recording->final_tick)});
     ProgressBar progress(global);
+    progress.stop_on(install_interrupt_flag());  // Ctrl-C: stop, write nothing
     auto result = session::replay(*recording, opt.threads, opt.until, &progress);
     if (!result)
+    {
+        if (result.error().code == core::ErrorCode::Cancelled)
+        {
+            spdlog::error("{}; nothing written (--until replays part of a recording)",
+                          result.error().message);
+            return k_exit_interrupted;
+        }
         return report(result.error());
+    }
     const core::TetraGrid& grid = result->model.grid();
     const std::uint64_t hash =
         session::state_hash(grid, result->state.u, result->state.v, recording->hash_mask);
@@ -127,7 +136,8 @@ void add_replay_command(CLI::App& app, const GlobalOptions& global)
         "A recording (.prec) holds the model and every peer's force lists with the ticks they\n"
         "applied from; `pliant demo` writes demo-out/session.prec and `pliant host --record F`\n"
         "writes one. In exact coupling the replay reproduces the session's final state bit for\n"
-        "bit (exit status 3 if not). -o exports the replayed surface p = P + u N.\n\n"
+        "bit (exit status 3 if not). -o exports the replayed surface p = P + u N. Ctrl-C stops\n"
+        "the replay, writes nothing and exits with status 130.\n\n"
         "Examples:\n"
         "  pliant replay demo-out/session.prec\n"
         "  pliant replay demo-out/session.prec -o final.ply\n"

@@ -232,6 +232,10 @@ core::Result<ReplayResult> replay(const Recording& recording, int threads, std::
     {
         if (progress != nullptr && t % report_every == 0)
             progress->update("replay", static_cast<double>(t) / static_cast<double>(ticks));
+        // A stop asked for (Ctrl-C in `pliant replay`) ends the replay within 16 steps.
+        if (t % 16 == 0 && core::stop_requested(progress))
+            return core::cancelled("replay",
+                                   "tick " + std::to_string(t) + " of " + std::to_string(ticks));
         if (next != changes.end() && *next <= t)
         {
             forces = forces_at(model, recording.forces, t);

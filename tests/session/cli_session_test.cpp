@@ -4,10 +4,12 @@
 // all exit 0 and their statistics show traffic both ways. Bounded by --duration.
 #include <pliant/core/grid_io.h>
 #include <pliant/core/tetra_grid.h>
+#include <pliant/session/recording.h>
 
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include "grid_shapes.h"
 #include "stats_csv.h"
 #include "support/test_paths.h"
 
@@ -545,6 +547,43 @@ TEST(SessionCli, ASavedStateResumesInHostAndSimulateAndIsRefusedAsRestGeometry)
     EXPECT_EQ(
         channel_diff(dir / "o4" / "frame_00000.pgrid", dir / "o1" / "frame_00002.pgrid", "u").diff,
         0.0);
+}
+
+// Ctrl-C during `pliant replay`: the replay stops within 16 steps, says at which tick, writes
+// nothing at -o and exits with status 130. The recording (a million ticks at level 5, many
+// seconds of replay) is made here; the signal goes once the replay's log shows progress.
+TEST(SessionCli, CtrlCStopsAReplayAndWritesNothing)
+{
+    const auto dir = pliant::test::scratch_dir("session_cli_replay_interrupted");
+    const auto grid = pliant::core::TetraGrid::create(5).value();
+    pliant::sim::MembraneSettings material;
+    material.fixed_step = true;
+    material.fixed_dt = 1e-3;
+    auto model =
+        pliant::sim::MembraneModel::create(grid, pliant::scenes::sphere_grid(grid, 1.0), material)
+            .value();
+    pliant::session::Recording rec;
+    rec.model = pliant::session::encode_model(model, pliant::session::Coupling::Exact);
+    rec.final_tick = 1'000'000;
+    rec.forces.push_back(pliant::session::ForceRecord{
+        0,
+        0,
+        {pliant::net::UserForce{
+            pliant::net::Target{pliant::net::TargetKind::Face, 100, {0, 0, 0}, 0.0},
+            0,
+            {0.0, 0.0, 0.5}}}});
+    ASSERT_TRUE(pliant::session::save_recording(dir / "long.prec", rec));
+    const std::string cmd = "cd '" + dir.string() + "' && rm -f out.pgrid && sh '" +
+                            PLIANT_INTERRUPT_SH + "' log '^replay: [0-9]+%' '" + PLIANT_EXE +
+                            "' replay long.prec -o out.pgrid > replay.out 2> replay.err; " +
+                            "echo $? > replay.rc";
+    ASSERT_EQ(std::system(cmd.c_str()), 0);
+    const std::string err = read(dir / "replay.err");
+    EXPECT_EQ(read(dir / "replay.rc"), "130\n") << err;
+    // The message tells a stop that was heard from a process killed by the signal (also 130).
+    EXPECT_NE(err.find("replay: cancelled during tick "), std::string::npos) << err;
+    EXPECT_NE(err.find(" of 1000000; nothing written"), std::string::npos) << err;
+    EXPECT_FALSE(std::filesystem::exists(dir / "out.pgrid"));
 }
 
 }  // namespace

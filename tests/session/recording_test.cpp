@@ -130,6 +130,36 @@ TEST(Recording, ReplayRuleEqualsTheReferenceSchedule)
     EXPECT_GT(compare(grid, replayed->state.u, ref.u, {}).max_ref, 1e-5);
 }
 
+// A stop asked for through the progress sink ends the replay within 16 steps, with Cancelled
+// and the tick it stopped at, and no result.
+TEST(Recording, AStopAskedForEndsTheReplayWithinSixteenSteps)
+{
+    struct StopAtThirdReport final : core::ProgressSink
+    {
+        int reports = 0;
+        void update(std::string_view phase, double) noexcept override
+        {
+            EXPECT_EQ(phase, "replay");
+            ++reports;
+        }
+        bool stop_requested() const noexcept override { return reports >= 3; }
+    };
+    const core::TetraGrid grid = core::TetraGrid::create(k_recording_level).value();
+    auto model =
+        sim::MembraneModel::create(grid, scenes::sphere_grid(grid, 1.0), material()).value();
+    Recording rec;
+    rec.model = encode_model(model, Coupling::Exact);
+    rec.final_tick = 1'000'000;  // minutes of steps if the stop went unheard
+    rec.forces.push_back(ForceRecord{0, 0, {face_pull(200, 0.5)}});
+    StopAtThirdReport sink;
+    const auto replayed = replay(rec, 1, 0, &sink);
+    ASSERT_FALSE(replayed);
+    EXPECT_EQ(replayed.error().code, core::ErrorCode::Cancelled);
+    // Reports every 10,000 ticks: the third is at tick 20,000, where the stop is heard at once.
+    EXPECT_EQ(replayed.error().message, "replay: cancelled during tick 20000 of 1000000");
+    EXPECT_EQ(sink.reports, 3);
+}
+
 std::vector<char> read_all(const std::filesystem::path& p)
 {
     std::ifstream in(p, std::ios::binary);

@@ -87,7 +87,8 @@ struct ReplayResult
 
 /// Replays `recording` on one process with `threads` threads (the result does not depend on it)
 /// up to `until` ticks (0: the recording's final tick), reporting progress as phase "replay".
-/// \return decode_model's errors; InvalidArgument if the model is not fixed-step.
+/// \return decode_model's errors; InvalidArgument if the model is not fixed-step; Cancelled
+/// ("replay: cancelled during tick T of N") within 16 steps of `progress` asking to stop.
 core::Result<ReplayResult> replay(const Recording& recording, int threads = 1,
                                   std::uint64_t until = 0, core::ProgressSink* progress = nullptr);
 
