@@ -101,6 +101,8 @@ struct LiveLink
     std::atomic<bool> discard{false};
     std::promise<std::uint16_t> master_port;
     std::atomic<bool> announced{false};
+    /// Ctrl-C (install_interrupt_flag, installed before the session thread starts).
+    const volatile std::sig_atomic_t* interrupt = nullptr;
 
     void announce(std::uint16_t port)
     {
@@ -378,10 +380,12 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
     spdlog::info("demo: {} ({} vertices, {} faces) is a closed genus-0 surface",
                  mesh_path.filename().string(), mesh->vertex_count(), mesh->face_count());
     ProgressBar progress(global);
-    // Ctrl-C or SIGTERM (not with --view, whose window ends the run): the remeshing stops and
-    // nothing is written; the session stops after the frame being shown and the run ends as
-    // usual with what ran (final state, recording and its replay check, summary), exit 130.
-    const volatile std::sig_atomic_t* interrupt = live ? nullptr : install_interrupt_flag();
+    // Ctrl-C or SIGTERM: the remeshing stops and nothing is written; the session stops after
+    // the frame being shown (with --view: the viewer closes as its window does, and the
+    // session with it) and the run ends as usual with what ran (final state, recording and its
+    // replay check, summary), exit 130.
+    const volatile std::sig_atomic_t* interrupt =
+        live ? live_link->interrupt : install_interrupt_flag();
     const auto interrupted = [interrupt] { return interrupt != nullptr && *interrupt != 0; };
     progress.stop_on(interrupt);
     remesh::RemeshSettings rs;
@@ -788,7 +792,7 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
     if (!identical)
         return report({core::ErrorCode::NotConverged,
                        "demo: replaying the recording did not reproduce the session's state"});
-    if (interrupted() && frames_run < frames)
+    if (!live && interrupted() && frames_run < frames)
     {
         spdlog::error("demo: interrupted after {} of {} frames; {} holds what ran", frames_run,
                       frames, opt.out.string());
@@ -811,6 +815,7 @@ int run_demo_with_viewer(const DemoOptions& opt, const GlobalOptions& global)
         return k_exit_failure;
     }
     LiveLink link;
+    link.interrupt = install_interrupt_flag();
     std::future<std::uint16_t> port = link.master_port.get_future();
     int demo_rc = 0;
     std::thread session_thread(
@@ -834,12 +839,17 @@ int run_demo_with_viewer(const DemoOptions& opt, const GlobalOptions& global)
         v.exit_after = opt.exit_after;
         v.name = "viewer";
         v.owner_colors = true;
+        v.stop = link.interrupt;
         view_rc = viewer::run_viewer(v);
-        if (view_rc != 0)
+        // A viewer that failed leaves no outputs; one closed by Ctrl-C ends the run as its
+        // window's close does, with every output, and the demo exits 130.
+        if (view_rc != 0 && view_rc != k_exit_interrupted)
             link.discard = true;
     }
     link.stop = true;
     session_thread.join();
+    if (demo_rc == 0 && view_rc == k_exit_interrupted)
+        spdlog::error("demo: interrupted; {} holds what ran", opt.out.string());
     return demo_rc != 0 ? demo_rc : view_rc;
 #else
     (void)opt;
@@ -868,8 +878,9 @@ void add_demo_command(CLI::App& app, const GlobalOptions& global)
         "of rendering frames: the peers run in real time on a second thread, the two users'\n"
         "grabs repeat every --duration seconds, and closing the window ends the session (the\n"
         "summary and session.prec are still written; `pliant replay` checks the recording).\n"
-        "Without --view, Ctrl-C stops after the frame being shown and the run ends with what\n"
-        "ran (every output, the replay check), exit status 130.\n\n"
+        "Ctrl-C stops after the frame being shown (with --view: closes the viewer as its\n"
+        "window does) and the run ends with what ran (every output, the replay check), exit\n"
+        "status 130.\n\n"
         "Examples:\n"
         "  pliant demo                      # the bundled cow, level 6, 3 s at 12 fps\n"
         "  pliant demo --view               # watch it live in a window\n"

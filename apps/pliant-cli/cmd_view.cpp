@@ -92,6 +92,7 @@ int run_view(const ViewOptions& opt)
     v.port = opt.port;
     v.vsync = !opt.no_vsync;
     v.hide_panels = opt.hide_panels;
+    v.stop = install_interrupt_flag();  // Ctrl-C: close as the window does, exit 130
     return viewer::run_viewer(v);
 #else
     (void)opt;
@@ -116,7 +117,8 @@ void add_view_command(CLI::App& app, const GlobalOptions& global)
         "zooms; P or F12 saves a screenshot (the first free pliant-view-NNNN.png); W wireframe;\n"
         "C colouring; Space pause; R rest; H hides the panels. --script, --screenshot and\n"
         "--exit-after make a headless run for tests (docs/viewer.md); their clocks start when\n"
-        "the object shows.\n\n"
+        "the object shows. Ctrl-C in the terminal closes the viewer as its window does (a\n"
+        "session left with its hand-over, --screenshot written), exit status 130.\n\n"
         "Examples:\n"
         "  pliant view                                   # the bundled cow, level 6\n"
         "  pliant view spot.pgrid --display-level 8\n"

@@ -903,8 +903,17 @@ int Viewer::run()
     last_frame_ = start;
     double frame_seconds_sum = 0.0;
     std::uint64_t timed_frames = 0;
+    bool interrupted = false;
     while (glfwWindowShouldClose(window_) == GLFW_FALSE)
     {
+        if (options_.stop != nullptr && *options_.stop != 0)
+        {
+            // Ctrl-C: close as the window's close button does (a load is cancelled, a
+            // session left with its hand-over).
+            spdlog::info("view: interrupted; closing");
+            interrupted = true;
+            break;
+        }
         glfwPollEvents();
         const auto now = Clock::now();
         const double wall_dt = seconds(now - last_frame_);
@@ -1014,13 +1023,15 @@ int Viewer::run()
         if (!object_shown())
         {
             spdlog::error("view: nothing was shown, no screenshot written");
-            return 3;
+            return interrupted ? 130 : 3;
         }
         std::printf("view: screenshot %s (%dx%d), the object covers %.1f %% of the 3D view\n",
                     options_.screenshot.string().c_str(), fb_w, fb_h, 100.0 * last_coverage_);
     }
     std::fflush(stdout);
-    return shot_ok ? 0 : 3;
+    if (!shot_ok)
+        return 3;
+    return interrupted ? 130 : 0;  // 130: the CLI's status for a run stopped by Ctrl-C
 }
 
 bool display_available(std::string* why)

@@ -5,6 +5,7 @@
 // `pliant view`: the interactive viewer (GLFW + Dear ImGui, docs/viewer.md). Only built when
 // viewer.cmake found GLFW and ImGui (PLIANT_HAVE_VIEWER); cmd_view.cpp parses the options.
 
+#include <csignal>
 #include <cstdint>
 #include <filesystem>
 #include <memory>
@@ -41,9 +42,14 @@ struct ViewerOptions
     /// simulation starts from; `resume` names its file.
     std::shared_ptr<const sim::MembraneState> resume_state;
     std::filesystem::path resume;
+    /// Set (to non-zero) by Ctrl-C (the CLI's install_interrupt_flag): the viewer closes as if
+    /// its window were closed (a session left cleanly, the --screenshot written) and returns
+    /// 130. Null: Ctrl-C keeps its default (the process ends at once).
+    const volatile std::sig_atomic_t* stop = nullptr;
 };
 
-/// Runs the viewer until the window closes or `exit_after`. \return the process exit code.
+/// Runs the viewer until the window closes, `exit_after` or `stop`. \return the process exit
+/// code (130 when `stop` ended it).
 int run_viewer(const ViewerOptions& options);
 
 /// Whether GLFW can start (a display to open a window on); else `why` says what failed.
