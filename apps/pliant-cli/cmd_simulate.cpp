@@ -801,8 +801,10 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
     const bool fixed = sc.settings.fixed_step;
     const double h = sc.settings.fixed_dt;
     ProgressBar bar(global);
-    // Ctrl-C or SIGTERM: stop after the frame being computed, keeping every frame written.
+    // Ctrl-C or SIGTERM: stop before the next step, keeping every frame written (the frame
+    // being computed is dropped; at high levels with small steps a frame can take seconds).
     const volatile std::sig_atomic_t* interrupted = install_interrupt_flag();
+    bar.stop_on(interrupted);
     std::vector<sim::Force> forces;
     std::uint64_t total_steps = 0;
     std::uint64_t total_rejections = 0;
@@ -825,6 +827,18 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
             fixed ? "fixed_dt" : "dt_min and dt_max");
         return k_exit_failure;
     };
+    // Stopped by Ctrl-C with frames 0 to `last` written (the last at t_written).
+    double t_written = state.time;
+    const auto stopped = [&](int last)
+    {
+        record.end("interrupted", last + 1, t_written, seconds_since_start(),
+                   {total_steps, total_rejections, total_at_min});
+        if (auto ok = record.write(); !ok)
+            spdlog::warn("{}", ok.error().message);
+        spdlog::error("{}: interrupted at t = {} s; frames 0 to {} of 0 to {} are in {}",
+                      opt.scenario.string(), fmt_number(t_written), last, frames, opt.out.string());
+        return k_exit_interrupted;
+    };
     for (int frame = 0; frame <= frames; ++frame)
     {
         const double t_frame = frame / sc.frame_rate;
@@ -834,7 +848,8 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
         const auto advance = [&](double t_next)
         {
             active_forces(sc, state.time, t_next, centre, forces);
-            const sim::AdvanceReport r = sim::advance_to(*model, state, ws, t_next, forces);
+            const sim::AdvanceReport r =
+                sim::advance_to(*model, state, ws, t_next, forces, {}, 10'000'000, &bar);
             rep.status = rep.status | r.status;
             rep.steps += r.steps;
             rep.rejections += r.rejections;
@@ -869,6 +884,8 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
                 const sim::AdvanceReport r = advance(t_next);
                 if (sim::has_flag(r.status, sim::StepStatus::NonFinite))
                     return diverged("the state became non-finite", frame - 1);
+                if (r.stopped)
+                    return stopped(frame - 1);
                 if (r.steps == 0)
                     break;  // no whole step fitted after all (rounding): the next frame takes it
             }
@@ -886,6 +903,8 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
                 const sim::AdvanceReport r = advance(t_next);
                 if (sim::has_flag(r.status, sim::StepStatus::NonFinite))
                     return diverged("the state became non-finite", frame - 1);
+                if (r.stopped)
+                    return stopped(frame - 1);
                 if (!r.reached)
                     break;  // max_steps: the remainder waits for the next frame
             }
@@ -902,17 +921,9 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
         if (!std::isfinite(e.total()))
             return diverged("the energy became non-finite", frame);
         bar.update("simulate", frames > 0 ? static_cast<double>(frame) / frames : 1.0);
+        t_written = state.time;
         if (*interrupted != 0 && frame < frames)
-        {
-            record.end("interrupted", frame + 1, state.time, seconds_since_start(),
-                       {total_steps, total_rejections, total_at_min});
-            if (auto ok = record.write(); !ok)
-                spdlog::warn("{}", ok.error().message);
-            spdlog::error("{}: interrupted at t = {} s; frames 0 to {} of 0 to {} are in {}",
-                          opt.scenario.string(), fmt_number(state.time), frame, frames,
-                          opt.out.string());
-            return k_exit_interrupted;
-        }
+            return stopped(frame);
     }
     const double wall = seconds_since_start();
     record.end("complete", frames + 1, state.time, wall,
@@ -968,8 +979,8 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global)
         "energy.csv (frame, time, kinetic, strain, foundation, total energy [J], steps,\n"
         "rejections, flags), and run.json: the inputs, every setting in effect (the command\n"
         "line's and the scenario's), and the result (status running, complete, diverged or\n"
-        "interrupted, frames written, simulated and wall seconds, steps). Ctrl-C stops after\n"
-        "the frame being computed, keeps the frames written and exits with status 130.\n\n"
+        "interrupted, frames written, simulated and wall seconds, steps). Ctrl-C stops before\n"
+        "the next step, keeps the frames written and exits with status 130.\n\n"
         "Examples:\n"
         "  pliant simulate --scenario scenes/pull.toml -o out/pull            # sphere, level 6\n"
         "  pliant simulate spot.pgrid --scenario scenes/spot.toml -o out/spot --format ply\n"

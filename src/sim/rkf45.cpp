@@ -754,7 +754,8 @@ StepReport step(MembraneModel& model, MembraneState& state, Rkf45Workspace& ws,
 
 AdvanceReport advance_to(MembraneModel& model, MembraneState& state, Rkf45Workspace& ws,
                          double target_time, std::span<const Force> forces,
-                         const StepOptions& options, std::uint64_t max_steps)
+                         const StepOptions& options, std::uint64_t max_steps,
+                         const core::ProgressSink* stop)
 {
     const MembraneSettings& set = model.settings();
     const bool ramp = set.force_hold == ForceHold::Linear && target_time > state.time;
@@ -771,6 +772,11 @@ AdvanceReport advance_to(MembraneModel& model, MembraneState& state, Rkf45Worksp
         if (set.fixed_step ? remaining + slack < set.fixed_dt : remaining <= slack)
         {
             report.reached = true;
+            break;
+        }
+        if (core::stop_requested(stop))
+        {
+            report.stopped = true;
             break;
         }
         opt.dt_limit = options.dt_limit > 0.0 ? std::min(options.dt_limit, remaining) : remaining;

@@ -254,6 +254,43 @@ TEST(Rkf45, FixedStepAdvanceTakesWholeSteps)
     EXPECT_NEAR(s.time, 0.2, 1e-12);
 }
 
+// A stop asked for between steps (Ctrl-C in `pliant simulate`) ends advance_to before its next
+// step: the state is that of the last whole step, the same as that many steps without a stop.
+TEST(Rkf45, AdvanceStopsBeforeTheStepAfterAStopIsAsked)
+{
+    struct StopAfterPolls final : core::ProgressSink
+    {
+        mutable int polls = 0;
+        int allowed = 0;
+        void update(std::string_view, double) noexcept override {}
+        bool stop_requested() const noexcept override { return ++polls > allowed; }
+    };
+    for (const bool fixed : {true, false})
+    {
+        MembraneSettings set = ode_settings();
+        set.fixed_step = fixed;
+        set.fixed_dt = 0.01;
+        MembraneModel m = test::sphere_model(3, set);
+        MembraneState s = initial_state(m);
+        Rkf45Workspace ws(m, 1);
+        StopAfterPolls stop;
+        stop.allowed = 4;
+        const AdvanceReport r = advance_to(m, s, ws, 1.0, {}, {}, 10'000'000, &stop);
+        EXPECT_TRUE(r.stopped);
+        EXPECT_FALSE(r.reached);
+        EXPECT_EQ(r.steps, 4U);
+        EXPECT_EQ(s.tick, 4U);
+        EXPECT_EQ(stop.polls, 5);
+        // The same four steps, unstopped, one advance each.
+        MembraneState ref = initial_state(m);
+        Rkf45Workspace ws_ref(m, 1);
+        for (int k = 0; k < 4; ++k)
+            (void)step(m, ref, ws_ref, {});
+        EXPECT_EQ(s.hash(), ref.hash()) << (fixed ? "fixed" : "adaptive");
+        EXPECT_EQ(s.time, ref.time);
+    }
+}
+
 double largest_omega(const MembraneModel& m)
 {
     // The exact largest frequency: omega^2 = largest eigenvalue of (K + k_f M, M).

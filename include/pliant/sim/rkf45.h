@@ -41,6 +41,7 @@
 ///   from its value at the call's start to the new forces' at its target time.
 
 #include <pliant/core/field.h>
+#include <pliant/core/progress.h>
 #include <pliant/core/tetra_grid.h>
 #include <pliant/core/vec3.h>
 #include <pliant/sim/membrane.h>
@@ -118,6 +119,7 @@ struct AdvanceReport
     std::uint64_t at_min_steps = 0;  ///< accepted steps flagged MinStepReached (at dt_min
                                      ///< with the error above tolerance)
     bool reached = false;  ///< time == target (adaptive) or no full fixed step fits any more
+    bool stopped = false;  ///< `stop` asked advance_to to stop (between two steps)
 };
 
 /// Per-step options.
@@ -283,9 +285,12 @@ StepReport step(MembraneModel& model, MembraneState& state, Rkf45Workspace& ws,
 /// with `forces` held as the model's `force_hold` says: unchanged over the call (Step), or
 /// ramped linearly from the previous call's forces to reach `forces` at `target_time` (Linear;
 /// the first call ramps up from zero). Real-time use: one call per frame. Stops early after
-/// `max_steps` steps or on NonFinite (a linear hold then keeps the forces it reached).
+/// `max_steps` steps, on NonFinite, or when `stop` (may be null) says stop_requested(), polled
+/// before every step (a user's Ctrl-C in `pliant simulate`; the state is then that of the last
+/// whole step; a linear hold keeps the forces it reached).
 AdvanceReport advance_to(MembraneModel& model, MembraneState& state, Rkf45Workspace& ws,
                          double target_time, std::span<const Force> forces,
-                         const StepOptions& options = {}, std::uint64_t max_steps = 10'000'000);
+                         const StepOptions& options = {}, std::uint64_t max_steps = 10'000'000,
+                         const core::ProgressSink* stop = nullptr);
 
 }  // namespace pliant::sim
