@@ -28,13 +28,8 @@ endif()
 # earlier file at the output path is left as it was.
 if(TARGET pliant)
     set(_int_pgrid ${CMAKE_CURRENT_BINARY_DIR}/remesh-interrupted/fox7.pgrid)
-    add_test(NAME cli_remesh_interrupted
-             COMMAND ${CMAKE_COMMAND}
-                     "-DCOMMAND=sh;${CMAKE_CURRENT_SOURCE_DIR}/interrupt.sh;log;^untangle: ;$<TARGET_FILE:pliant>;remesh;${PROJECT_SOURCE_DIR}/tests/data/meshes/fox.ply;--level;7;-o;${_int_pgrid}"
-                     -DEXIT=130
-                     "-DSTDERR_REGEX=remesh: cancelled during untangle; nothing written"
-                     "-DKEEP=${_int_pgrid}" -DTIMEOUT=500
-                     -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
-    set_tests_properties(cli_remesh_interrupted PROPERTIES TIMEOUT 540
-                         ENVIRONMENT "OMP_NUM_THREADS=1")
+    pliant_add_interrupt_test(cli_remesh_interrupted LOG "^untangle: "
+        STDERR_REGEX "remesh: cancelled during untangle. nothing written"
+        KEEP ${_int_pgrid} ENVIRONMENT "OMP_NUM_THREADS=1"
+        ARGS remesh ${PROJECT_SOURCE_DIR}/tests/data/meshes/fox.ply --level 7 -o ${_int_pgrid})
 endif()

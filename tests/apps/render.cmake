@@ -85,14 +85,10 @@ if(TARGET pliant AND TARGET pliant_png_check)
 
     # Ctrl-C during a sequence (the 101 frames of cli_simulate_pull), once f_0003.png is
     # written: the render stops after the frame being written, says how many, exits 130.
-    add_test(NAME cli_render_frames_interrupted
-             COMMAND ${CMAKE_COMMAND}
-                     "-DCOMMAND=sh;${CMAKE_CURRENT_SOURCE_DIR}/interrupt.sh;file;${_r}/interrupted/f_0003.png;$<TARGET_FILE:pliant>;render;--frames;${sim_out};-o;${_r}/interrupted/f.png;--size;320x240"
-                     -DEXIT=130
-                     "-DSTDERR_REGEX=render: interrupted after [0-9]+ of 101 frames \\(.*f_0000\\.png to .*f_[0-9]+\\.png\\)"
-                     -DTIMEOUT=500 -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
-    set_tests_properties(cli_render_frames_interrupted PROPERTIES TIMEOUT 540
-        FIXTURES_REQUIRED "render_clean;simulate_pull_frames" ENVIRONMENT "${_env}")
+    pliant_add_interrupt_test(cli_render_frames_interrupted FILE ${_r}/interrupted/f_0003.png
+        STDERR_REGEX "render: interrupted after [0-9]+ of 101 frames \\(.*f_0000\\.png to .*f_[0-9]+\\.png\\)"
+        FIXTURES_REQUIRED render_clean simulate_pull_frames ENVIRONMENT ${_env}
+        ARGS render --frames ${sim_out} -o ${_r}/interrupted/f.png --size 320x240)
 
     # Bad input: each refusal exits non-zero and says why.
     file(MAKE_DIRECTORY ${CMAKE_CURRENT_BINARY_DIR}/render-inputs/empty)

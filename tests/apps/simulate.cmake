@@ -32,24 +32,16 @@ if(TARGET pliant)
                      -DPRECISION=double -P ${CMAKE_CURRENT_SOURCE_DIR}/check_run_json.cmake)
     set_tests_properties(cli_simulate_pull_run_json PROPERTIES DEPENDS cli_simulate_pull)
 
-    # Ctrl-C once frame 3 is written (level 8: 101 frames take seconds): the run stops after
-    # the frame being computed with exit status 130, says where it stopped, and run.json says
+    # Ctrl-C once frame 3 is written (level 8: 101 frames take seconds): the run stops before
+    # its next step with exit status 130, says where it stopped, and run.json says
     # "interrupted" with as many frames as the folder and energy.csv hold.
     set(_int_out ${CMAKE_CURRENT_BINARY_DIR}/simulate-interrupted)
-    add_test(NAME cli_simulate_interrupted_clean
-             COMMAND ${CMAKE_COMMAND} -DDIR=${_int_out} -P ${CMAKE_CURRENT_SOURCE_DIR}/fresh_dir.cmake)
-    set_tests_properties(cli_simulate_interrupted_clean PROPERTIES
-                         FIXTURES_SETUP simulate_interrupted_clean)
-    add_test(NAME cli_simulate_interrupted
-             COMMAND ${CMAKE_COMMAND}
-                     "-DCOMMAND=sh;${CMAKE_CURRENT_SOURCE_DIR}/interrupt.sh;file;${_int_out}/frame_00003.pgrid;$<TARGET_FILE:pliant>;simulate;--scenario;${PROJECT_SOURCE_DIR}/scenes/pull.toml;-o;${_int_out};--level;8;-j;1"
-                     -DEXIT=130
-                     "-DSTDERR_REGEX=pull.toml: interrupted at t = [0-9.]+ s; frames 0 to [0-9]+ of 0 to 100 are in"
-                     -DTIMEOUT=500 -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
-    set_tests_properties(cli_simulate_interrupted PROPERTIES
-        TIMEOUT 540
-        FIXTURES_REQUIRED simulate_interrupted_clean
-        FIXTURES_SETUP simulate_interrupted)
+    pliant_add_interrupt_test(cli_simulate_interrupted FILE ${_int_out}/frame_00003.pgrid
+        FRESH_DIR ${_int_out}
+        STDERR_REGEX "pull.toml: interrupted at t = [0-9.]+ s. frames 0 to [0-9]+ of 0 to 100 are in"
+        FIXTURES_SETUP simulate_interrupted
+        ARGS simulate --scenario ${PROJECT_SOURCE_DIR}/scenes/pull.toml -o ${_int_out} --level 8
+             -j 1)
     add_test(NAME cli_simulate_interrupted_run_json
              COMMAND ${CMAKE_COMMAND} -DDIR=${_int_out} -DSTATUS=interrupted -DLEVEL=8
                      -DPRECISION=double -P ${CMAKE_CURRENT_SOURCE_DIR}/check_run_json.cmake)

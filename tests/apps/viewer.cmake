@@ -67,24 +67,17 @@ if(TARGET pliant AND PLIANT_HAVE_VIEWER AND PLIANT_XVFB)
     # viewer as its window's close button does (the --screenshot is still written) and the
     # status is 130. With `demo --view`, the demo then ends its session and writes every output.
     set(_int_png ${CMAKE_CURRENT_BINARY_DIR}/viewer-interrupted.png)
-    add_test(NAME cli_view_interrupted
-             COMMAND ${CMAKE_COMMAND}
-                     "-DCOMMAND=${_xvfb};sh;${CMAKE_CURRENT_SOURCE_DIR}/interrupt.sh;log;remeshed at level 4;$<TARGET_FILE:pliant>;view;${PROJECT_SOURCE_DIR}/data/spot.obj;--level;4;--size;320x240;--screenshot;${_int_png}"
-                     -DEXIT=130 "-DSTDOUT_REGEX=view: screenshot .*viewer-interrupted\\.png .*covers"
-                     "-DSTDERR_REGEX=view: interrupted; closing" -DTIMEOUT=170
-                     -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
-    set_tests_properties(cli_view_interrupted PROPERTIES
-        TIMEOUT 180
-        ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0;LIBGL_ALWAYS_SOFTWARE=1;OMP_NUM_THREADS=1")
-    add_test(NAME cli_demo_view_interrupted
-             COMMAND ${CMAKE_COMMAND}
-                     "-DCOMMAND=${_xvfb};sh;${CMAKE_CURRENT_SOURCE_DIR}/interrupt.sh;log;view: joined ;$<TARGET_FILE:pliant>;demo;--quick;--view;--out;${CMAKE_CURRENT_BINARY_DIR}/demo-view-interrupted"
-                     -DEXIT=130 "-DSTDOUT_REGEX=wrote .*demo-view-interrupted .*session\\.prec"
-                     "-DSTDERR_REGEX=demo: interrupted; .*demo-view-interrupted holds what ran"
-                     -DTIMEOUT=170 -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
-    set_tests_properties(cli_demo_view_interrupted PROPERTIES
-        TIMEOUT 180
-        ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0;LIBGL_ALWAYS_SOFTWARE=1;OMP_NUM_THREADS=1")
+    set(_int_env ASAN_OPTIONS=detect_leaks=0 LIBGL_ALWAYS_SOFTWARE=1 OMP_NUM_THREADS=1)
+    pliant_add_interrupt_test(cli_view_interrupted XVFB LOG "remeshed at level 4"
+        STDOUT_REGEX "view: screenshot .*viewer-interrupted\\.png .*covers"
+        STDERR_REGEX "view: interrupted. closing" TIMEOUT 170 ENVIRONMENT ${_int_env}
+        ARGS view ${PROJECT_SOURCE_DIR}/data/spot.obj --level 4 --size 320x240
+             --screenshot ${_int_png})
+    pliant_add_interrupt_test(cli_demo_view_interrupted XVFB LOG "view: joined "
+        STDOUT_REGEX "wrote .*demo-view-interrupted .*session\\.prec"
+        STDERR_REGEX "demo: interrupted. .*demo-view-interrupted holds what ran"
+        TIMEOUT 170 ENVIRONMENT ${_int_env}
+        ARGS demo --quick --view --out ${CMAKE_CURRENT_BINARY_DIR}/demo-view-interrupted)
     add_test(NAME cli_demo_view_png
              COMMAND ${CMAKE_COMMAND} -DPNG=${_demo_view_png} -DMIN_BYTES=8000
                      -P ${CMAKE_CURRENT_SOURCE_DIR}/viewer_check_png.cmake)
