@@ -436,8 +436,18 @@ struct HaloBuffer
 {
     std::uint64_t tick = 0;
     double time = 0.0;
-    std::vector<std::uint32_t> nodes;
-    std::vector<double> u, v;
+    std::vector<net::NodeRange> ranges;  // the nodes, as received (checked against the grid)
+    std::vector<double> u, v;            // in range order
+};
+
+/// One Halo datagram to one receiver, planned once per pair of partitions (refresh_exact_sets):
+/// its node ranges, and the same nodes as runs of consecutive padded offsets in the state's
+/// planes, from which each tick gathers the values.
+struct HaloChunk
+{
+    std::vector<net::NodeRange> ranges;
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> runs;  // {padded offset, length}
+    std::size_t values = 0;
 };
 
 struct Session::Impl
@@ -553,9 +563,9 @@ struct Session::Impl
 
     // Cached sets for (prev, next) partition epochs.
     std::uint32_t cache_prev = 0, cache_next = 0;
-    std::vector<core::Region> integrate_runs;                      // exact: dilated own set
-    std::vector<core::Region> own_runs;                            // exact: own set
-    std::map<std::uint16_t, std::vector<std::uint32_t>> halo_out;  // receiver -> nodes
+    std::vector<core::Region> integrate_runs;                  // exact: dilated own set
+    std::vector<core::Region> own_runs;                        // exact: own set
+    std::map<std::uint16_t, std::vector<HaloChunk>> halo_out;  // receiver -> its datagrams
     std::uint32_t fast_epoch = 0;
     std::vector<char> fast_mine;  // fast: owned_mask of fast_mine_epoch
     // Fast: the x-runs of in-range positions whose canonical node fast_mine does not own, as
@@ -1039,8 +1049,40 @@ struct Session::Impl
                 if (need[i] != 0 && mine[i] != 0 && has[i] == 0)
                     nodes.push_back(i);
             if (!nodes.empty())
-                halo_out[r.value] = std::move(nodes);
+                halo_out[r.value] = plan_halo(nodes);
         }
+    }
+
+    /// The Halo datagrams that carry `nodes` (increasing): ranges of consecutive nodes (at most
+    /// 65,535 each), as many nodes per datagram as its payload and range limits allow.
+    std::vector<HaloChunk> plan_halo(const std::vector<std::uint32_t>& nodes) const
+    {
+        std::vector<HaloChunk> chunks(1);
+        for (const std::uint32_t n : nodes)
+        {
+            HaloChunk* c = &chunks.back();
+            const bool extend = !c->ranges.empty() &&
+                                c->ranges.back().first + c->ranges.back().count == n &&
+                                c->ranges.back().count < 0xFFFF;
+            const std::size_t r = c->ranges.size() + (extend ? 0 : 1);
+            const std::size_t bytes = 16 + 8 * r + 16 * (c->values + 1);
+            if (bytes > net::k_max_state_payload || r > net::k_max_halo_ranges)
+            {
+                chunks.emplace_back();
+                c = &chunks.back();
+                c->ranges.push_back(net::NodeRange{n, 1});
+            }
+            else if (extend)
+                ++c->ranges.back().count;
+            else
+                c->ranges.push_back(net::NodeRange{n, 1});
+            if (!c->runs.empty() && c->runs.back().first + c->runs.back().second == pad[n])
+                ++c->runs.back().second;
+            else
+                c->runs.emplace_back(pad[n], 1);
+            ++c->values;
+        }
+        return chunks;
     }
 
     void refresh_my_leaves(const PartitionEntry* p)
@@ -1144,47 +1186,29 @@ struct Session::Impl
         halo_message.header.sender = s.id_;
         halo_message.header.tick = t;
         net::Halo& h = std::get<net::Halo>(halo_message.body);
-        for (const auto& [rid, nodes] : halo_out)
-        {
-            h.ranges.clear();
-            h.u.clear();
-            h.v.clear();
-            auto flush = [&]
+        h.epoch = epoch;
+        h.stage = net::k_max_halo_stage;
+        h.encoding = net::ValueEncoding::F64;
+        h.time = s.state_.time;
+        h.has_u = true;
+        h.has_v = true;
+        const double* su = s.state_.u.padded().data();
+        const double* sv = s.state_.v.padded().data();
+        for (const auto& [rid, chunks] : halo_out)
+            for (const HaloChunk& c : chunks)
             {
-                if (h.ranges.empty())
-                    return;
-                send_to(rid, halo_message, net::SendMode::Reliable);
-                h.ranges.clear();
-                h.u.clear();
-                h.v.clear();
-            };
-            h.epoch = epoch;
-            h.stage = net::k_max_halo_stage;
-            h.encoding = net::ValueEncoding::F64;
-            h.time = s.state_.time;
-            h.has_u = true;
-            h.has_v = true;
-            for (const std::uint32_t n : nodes)
-            {
-                const bool extend = !h.ranges.empty() &&
-                                    h.ranges.back().first + h.ranges.back().count == n &&
-                                    h.ranges.back().count < 0xFFFF;
-                const std::size_t r = h.ranges.size() + (extend ? 0 : 1);
-                const std::size_t bytes = 16 + 8 * r + 16 * (h.u.size() + 1);
-                if (bytes > net::k_max_state_payload || r > net::k_max_halo_ranges)
+                h.ranges.assign(c.ranges.begin(), c.ranges.end());
+                h.u.resize(c.values);
+                h.v.resize(c.values);
+                std::size_t k = 0;
+                for (const auto& [o, len] : c.runs)
                 {
-                    flush();
-                    h.ranges.push_back(net::NodeRange{n, 1});
+                    copy_run(su + o, len, h.u.data() + k);
+                    copy_run(sv + o, len, h.v.data() + k);
+                    k += len;
                 }
-                else if (extend)
-                    ++h.ranges.back().count;
-                else
-                    h.ranges.push_back(net::NodeRange{n, 1});
-                h.u.push_back(s.state_.u.padded()[pad[n]]);
-                h.v.push_back(s.state_.v.padded()[pad[n]]);
+                send_to(rid, halo_message, net::SendMode::Reliable);
             }
-            flush();
-        }
     }
 
     /// Peers whose Heartbeat(t) this peer needs before stepping from t.
@@ -1254,11 +1278,13 @@ struct Session::Impl
         {
             if (h.tick != t)
                 continue;
-            for (std::size_t k = 0; k < h.nodes.size(); ++k)
-            {
-                su[pad[h.nodes[k]]] = h.u[k];
-                sv[pad[h.nodes[k]]] = h.v[k];
-            }
+            std::size_t k = 0;
+            for (const net::NodeRange& r : h.ranges)
+                for (std::uint32_t j = 0; j < r.count; ++j, ++k)
+                {
+                    su[pad[r.first + j]] = h.u[k];
+                    sv[pad[r.first + j]] = h.v[k];
+                }
             if (!state_exact)
                 s.state_.time = h.time;
         }
@@ -2706,10 +2732,7 @@ struct Session::Impl
         }
         buf.tick = m.header.tick;
         buf.time = h.time;
-        buf.nodes.clear();
-        for (const net::NodeRange& r : h.ranges)
-            for (std::uint32_t k = 0; k < r.count; ++k)
-                buf.nodes.push_back(r.first + k);
+        buf.ranges.assign(h.ranges.begin(), h.ranges.end());
         buf.u.assign(h.u.begin(), h.u.end());
         buf.v.assign(h.v.begin(), h.v.end());
         // Keep the buffer ordered by tick (arrivals per sender are in order; merge by tick).
