@@ -15,6 +15,7 @@
 // Without gnuplot it says how to install it and still writes the data.
 #include <fcntl.h>
 #include <nlohmann/json.hpp>
+#include <signal.h>
 #include <spawn.h>
 #include <spdlog/spdlog.h>
 #include <sys/utsname.h>
@@ -197,9 +198,12 @@ fs::path find_on_path(const std::string& name)
 }
 
 /// Runs `argv` with stdout and stderr appended to `log`, showing a progress line with the
-/// elapsed time. \return the exit status (128 + signal when killed, 127 when it cannot start).
+/// elapsed time. Once `*stop` is set (Ctrl-C) the child is sent SIGINT too (from a terminal it
+/// already has it: it is in the same process group) and waited for. \return the exit status
+/// (128 + signal when killed, 127 when it cannot start).
 int run_child(const std::vector<std::string>& argv, const fs::path& log, const std::string& label,
-              const GlobalOptions& global, double& seconds)
+              const GlobalOptions& global, double& seconds,
+              const volatile std::sig_atomic_t* stop = nullptr)
 {
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);
@@ -219,8 +223,14 @@ int run_child(const std::vector<std::string>& argv, const fs::path& log, const s
         return 127;
     const bool tty = ::isatty(STDERR_FILENO) == 1 && !global.quiet;
     int status = 0;
+    bool forwarded = false;
     for (;;)
     {
+        if (stop != nullptr && *stop != 0 && !forwarded)
+        {
+            ::kill(pid, SIGINT);
+            forwarded = true;
+        }
         const pid_t done = waitpid(pid, &status, WNOHANG);
         seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         if (done == pid || done < 0)
@@ -332,8 +342,13 @@ int run_bench(const BenchOptions& opt, const GlobalOptions& global)
     results["suites"] = Json::object();
 
     int failures = 0;
+    // Ctrl-C or SIGTERM: the running suite is stopped, no further suite starts, and results.json
+    // is written with the suites that completed (their CSV and JSON files stay).
+    const volatile std::sig_atomic_t* interrupted = install_interrupt_flag();
+    std::string interrupted_in;  // the suite Ctrl-C stopped ("" between suites)
+    std::vector<std::string> completed;
     const auto start = std::chrono::steady_clock::now();
-    for (std::size_t i = 0; i < chosen.size(); ++i)
+    for (std::size_t i = 0; i < chosen.size() && *interrupted == 0; ++i)
     {
         const Suite& s = *chosen[i];
         const fs::path csv = opt.out / (std::string(s.name) + ".csv");
@@ -356,8 +371,8 @@ int run_bench(const BenchOptions& opt, const GlobalOptions& global)
             std::fflush(stdout);
         }
         double seconds = 0.0;
-        const int rc =
-            run_child(argv, log, "      running " + std::string(s.program), global, seconds);
+        const int rc = run_child(argv, log, "      running " + std::string(s.program), global,
+                                 seconds, interrupted);
         Json entry;
         entry["program"] = programs[i].string();
         entry["arguments"] = std::vector<std::string>(argv.begin() + 1, argv.end());
@@ -365,8 +380,14 @@ int run_bench(const BenchOptions& opt, const GlobalOptions& global)
         entry["seconds"] = seconds;
         entry["load_average_after"] = load_average();
         Json parsed = Json::parse(read_text(json), nullptr, false);
-        if (rc == 0 && !parsed.is_discarded() && parsed.contains("rows"))
+        if (*interrupted != 0 && rc != 0)
         {
+            entry["interrupted"] = true;
+            interrupted_in = s.name;
+        }
+        else if (rc == 0 && !parsed.is_discarded() && parsed.contains("rows"))
+        {
+            completed.emplace_back(s.name);
             entry["meta"] = parsed.value("meta", Json::object());
             entry["rows"] = parsed["rows"];
             if (s.name == std::string("render") && entry["meta"].contains("gl_renderer"))
@@ -386,6 +407,7 @@ int run_bench(const BenchOptions& opt, const GlobalOptions& global)
         std::fflush(stdout);
     }
     results["machine"]["load_average_end"] = load_average();
+    results["interrupted"] = *interrupted != 0;
     results["total_seconds"] =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     {
@@ -394,6 +416,17 @@ int run_bench(const BenchOptions& opt, const GlobalOptions& global)
         if (!f.flush())
             return report(
                 {ErrorCode::IoError, "bench: cannot write " + (opt.out / "results.json").string()});
+    }
+    if (*interrupted != 0)
+    {
+        std::string done;
+        for (const std::string& n : completed)
+            done += (done.empty() ? "" : ", ") + n;
+        spdlog::error("bench: interrupted{}; {} holds the {} suite{} that completed{}",
+                      interrupted_in.empty() ? "" : " during " + interrupted_in,
+                      (opt.out / "results.json").string(), completed.size(),
+                      completed.size() == 1 ? "" : "s", done.empty() ? "" : " (" + done + ")");
+        return k_exit_interrupted;
     }
     if (!global.quiet)
         std::printf("all results: %s (%.0f s in all)\n",
@@ -453,7 +486,9 @@ void add_bench_command(CLI::App& app, const GlobalOptions& global)
         "release preset);\n"
         "--bench-dir or the PLIANT_BENCH_DIR environment variable point elsewhere. DIR gets\n"
         "<suite>.csv, <suite>.json, <suite>.log, results.json (with the machine and its load)\n"
-        "and, when gnuplot is installed, PNG plots. Timings on a shared machine vary by +-20 %.\n\n"
+        "and, when gnuplot is installed, PNG plots. Timings on a shared machine vary by +-20 %.\n"
+        "Ctrl-C stops the running suite, writes results.json with the suites that completed\n"
+        "and exits with status 130.\n\n"
         "Examples:\n"
         "  pliant bench --quick                       # every suite, about 3 minutes on 2 cores\n"
         "  pliant bench sim session --out my-results  # two suites, full length");

@@ -34,5 +34,18 @@ if(TARGET pliant)
                          -P ${PROJECT_SOURCE_DIR}/apps/pliant-cli/bench/check_bench_outputs.cmake)
         set_tests_properties(cli_bench_latency_quick_outputs PROPERTIES
             DEPENDS cli_bench_latency_quick)
+        # Ctrl-C once the second suite has started (its log file is created when it is
+        # spawned): it is stopped, and results.json is written with the first, which completed.
+        set(_bench_int ${CMAKE_CURRENT_BINARY_DIR}/bench-interrupted)
+        pliant_add_interrupt_test(cli_bench_interrupted FILE ${_bench_int}/sim.log
+            FRESH_DIR ${_bench_int}
+            STDERR_REGEX "bench: interrupted during sim. .*results.json holds the 1 suite that completed \\(net\\)"
+            TIMEOUT 170 FIXTURES_SETUP bench_interrupted
+            ARGS bench net sim --quick --no-plots --out ${_bench_int})
+        add_test(NAME cli_bench_interrupted_outputs
+                 COMMAND ${CMAKE_COMMAND} -DDIR=${_bench_int} -DSUITE=net
+                         -P ${PROJECT_SOURCE_DIR}/apps/pliant-cli/bench/check_bench_outputs.cmake)
+        set_tests_properties(cli_bench_interrupted_outputs PROPERTIES
+            FIXTURES_REQUIRED bench_interrupted)
     endif()
 endif()
