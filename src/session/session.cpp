@@ -507,8 +507,9 @@ struct Session::Impl
     std::vector<std::uint16_t> leaf_sender;
     std::vector<double> leaf_sent_time;  // our leaves: simulated time last streamed
 
-    // Smooth display (docs/session.md §5.3): per leaf not ours, the last states received (as
-    // displayed, coarse leaves refined), oldest first; per sender, a playout clock.
+    // Smooth display (docs/session.md §5.3): per leaf not ours, the displacements of the last
+    // states received (as displayed, coarse leaves refined), oldest first; per sender, a
+    // playout clock. What is drawn is u alone, so velocities are neither kept nor interpolated.
     struct ViewHistory
     {
         std::uint16_t sender = 0;
@@ -516,7 +517,7 @@ struct Session::Impl
         int first = 0;  // the slot of the oldest state: state k (0 = oldest) is in slot
                         // (first + k) % k_view_history
         std::array<double, k_view_history> time{};  // per slot
-        std::vector<double> u, v;  // k_view_history x nodes, slot j at [j n, (j + 1) n)
+        std::vector<double> u;  // k_view_history x nodes, slot j at [j n, (j + 1) n)
 
         [[nodiscard]] int slot(int k) const noexcept { return (first + k) % k_view_history; }
         [[nodiscard]] double time_of(int k) const noexcept
@@ -538,7 +539,7 @@ struct Session::Impl
     std::vector<std::uint32_t> updated;  // leaves whose shown state changed in this poll
     std::vector<char> updated_flag;
     std::map<std::uint16_t, Playout> playout;
-    core::Field<double> view_u, view_v;
+    core::Field<double> view_u;
     std::vector<double> view_time;
 
     // Quantised streaming (docs/protocol.md §5.5).
@@ -591,7 +592,7 @@ struct Session::Impl
     net::Message stream_msg;                    // stream(): the leaf state being sent
     // Our leaves' nodes in the display are older than the state (flush_display).
     bool own_display_pending = false;
-    // A frame's update_view has not been written into view_u/v yet (materialize_view).
+    // A frame's update_view has not been written into view_u yet (materialize_view).
     bool view_due = false;
     double stall_since = -1.0;  // fast: our clock when the current hold began (-1: none)
     // fast: a hold ran out (max_stall_s) and the frames since have all been stale: step on
@@ -630,7 +631,7 @@ struct Session::Impl
     double next_stream = 0.0;
     double next_greeting_repeat = 0.0;
     double next_frame = 0.0;
-    double next_view = 0.0;  // view_u/v are refreshed at frame_rate_hz
+    double next_view = 0.0;  // view_u is refreshed at frame_rate_hz
     bool leaving = false;
     double leave_started = 0.0;
 
@@ -800,7 +801,6 @@ struct Session::Impl
         history.assign(s.graph_->size(), {});
         updated_flag.assign(s.graph_->size(), 0);
         view_u = core::Field<double>(g, 1);
-        view_v = core::Field<double>(g, 1);
         view_time.assign(s.graph_->size(), 0.0);
         leaf_coarsen.assign(s.graph_->size(), 0);
         leaf_mine.assign(s.graph_->size(), 0);
@@ -3189,7 +3189,6 @@ struct Session::Impl
             return;
         }
         const double* du = s.display_u_.padded().data();
-        const double* dv = s.display_v_.padded().data();
         for (const std::uint32_t l : updated)
         {
             updated_flag[l] = 0;
@@ -3202,10 +3201,7 @@ struct Session::Impl
                 h.count = 0;  // another sender's clock: start over
             h.sender = leaf_sender[l];
             if (h.u.size() != k_view_history * n)
-            {
                 h.u.assign(k_view_history * n, 0.0);
-                h.v.assign(k_view_history * n, 0.0);
-            }
             if (h.count == k_view_history)
             {
                 // Drop the oldest: its slot takes the new state.
@@ -3215,10 +3211,7 @@ struct Session::Impl
             const auto k = static_cast<std::size_t>(h.slot(h.count));
             for_node_runs(l,
                           [&](std::size_t o, std::size_t i, std::size_t c)
-                          {
-                              copy_run(du + o, c, h.u.data() + k * n + i);
-                              copy_run(dv + o, c, h.v.data() + k * n + i);
-                          });
+                          { copy_run(du + o, c, h.u.data() + k * n + i); });
             h.time[k] = leaf_time[l];
             ++h.count;
             Playout& pl = playout[h.sender];
@@ -3284,7 +3277,7 @@ struct Session::Impl
     }
 
     /// The view of the last update_view's playout times, from the display and the states
-    /// received up to now; once per update_view, when the view is read (Session::view_u/v,
+    /// received up to now; once per update_view, when the view is read (Session::view_u,
     /// view_time).
     void materialize_view()
     {
@@ -3295,16 +3288,13 @@ struct Session::Impl
         if (!settings.interpolate_view)
         {
             view_u = s.display_u_;
-            view_v = s.display_v_;
             std::copy(leaf_time.begin(), leaf_time.end(), view_time.begin());
             return;
         }
         // Leaf by leaf, the display's nodes or the interpolated ones; then the twins and ghosts
         // (a copy of the whole display first cost as much as the rest together at level 8).
         double* vu = view_u.padded().data();
-        double* vv = view_v.padded().data();
         const double* du = s.display_u_.padded().data();
-        const double* dv = s.display_v_.padded().data();
         for (std::size_t l = 0; l < s.graph_->size(); ++l)
         {
             const ViewHistory& h = history[l];
@@ -3313,10 +3303,7 @@ struct Session::Impl
             {
                 for_node_runs(l,
                               [&](std::size_t o, std::size_t, std::size_t c)
-                              {
-                                  copy_run(du + o, c, vu + o);
-                                  copy_run(dv + o, c, vv + o);
-                              });
+                              { copy_run(du + o, c, vu + o); });
                 continue;
             }
             const double t = playout[h.sender].render;
@@ -3336,20 +3323,14 @@ struct Session::Impl
             const std::size_t n = s.graph_->node_count(l);
             const double* ua = h.u.data() + static_cast<std::size_t>(h.slot(a)) * n;
             const double* ub = h.u.data() + static_cast<std::size_t>(h.slot(b)) * n;
-            const double* va = h.v.data() + static_cast<std::size_t>(h.slot(a)) * n;
-            const double* vb = h.v.data() + static_cast<std::size_t>(h.slot(b)) * n;
             for_node_runs(l,
                           [&](std::size_t o, std::size_t i, std::size_t c)
                           {
                               for (std::size_t j = 0; j < c; ++j)
-                              {
                                   vu[o + j] = ua[i + j] + w * (ub[i + j] - ua[i + j]);
-                                  vv[o + j] = va[i + j] + w * (vb[i + j] - va[i + j]);
-                              }
                           });
         }
         s.model_->sync(view_u);
-        s.model_->sync(view_v);
     }
 
     void advance(double now)
@@ -3622,12 +3603,6 @@ const core::Field<double>& Session::view_u() const noexcept
 {
     impl_->materialize_view();
     return impl_->view_u;
-}
-
-const core::Field<double>& Session::view_v() const noexcept
-{
-    impl_->materialize_view();
-    return impl_->view_v;
 }
 
 std::span<const double> Session::view_time() const noexcept

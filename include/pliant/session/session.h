@@ -34,8 +34,8 @@
 ///   §4.2).
 /// - Streaming: owners send their leaves' (u, v) to every peer at `stream_rate_hz`, unsequenced;
 ///   every peer (viewers included) displays the whole object from its own leaves and the newest
-///   state received per leaf (by partition epoch, then tick), and draws `view_u/v`: the same with
-///   the others' leaves interpolated in time at a per-sender playout clock (docs/session.md §5.3).
+///   state received per leaf (by partition epoch, then tick), and draws `view_u`: the same
+///   displacements with the others' leaves interpolated in time at a per-sender playout clock (docs/session.md §5.3).
 /// - Loss and latency (§4.3): fast coupling bounds halo staleness (`max_halo_age_s`: a frame whose
 ///   Dirichlet values are older waits), quiescent compressed leaves are refreshed so rest is not
 ///   mistaken for silence, and a joiner's clock starts half a round trip after the welcome's.
@@ -147,7 +147,7 @@ struct SessionSettings
     /// fails if that stops holding). More rings cost compute and halo traffic for nothing with
     /// this integrator (6 would cover one whose every stage reads the previous one).
     int halo_rings = 3;
-    /// Fast mode: restricted advances per second; every mode: view_u/v updates per second; > 0.
+    /// Fast mode: restricted advances per second; every mode: view_u updates per second; > 0.
     double frame_rate_hz = 60.0;
     /// Fast mode: the bound on halo staleness, s (0: none). A frame steps only if every streamed
     /// state that holds a Dirichlet value next to an owned node is at most this old at the
@@ -167,7 +167,7 @@ struct SessionSettings
     /// rest from a lost one and the halo age stays bounded (0: never, quiescent leaves cost
     /// nothing).
     double quiescent_refresh_s = 0.25;
-    /// Smooth display (view_u/view_v): the leaves this peer does not compute are shown
+    /// Smooth display (view_u): the leaves this peer does not compute are shown
     /// interpolated between the states received, at a playout time per sender delayed just
     /// enough to have a state on each side (docs/session.md §5.3). false: view = display.
     bool interpolate_view = true;
@@ -349,15 +349,16 @@ public:
     /// is read, not at every step (an exact-coupling peer steps 1,000 times a second).
     [[nodiscard]] const core::Field<double>& display_u() const noexcept;
     [[nodiscard]] const core::Field<double>& display_v() const noexcept;
-    /// What to draw: display_u/v with the leaves this peer does not compute interpolated in
+    /// What to draw: display_u with the leaves this peer does not compute interpolated in
     /// time between the states received (SessionSettings::interpolate_view; equal to the display
     /// when off). Updated at most frame_rate_hz times per second: advance() sets the playout
     /// times, and the nodes are computed when the view is first read after it (a peer that
     /// draws nothing does not compute them). The display holds
     /// the newest values, which fast coupling uses as Dirichlet values; the view lags them by
     /// view_delay_s and moves smoothly.
+    /// Displacements only: what is drawn is p = P + u N, so the view keeps and interpolates no
+    /// velocities (display_v holds the newest received ones).
     [[nodiscard]] const core::Field<double>& view_u() const noexcept;
-    [[nodiscard]] const core::Field<double>& view_v() const noexcept;
     /// Per leaf (LeafGraph order): the owner's simulation time of the state shown in the view,
     /// s (own leaves: this peer's time; leaves never received: 0).
     [[nodiscard]] std::span<const double> view_time() const noexcept;
