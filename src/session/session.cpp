@@ -3209,8 +3209,7 @@ struct Session::Impl
                 --h.count;
             }
             const auto k = static_cast<std::size_t>(h.slot(h.count));
-            for_node_runs(l,
-                          [&](std::size_t o, std::size_t i, std::size_t c)
+            for_node_runs(l, [&](std::size_t o, std::size_t i, std::size_t c)
                           { copy_run(du + o, c, h.u.data() + k * n + i); });
             h.time[k] = leaf_time[l];
             ++h.count;
@@ -3301,8 +3300,7 @@ struct Session::Impl
             view_time[l] = leaf_time[l];
             if (h.count == 0 || leaf_sender[l] == s.id_.value || h.sender != leaf_sender[l])
             {
-                for_node_runs(l,
-                              [&](std::size_t o, std::size_t, std::size_t c)
+                for_node_runs(l, [&](std::size_t o, std::size_t, std::size_t c)
                               { copy_run(du + o, c, vu + o); });
                 continue;
             }

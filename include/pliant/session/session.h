@@ -35,7 +35,8 @@
 /// - Streaming: owners send their leaves' (u, v) to every peer at `stream_rate_hz`, unsequenced;
 ///   every peer (viewers included) displays the whole object from its own leaves and the newest
 ///   state received per leaf (by partition epoch, then tick), and draws `view_u`: the same
-///   displacements with the others' leaves interpolated in time at a per-sender playout clock (docs/session.md §5.3).
+///   displacements with the others' leaves interpolated in time at a per-sender playout clock
+///   (docs/session.md §5.3).
 /// - Loss and latency (§4.3): fast coupling bounds halo staleness (`max_halo_age_s`: a frame whose
 ///   Dirichlet values are older waits), quiescent compressed leaves are refreshed so rest is not
 ///   mistaken for silence, and a joiner's clock starts half a round trip after the welcome's.
