@@ -15,11 +15,14 @@
 #include <pliant/net/enet_transport.h>
 
 #include <enet/enet.h>
+#include <poll.h>
 #include <spdlog/spdlog.h>
+#include <time.h>
 
 #include <algorithm>
 #include <cerrno>
 #include <chrono>
+#include <cmath>
 #include <cstring>
 #include <deque>
 #include <map>
@@ -285,6 +288,30 @@ public:
     {
         if (host_ != nullptr)
             enet_host_flush(host_);
+    }
+
+    // On the socket, to the nanosecond (ENet's own wait, enet_socket_wait, counts whole
+    // milliseconds). Events already taken off the socket (ours, or ENet's dispatch queue when
+    // the caller stopped polling before it was empty) end it at once.
+    void wait(double max_s) noexcept override
+    {
+        if (max_s <= 0.0 || !pending_.empty())
+            return;
+        if (host_ == nullptr)
+        {
+            Transport::wait(max_s);
+            return;
+        }
+        if (!enet_list_empty(&host_->dispatchQueue))
+            return;
+        pollfd fd{};
+        fd.fd = host_->socket;
+        fd.events = POLLIN;
+        const double whole = std::floor(max_s);
+        timespec ts{};
+        ts.tv_sec = static_cast<time_t>(whole);
+        ts.tv_nsec = static_cast<long>(std::min(999'999'999.0, (max_s - whole) * 1e9));
+        (void)::ppoll(&fd, 1, &ts, nullptr);  // EINTR (a signal): return, the caller goes on
     }
 
     void disconnect(PeerHandle peer, DisconnectReason reason) noexcept override

@@ -624,6 +624,12 @@ void SecureTransport::flush() noexcept
     impl_->inner->flush();
 }
 
+void SecureTransport::wait(double max_s) noexcept
+{
+    if (impl_->pending.empty())
+        impl_->inner->wait(max_s);
+}
+
 void SecureTransport::disconnect(PeerHandle peer, DisconnectReason reason) noexcept
 {
     auto it = impl_->conns.find(peer.value);

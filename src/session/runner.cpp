@@ -11,7 +11,6 @@
 #include <span>
 #include <sstream>
 #include <string>
-#include <thread>
 
 namespace pliant::session
 {
@@ -268,7 +267,7 @@ core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
             next_row += 1.0;
         }
         if (options.idle_sleep_s > 0.0 && !session.behind())
-            std::this_thread::sleep_for(std::chrono::duration<double>(options.idle_sleep_s));
+            session.wait(options.idle_sleep_s);
     }
     // Wind down: a participant or viewer leaves (and waits, bounded, for the hand-over); the
     // master shuts the session down.
@@ -283,7 +282,7 @@ core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
         {
             session.poll();
             session.advance(elapsed());
-            std::this_thread::sleep_for(std::chrono::microseconds(200));
+            session.wait(200e-6);
         }
     }
     if (!script_error)

@@ -3501,6 +3501,10 @@ void Session::poll()
 {
     impl_->poll();
 }
+void Session::wait(double max_s) noexcept
+{
+    impl_->transport.wait(max_s);
+}
 void Session::advance(double now_s)
 {
     impl_->advance(now_s);

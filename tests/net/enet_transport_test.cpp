@@ -3,7 +3,8 @@
 // EnetTransport on 127.0.0.1 with ephemeral ports: two hosts connect, exchange reliable and
 // unreliable messages and disconnect with a reason; bad bytes sent through ENet are dropped and
 // counted and finally cut the sender off; raw UDP junk at the port does not disturb a connection;
-// a handshake whose acknowledgement is lost still completes on the acceptor's side.
+// a handshake whose acknowledgement is lost still completes on the acceptor's side; wait() ends
+// when a datagram arrives.
 // Every wait is a bounded loop with a wall-clock deadline that keeps servicing both hosts
 // (TESTING-NOTES: an unserviced ENet peer times out). Skipped with a reason if no socket binds.
 
@@ -24,6 +25,7 @@
 #include <cstring>
 #include <functional>
 #include <optional>
+#include <thread>
 #include <vector>
 
 namespace pliant::net
@@ -188,6 +190,59 @@ TEST(EnetTransport, DestroyingATransportKeepsTheReasonOfAClosedConnection)
     const auto* ev = Hosts::find(h.from_b, MessengerEvent::Kind::Disconnected);
     ASSERT_NE(ev, nullptr);
     EXPECT_EQ(ev->reason, DisconnectReason::Quit);
+}
+
+// wait() is a wait on the socket, not a sleep (docs/session.md §4.1): with nothing to read it
+// takes its time (returning at once would make every idle loop spin); a datagram ends it (b
+// sends 0.2 s into a wait of 30 s: a sleep would take the 30 s); and events ENet has already
+// taken off the socket but not handed out end it at once (two pings in one flush: after the
+// first is polled, the second waits in ENet's dispatch queue while the socket is empty).
+TEST(EnetTransport, WaitEndsWhenADatagramArrivesAndOtherwiseTakesItsTime)
+{
+    using namespace std::chrono_literals;
+    Hosts h;
+    if (!h.skip_reason.empty())
+        GTEST_SKIP() << h.skip_reason;
+    ASSERT_TRUE(h.connect());
+    while (auto ev = h.a.poll(0))  // drain; b is not serviced from here until it sends
+        h.from_a.push_back(std::move(*ev));
+
+    auto t0 = Clock::now();
+    h.ta->wait(0.05);
+    EXPECT_GE(Clock::now() - t0, 40ms) << "wait() returned with nothing to read";
+
+    std::thread sender(
+        [&h]
+        {
+            std::this_thread::sleep_for(200ms);
+            (void)h.b.send(h.b_to_a, Message{samples::header(), Ping{.nonce = 1, .time_us = 1}});
+            h.tb->flush();
+        });
+    t0 = Clock::now();
+    h.ta->wait(30.0);
+    const auto waited = Clock::now() - t0;
+    sender.join();
+    EXPECT_LT(waited, 15s) << "wait() did not end when the datagram arrived";
+    ASSERT_TRUE(h.pump([&h] { return Hosts::find(h.from_a, MessengerEvent::Kind::Received); }));
+
+    h.from_a.clear();
+    while (auto ev = h.a.poll(0))
+        h.from_a.push_back(std::move(*ev));
+    h.from_a.clear();
+    for (std::uint32_t nonce : {2U, 3U})
+        ASSERT_TRUE(
+            h.b.send(h.b_to_a, Message{samples::header(), Ping{.nonce = nonce, .time_us = 1}}));
+    h.tb->flush();
+    auto first = h.a.poll(1000);
+    ASSERT_TRUE(first.has_value());
+    ASSERT_EQ(first->kind, MessengerEvent::Kind::Received);
+    EXPECT_EQ(std::get<Ping>(first->message.body).nonce, 2u);
+    t0 = Clock::now();
+    h.ta->wait(30.0);
+    EXPECT_LT(Clock::now() - t0, 15s) << "wait() slept over an event ENet already held";
+    auto second = h.a.poll(1000);
+    ASSERT_TRUE(second.has_value());
+    EXPECT_EQ(std::get<Ping>(second->message.body).nonce, 3u);
 }
 
 TEST(EnetTransport, BadBytesAreDroppedCountedAndCutTheSenderOff)

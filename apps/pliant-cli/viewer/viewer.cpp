@@ -25,7 +25,6 @@
 #if defined(__GLIBC__)
 #include <malloc.h>
 #endif
-#include <thread>
 #include <vector>
 
 namespace pliant::viewer
@@ -438,7 +437,7 @@ void Viewer::leave_session(const std::string& message, bool error)
         {
             session_->poll();
             session_->advance(seconds(Clock::now().time_since_epoch()));
-            std::this_thread::sleep_for(std::chrono::microseconds(500));
+            session_->wait(500e-6);
         }
     }
     // Keep showing the object: a local simulation of the session's model from rest.
@@ -470,7 +469,7 @@ void Viewer::pump_session(double now_s)
         session_->advance(now_s);
         if (!simulates)
             break;
-        std::this_thread::sleep_for(std::chrono::microseconds(250));
+        session_->wait(250e-6);  // ends when a neighbour's halo or heartbeat arrives
         now_s = seconds(Clock::now().time_since_epoch());
     } while (Clock::now() < budget_end && !session_->left());
     if (session_->left())

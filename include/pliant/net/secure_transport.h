@@ -135,6 +135,8 @@ public:
                             Delivery delivery) noexcept override;
     std::optional<TransportEvent> poll(int timeout_ms = 0) noexcept override;
     void flush() noexcept override;
+    /// Returns at once while decrypted events are pending, else waits on the inner transport.
+    void wait(double max_s) noexcept override;
     void disconnect(PeerHandle peer, DisconnectReason reason) noexcept override;
     /// The inner transport's counters (bytes include the 25-byte overhead), with
     /// `bad_datagrams` increased by this layer's authentication failures and malformed drops.

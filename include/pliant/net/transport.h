@@ -129,6 +129,14 @@ public:
     /// Sends queued packets now (poll() also does).
     virtual void flush() noexcept = 0;
 
+    /// Blocks until a datagram may be ready for poll(), for at most `max_s` seconds: the idle
+    /// time of a caller's loop. Unlike a sleep it ends as soon as data arrives, so a lockstep
+    /// peer waiting for its neighbours' halos steps as soon as they are in instead of at the end
+    /// of its nap. It does no network work (poll() does): call it after poll() returned nothing.
+    /// It may return early (any datagram wakes it, ENet's acknowledgements too). The default
+    /// sleeps `max_s` (SimulatedTransport: its clock is the network's, not the wall's).
+    virtual void wait(double max_s) noexcept;
+
     /// Ends the connection gracefully; the remote side sees `reason`; a Disconnected event for
     /// `peer` follows here. Unknown handles are ignored.
     virtual void disconnect(PeerHandle peer, DisconnectReason reason) noexcept = 0;

@@ -70,7 +70,9 @@ struct RunOptions
     std::vector<ScriptEvent> script;
     std::string script_name = "script";  ///< names the script in messages (its file)
     std::filesystem::path stats_csv;     ///< empty: none
-    double idle_sleep_s = 0.0002;  ///< sleep per loop iteration unless the peer is behind real time
+    /// Idle time per loop iteration unless the peer is behind real time, s: a wait on the
+    /// socket that a datagram ends (Session::wait), so the loop answers within it
+    double idle_sleep_s = 0.0002;
     /// When set and non-zero (a signal handler's flag: Ctrl-C), the loop ends early and winds
     /// down as at the end of the duration.
     const volatile std::sig_atomic_t* stop = nullptr;

@@ -288,6 +288,11 @@ public:
     /// Whether the last advance() stopped on its slice with steps still due: the caller should
     /// poll() and advance() again at once rather than sleep.
     [[nodiscard]] bool behind() const noexcept;
+    /// A caller's idle time between two rounds of poll() and advance(), at most `max_s` seconds:
+    /// it ends as soon as a datagram arrives (net::Transport::wait), so a lockstep peer waiting
+    /// for its neighbours' halos and heartbeats steps as soon as they are in, where a sleep
+    /// made it wait out the nap every tick (docs/session.md §4.1).
+    void wait(double max_s) noexcept;
 
     /// This peer's points of interest (participants): sent to the master, which re-partitions.
     void set_points_of_interest(std::vector<net::Target> points);
