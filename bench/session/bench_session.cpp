@@ -1340,7 +1340,7 @@ void cpu_suite(bench::Report& report, const std::vector<int>& levels)
     constexpr double lan_s = 0.0005;
     std::printf(
         "# all work per peer (poll + advance) per simulated second, steady state, LAN 0.5 ms, "
-        "%llu ticks, 1 thread per peer, best of %d runs\n"
+        "%llu ticks, 1 thread per peer, best of %d runs (1..4 peers in turn)\n"
         "level coupling peers | work ms/s busiest mean | / alone: busiest mean | steps / "
         "alone's: busiest | not steps, busiest\n",
         static_cast<unsigned long long>(ticks), rounds);
@@ -1350,23 +1350,30 @@ void cpu_suite(bench::Report& report, const std::vector<int>& levels)
             const char* name = coupling == session::Coupling::Exact ? "exact" : "fast";
             double alone_work = 0.0;
             double alone_step = 0.0;
-            for (int peers = 1; peers <= 4; ++peers)
-            {
-                // Best of `rounds` runs, per peer (the same seats every run): the wall time of
-                // one run scatters by +-25 % on a shared machine.
-                RunResult r;
-                for (int round = 0; round < rounds; ++round)
+            // Best of `rounds` runs, per peer (the same seats every run): the wall time of one
+            // run scatters by +-25 % on a shared machine, and the machine's speed drifts from
+            // minute to minute, so each round runs 1, 2, 3 and 4 peers in turn: the peer alone,
+            // the denominator of every ratio, is measured across the same minutes as the others.
+            std::array<RunResult, 4> best;
+            std::array<bool, 4> incomplete{};
+            for (int round = 0; round < rounds; ++round)
+                for (int peers = 1; peers <= 4; ++peers)
                 {
-                    const RunResult one =
+                    const auto p = static_cast<std::size_t>(peers - 1);
+                    if (incomplete[p])
+                        continue;
+                    RunResult one =
                         run(level, peers, coupling, ticks, nullptr, 60.0, std::nullopt, lan_s);
+                    RunResult& r = best[p];
                     if (one.steady_sim_s.size() != static_cast<std::size_t>(peers))
                     {
-                        r = one;
-                        break;
+                        r = std::move(one);
+                        incomplete[p] = true;
+                        continue;
                     }
                     if (round == 0)
                     {
-                        r = one;
+                        r = std::move(one);
                         continue;
                     }
                     for (std::size_t k = 0; k < one.steady_sim_s.size(); ++k)
@@ -1380,6 +1387,9 @@ void cpu_suite(bench::Report& report, const std::vector<int>& levels)
                         }
                     }
                 }
+            for (int peers = 1; peers <= 4; ++peers)
+            {
+                const RunResult& r = best[static_cast<std::size_t>(peers - 1)];
                 if (r.steady_sim_s.size() != static_cast<std::size_t>(peers))
                 {
                     std::printf("%5d %-8s %5d | no steady state within %llu ticks\n", level, name,
