@@ -1296,8 +1296,8 @@ std::vector<GrabSeen> run_latency_enet(int level, int peers, session::Coupling c
                             seen_count.fetch_add(1);
                         }
                     }
-                    if (!p.behind())  // as run_peer: no sleep while behind real time
-                        std::this_thread::sleep_for(std::chrono::microseconds(200));
+                    if (!p.behind())  // as run_peer: no wait while behind real time
+                        p.wait(200e-6);
                 }
             });
     // Bounded: 30 s for the set-up and the grab, 2 s after the grab for it to show everywhere.
