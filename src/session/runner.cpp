@@ -2,6 +2,7 @@
 // SPDX-FileCopyrightText: 2026 pliant contributors
 #include <pliant/session/runner.h>
 
+#include <spdlog/fmt/fmt.h>
 #include <spdlog/spdlog.h>
 
 #include <chrono>
@@ -150,6 +151,41 @@ core::Result<void> check_script(std::span<const ScriptEvent> script, std::int64_
     return {};
 }
 
+std::optional<std::string> PaceWatch::add(const PaceSample& sample)
+{
+    quiet_for_ -= sample.wall_s;
+    if (sample.wall_s <= 0.0)
+        return std::nullopt;
+    const double pace = sample.sim_s / sample.wall_s;
+    slow_ = pace < k_slow_ratio ? slow_ + 1 : 0;
+    if (slow_ < k_slow_samples || quiet_for_ > 0.0)
+        return std::nullopt;
+    quiet_for_ = k_quiet_s;
+    const double steps_per_s = static_cast<double>(sample.steps) / sample.wall_s;
+    const double load = sample.step_s / sample.wall_s;
+    std::string out = fmt::format(
+        "the simulation runs at {:.2f}x real time ({:.0f} steps/s): ", pace, steps_per_s);
+    if (load >= k_step_bound)
+        out += fmt::format(
+            "its steps take {:.0f} % of this peer's time ({:.2f} ms each); a coarser level, or "
+            "more participants sharing the object, would keep up",
+            100.0 * load,
+            sample.steps > 0 ? 1e3 * sample.step_s / static_cast<double>(sample.steps) : 0.0);
+    else if (coupling_ == Coupling::Exact)
+        out += fmt::format(
+            "exact coupling steps once per round of halos with the neighbours, and this peer "
+            "waits for them (its steps take {:.0f} % of its time; it sends {:.1f} MB/s); "
+            "--compress or --f32 on every peer cut the leaf-state traffic, and --mode fast does "
+            "not wait every step",
+            100.0 * load, sample.bytes_out / sample.wall_s / 1e6);
+    else
+        out += fmt::format(
+            "this peer holds its clock for its neighbours' states (fast coupling's bound on "
+            "their age, --max-halo-age; its steps take {:.0f} % of its time)",
+            100.0 * load);
+    return out;
+}
+
 core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
 {
     std::ofstream csv;
@@ -181,10 +217,32 @@ core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
     std::uint64_t last_refused = 0;
     double next_row = 1.0;
     RunSummary summary;
+    PaceWatch pace(session.coupling());
+    double last_row_t = 0.0;
+    double last_sim_t = session.time();
+    bool pace_from_here = false;  // the next row starts a sample (the peer simulates, has a model)
     auto write_row = [&](double t)
     {
         const SessionStats s = session.stats();
         const std::uint64_t refused = auth_refused();
+        // Behind real time: say so, and why (a joiner's clock jumps to the master's with the
+        // model, so samples start one row after it simulates).
+        const bool simulating = session.ready() && session.role() != SessionRole::Viewer &&
+                                s.owned_nodes > 0 && !session.left();
+        if (simulating && pace_from_here)
+        {
+            const PaceSample sample{
+                .wall_s = t - last_row_t,
+                .sim_s = session.time() - last_sim_t,
+                .step_s = s.step_seconds - last.step_seconds,
+                .steps = s.steps - last.steps,
+                .bytes_out = static_cast<double>(s.bytes_sent - last.bytes_sent)};
+            if (auto warning = pace.add(sample))
+                spdlog::warn("{}", *warning);
+        }
+        pace_from_here = simulating;
+        last_row_t = t;
+        last_sim_t = session.time();
         if (csv)
         {
             const double step_ms = s.steps > last.steps

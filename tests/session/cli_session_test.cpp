@@ -195,6 +195,28 @@ TEST(SessionCli, InterruptLeavesAndEndsTheSessionCleanly)
     EXPECT_GE(rows(dir / "a.csv").size(), 1U) << "the stats file got its final row";
 }
 
+// A peer that cannot keep real time says so, and why: a lone level-9 master steps the whole
+// object, several milliseconds per 0.45 ms tick, so after three slow seconds it warns with its
+// pace and names its steps as the cause (PaceWatch, tests/session/script_test.cpp).
+TEST(SessionCli, AHostBehindRealTimeSaysSoAndWhy)
+{
+    const auto dir = pliant::test::scratch_dir("session_cli_pace");
+    const int port = test_port(6);
+    const std::string exe = PLIANT_EXE;
+    const std::string cmd = "cd '" + dir.string() + "' && '" + exe + "' host --level 9 --port " +
+                            std::to_string(port) +
+                            " --duration 6 > host.log 2>&1; echo $? > host.rc";
+    ASSERT_EQ(std::system(cmd.c_str()), 0);
+    const std::string log = read(dir / "host.log");
+    if (log.find("bind") != std::string::npos && read(dir / "host.rc") != "0\n")
+        GTEST_SKIP() << "cannot bind UDP port " << port << " on this machine: " << log;
+    EXPECT_EQ(read(dir / "host.rc"), "0\n") << log;
+    EXPECT_NE(log.find("warning: the simulation runs at 0."), std::string::npos) << log;
+    EXPECT_NE(log.find("x real time ("), std::string::npos) << log;
+    EXPECT_NE(log.find("its steps take"), std::string::npos) << log;
+    EXPECT_NE(log.find("coarser level"), std::string::npos) << log;
+}
+
 // A joiner with another key file, and one with no secret, cannot join a master that has one:
 // each exits 3 saying why (it used to say only "never received the model"); the master warns of
 // the first refusal (at most one line per 10 s) and counts both in its --stats column

@@ -1,10 +1,14 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: 2026 pliant contributors
 // The `--script` format of pliant host/join: commands parse into events sorted by time, and a
-// malformed line is an error naming it.
+// malformed line is an error naming it. PaceWatch, run_peer's behind-real-time warning: when it
+// speaks, how often, and which cause it names.
 #include <pliant/session/runner.h>
 
 #include <gtest/gtest.h>
+
+#include <optional>
+#include <string>
 
 namespace pliant::session
 {
@@ -72,6 +76,64 @@ TEST(Script, FacesBeyondTheGridAndAViewersGrabsAreErrorsNamingTheLine)
     ASSERT_FALSE(viewer.has_value());
     EXPECT_EQ(viewer.error().message.rfind("grabs.txt:2: a viewer cannot grab", 0), 0U)
         << viewer.error().message;
+}
+
+// Three slow seconds in a row, then a warning naming the pace and the steps per second; then
+// silence for 30 s of samples; a second at real time starts the count over.
+TEST(PaceWatch, WarnsAfterThreeSlowSecondsInARowThenKeepsQuietForThirty)
+{
+    PaceWatch watch(Coupling::Exact);
+    // Compute-bound: 0.25 s simulated per s, 250 steps of 3.6 ms (90 % of the time).
+    const PaceSample slow{
+        .wall_s = 1.0, .sim_s = 0.25, .step_s = 0.9, .steps = 250, .bytes_out = 1e6};
+    const PaceSample on_time{
+        .wall_s = 1.0, .sim_s = 1.0, .step_s = 0.5, .steps = 1000, .bytes_out = 1e6};
+    EXPECT_FALSE(watch.add(slow));
+    EXPECT_FALSE(watch.add(slow));
+    EXPECT_FALSE(watch.add(on_time));  // the count starts over
+    EXPECT_FALSE(watch.add(slow));
+    EXPECT_FALSE(watch.add(slow));
+    const auto w = watch.add(slow);
+    ASSERT_TRUE(w.has_value());
+    EXPECT_NE(w->find("0.25x real time (250 steps/s)"), std::string::npos) << *w;
+    EXPECT_NE(w->find("its steps take 90 % of this peer's time (3.60 ms each)"), std::string::npos)
+        << *w;
+    EXPECT_NE(w->find("coarser level"), std::string::npos) << *w;
+    for (int k = 0; k < 29; ++k)
+        EXPECT_FALSE(watch.add(slow)) << "second " << k + 1 << " after the warning";
+    EXPECT_TRUE(watch.add(slow).has_value());  // 30 s on, still slow: said again
+    // Keeping up never warns.
+    PaceWatch fine(Coupling::Exact);
+    for (int k = 0; k < 100; ++k)
+        EXPECT_FALSE(fine.add(on_time));
+}
+
+// The cause named: a peer whose steps take little of its time waits on the network; in exact
+// coupling for the halos of every tick (with the bytes it sends and the options that cut them),
+// in fast coupling for fresh neighbour states.
+TEST(PaceWatch, NamesTheWaitForTheNeighboursWhenTheStepsAreNotTheCause)
+{
+    const PaceSample waiting{
+        .wall_s = 1.0, .sim_s = 0.4, .step_s = 0.2, .steps = 400, .bytes_out = 66.8e6};
+    PaceWatch exact(Coupling::Exact);
+    PaceWatch fast(Coupling::Fast);
+    std::optional<std::string> we;
+    std::optional<std::string> wf;
+    for (int k = 0; k < PaceWatch::k_slow_samples; ++k)
+    {
+        we = exact.add(waiting);
+        wf = fast.add(waiting);
+    }
+    ASSERT_TRUE(we.has_value());
+    ASSERT_TRUE(wf.has_value());
+    EXPECT_NE(we->find("0.40x real time (400 steps/s)"), std::string::npos) << *we;
+    EXPECT_NE(we->find("waits for them (its steps take 20 % of its time; it sends 66.8 MB/s)"),
+              std::string::npos)
+        << *we;
+    EXPECT_NE(we->find("--compress or --f32"), std::string::npos) << *we;
+    EXPECT_EQ(we->find("coarser level"), std::string::npos) << *we;
+    EXPECT_NE(wf->find("--max-halo-age"), std::string::npos) << *wf;
+    EXPECT_EQ(wf->find("--compress"), std::string::npos) << *wf;
 }
 
 }  // namespace

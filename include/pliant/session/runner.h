@@ -27,6 +27,7 @@
 
 #include <csignal>
 #include <filesystem>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -63,6 +64,42 @@ core::Result<std::vector<ScriptEvent>> load_script(const std::filesystem::path& 
 /// applying it, so a script is checked before it plays.)
 core::Result<void> check_script(std::span<const ScriptEvent> script, std::int64_t face_count,
                                 SessionRole role, std::string_view source);
+
+/// One second (or so) of a simulating peer's run, for PaceWatch.
+struct PaceSample
+{
+    double wall_s = 0.0;  ///< wall time it covers, s (> 0)
+    double sim_s = 0.0;   ///< simulated time the peer advanced in it, s
+    double step_s = 0.0;  ///< wall time spent in its steps, s
+    std::uint64_t steps = 0;
+    double bytes_out = 0.0;  ///< datagram bytes it sent
+};
+
+/// Tells a user when their peer's simulation falls behind real time, and why (run_peer logs
+/// it): after k_slow_samples samples in a row below k_slow_ratio of real time, a message with
+/// the pace, the steps per second and the likely cause: its own steps (they take most of its
+/// time: a coarser level or more participants would keep up), or, in exact coupling, the wait
+/// for its neighbours' halos every tick (with the bytes it sends and the options that cut
+/// them), or, in fast coupling, the wait for fresh neighbour states (max_halo_age_s). At most
+/// one message per k_quiet_s of samples.
+class PaceWatch
+{
+public:
+    static constexpr double k_slow_ratio = 0.9;
+    static constexpr int k_slow_samples = 3;
+    static constexpr double k_quiet_s = 30.0;
+    /// Steps taking at least this share of the wall time make the steps the cause.
+    static constexpr double k_step_bound = 0.6;
+
+    explicit PaceWatch(Coupling coupling) noexcept : coupling_(coupling) {}
+    /// Adds one sample. \return the warning to log, if it is due.
+    std::optional<std::string> add(const PaceSample& sample);
+
+private:
+    Coupling coupling_;
+    int slow_ = 0;          // samples in a row below k_slow_ratio
+    double quiet_for_ = 0;  // wall seconds left before another message
+};
 
 struct RunOptions
 {
