@@ -171,7 +171,7 @@ std::optional<std::string> PaceWatch::add(const PaceSample& sample)
             "more participants sharing the object, would keep up",
             100.0 * load,
             sample.steps > 0 ? 1e3 * sample.step_s / static_cast<double>(sample.steps) : 0.0);
-    else if (coupling_ == Coupling::Exact)
+    else if (sample.coupling == Coupling::Exact)
         out += fmt::format(
             "exact coupling steps once per round of halos with the neighbours, and this peer "
             "waits for them (its steps take {:.0f} % of its time; it sends {:.1f} MB/s); "
@@ -217,7 +217,7 @@ core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
     std::uint64_t last_refused = 0;
     double next_row = 1.0;
     RunSummary summary;
-    PaceWatch pace(session.coupling());
+    PaceWatch pace;
     double last_row_t = 0.0;
     double last_sim_t = session.time();
     bool pace_from_here = false;  // the next row starts a sample (the peer simulates, has a model)
@@ -236,7 +236,8 @@ core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
                 .sim_s = session.time() - last_sim_t,
                 .step_s = s.step_seconds - last.step_seconds,
                 .steps = s.steps - last.steps,
-                .bytes_out = static_cast<double>(s.bytes_sent - last.bytes_sent)};
+                .bytes_out = static_cast<double>(s.bytes_sent - last.bytes_sent),
+                .coupling = session.coupling()};
             if (auto warning = pace.add(sample))
                 spdlog::warn("{}", *warning);
         }

@@ -82,7 +82,7 @@ TEST(Script, FacesBeyondTheGridAndAViewersGrabsAreErrorsNamingTheLine)
 // silence for 30 s of samples; a second at real time starts the count over.
 TEST(PaceWatch, WarnsAfterThreeSlowSecondsInARowThenKeepsQuietForThirty)
 {
-    PaceWatch watch(Coupling::Exact);
+    PaceWatch watch;
     // Compute-bound: 0.25 s simulated per s, 250 steps of 3.6 ms (90 % of the time).
     const PaceSample slow{
         .wall_s = 1.0, .sim_s = 0.25, .step_s = 0.9, .steps = 250, .bytes_out = 1e6};
@@ -103,7 +103,7 @@ TEST(PaceWatch, WarnsAfterThreeSlowSecondsInARowThenKeepsQuietForThirty)
         EXPECT_FALSE(watch.add(slow)) << "second " << k + 1 << " after the warning";
     EXPECT_TRUE(watch.add(slow).has_value());  // 30 s on, still slow: said again
     // Keeping up never warns.
-    PaceWatch fine(Coupling::Exact);
+    PaceWatch fine;
     for (int k = 0; k < 100; ++k)
         EXPECT_FALSE(fine.add(on_time));
 }
@@ -115,14 +115,16 @@ TEST(PaceWatch, NamesTheWaitForTheNeighboursWhenTheStepsAreNotTheCause)
 {
     const PaceSample waiting{
         .wall_s = 1.0, .sim_s = 0.4, .step_s = 0.2, .steps = 400, .bytes_out = 66.8e6};
-    PaceWatch exact(Coupling::Exact);
-    PaceWatch fast(Coupling::Fast);
+    PaceSample waiting_fast = waiting;
+    waiting_fast.coupling = Coupling::Fast;
+    PaceWatch exact;
+    PaceWatch fast;
     std::optional<std::string> we;
     std::optional<std::string> wf;
     for (int k = 0; k < PaceWatch::k_slow_samples; ++k)
     {
         we = exact.add(waiting);
-        wf = fast.add(waiting);
+        wf = fast.add(waiting_fast);
     }
     ASSERT_TRUE(we.has_value());
     ASSERT_TRUE(wf.has_value());

@@ -73,6 +73,8 @@ struct PaceSample
     double step_s = 0.0;  ///< wall time spent in its steps, s
     std::uint64_t steps = 0;
     double bytes_out = 0.0;  ///< datagram bytes it sent
+    /// The session's coupling (a joiner learns it from the welcome).
+    Coupling coupling = Coupling::Exact;
 };
 
 /// Tells a user when their peer's simulation falls behind real time, and why (run_peer logs
@@ -81,7 +83,8 @@ struct PaceSample
 /// time: a coarser level or more participants would keep up), or, in exact coupling, the wait
 /// for its neighbours' halos every tick (with the bytes it sends and the options that cut
 /// them), or, in fast coupling, the wait for fresh neighbour states (max_halo_age_s). At most
-/// one message per k_quiet_s of samples.
+/// one message per k_quiet_s of samples. The coupling comes with each sample (a joiner learns it
+/// from the welcome).
 class PaceWatch
 {
 public:
@@ -91,12 +94,10 @@ public:
     /// Steps taking at least this share of the wall time make the steps the cause.
     static constexpr double k_step_bound = 0.6;
 
-    explicit PaceWatch(Coupling coupling) noexcept : coupling_(coupling) {}
     /// Adds one sample. \return the warning to log, if it is due.
     std::optional<std::string> add(const PaceSample& sample);
 
 private:
-    Coupling coupling_;
     int slow_ = 0;          // samples in a row below k_slow_ratio
     double quiet_for_ = 0;  // wall seconds left before another message
 };
