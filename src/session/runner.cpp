@@ -12,6 +12,7 @@
 #include <span>
 #include <sstream>
 #include <string>
+#include <thread>
 
 namespace pliant::session
 {
@@ -183,7 +184,19 @@ std::optional<std::string> PaceWatch::add(const PaceSample& sample)
             "this peer holds its clock for its neighbours' states (fast coupling's bound on "
             "their age, --max-halo-age; its steps take {:.0f} % of its time)",
             100.0 * load);
+    if (sample.cores > 0 && sample.load_average > static_cast<double>(sample.cores))
+        out += fmt::format("; this machine is also busy (load average {:.1f} on {} cores)",
+                           sample.load_average, sample.cores);
     return out;
+}
+
+double load_average() noexcept
+{
+    std::ifstream in("/proc/loadavg");
+    double load = -1.0;
+    if (!(in >> load))
+        return -1.0;
+    return load;
 }
 
 core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
@@ -237,7 +250,9 @@ core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
                 .step_s = s.step_seconds - last.step_seconds,
                 .steps = s.steps - last.steps,
                 .bytes_out = static_cast<double>(s.bytes_sent - last.bytes_sent),
-                .coupling = session.coupling()};
+                .coupling = session.coupling(),
+                .load_average = load_average(),
+                .cores = static_cast<int>(std::thread::hardware_concurrency())};
             if (auto warning = pace.add(sample))
                 spdlog::warn("{}", *warning);
         }

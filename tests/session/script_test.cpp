@@ -110,7 +110,7 @@ TEST(PaceWatch, WarnsAfterThreeSlowSecondsInARowThenKeepsQuietForThirty)
 
 // The cause named: a peer whose steps take little of its time waits on the network; in exact
 // coupling for the halos of every tick (with the bytes it sends and the options that cut them),
-// in fast coupling for fresh neighbour states.
+// in fast coupling for fresh neighbour states; and a machine whose load exceeds its cores.
 TEST(PaceWatch, NamesTheWaitForTheNeighboursWhenTheStepsAreNotTheCause)
 {
     const PaceSample waiting{
@@ -136,6 +136,29 @@ TEST(PaceWatch, NamesTheWaitForTheNeighboursWhenTheStepsAreNotTheCause)
     EXPECT_EQ(we->find("coarser level"), std::string::npos) << *we;
     EXPECT_NE(wf->find("--max-halo-age"), std::string::npos) << *wf;
     EXPECT_EQ(wf->find("--compress"), std::string::npos) << *wf;
+    EXPECT_EQ(we->find("busy"), std::string::npos) << *we;  // load unknown: nothing said
+
+    // A load above the cores is named; at or below them, not.
+    PaceSample busy = waiting;
+    busy.load_average = 5.2;
+    busy.cores = 2;
+    PaceSample calm = waiting;
+    calm.load_average = 1.5;
+    calm.cores = 2;
+    PaceWatch on_busy;
+    PaceWatch on_calm;
+    std::optional<std::string> wb;
+    std::optional<std::string> wc;
+    for (int k = 0; k < PaceWatch::k_slow_samples; ++k)
+    {
+        wb = on_busy.add(busy);
+        wc = on_calm.add(calm);
+    }
+    ASSERT_TRUE(wb.has_value() && wc.has_value());
+    EXPECT_NE(wb->find("; this machine is also busy (load average 5.2 on 2 cores)"),
+              std::string::npos)
+        << *wb;
+    EXPECT_EQ(wc->find("busy"), std::string::npos) << *wc;
 }
 
 }  // namespace

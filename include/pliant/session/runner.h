@@ -75,7 +75,14 @@ struct PaceSample
     double bytes_out = 0.0;  ///< datagram bytes it sent
     /// The session's coupling (a joiner learns it from the welcome).
     Coupling coupling = Coupling::Exact;
+    /// The machine's 1-minute load average and its cores (load < 0: unknown). A load above
+    /// the cores adds to the message that other work competes for them.
+    double load_average = -1.0;
+    int cores = 0;
 };
+
+/// The machine's 1-minute load average (/proc/loadavg), or -1 where there is none.
+[[nodiscard]] double load_average() noexcept;
 
 /// Tells a user when their peer's simulation falls behind real time, and why (run_peer logs
 /// it): after k_slow_samples samples in a row below k_slow_ratio of real time, a message with
