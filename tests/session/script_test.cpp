@@ -108,6 +108,16 @@ TEST(PaceWatch, WarnsAfterThreeSlowSecondsInARowThenKeepsQuietForThirty)
         EXPECT_FALSE(fine.add(on_time));
 }
 
+// What a fresh PaceWatch says after k_slow_samples of `sample` in a row.
+std::optional<std::string> warning_after_slow_run(const PaceSample& sample)
+{
+    PaceWatch watch;
+    std::optional<std::string> said;
+    for (int k = 0; k < PaceWatch::k_slow_samples; ++k)
+        said = watch.add(sample);
+    return said;
+}
+
 // The cause named: a peer whose steps take little of its time waits on the network; in exact
 // coupling for the halos of every tick (with the bytes it sends and the options that cut them),
 // in fast coupling for fresh neighbour states; and a machine whose load exceeds its cores.
@@ -117,15 +127,8 @@ TEST(PaceWatch, NamesTheWaitForTheNeighboursWhenTheStepsAreNotTheCause)
         .wall_s = 1.0, .sim_s = 0.4, .step_s = 0.2, .steps = 400, .bytes_out = 66.8e6};
     PaceSample waiting_fast = waiting;
     waiting_fast.coupling = Coupling::Fast;
-    PaceWatch exact;
-    PaceWatch fast;
-    std::optional<std::string> we;
-    std::optional<std::string> wf;
-    for (int k = 0; k < PaceWatch::k_slow_samples; ++k)
-    {
-        we = exact.add(waiting);
-        wf = fast.add(waiting_fast);
-    }
+    const std::optional<std::string> we = warning_after_slow_run(waiting);
+    const std::optional<std::string> wf = warning_after_slow_run(waiting_fast);
     ASSERT_TRUE(we.has_value());
     ASSERT_TRUE(wf.has_value());
     EXPECT_NE(we->find("0.40x real time (400 steps/s)"), std::string::npos) << *we;
@@ -145,15 +148,8 @@ TEST(PaceWatch, NamesTheWaitForTheNeighboursWhenTheStepsAreNotTheCause)
     PaceSample calm = waiting;
     calm.load_average = 1.5;
     calm.cores = 2;
-    PaceWatch on_busy;
-    PaceWatch on_calm;
-    std::optional<std::string> wb;
-    std::optional<std::string> wc;
-    for (int k = 0; k < PaceWatch::k_slow_samples; ++k)
-    {
-        wb = on_busy.add(busy);
-        wc = on_calm.add(calm);
-    }
+    const std::optional<std::string> wb = warning_after_slow_run(busy);
+    const std::optional<std::string> wc = warning_after_slow_run(calm);
     ASSERT_TRUE(wb.has_value() && wc.has_value());
     EXPECT_NE(wb->find("; this machine is also busy (load average 5.2 on 2 cores)"),
               std::string::npos)
