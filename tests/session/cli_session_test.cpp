@@ -18,7 +18,9 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <string>
@@ -39,6 +41,22 @@ int test_port(int slot)
     return 20000 + static_cast<int>((getpid() + 1000 * slot) % 12000);
 }
 
+/// The log of the peer that wrote `NAME.log` and `NAME.rc` (its exit status; none if it was
+/// killed) in `dir`, when it failed naming "bind": its UDP port is taken on this machine, and
+/// the test is skipped, not failed; nothing when it ran.
+std::optional<std::string> bind_failure(const std::filesystem::path& dir, const std::string& name)
+{
+    std::string log = read(dir / (name + ".log"));
+    if (log.find("bind") == std::string::npos || read(dir / (name + ".rc")) == "0\n")
+        return std::nullopt;
+    return log;
+}
+
+/// Skips the calling test when the peer `name` could not bind `port` (bind_failure).
+#define PLIANT_SKIP_IF_UNBOUND(dir, name, port)       \
+    if (const auto unbound = bind_failure(dir, name)) \
+    GTEST_SKIP() << "cannot bind UDP port " << (port) << " on this machine: " << *unbound
+
 TEST(SessionCli, HostAndTwoJoinsAsProcessesExchangeTraffic)
 {
     const auto dir = pliant::test::scratch_dir("session_cli");
@@ -57,9 +75,7 @@ TEST(SessionCli, HostAndTwoJoinsAsProcessesExchangeTraffic)
         "('" + exe + "' join 127.0.0.1:" + p +
         " --viewer --duration 2.5 --stats v.csv > v.log 2>&1; echo $? > v.rc) & wait";
     ASSERT_EQ(std::system(cmd.c_str()), 0);
-    const std::string host_log = read(dir / "host.log");
-    if (host_log.find("bind") != std::string::npos && read(dir / "host.rc") != "0\n")
-        GTEST_SKIP() << "cannot bind UDP port " << port << " on this machine: " << host_log;
+    PLIANT_SKIP_IF_UNBOUND(dir, "host", port);
     for (const char* name : {"host", "p1", "v"})
     {
         EXPECT_EQ(read(dir / (std::string(name) + ".rc")), "0\n")
@@ -127,9 +143,7 @@ TEST(SessionCli, KillingAParticipantThenTheMasterLeavesTheOthersRunning)
         " --viewer --duration 18 --stats v.csv > v.log 2>&1; echo $? > v.rc) & " +
         "sleep 1.5; kill -9 $B; sleep 1.0; kill -9 $HOST; wait";
     ASSERT_EQ(std::system(cmd.c_str()), 0);
-    const std::string host_log = read(dir / "host.log");
-    if (host_log.find("bind") != std::string::npos)
-        GTEST_SKIP() << "cannot bind UDP port " << port << " on this machine: " << host_log;
+    PLIANT_SKIP_IF_UNBOUND(dir, "host", port);
     EXPECT_EQ(read(dir / "a.rc"), "0\n") << read(dir / "a.log");
     EXPECT_EQ(read(dir / "v.rc"), "0\n") << read(dir / "v.log");
     EXPECT_NE(read(dir / "a.log").find("peer 1 takes over"), std::string::npos)
@@ -183,9 +197,8 @@ TEST(SessionCli, InterruptLeavesAndEndsTheSessionCleanly)
     ASSERT_EQ(std::system(cmd.c_str()), 0);
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    PLIANT_SKIP_IF_UNBOUND(dir, "host", port);
     const std::string host_log = read(dir / "host.log");
-    if (host_log.find("bind") != std::string::npos && read(dir / "host.rc") != "0\n")
-        GTEST_SKIP() << "cannot bind UDP port " << port << " on this machine: " << host_log;
     EXPECT_EQ(read(dir / "a.rc"), "0\n") << read(dir / "a.log");
     EXPECT_EQ(read(dir / "host.rc"), "0\n") << host_log;
     EXPECT_EQ(read(dir / "v.rc"), "0\n") << read(dir / "v.log");
@@ -207,9 +220,8 @@ TEST(SessionCli, AHostBehindRealTimeSaysSoAndWhy)
                             std::to_string(port) +
                             " --duration 6 > host.log 2>&1; echo $? > host.rc";
     ASSERT_EQ(std::system(cmd.c_str()), 0);
+    PLIANT_SKIP_IF_UNBOUND(dir, "host", port);
     const std::string log = read(dir / "host.log");
-    if (log.find("bind") != std::string::npos && read(dir / "host.rc") != "0\n")
-        GTEST_SKIP() << "cannot bind UDP port " << port << " on this machine: " << log;
     EXPECT_EQ(read(dir / "host.rc"), "0\n") << log;
     EXPECT_NE(log.find("warning: the simulation runs at 0."), std::string::npos) << log;
     EXPECT_NE(log.find("x real time ("), std::string::npos) << log;
@@ -240,9 +252,8 @@ TEST(SessionCli, RefusedJoinersSayWhyAndTheMasterCountsThem)
         join + " --key-file other.key > wrong.log 2>&1; echo $? > wrong.rc); (" + join +
         " > plain.log 2>&1; echo $? > plain.rc); wait";
     ASSERT_EQ(std::system(cmd.c_str()), 0);
+    PLIANT_SKIP_IF_UNBOUND(dir, "host", port);
     const std::string host_log = read(dir / "host.log");
-    if (host_log.find("bind") != std::string::npos && read(dir / "host.rc") != "0\n")
-        GTEST_SKIP() << "cannot bind UDP port " << port << " on this machine: " << host_log;
     EXPECT_EQ(read(dir / "host.rc"), "0\n") << host_log;
     const std::string wrong = read(dir / "wrong.log");
     EXPECT_EQ(read(dir / "wrong.rc"), "3\n") << wrong;
@@ -286,9 +297,8 @@ TEST(SessionCli, StreamCoarsenFeedsAViewerAndIsRefusedInFastMode)
         "' join 127.0.0.1:" + q +
         " --stream-coarsen 1 --duration 2 > refused.log 2>&1; echo $? > refused.rc) & wait";
     ASSERT_EQ(std::system(cmd.c_str()), 0);
+    PLIANT_SKIP_IF_UNBOUND(dir, "host", port);
     const std::string host_log = read(dir / "host.log");
-    if (host_log.find("bind") != std::string::npos && read(dir / "host.rc") != "0\n")
-        GTEST_SKIP() << "cannot bind UDP port " << port << " on this machine: " << host_log;
     EXPECT_EQ(read(dir / "host.rc"), "0\n") << host_log;
     EXPECT_EQ(read(dir / "v.rc"), "0\n") << read(dir / "v.log");
     EXPECT_GT(column_sum(dir / "v.csv", "bytes_in"), 1000.0);
@@ -327,9 +337,7 @@ void run_exact_processes(int participants)
     cmd +=
         "wait; '" + exe + "' replay rec.prec -o ref.pgrid > replay.log 2>&1; echo $? > replay.rc";
     ASSERT_EQ(std::system(cmd.c_str()), 0);
-    const std::string host_log = read(dir / "host.log");
-    if (host_log.find("bind") != std::string::npos && read(dir / "host.rc") != "0\n")
-        GTEST_SKIP() << "cannot bind UDP port " << port << " on this machine: " << host_log;
+    PLIANT_SKIP_IF_UNBOUND(dir, "host", port);
     std::vector<std::string> peers{"host"};
     for (int k = 1; k <= participants; ++k)
         peers.push_back("p" + std::to_string(k));
@@ -390,9 +398,8 @@ TEST(SessionCli, ARecordingWithoutCommonTicksReplaysBitForBitOnTheMastersNodes)
         " --duration 4 --script g1.txt > p1.log 2>&1; echo $? > p1.rc) & wait; '" + exe +
         "' replay rec.prec > replay.log 2>&1; echo $? > replay.rc";
     ASSERT_EQ(std::system(cmd.c_str()), 0);
+    PLIANT_SKIP_IF_UNBOUND(dir, "host", port);
     const std::string host_log = read(dir / "host.log");
-    if (host_log.find("bind") != std::string::npos && read(dir / "host.rc") != "0\n")
-        GTEST_SKIP() << "cannot bind UDP port " << port << " on this machine: " << host_log;
     ASSERT_EQ(read(dir / "host.rc"), "0\n") << host_log;
     EXPECT_NE(host_log.find("over the master's"), std::string::npos) << host_log;
     EXPECT_EQ(read(dir / "replay.rc"), "0\n") << read(dir / "replay.log");
@@ -432,9 +439,7 @@ TEST(SessionCli, F32AndStreamRateCutTheStream)
         exe + "' join 127.0.0.1:" + q +
         " --viewer --duration 2 --stats vcut.csv > vcut.log 2>&1; echo $? > vcut.rc) & wait";
     ASSERT_EQ(std::system(cmd.c_str()), 0);
-    const std::string host_log = read(dir / "full.log");
-    if (host_log.find("bind") != std::string::npos && read(dir / "full.rc") != "0\n")
-        GTEST_SKIP() << "cannot bind UDP port " << port << " on this machine: " << host_log;
+    PLIANT_SKIP_IF_UNBOUND(dir, "full", port);
     for (const char* name : {"full", "cut", "vfull", "vcut"})
         ASSERT_EQ(read(dir / (std::string(name) + ".rc")), "0\n")
             << name << ": " << read(dir / (std::string(name) + ".log"));
@@ -509,9 +514,7 @@ TEST(SessionCli, ASavedStateResumesInHostAndSimulateAndIsRefusedAsRestGeometry)
         run("o2", "simulate --level 4 --scenario free.toml -o o2 --resume o1/frame_00002.pgrid") +
         run("frame_as_rest", "simulate o1/frame_00002.pgrid --scenario free.toml -o o3");
     ASSERT_EQ(std::system(cmd.c_str()), 0);
-    const std::string a_log = read(dir / "a.log");
-    if (a_log.find("bind") != std::string::npos && read(dir / "a.rc") != "0\n")
-        GTEST_SKIP() << "cannot bind UDP port " << port << " on this machine: " << a_log;
+    PLIANT_SKIP_IF_UNBOUND(dir, "a", port);
     for (const char* name : {"a", "b", "o1", "o2"})
         ASSERT_EQ(read(dir / (std::string(name) + ".rc")), "0\n")
             << name << ": " << read(dir / (std::string(name) + ".log"));
