@@ -71,9 +71,10 @@ class Tap final : public Transport
 public:
     explicit Tap(std::unique_ptr<Transport> inner) : inner_(std::move(inner)) {}
 
-    std::function<void(std::vector<std::byte>&)> mutate;  ///< applied to received datagrams
-    bool hold = false;                                    ///< keep received datagrams back
-    std::vector<TransportEvent> received;                 ///< copies, before mutation
+    std::function<void(std::vector<std::byte>&)> mutate;      ///< applied to received datagrams
+    std::function<bool(const std::vector<std::byte>&)> drop;  ///< received datagrams it loses
+    bool hold = false;                                        ///< keep received datagrams back
+    std::vector<TransportEvent> received;                     ///< copies, before mutation
     std::vector<TransportEvent> held;
     std::deque<TransportEvent> inject;  ///< returned by poll() before anything else
     std::vector<std::pair<Channel, std::vector<std::byte>>> sent;
@@ -100,6 +101,10 @@ public:
             return ev;
         }
         auto ev = inner_->poll(timeout_ms);
+        for (int k = 0; k < 1'000'000 && ev && drop && ev->kind == TransportEvent::Kind::Received &&
+                        drop(ev->data);
+             ++k)
+            ev = inner_->poll(0);
         // Holding: swallow every received datagram available now (bounded by what is queued).
         for (int k = 0; k < 1'000'000 && ev && ev->kind == TransportEvent::Kind::Received; ++k)
         {
@@ -623,6 +628,34 @@ TEST(SecureTransport, ALostHandshakeDatagramCostsARepeatPeriodNotARetransmission
     }
     EXPECT_LT(worst_with, 0.75);
     EXPECT_GE(worst_without, 1.0) << "no seed lost a handshake datagram: the test shows nothing";
+}
+
+// The Confirm is lost and the peer's first authenticated datagram is data: that one datagram
+// gives two events (Connected, then the data). poll() returns the first; wait() must then return
+// at once, since an event is already pending, instead of waiting on the socket for more.
+TEST(SecureTransport, WaitReturnsAtOnceWhileAnEventIsPending)
+{
+    SimPair p;
+    constexpr auto k_confirm = std::byte{4};  // the handshake's Confirm (secure_transport.cpp)
+    p.tap_b->drop = [&](const std::vector<std::byte>& d) { return d[0] == k_confirm; };
+    p.a_to_b = p.a->connect(p.addr_b).value();
+    ASSERT_TRUE(p.pump_until([&] { return find_kind(p.from_a, TransportEvent::Kind::Connected); }));
+    ASSERT_EQ(p.from_b.size(), 0u) << "b must not be connected before the data arrives";
+    const auto payload = seeded_payload(64, 9);
+    ASSERT_TRUE(p.a->send(p.a_to_b, Channel::Control, payload, Delivery::Reliable));
+    p.net.advance(0.01);
+    const auto connected = p.b->poll(0);
+    ASSERT_TRUE(connected);
+    EXPECT_EQ(connected->kind, TransportEvent::Kind::Connected);
+    const auto t0 = std::chrono::steady_clock::now();
+    p.b->wait(5.0);  // SimulatedTransport's own wait would sleep all of it
+    const double waited =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    EXPECT_LT(waited, 1.0);
+    const auto data = p.b->poll(0);
+    ASSERT_TRUE(data);
+    EXPECT_EQ(data->kind, TransportEvent::Kind::Received);
+    EXPECT_EQ(data->data, payload);
 }
 
 TEST(SecureTransport, PeerWithoutEncryptionTimesOutAndIsNeverConnected)
