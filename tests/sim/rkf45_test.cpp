@@ -74,6 +74,15 @@ private:
     Eigen::VectorXd lambda_, q0_, p0_;
 };
 
+/// The ODE test's settings with steps of 10 ms, fixed or adaptive, on a level-3 sphere.
+MembraneModel model_in_steps_of_10_ms(bool fixed = true)
+{
+    MembraneSettings set = ode_settings();
+    set.fixed_step = fixed;
+    set.fixed_dt = 0.01;
+    return test::sphere_model(3, set);
+}
+
 MembraneState initial_state(const MembraneModel& m)
 {
     MembraneState s = MembraneState::at_rest(m.grid());
@@ -223,10 +232,7 @@ TEST(Rkf45, AdvanceCountsTheStepsAtDtMin)
 TEST(Rkf45, NonFiniteTrialKeepsTheLastGoodState)
 {
     pliant::test::FpTrapsOff traps_off;
-    MembraneSettings set = ode_settings();
-    set.fixed_step = true;
-    set.fixed_dt = 0.01;
-    MembraneModel m = test::sphere_model(3, set);
+    MembraneModel m = model_in_steps_of_10_ms();
     MembraneState s = initial_state(m);
     s.u.at(5, 3) = 1e308;  // K u overflows
     m.sync(s.u);
@@ -240,10 +246,7 @@ TEST(Rkf45, NonFiniteTrialKeepsTheLastGoodState)
 
 TEST(Rkf45, FixedStepAdvanceTakesWholeSteps)
 {
-    MembraneSettings set = ode_settings();
-    set.fixed_step = true;
-    set.fixed_dt = 0.01;
-    MembraneModel m = test::sphere_model(3, set);
+    MembraneModel m = model_in_steps_of_10_ms();
     MembraneState s = initial_state(m);
     Rkf45Workspace ws(m, 1);
     AdvanceReport r = advance_to(m, s, ws, 0.105, {});
@@ -267,10 +270,7 @@ TEST(Rkf45, AdvanceStopsBeforeTheStepAfterAStopIsAsked)
     };
     for (const bool fixed : {true, false})
     {
-        MembraneSettings set = ode_settings();
-        set.fixed_step = fixed;
-        set.fixed_dt = 0.01;
-        MembraneModel m = test::sphere_model(3, set);
+        MembraneModel m = model_in_steps_of_10_ms(fixed);
         MembraneState s = initial_state(m);
         Rkf45Workspace ws(m, 1);
         StopAfterPolls stop;
