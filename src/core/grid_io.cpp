@@ -88,7 +88,7 @@ const Field<double>* GridFile::find(std::string_view name) const noexcept
     return nullptr;
 }
 
-Result<void> save_grid(const std::filesystem::path& path, const GridFile& file)
+Result<std::vector<std::byte>> encode_grid(const GridFile& file, const std::string& source)
 {
     auto grid = TetraGrid::create(file.level);
     if (!grid)
@@ -107,9 +107,11 @@ Result<void> save_grid(const std::filesystem::path& path, const GridFile& file)
                         "save_grid: channel '" + f.name + "' is of level " +
                             std::to_string(f.values.level()) + ", the file of level " +
                             std::to_string(file.level));
-        if (auto ok = check_channel(*grid, f.name, f.values, "save_grid: " + path.string() + ": ");
-            !ok)
+        if (auto ok = check_channel(*grid, f.name, f.values, "save_grid: " + source + ": "); !ok)
             return fail(ErrorCode::InvalidArgument, ok.error().message);
+        if (file.find(f.name) != &f.values)
+            return fail(ErrorCode::InvalidArgument,
+                        "save_grid: " + source + ": channel '" + f.name + "' appears twice");
         char name[k_name_bytes] = {};
         std::memcpy(name, f.name.data(), f.name.size());
         out.insert(out.end(), reinterpret_cast<const std::byte*>(name),
@@ -119,28 +121,26 @@ Result<void> save_grid(const std::filesystem::path& path, const GridFile& file)
         out.insert(out.end(), bytes.begin(), bytes.end());
     }
     put(out, hash_bytes(out));
+    return out;
+}
 
+Result<void> save_grid(const std::filesystem::path& path, const GridFile& file)
+{
+    auto out = encode_grid(file, path.string());
+    if (!out)
+        return out.error();
     std::ofstream os(path, std::ios::binary | std::ios::trunc);
     if (!os)
         return fail(ErrorCode::IoError, path.string() + ": cannot open for writing");
-    os.write(reinterpret_cast<const char*>(out.data()), static_cast<std::streamsize>(out.size()));
+    os.write(reinterpret_cast<const char*>(out->data()), static_cast<std::streamsize>(out->size()));
     if (!os)
         return fail(ErrorCode::IoError, path.string() + ": write failed (disk full?)");
     return {};
 }
 
-Result<GridFile> load_grid(const std::filesystem::path& path)
+Result<GridFile> decode_grid(std::span<const std::byte> bytes, const std::string& source)
 {
-    const std::string where = path.string() + ": ";
-    // A directory opens as a stream on Linux and then throws from the first read.
-    std::error_code ec;
-    if (std::filesystem::is_directory(path, ec))
-        return fail(ErrorCode::IoError, where + "is a directory, not a grid file");
-    std::ifstream is(path, std::ios::binary);
-    if (!is)
-        return fail(ErrorCode::IoError, where + "cannot open for reading");
-    std::vector<char> raw((std::istreambuf_iterator<char>(is)), std::istreambuf_iterator<char>());
-    const std::span<const std::byte> bytes = std::as_bytes(std::span<const char>(raw));
+    const std::string where = source + ": ";
     if (bytes.size() < sizeof(k_magic) + 12 + 8)
         return fail(ErrorCode::ParseError, where + "too short for a pliant grid file (" +
                                                std::to_string(bytes.size()) + " bytes)");
@@ -181,12 +181,33 @@ Result<GridFile> load_grid(const std::filesystem::path& path)
         (void)r.read(name, k_name_bytes);
         (void)r.read(plane.data(), plane_bytes);
         NamedField f{std::string(name), Field<double>(*grid)};
+        // NUL-padded: a byte after the name's end that is not NUL is not a name this writes.
+        if (std::any_of(name + f.name.size(), name + k_name_bytes, [](char ch) { return ch != 0; }))
+            return fail(ErrorCode::BadGrid, where + "channel " + std::to_string(c) + " ('" +
+                                                f.name +
+                                                "'): its name field is not padded with NUL bytes");
         f.values.copy_from(plane);
         if (auto ok = check_channel(*grid, f.name, f.values, where); !ok)
             return ok.error();
+        for (const NamedField& other : file.fields)
+            if (other.name == f.name)
+                return fail(ErrorCode::BadGrid, where + "channel '" + f.name + "' appears twice");
         file.fields.push_back(std::move(f));
     }
     return file;
+}
+
+Result<GridFile> load_grid(const std::filesystem::path& path)
+{
+    // A directory opens as a stream on Linux and then throws from the first read.
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec))
+        return fail(ErrorCode::IoError, path.string() + ": is a directory, not a grid file");
+    std::ifstream is(path, std::ios::binary);
+    if (!is)
+        return fail(ErrorCode::IoError, path.string() + ": cannot open for reading");
+    std::vector<char> raw((std::istreambuf_iterator<char>(is)), std::istreambuf_iterator<char>());
+    return decode_grid(std::as_bytes(std::span<const char>(raw)), path.string());
 }
 
 GridFile make_geometry_file(const TetraGrid& grid, const Vec3Field<double>& positions)

@@ -67,16 +67,15 @@ struct Reader
     }
 };
 
-core::Unexpected bad_file(const std::filesystem::path& path, std::size_t offset,
-                          const std::string& why)
+core::Unexpected bad_file(const std::string& source, std::size_t offset, const std::string& why)
 {
     return core::fail(core::ErrorCode::ParseError,
-                      path.string() + ": byte " + std::to_string(offset) + ": " + why);
+                      source + ": byte " + std::to_string(offset) + ": " + why);
 }
 
 }  // namespace
 
-core::Result<void> save_recording(const std::filesystem::path& path, const Recording& recording)
+core::Result<std::vector<std::byte>> encode_recording(const Recording& recording)
 {
     std::vector<std::byte> out;
     for (const char c : k_magic)
@@ -107,8 +106,17 @@ core::Result<void> save_recording(const std::filesystem::path& path, const Recor
         out.insert(out.end(), datagram.begin(), datagram.begin() + static_cast<std::ptrdiff_t>(*n));
     }
     put(out, core::hash_bytes(out), 8);
+    return out;
+}
+
+core::Result<void> save_recording(const std::filesystem::path& path, const Recording& recording)
+{
+    auto out = encode_recording(recording);
+    if (!out)
+        return out.error();
     std::ofstream file(path, std::ios::binary | std::ios::trunc);
-    file.write(reinterpret_cast<const char*>(out.data()), static_cast<std::streamsize>(out.size()));
+    file.write(reinterpret_cast<const char*>(out->data()),
+               static_cast<std::streamsize>(out->size()));
     if (!file)
         return core::fail(core::ErrorCode::IoError, "cannot write recording " + path.string());
     return {};
@@ -120,18 +128,23 @@ core::Result<Recording> load_recording(const std::filesystem::path& path)
     if (!file)
         return core::fail(core::ErrorCode::IoError, "cannot read recording " + path.string());
     std::vector<char> raw((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
-    const std::span<const std::byte> bytes = std::as_bytes(std::span<const char>(raw));
+    return decode_recording(std::as_bytes(std::span<const char>(raw)), path.string());
+}
+
+core::Result<Recording> decode_recording(std::span<const std::byte> bytes,
+                                         const std::string& source)
+{
     if (bytes.size() < k_magic.size() + 8 ||
-        std::memcmp(raw.data(), k_magic.data(), k_magic.size()) != 0)
-        return bad_file(path, 0, "not a pliant recording (magic PLIANTR)");
+        std::memcmp(bytes.data(), k_magic.data(), k_magic.size()) != 0)
+        return bad_file(source, 0, "not a pliant recording (magic PLIANTR)");
     const std::size_t body = bytes.size() - 8;
     Reader tail{bytes.subspan(body)};
     if (tail.get(8) != core::hash_bytes(bytes.first(body)))
-        return bad_file(path, body, "checksum mismatch (truncated or corrupted)");
+        return bad_file(source, body, "checksum mismatch (truncated or corrupted)");
     Reader r{bytes.first(body), k_magic.size()};
     const auto version = r.get(4);
     if (version != 1 && version != k_version)
-        return bad_file(path, 8,
+        return bad_file(source, 8,
                         "version " + std::to_string(version) + ", this build reads 1 to " +
                             std::to_string(k_version));
     Recording rec;
@@ -148,14 +161,14 @@ core::Result<Recording> load_recording(const std::filesystem::path& path)
     rec.model.assign(model.begin(), model.end());
     const auto count = r.get(4);
     if (!r.ok)
-        return bad_file(path, r.pos, "truncated header");
+        return bad_file(source, r.pos, "truncated header");
     for (std::uint64_t i = 0; i < count; ++i)
     {
         const std::size_t at = r.pos;
         const auto size = r.get(2);
         const auto datagram = r.take(size);
         if (!r.ok)
-            return bad_file(path, at, "truncated force entry " + std::to_string(i));
+            return bad_file(source, at, "truncated force entry " + std::to_string(i));
         std::array<std::byte, net::k_max_datagram_size> current{};
         std::span<const std::byte> entry = datagram;
         if (datagram.size() > k_type_byte &&
@@ -171,15 +184,15 @@ core::Result<Recording> load_recording(const std::filesystem::path& path)
         auto m = net::decode(entry);
         if (!m)
             return bad_file(
-                path, at,
+                source, at,
                 "force entry " + std::to_string(i) + ": " + std::string(net::to_string(m.error())));
         const auto* force = std::get_if<net::Force>(&m->body);
         if (force == nullptr)
-            return bad_file(path, at, "entry " + std::to_string(i) + " is not a force list");
+            return bad_file(source, at, "entry " + std::to_string(i) + " is not a force list");
         rec.forces.push_back(ForceRecord{m->header.sender.value, m->header.tick, force->forces});
     }
     if (r.pos != body)
-        return bad_file(path, r.pos, "trailing bytes after the last entry");
+        return bad_file(source, r.pos, "trailing bytes after the last entry");
     return rec;
 }
 

@@ -124,36 +124,6 @@ struct Reader
     }
 };
 
-std::vector<std::byte> encode_state(const core::TetraGrid& g, const core::Field<double>& u,
-                                    const core::Field<double>& v, std::uint64_t tick, double time)
-{
-    Writer w;
-    w.u64(tick);
-    w.f64(time);
-    for (int y = 0; y < g.ny(); ++y)
-        for (int x = 0; x < g.nx(); ++x)
-        {
-            w.f64(u.at(x, y));
-            w.f64(v.at(x, y));
-        }
-    return std::move(w.out);
-}
-
-bool decode_state(const core::TetraGrid& g, std::span<const std::byte> blob, core::Field<double>& u,
-                  core::Field<double>& v)
-{
-    Reader r{blob};
-    (void)r.u64();
-    (void)r.f64();
-    for (int y = 0; y < g.ny(); ++y)
-        for (int x = 0; x < g.nx(); ++x)
-        {
-            u.at(x, y) = r.f64();
-            v.at(x, y) = r.f64();
-        }
-    return r.ok && r.pos == blob.size();
-}
-
 /// Coarse streaming: the largest k a grid allows with leaves of side `w >> depth`: level - k >= 1,
 /// k <= net::k_max_leaf_coarsen, and 2^(k+1) divides the side, so a leaf maps to whole coarse
 /// nodes and holds at least two rows of them. One row is not enough: a leaf of the bottom row
@@ -230,7 +200,12 @@ core::Result<DecodedModel> decode_model(std::span<const std::byte> blob)
         return core::fail(core::ErrorCode::InvalidArgument, "model blob: bad header");
     sim::MembraneSettings s;
     s.fixed_step = fixed == 1;
-    s.reassemble_every = static_cast<int>(std::min<std::uint32_t>(r.u32(), 1u << 30));
+    const std::uint32_t reassemble = r.u32();
+    if (reassemble > (1u << 30))
+        return core::fail(
+            core::ErrorCode::InvalidArgument,
+            "model blob: re-assembly every " + std::to_string(reassemble) + " steps, at most 2^30");
+    s.reassemble_every = static_cast<int>(reassemble);
     for (double* v : {&s.T, &s.rho, &s.beta, &s.k_f, &s.rtol, &s.atol, &s.dt_min, &s.dt_max,
                       &s.dt_initial, &s.safety, &s.max_growth, &s.min_shrink, &s.fixed_dt})
         *v = r.f64();
@@ -246,6 +221,17 @@ core::Result<DecodedModel> decode_model(std::span<const std::byte> blob)
                 rest[static_cast<std::size_t>(c)].at(x, y) = r.f64();
     if (!r.ok)
         return core::fail(core::ErrorCode::InvalidArgument, "model blob: non-finite position");
+    for (const core::TwinPair& t : g.twins())
+        for (const core::Field<double>& plane : rest)
+            if (plane[t.twin] != plane[t.canonical] ||
+                std::signbit(plane[t.twin]) != std::signbit(plane[t.canonical]))
+            {
+                const core::GridCoord a = g.coord(t.twin);
+                return core::fail(core::ErrorCode::InvalidArgument,
+                                  "model blob: twin node (" + std::to_string(a.x) + "," +
+                                      std::to_string(a.y) +
+                                      ") has another rest position than its canonical node");
+            }
     auto model = sim::MembraneModel::create(g, rest, s);
     if (!model)
         return core::fail(model.error().code, "model blob: " + model.error().message);
@@ -253,6 +239,43 @@ core::Result<DecodedModel> decode_model(std::span<const std::byte> blob)
     if (clearance != 0)
         clear = clearance == 1 ? PointClearance::AsGrown : PointClearance::Inside;
     return DecodedModel{std::move(model).value(), static_cast<Coupling>(coupling), clear};
+}
+
+std::vector<std::byte> encode_state(const core::TetraGrid& grid, const core::Field<double>& u,
+                                    const core::Field<double>& v, std::uint64_t tick, double time)
+{
+    Writer w;
+    w.u64(tick);
+    w.f64(time);
+    for (int y = 0; y < grid.ny(); ++y)
+        for (int x = 0; x < grid.nx(); ++x)
+        {
+            w.f64(u.at(x, y));
+            w.f64(v.at(x, y));
+        }
+    return std::move(w.out);
+}
+
+core::Result<DecodedState> decode_state(const core::TetraGrid& grid,
+                                        std::span<const std::byte> blob)
+{
+    if (blob.size() != 16 + grid.node_count() * 16)
+        return core::fail(core::ErrorCode::InvalidArgument,
+                          "state blob: " + std::to_string(blob.size()) + " bytes, level " +
+                              std::to_string(grid.level()) + " needs " +
+                              std::to_string(16 + grid.node_count() * 16));
+    Reader r{blob};
+    DecodedState out{r.u64(), r.f64(), core::Field<double>(grid), core::Field<double>(grid)};
+    for (int y = 0; y < grid.ny() && r.ok; ++y)
+        for (int x = 0; x < grid.nx(); ++x)
+        {
+            out.u.at(x, y) = r.f64();
+            out.v.at(x, y) = r.f64();
+        }
+    if (!r.ok)
+        return core::fail(core::ErrorCode::InvalidArgument,
+                          "state blob: a non-finite value near byte " + std::to_string(r.pos));
+    return out;
 }
 
 sim::Force to_sim_force(const net::UserForce& f)
@@ -2600,6 +2623,7 @@ struct Session::Impl
             core::hash_bytes(state_blob) != welcome.state_hash)
         {
             spdlog::error("session: model or state blob hash mismatch");
+            refusal = "the master's model or state blob does not match its hash";
             close_all(net::DisconnectReason::ProtocolMismatch);
             return;
         }
@@ -2607,8 +2631,23 @@ struct Session::Impl
         if (!decoded)
         {
             spdlog::error("session: {}", decoded.error().message);
+            refusal = decoded.error().message;
             close_all(net::DisconnectReason::ProtocolMismatch);
             return;
+        }
+        std::optional<DecodedState> state;
+        if (!state_blob.empty())
+        {
+            auto st = decode_state(decoded->model.grid(), state_blob);
+            if (!st)
+            {
+                // The master's state cannot be taken: stepping on from rest would diverge.
+                spdlog::error("session: {}", st.error().message);
+                refusal = st.error().message;
+                close_all(net::DisconnectReason::ProtocolMismatch);
+                return;
+            }
+            state = std::move(*st);
         }
         s.coupling_ = decoded->coupling;
         s.clearance_ = decoded->clearance;
@@ -2625,8 +2664,14 @@ struct Session::Impl
                 close_all(net::DisconnectReason::Quit);
                 return;
             }
-        if (!state_blob.empty() && decode_state(g, state_blob, s.display_u_, s.display_v_))
+        if (state)
         {
+            for (int y = 0; y < g.ny(); ++y)
+                for (int x = 0; x < g.nx(); ++x)
+                {
+                    s.display_u_.at(x, y) = state->u.at(x, y);
+                    s.display_v_.at(x, y) = state->v.at(x, y);
+                }
             s.model_->sync(s.display_u_);
             s.model_->sync(s.display_v_);
             for (int y = 0; y < g.ny(); ++y)
@@ -2983,7 +3028,7 @@ struct Session::Impl
     }
     bool display_dirty = false;
     bool behind = false;  ///< the last advance() returned on its wall-time budget (Session::behind)
-    std::string refusal;  // why this joiner left on its own (settings refused by the session)
+    std::string refusal;  // why this joiner left on its own (settings refused, a blob refused)
     // A joiner whose connection to the master ended before the Welcome: why (Session::
     // join_failure), and whether the transport had connected it (handshake and key check done).
     std::optional<net::DisconnectReason> join_lost;

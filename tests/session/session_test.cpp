@@ -2,6 +2,9 @@
 // SPDX-FileCopyrightText: 2026 pliant contributors
 // Sessions over a simulated network: exact coupling equals a single-process run, fast coupling
 // stays within its documented error, late viewers see the same object, leaving re-partitions.
+#include <pliant/core/hash.h>
+#include <pliant/net/codec.h>
+
 #include <gtest/gtest.h>
 
 #include "session_harness.h"
@@ -9,9 +12,11 @@
 #include <bit>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <limits>
 #include <optional>
 #include <random>
+#include <span>
 #include <string>
 
 namespace pliant::session::test
@@ -456,6 +461,153 @@ TEST(SessionModelBlob, CarriesThePointClearanceAndReadsVersionOne)
     EXPECT_FALSE(decode_model(std::span(v1).first(v1.size() - 1)));  // exact lengths
     v1[4] = std::byte{3};
     EXPECT_FALSE(decode_model(v1));  // a version from the future
+}
+
+// Every field of a model blob is checked: a twin whose rest position is not its canonical
+// node's, or a re-assembly period above 2^30, is refused (both were taken as they came before:
+// the twin overwritten, the period cut), so a version-2 blob that decodes encodes back to the
+// same bytes.
+TEST(SessionModelBlob, RefusesTwinsThatDifferAndAHugeReassemblyPeriod)
+{
+    const core::TetraGrid g = core::TetraGrid::create(2).value();
+    const auto model = sim::MembraneModel::create(g, scenes::sphere_grid(g, 1.0), material());
+    ASSERT_TRUE(model);
+    const auto blob = encode_model(*model, Coupling::Exact);
+    const auto back = decode_model(blob);
+    ASSERT_TRUE(back) << back.error().message;
+    EXPECT_EQ(encode_model(back->model, back->coupling, back->clearance), blob);
+
+    constexpr std::size_t k_reassemble_at = 9;  // magic, version, level, coupling, clearance, fixed
+    constexpr std::size_t k_positions_at = k_reassemble_at + 4 + 13 * 8;
+    auto huge = blob;
+    huge[k_reassemble_at + 3] = std::byte{0x41};  // 0x41000000 > 2^30
+    const auto refused = decode_model(huge);
+    ASSERT_FALSE(refused);
+    EXPECT_NE(refused.error().message.find("at most 2^30"), std::string::npos)
+        << refused.error().message;
+
+    // Node (2W, 1) is a twin (the right edge folds onto the left half; core's twin map).
+    const core::NodeIndex twin = g.index(2 * g.w(), 1);
+    ASSERT_NE(g.canonical(twin), twin);
+    auto moved = blob;
+    const std::size_t at = k_positions_at + 24 * static_cast<std::size_t>(twin.value);
+    moved[at + 7] ^= std::byte{0x01};  // px's top byte
+    const auto twin_refused = decode_model(moved);
+    ASSERT_FALSE(twin_refused);
+    EXPECT_NE(twin_refused.error().message.find("twin node"), std::string::npos)
+        << twin_refused.error().message;
+}
+
+// The Welcome's state blob: every node's u and v, the tick and time, round trip bit for bit;
+// a wrong length or a non-finite value is refused with a message (a joiner then leaves rather
+// than step on from rest, apart from the session).
+TEST(SessionStateBlob, RoundTripsAndRefusesWrongLengthsAndNonFiniteValues)
+{
+    const core::TetraGrid g = core::TetraGrid::create(2).value();
+    core::Field<double> u(g), v(g);
+    for (int y = 0; y < g.ny(); ++y)
+        for (int x = 0; x < g.nx(); ++x)
+        {
+            u.at(x, y) = 0.001 * x - 1e-9 * y;
+            v.at(x, y) = -0.25 * y;
+        }
+    const auto blob = encode_state(g, u, v, 1234, 1.234);
+    const auto back = decode_state(g, blob);
+    ASSERT_TRUE(back) << back.error().message;
+    EXPECT_EQ(back->tick, 1234U);
+    EXPECT_EQ(back->time, 1.234);
+    EXPECT_TRUE(back->u == u);
+    EXPECT_TRUE(back->v == v);
+    EXPECT_EQ(encode_state(g, back->u, back->v, back->tick, back->time), blob);
+
+    const core::TetraGrid g3 = core::TetraGrid::create(3).value();
+    EXPECT_FALSE(decode_state(g3, blob));  // another level's length
+    EXPECT_FALSE(decode_state(g, std::span(blob).first(blob.size() - 1)));
+    auto nan = blob;
+    const double q = std::numeric_limits<double>::quiet_NaN();
+    std::memcpy(nan.data() + 16 + 16 * 7 + 8, &q, 8);  // v of node 7
+    const auto refused = decode_state(g, nan);
+    ASSERT_FALSE(refused);
+    EXPECT_NE(refused.error().message.find("non-finite"), std::string::npos)
+        << refused.error().message;
+}
+
+// A master whose state blob holds a non-finite value, its announced hash matching, so that
+// only decoding can tell: the joiner refuses the welcome, says why and never installs the model,
+// rather than step on from rest apart from the session. The master here is hand-made: a
+// transport endpoint that answers the joiner's Hello with a Welcome and the two blobs.
+TEST(SessionJoin, AStateBlobThatDoesNotDecodeIsRefused)
+{
+    net::SimulatedNetwork net;
+    auto master = net.create_endpoint();
+    const net::Address master_address = master->open({}).value();
+    auto end = net.create_endpoint();
+    ASSERT_TRUE(end->open({}));
+    auto joiner = Session::join(*end, master_address, net::Role::Participant,
+                                settings_for(Coupling::Exact, "j"));
+    ASSERT_TRUE(joiner) << joiner.error().message;
+
+    const core::TetraGrid g = core::TetraGrid::create(3).value();
+    const auto model = sim::MembraneModel::create(g, scenes::sphere_grid(g, 1.0), material());
+    ASSERT_TRUE(model);
+    const auto model_blob = encode_model(*model, Coupling::Exact);
+    core::Field<double> u(g), v(g);
+    auto state_blob = encode_state(g, u, v, 0, 0.0);
+    const double inf = std::numeric_limits<double>::infinity();
+    std::memcpy(state_blob.data() + 16 + 16 * 40, &inf, 8);  // u of node 40
+
+    const auto send = [&](net::PeerHandle to, net::Body body)
+    {
+        net::Message m;
+        m.header.session = 77;
+        m.header.sender = net::PeerId{0};
+        m.body = std::move(body);
+        std::vector<std::byte> bytes(net::encoded_size(m));
+        ASSERT_TRUE(net::encode(m, bytes));
+        ASSERT_TRUE(master->send(to, net::Channel::Control, bytes, net::Delivery::Reliable));
+    };
+    const auto blob = [](net::BlobKind kind, const std::vector<std::byte>& b)
+    {
+        return net::Blob{.kind = kind,
+                         .total_size = static_cast<std::uint32_t>(b.size()),
+                         .offset = 0,
+                         .data = b};
+    };
+    bool welcomed = false;
+    for (int k = 0; k < 2000 && (*joiner)->refusal().empty(); ++k)
+    {
+        while (auto ev = master->poll(0))
+        {
+            if (ev->kind != net::TransportEvent::Kind::Received || welcomed)
+                continue;
+            auto hello = net::decode(ev->data);
+            ASSERT_TRUE(hello);
+            ASSERT_EQ(hello->type(), net::MessageType::Hello);
+            net::Welcome w;
+            w.your_id = net::PeerId{1};
+            w.master_id = net::PeerId{0};
+            w.grid_level = 3;
+            w.leaf_depth = 0;
+            w.model_size = static_cast<std::uint32_t>(model_blob.size());
+            w.model_hash = core::hash_bytes(model_blob);
+            w.state_size = static_cast<std::uint32_t>(state_blob.size());
+            w.state_hash = core::hash_bytes(state_blob);
+            w.peers = {{net::PeerId{0}, net::Role::Participant, {127, 0, 0, 1}, 7000, "m"},
+                       {net::PeerId{1}, net::Role::Participant, {127, 0, 0, 1}, 7001, "j"}};
+            send(ev->peer, w);
+            ASSERT_LE(model_blob.size(), 32768U);
+            send(ev->peer, blob(net::BlobKind::Model, model_blob));
+            send(ev->peer, blob(net::BlobKind::State, state_blob));
+            welcomed = true;
+        }
+        (*joiner)->poll();
+        (*joiner)->advance(1e-3 * k);
+        net.advance(1e-3);
+    }
+    ASSERT_TRUE(welcomed);
+    EXPECT_NE((*joiner)->refusal().find("state blob: a non-finite value"), std::string::npos)
+        << (*joiner)->refusal();
+    EXPECT_FALSE((*joiner)->ready());
 }
 
 // Points a quarter of the faces apart at level 5 with 4 members (pliant_bench_session's seats):

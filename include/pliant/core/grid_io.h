@@ -14,13 +14,17 @@
 ///     checksum u64      hash_bytes of everything before it
 ///
 /// A geometry file has channels "px", "py", "pz" (rest positions); others (for example "u" for
-/// a displacement) are optional. Reading validates magic, version, level, sizes, the checksum,
-/// finiteness and twin equality, and gives back exactly the doubles that were written.
+/// a displacement) are optional; no name appears twice. Reading validates magic, version,
+/// level, sizes, the checksum, the names (printable, NUL-padded, distinct), finiteness and twin
+/// equality, and gives back exactly the doubles that were written: a file it accepts encodes
+/// back to the same bytes (fuzz/fuzz_grid_file.cpp checks that).
 
 #include <pliant/core/field.h>
 #include <pliant/core/result.h>
 
+#include <cstddef>
 #include <filesystem>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -43,12 +47,22 @@ struct GridFile
     [[nodiscard]] const Field<double>* find(std::string_view name) const noexcept;
 };
 
-/// Writes `file` to `path`. \return IoError if the file cannot be written; InvalidArgument for
-/// a bad name or a field of another level.
+/// The bytes of `file` as a `.pgrid` file; `source` names it in messages. \return
+/// InvalidArgument for a bad or repeated name, a channel that breaks the rules above or a field
+/// of another level; BadGrid for a level outside 1..10.
+Result<std::vector<std::byte>> encode_grid(const GridFile& file, const std::string& source);
+
+/// Writes `file` to `path` (encode_grid). \return encode_grid's errors; IoError if the file
+/// cannot be written.
 Result<void> save_grid(const std::filesystem::path& path, const GridFile& file);
 
-/// Reads a `.pgrid` file. \return IoError, ParseError (truncated, bad magic, bad checksum),
-/// BadGrid (level out of range, twins that differ, non-finite values).
+/// Reads the bytes of a `.pgrid` file; `source` (a path, "the welcome", ...) begins every
+/// message. \return ParseError (truncated, bad magic, bad checksum, wrong sizes), BadGrid (level
+/// out of range, a bad or repeated name, twins that differ, non-finite values).
+Result<GridFile> decode_grid(std::span<const std::byte> bytes, const std::string& source);
+
+/// Reads a `.pgrid` file (decode_grid). \return IoError if it cannot be read; decode_grid's
+/// errors, naming the path.
 Result<GridFile> load_grid(const std::filesystem::path& path);
 
 /// Bundles rest positions into a grid file with channels px, py, pz.

@@ -36,6 +36,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <span>
+#include <string>
 #include <vector>
 
 namespace pliant::session
@@ -61,15 +62,27 @@ struct Recording
     /// own nodes exactly at its final tick (docs/session.md §9).
     std::vector<std::uint8_t> hash_mask;
     std::vector<ForceRecord> forces;  ///< in the order the recorder saw them
+    friend bool operator==(const Recording&, const Recording&) = default;
 };
 
-/// Writes `recording` to `path`. \return IoError if the file cannot be written;
-/// InvalidArgument if a force list breaks the wire's rules.
+/// The bytes of `recording` as a file. \return InvalidArgument if a force list breaks the wire's
+/// rules.
+core::Result<std::vector<std::byte>> encode_recording(const Recording& recording);
+
+/// Writes `recording` to `path` (encode_recording). \return its errors; IoError if the file
+/// cannot be written.
 core::Result<void> save_recording(const std::filesystem::path& path, const Recording& recording);
 
-/// Reads a recording. \return IoError if unreadable; ParseError naming the file and the byte
-/// offset for a wrong magic or version, a truncated or corrupted file (checksum), or a force
-/// entry the wire codec refuses.
+/// Reads the bytes of a recording; `source` begins every message. \return ParseError naming the
+/// source and the byte offset for a wrong magic or version, a truncated or corrupted file
+/// (checksum), a force entry the wire codec refuses, or trailing bytes. The model blob is
+/// checked when it is used (decode_model, in replay). What it accepts encodes to a file that
+/// decodes to the same recording (fuzz/fuzz_recording.cpp checks that).
+core::Result<Recording> decode_recording(std::span<const std::byte> bytes,
+                                         const std::string& source);
+
+/// Reads a recording from `path` (decode_recording). \return IoError if unreadable;
+/// decode_recording's errors, naming the path.
 core::Result<Recording> load_recording(const std::filesystem::path& path);
 
 /// The forces of tick `tick` under the session's rule (see the file comment).

@@ -373,9 +373,10 @@ public:
     /// The same peers (not departed), by id, with their roles, names and the state of the link.
     [[nodiscard]] std::vector<PeerStatus> peer_status() const;
     [[nodiscard]] SessionStats stats() const;
-    /// Why this peer left on its own when the session refused its settings (empty otherwise):
-    /// a joiner learns the level and coupling only from the model (e.g. stream_coarsen in a fast
-    /// session, docs/session.md §5.2).
+    /// Why this peer left on its own when the session refused its settings, or it refused the
+    /// master's model or state blob (empty otherwise): a joiner learns the level and coupling
+    /// only from the model (e.g. stream_coarsen in a fast session, docs/session.md §5.2), and
+    /// decodes the blobs only once they are in (docs/protocol.md, Blob).
     [[nodiscard]] std::string refusal() const;
     /// A joiner whose connection to the master ended before it was welcomed: the reason the
     /// transport gave (net::DisconnectReason::Refused: the master, or its SecureTransport,
@@ -414,9 +415,33 @@ struct DecodedModel
     Coupling coupling = Coupling::Exact;
     std::optional<PointClearance> clearance;  ///< unset: the coupling's rule (and version 1)
 };
-/// Decodes a model blob (version 2, or version 1, which has no clearance byte). \return
-/// InvalidArgument for a malformed blob; the model's errors.
+/// Decodes a model blob (version 2, or version 1, which has no clearance byte). Every field is
+/// checked: the header's values, the length, finite values, a re-assembly period of at most
+/// 2^30 steps, and twin nodes whose rest positions equal their canonical node's, so that a
+/// version-2 blob it accepts encodes back to the same bytes (fuzz/fuzz_session_blobs.cpp).
+/// \return InvalidArgument for a malformed blob; the model's errors (settings out of range, a
+/// degenerate face).
 core::Result<DecodedModel> decode_model(std::span<const std::byte> blob);
+
+/// A session's state as the Welcome's state blob carries it: every node of u and v (twins and
+/// all), the tick and the simulation time.
+struct DecodedState
+{
+    std::uint64_t tick = 0;
+    double time = 0.0;
+    core::Field<double> u;
+    core::Field<double> v;
+};
+/// Encodes the state blob of a Welcome (DecodedState's fields).
+[[nodiscard]] std::vector<std::byte> encode_state(const core::TetraGrid& grid,
+                                                  const core::Field<double>& u,
+                                                  const core::Field<double>& v, std::uint64_t tick,
+                                                  double time);
+/// Decodes a state blob for `grid`. \return InvalidArgument for a wrong length or a non-finite
+/// value (a time, a displacement or a velocity); what it accepts encodes back to the same
+/// bytes.
+core::Result<DecodedState> decode_state(const core::TetraGrid& grid,
+                                        std::span<const std::byte> blob);
 
 /// The sim force of a wire force (face or point + radius).
 [[nodiscard]] sim::Force to_sim_force(const net::UserForce& force);
