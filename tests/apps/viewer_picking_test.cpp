@@ -231,6 +231,23 @@ TEST(ViewerScript, RejectsUnknownKeysNamingFileAndLine)
               "run.txt:3: unknown key `q` (expected p, f12, e, w, c, h, r, space or escape)");
 }
 
+// An export name is one word of the file's own bytes: a NUL in it would end the name the system
+// sees early (another file written), so control bytes are refused (found by fuzz_scripts);
+// other bytes, UTF-8 included, and any case of the extension are kept.
+TEST(ViewerScript, ExportNamesRefuseControlBytes)
+{
+    using namespace std::string_literals;
+    auto nul = parse_input_script("0.1 export a\0b.glb\n"s, "x.txt");
+    ASSERT_FALSE(nul.has_value());
+    EXPECT_EQ(nul.error().message,
+              "x.txt:1: export file name has a control byte (0x00) at character 2");
+    EXPECT_FALSE(parse_input_script("0.1 export a\x7f.obj\n"s).has_value());
+    EXPECT_FALSE(parse_input_script("0.1 export a\x01.ply\n"s).has_value());
+    auto ok = parse_input_script("0.1 export r\xc3\xa9sultat.GLB\n"s);
+    ASSERT_TRUE(ok.has_value()) << ok.error().message;
+    EXPECT_EQ(ok->at(0).file, "r\xc3\xa9sultat.GLB");
+}
+
 TEST(ViewerScript, FileErrorsNameTheFile)
 {
     const std::filesystem::path path = test::scratch_dir("ViewerScript") / "bad.txt";

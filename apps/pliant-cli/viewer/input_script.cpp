@@ -14,6 +14,12 @@ namespace pliant::viewer
 namespace
 {
 
+std::string hex_byte(unsigned char c)
+{
+    constexpr char digits[] = "0123456789abcdef";
+    return {digits[c >> 4], digits[c & 15]};
+}
+
 core::Error parse_error(std::string_view source, std::size_t line, const std::string& what)
 {
     return {core::ErrorCode::ParseError,
@@ -98,6 +104,17 @@ core::Result<std::vector<ScriptEvent>> parse_input_script(std::string_view text,
             e.kind = ScriptEvent::Kind::Export;
             if (!(in >> e.file))
                 return parse_error(source, number, "expected `TIME export FILE`");
+            // A NUL would end the name the system sees early (another file would be written),
+            // and other control bytes are no one's file name.
+            if (const auto bad =
+                    std::find_if(e.file.begin(), e.file.end(),
+                                 [](unsigned char c) { return c < 0x20 || c == 0x7f; });
+                bad != e.file.end())
+                return parse_error(source, number,
+                                   "export file name has a control byte (0x" +
+                                       hex_byte(static_cast<unsigned char>(*bad)) +
+                                       ") at character " +
+                                       std::to_string(bad - e.file.begin() + 1));
             std::string ext = std::filesystem::path(e.file).extension().string();
             std::transform(ext.begin(), ext.end(), ext.begin(),
                            [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
