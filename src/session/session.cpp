@@ -458,6 +458,7 @@ struct QuantisedLeaf
 struct HaloBuffer
 {
     std::uint64_t tick = 0;
+    net::PeerId sender;
     double time = 0.0;
     std::vector<net::NodeRange> ranges;  // the nodes, as received (checked against the grid)
     std::vector<double> u, v;            // in range order
@@ -1297,10 +1298,18 @@ struct Session::Impl
         }
         double* su = s.state_.u.padded().data();
         double* sv = s.state_.v.padded().data();
+        // The values of tick t were computed by the step from t - 1, under that tick's partition
+        // (at a re-partition, the old owners' halos of t are also the new owners' hand-over).
+        const PartitionEntry* part = partition_at(t == 0 ? 0 : t - 1);
         for (const HaloBuffer& h : halos)
         {
             if (h.tick != t)
                 continue;
+            if (!owns_every_node(part, h))
+            {
+                ++counters.halo_rejects;
+                continue;
+            }
             std::size_t k = 0;
             for (const net::NodeRange& r : h.ranges)
                 for (std::uint32_t j = 0; j < r.count; ++j, ++k)
@@ -1315,6 +1324,20 @@ struct Session::Impl
         // No whole-plane sync of the state: the halo nodes lie in the set the step integrates,
         // and a swapping step (keep_outside = false) copies every twin and ghost it reads first
         // (sim::detail::sync_live).
+    }
+
+    /// Whether the sender of `h` owns every node it carries under `part` (the partition of its
+    /// tick): an honest peer sends only its own nodes, so anything else (a peer's bug, a forged
+    /// halo) is dropped rather than written over nodes this peer or another one owns.
+    bool owns_every_node(const PartitionEntry* part, const HaloBuffer& h) const
+    {
+        if (part == nullptr)
+            return false;
+        for (const net::NodeRange& r : h.ranges)
+            for (std::uint32_t j = 0; j < r.count; ++j)
+                if (part->owners[s.graph_->leaf_of(core::NodeIndex{r.first + j})] != h.sender)
+                    return false;
+        return true;
     }
 
     bool may_step(std::uint64_t t) const
@@ -2776,6 +2799,7 @@ struct Session::Impl
             spare_halos.pop_back();
         }
         buf.tick = m.header.tick;
+        buf.sender = m.header.sender;
         buf.time = h.time;
         buf.ranges.assign(h.ranges.begin(), h.ranges.end());
         buf.u.assign(h.u.begin(), h.u.end());

@@ -610,6 +610,62 @@ TEST(SessionJoin, AStateBlobThatDoesNotDecodeIsRefused)
     EXPECT_FALSE((*joiner)->ready());
 }
 
+// An honest peer's halo carries only nodes it owns; one that carries a node of the receiver (a
+// peer's bug, or a forged datagram on a member's connection) is dropped and counted, not written
+// over the receiver's own state: the master's nodes stay what one process computes.
+TEST(SessionExact, AHaloCarryingNodesItsSenderDoesNotOwnIsDropped)
+{
+    Harness h;
+    SessionSettings master = settings_for(Coupling::Exact, "m");
+    master.session_id = 4242;
+    h.host(3, master);
+    h.join(net::Role::Participant, settings_for(Coupling::Exact, "p"));
+    ASSERT_TRUE(pump_until_partitioned(h, 2));
+    ASSERT_TRUE(h.pump_until([&] { return all_at(h, 40); }, 20000));
+    const Session& m = *h.peers[0];
+    const core::TetraGrid& g = m.model()->grid();
+    const auto mine = owned_by(m);
+    core::NodeIndex target{0};
+    for (const core::NodeIndex n : g.node_of_unique())
+        if (mine(n))
+            target = n;
+    ASSERT_TRUE(mine(target));
+
+    // The participant's only connection is the one to the master.
+    net::Transport& wire = *h.transports[1];
+    ASSERT_EQ(wire.peers().size(), 1U);
+    const std::uint64_t tick = m.tick() + 30;
+    net::Message forged;
+    forged.header.session = 4242;
+    forged.header.sender = h.peers[1]->id();
+    forged.header.sequence = 60000;
+    forged.header.tick = tick;
+    net::Halo halo;
+    halo.epoch = m.epoch();
+    halo.stage = 6;
+    halo.time = 1e-3 * static_cast<double>(tick);
+    halo.ranges = {{target.value, 1}};
+    halo.has_u = halo.has_v = true;
+    halo.u = {0.25};
+    halo.v = {-0.5};
+    forged.body = halo;
+    std::vector<std::byte> bytes(net::encoded_size(forged));
+    ASSERT_TRUE(net::encode(forged, bytes));
+    ASSERT_TRUE(wire.send(wire.peers()[0], net::Channel::State, bytes, net::Delivery::Reliable));
+
+    ASSERT_TRUE(h.pump_until([&] { return all_at(h, tick + 20); }, 20000));
+    EXPECT_EQ(m.stats().halo_rejects, 1U);
+    EXPECT_EQ(h.peers[1]->stats().halo_rejects, 0U);
+    // No forces: one process stays at rest, and so does every owned node.
+    for (const auto& p : h.peers)
+    {
+        const Diff du = compare(g, p->state().u, core::Field<double>(g), owned_by(*p));
+        const Diff dv = compare(g, p->state().v, core::Field<double>(g), owned_by(*p));
+        EXPECT_EQ(du.max_abs, 0.0) << "peer " << p->id().value;
+        EXPECT_EQ(dv.max_abs, 0.0) << "peer " << p->id().value;
+    }
+}
+
 // Points a quarter of the faces apart at level 5 with 4 members (pliant_bench_session's seats):
 // the grown shares walled one seed in (imbalance 0.27) and are rebalanced across their borders
 // into irregular shapes; the lockstep still equals one process on every owned node.

@@ -220,6 +220,9 @@ struct SessionStats
     // Receiver side: quantised LeafStates dropped (never displayed, never acknowledged).
     std::uint64_t baseline_misses = 0;  ///< the baseline named is not held (lost, late join)
     std::uint64_t state_rejects = 0;    ///< wrong node count, or values leaving the int32 range
+    /// Exact mode: Halo datagrams dropped because their sender did not own every node they carry
+    /// at their tick (an honest peer sends only its own nodes; docs/session.md §4.1).
+    std::uint64_t halo_rejects = 0;
     /// Leaf states that arrived before this joiner had the model: dropped, since the next
     /// stream period resends every leaf it has not acknowledged.
     std::uint64_t early_states_dropped = 0;
