@@ -67,6 +67,11 @@ constexpr double k_view_snap_s = 0.25;
 constexpr std::uint32_t k_successor_epoch_gap = 16;
 /// Partitions kept aside per peer that is not (yet) our master (failover, docs/session.md §6).
 constexpr std::size_t k_max_foreign_partitions = 8;
+/// How far a leaf state's epoch may run ahead of the newest partition held: a successor's gap
+/// and a few re-partitions in flight; further is no epoch any master will issue soon.
+constexpr std::uint32_t k_max_epoch_lead = 2 * k_successor_epoch_gap;
+/// How long a leaf state of an epoch ahead of the partitions held counts without its Partition.
+constexpr double k_provisional_s = 3.0;
 
 // --- little-endian byte writer/reader for the blobs -------------------------------------------
 
@@ -529,7 +534,12 @@ struct Session::Impl
     std::vector<std::uint64_t> leaf_tick;
     std::vector<double> leaf_time;
     std::vector<std::uint16_t> leaf_sender;
-    std::vector<double> leaf_sent_time;  // our leaves: simulated time last streamed
+    // Per leaf: until when its shown state, of an epoch ahead of every partition held, counts
+    // without its Partition (0: settled); and those leaves (settle_provisional_states).
+    std::vector<double> leaf_provisional_until;
+    std::vector<std::uint32_t> provisional_leaves;
+    std::vector<std::uint8_t> provisional_listed;  // per leaf: in provisional_leaves
+    std::vector<double> leaf_sent_time;            // our leaves: simulated time last streamed
 
     // Smooth display (docs/session.md §5.3): per leaf not ours, the displacements of the last
     // states received (as displayed, coarse leaves refined), oldest first; per sender, a
@@ -821,6 +831,9 @@ struct Session::Impl
         leaf_tick.assign(s.graph_->size(), 0);
         leaf_time.assign(s.graph_->size(), 0.0);
         leaf_sender.assign(s.graph_->size(), 0);
+        leaf_provisional_until.assign(s.graph_->size(), 0.0);
+        provisional_leaves.clear();
+        provisional_listed.assign(s.graph_->size(), 0);
         leaf_sent_time.assign(s.graph_->size(), -std::numeric_limits<double>::infinity());
         history.assign(s.graph_->size(), {});
         updated_flag.assign(s.graph_->size(), 0);
@@ -919,6 +932,13 @@ struct Session::Impl
             if (p.apply_tick <= tick && (best == nullptr || p.epoch > best->epoch))
                 best = &p;
         return best;
+    }
+    const PartitionEntry* with_epoch(std::uint32_t epoch) const
+    {
+        for (const PartitionEntry& p : partitions)
+            if (p.epoch == epoch)
+                return &p;
+        return nullptr;
     }
     const PartitionEntry* newest() const
     {
@@ -2940,6 +2960,28 @@ struct Session::Impl
         const auto nodes = s.graph_->nodes(l);
         if (ls.node_offset + ls.node_count() > nodes.size())
             return;
+        // Only the leaf's owner under the partition the state names may send it: the newest
+        // (epoch, tick) of a leaf wins, so a state from anyone else, or of an epoch no partition
+        // has, would hold the leaf's display (and in fast coupling its Dirichlet values) for
+        // good (docs/protocol.md, LeafState).
+        const PartitionEntry* named = with_epoch(ls.epoch);
+        if (named == nullptr)
+        {
+            const std::uint32_t last = newest_epoch();
+            if (ls.epoch <= last || ls.epoch - last > k_max_epoch_lead)
+            {
+                ++counters.unknown_epoch_states;  // superseded long ago, or not an epoch
+                return;
+            }
+            // Newer than any partition here: the new owner streamed before the Partition
+            // reached us (it is reliable, the states are not). Taken provisionally, and checked
+            // once the Partition comes (settle_provisional_states).
+        }
+        else if (named->owners[l] != net::PeerId{from})
+        {
+            ++counters.foreign_states;
+            return;
+        }
         const core::TetraGrid& g = s.model_->grid();
         const int kc = ls.coarsen;
         if (kc != 0)
@@ -2985,6 +3027,17 @@ struct Session::Impl
         leaf_time[l] = ls.time;
         leaf_sender[l] = from;
         leaf_coarsen[l] = static_cast<std::uint8_t>(kc);
+        if (named == nullptr)
+        {
+            if (provisional_listed[l] == 0)
+            {
+                provisional_listed[l] = 1;
+                provisional_leaves.push_back(static_cast<std::uint32_t>(l));
+            }
+            leaf_provisional_until[l] = last_now + k_provisional_s;
+        }
+        else
+            leaf_provisional_until[l] = 0.0;  // settled: dropped from the list when next seen
         if (updated_flag[l] == 0)
         {
             updated_flag[l] = 1;
@@ -3231,6 +3284,7 @@ struct Session::Impl
             case net::MessengerEvent::Kind::Received: handle(ev->peer, ev->message); break;
             }
         }
+        settle_provisional_states();
         if (display_dirty && s.model_)
         {
             s.model_->sync(s.display_u_);
@@ -3242,6 +3296,52 @@ struct Session::Impl
         for (const net::PeerHandle h : transport.peers())
             if (auto st = transport.stats(h))
                 last_stats[h] = *st;
+    }
+
+    /// The leaves shown from a state of an epoch ahead of every partition held: once that
+    /// epoch's Partition is here, a state from its leaf's owner stays and any other is undone;
+    /// one whose epoch never came (skipped, or k_provisional_s passed) is undone too. Undone:
+    /// the leaf's newest (epoch, tick) goes back to the newest partition's epoch and tick 0, so
+    /// the owner's next state replaces the values within a stream period; the forged state
+    /// cannot hold the leaf as the newest.
+    void settle_provisional_states()
+    {
+        if (provisional_leaves.empty())
+            return;
+        const std::uint32_t last = newest_epoch();
+        std::erase_if(provisional_leaves,
+                      [&](std::uint32_t l)
+                      {
+                          const bool keep = settle_leaf(l, last);
+                          provisional_listed[l] = keep ? 1 : 0;
+                          return !keep;
+                      });
+    }
+    /// One leaf of settle_provisional_states. \return whether it stays provisional.
+    bool settle_leaf(std::uint32_t l, std::uint32_t last)
+    {
+        if (leaf_provisional_until[l] == 0.0)
+            return false;  // a known epoch's state came since
+        const PartitionEntry* named = with_epoch(leaf_epoch[l]);
+        const bool owner_known = named != nullptr;
+        const bool from_owner = owner_known && named->owners[l] == net::PeerId{leaf_sender[l]};
+        if (from_owner)
+        {
+            leaf_provisional_until[l] = 0.0;
+            return false;
+        }
+        if (!owner_known && leaf_epoch[l] > last && last_now < leaf_provisional_until[l])
+            return true;  // its Partition is still on the way
+        ++(owner_known ? counters.foreign_states : counters.unknown_epoch_states);
+        leaf_epoch[l] = last;
+        leaf_tick[l] = 0;
+        leaf_provisional_until[l] = 0.0;
+        return false;
+    }
+    std::uint32_t newest_epoch() const
+    {
+        const PartitionEntry* p = newest();
+        return p != nullptr ? p->epoch : 0;
     }
 
     // --- smooth display (docs/session.md §5.3) -------------------------------------------------

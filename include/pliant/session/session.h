@@ -241,6 +241,13 @@ struct SessionStats
     /// over senders; 0 when nothing is interpolated).
     double view_delay_s = 0.0;
     std::uint64_t stale_states = 0;  ///< LeafStates older than the one shown (reordered, late)
+    /// LeafStates of a partition epoch this peer does not hold: superseded long ago, or more
+    /// than 32 epochs ahead of the newest partition held (dropped); or ahead, taken
+    /// provisionally, and undone when their epoch never came within 3 s.
+    std::uint64_t unknown_epoch_states = 0;
+    /// LeafStates from a peer that does not own the leaf under the partition they name: dropped
+    /// (or, taken provisionally before that partition arrived, undone then).
+    std::uint64_t foreign_states = 0;
     /// User forces acting in this peer's last step (every peer's grabs; fast coupling drops a
     /// departed peer's, exact coupling keeps them, docs/session.md §6).
     std::size_t active_forces = 0;
