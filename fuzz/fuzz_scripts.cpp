@@ -11,6 +11,7 @@
 
 #include <pliant/session/runner.h>
 
+#include "fuzz_support.h"
 #include "viewer/input_script.h"
 
 #include <algorithm>
@@ -18,8 +19,6 @@
 #include <cctype>
 #include <cmath>
 #include <cstdint>
-#include <cstdio>
-#include <cstdlib>
 #include <string>
 #include <string_view>
 
@@ -30,14 +29,7 @@ namespace
 
 using namespace pliant;
 
-void require(bool ok, const char* what)
-{
-    if (!ok)
-    {
-        std::fprintf(stderr, "fuzz_scripts: %s\n", what);
-        std::abort();
-    }
-}
+constexpr const char* k_target = "fuzz_scripts";
 
 bool finite3(const std::array<double, 3>& v)
 {
@@ -46,7 +38,8 @@ bool finite3(const std::array<double, 3>& v)
 
 void check_refusal(const core::Error& e)
 {
-    require(e.message.rfind("fuzz:", 0) == 0, "a refusal that does not name the source");
+    fuzz::require(e.message.rfind("fuzz:", 0) == 0, k_target,
+                  "a refusal that does not name the source");
 }
 
 void session_script(std::string_view text)
@@ -57,20 +50,22 @@ void session_script(std::string_view text)
     double last = 0.0;
     for (const session::ScriptEvent& e : *events)
     {
-        require(std::isfinite(e.time) && e.time >= last, "times not finite and in order");
+        fuzz::require(std::isfinite(e.time) && e.time >= last, k_target,
+                      "times not finite and in order");
         last = e.time;
-        require(e.line >= 1, "an event without its line");
+        fuzz::require(e.line >= 1, k_target, "an event without its line");
         if (e.kind == session::ScriptEvent::Kind::Leave)
             continue;
         const net::Target& t = e.force.target;
         if (t.kind == net::TargetKind::Face)
-            require(t.face < net::k_max_face_index, "a face beyond the wire's limit");
+            fuzz::require(t.face < net::k_max_face_index, k_target,
+                          "a face beyond the wire's limit");
         else
-            require(finite3(t.position), "a non-finite point");
-        require(std::isfinite(t.radius) && t.radius >= 0.0, "a bad radius");
+            fuzz::require(finite3(t.position), k_target, "a non-finite point");
+        fuzz::require(std::isfinite(t.radius) && t.radius >= 0.0, k_target, "a bad radius");
         if (e.kind == session::ScriptEvent::Kind::Grab)
-            require(finite3(e.force.force) && std::isfinite(e.duration) && e.duration > 0.0,
-                    "a grab with a bad force or duration");
+            fuzz::require(finite3(e.force.force) && std::isfinite(e.duration) && e.duration > 0.0,
+                          k_target, "a grab with a bad force or duration");
     }
     for (const auto role : {session::SessionRole::Participant, session::SessionRole::Viewer})
         if (auto ok = session::check_script(*events, 1024, role, "fuzz"); !ok)
@@ -84,27 +79,27 @@ void viewer_script(std::string_view text)
         return check_refusal(events.error());
     for (const viewer::ScriptEvent& e : *events)
     {
-        require(std::isfinite(e.time) && e.time >= 0.0, "a bad time");
-        require(std::isfinite(e.duration) && e.duration >= 0.0, "a bad duration");
-        require(std::isfinite(e.x0) && std::isfinite(e.y0) && std::isfinite(e.x1) &&
-                    std::isfinite(e.y1) && std::isfinite(e.clicks),
-                "a non-finite coordinate");
+        fuzz::require(std::isfinite(e.time) && e.time >= 0.0, k_target, "a bad time");
+        fuzz::require(std::isfinite(e.duration) && e.duration >= 0.0, k_target, "a bad duration");
+        fuzz::require(std::isfinite(e.x0) && std::isfinite(e.y0) && std::isfinite(e.x1) &&
+                          std::isfinite(e.y1) && std::isfinite(e.clicks),
+                      k_target, "a non-finite coordinate");
         if (e.kind == viewer::ScriptEvent::Kind::Key)
-            require(std::find(viewer::k_script_keys.begin(), viewer::k_script_keys.end(), e.key) !=
-                        viewer::k_script_keys.end(),
-                    "an unknown key");
+            fuzz::require(std::find(viewer::k_script_keys.begin(), viewer::k_script_keys.end(),
+                                    e.key) != viewer::k_script_keys.end(),
+                          k_target, "an unknown key");
         if (e.kind == viewer::ScriptEvent::Kind::Export)
         {
             const std::size_t dot = e.file.rfind('.');
-            require(dot != std::string::npos, "an export without an extension");
+            fuzz::require(dot != std::string::npos, k_target, "an export without an extension");
             std::string ext = e.file.substr(dot);
             for (char& c : ext)
                 c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-            require(ext == ".obj" || ext == ".ply" || ext == ".gltf" || ext == ".glb",
-                    "an export format the viewer cannot write");
-            require(std::none_of(e.file.begin(), e.file.end(),
-                                 [](unsigned char c) { return c < 0x20 || c == 0x7f; }),
-                    "an export file name with a control byte");
+            fuzz::require(ext == ".obj" || ext == ".ply" || ext == ".gltf" || ext == ".glb",
+                          k_target, "an export format the viewer cannot write");
+            fuzz::require(std::none_of(e.file.begin(), e.file.end(),
+                                       [](unsigned char c) { return c < 0x20 || c == 0x7f; }),
+                          k_target, "an export file name with a control byte");
         }
     }
 }

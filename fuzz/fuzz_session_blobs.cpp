@@ -16,13 +16,12 @@
 #include <pliant/session/session.h>
 #include <pliant/sim/membrane.h>
 
+#include "fuzz_support.h"
 #include "grid_shapes.h"
 
 #include <array>
 #include <cmath>
 #include <cstdint>
-#include <cstdio>
-#include <cstdlib>
 #include <cstring>
 #include <optional>
 #include <span>
@@ -35,14 +34,7 @@ namespace
 
 using namespace pliant;
 
-void require(bool ok, const char* what)
-{
-    if (!ok)
-    {
-        std::fprintf(stderr, "fuzz_session_blobs: %s\n", what);
-        std::abort();
-    }
-}
+constexpr const char* k_target = "fuzz_session_blobs";
 
 bool same_bytes(std::span<const std::byte> a, std::span<const std::byte> b)
 {
@@ -54,7 +46,7 @@ void check_model(std::span<const std::byte> blob)
     auto decoded = session::decode_model(blob);
     if (!decoded)
     {
-        require(!decoded.error().message.empty(), "a refusal without a message");
+        fuzz::require(!decoded.error().message.empty(), k_target, "a refusal without a message");
         return;
     }
     const auto again = session::encode_model(decoded->model, decoded->coupling, decoded->clearance);
@@ -62,14 +54,16 @@ void check_model(std::span<const std::byte> blob)
     {
         // Version 1: the encoder writes version 2; that must decode to the same model.
         auto second = session::decode_model(again);
-        require(second.has_value(), "a version-1 model re-encodes to a refused blob");
-        require(
+        fuzz::require(second.has_value(), k_target,
+                      "a version-1 model re-encodes to a refused blob");
+        fuzz::require(
             same_bytes(session::encode_model(second->model, second->coupling, second->clearance),
                        again),
-            "a version-1 model does not round-trip");
+            k_target, "a version-1 model does not round-trip");
         return;
     }
-    require(same_bytes(again, blob), "an accepted model blob encodes to other bytes");
+    fuzz::require(same_bytes(again, blob), k_target,
+                  "an accepted model blob encodes to other bytes");
 }
 
 const core::TetraGrid& grid_of(int level)
@@ -84,14 +78,15 @@ void check_state(const core::TetraGrid& grid, std::span<const std::byte> blob)
     auto decoded = session::decode_state(grid, blob);
     if (!decoded)
     {
-        require(!decoded.error().message.empty(), "a refusal without a message");
+        fuzz::require(!decoded.error().message.empty(), k_target, "a refusal without a message");
         return;
     }
-    require(std::isfinite(decoded->time), "an accepted state has a non-finite time");
-    require(same_bytes(
-                session::encode_state(grid, decoded->u, decoded->v, decoded->tick, decoded->time),
-                blob),
-            "an accepted state blob encodes to other bytes");
+    fuzz::require(std::isfinite(decoded->time), k_target,
+                  "an accepted state has a non-finite time");
+    fuzz::require(same_bytes(session::encode_state(grid, decoded->u, decoded->v, decoded->tick,
+                                                   decoded->time),
+                             blob),
+                  k_target, "an accepted state blob encodes to other bytes");
 }
 
 /// Spheres of levels 1 and 2 (radius 0.5 and 1.5, adaptive and fixed steps), each coupling and
@@ -170,7 +165,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     {
         const auto& samples = model_samples();
         std::vector<std::byte> blob = samples[data[1] % samples.size()];
-        require(session::decode_model(blob).has_value(), "a model sample does not decode");
+        fuzz::require(session::decode_model(blob).has_value(), k_target,
+                      "a model sample does not decode");
         check_model(blob);
         corrupt(blob, data);
         check_model(blob);

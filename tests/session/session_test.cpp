@@ -610,17 +610,33 @@ TEST(SessionJoin, AStateBlobThatDoesNotDecodeIsRefused)
     EXPECT_FALSE((*joiner)->ready());
 }
 
+/// An exact session at level 3 on `h`: a master (session id `session`) and a participant,
+/// partitioned. \return whether that happened within its bound.
+bool master_and_participant(Harness& h, std::uint32_t session)
+{
+    SessionSettings master = settings_for(Coupling::Exact, "m");
+    master.session_id = session;
+    h.host(3, master);
+    h.join(net::Role::Participant, settings_for(Coupling::Exact, "p"));
+    return pump_until_partitioned(h, 2);
+}
+
+/// Puts `m` on `wire` to `to`, on the state channel, as it is: what a peer's bug or a forger on a
+/// member's connection sends. \return whether it went out.
+bool send_raw(net::Transport& wire, net::PeerHandle to, const net::Message& m,
+              net::Delivery delivery)
+{
+    std::vector<std::byte> bytes(net::encoded_size(m));
+    return net::encode(m, bytes) && wire.send(to, net::Channel::State, bytes, delivery);
+}
+
 // An honest peer's halo carries only nodes it owns; one that carries a node of the receiver (a
 // peer's bug, or a forged datagram on a member's connection) is dropped and counted, not written
 // over the receiver's own state: the master's nodes stay what one process computes.
 TEST(SessionExact, AHaloCarryingNodesItsSenderDoesNotOwnIsDropped)
 {
     Harness h;
-    SessionSettings master = settings_for(Coupling::Exact, "m");
-    master.session_id = 4242;
-    h.host(3, master);
-    h.join(net::Role::Participant, settings_for(Coupling::Exact, "p"));
-    ASSERT_TRUE(pump_until_partitioned(h, 2));
+    ASSERT_TRUE(master_and_participant(h, 4242));
     ASSERT_TRUE(h.pump_until([&] { return all_at(h, 40); }, 20000));
     const Session& m = *h.peers[0];
     const core::TetraGrid& g = m.model()->grid();
@@ -649,9 +665,7 @@ TEST(SessionExact, AHaloCarryingNodesItsSenderDoesNotOwnIsDropped)
     halo.u = {0.25};
     halo.v = {-0.5};
     forged.body = halo;
-    std::vector<std::byte> bytes(net::encoded_size(forged));
-    ASSERT_TRUE(net::encode(forged, bytes));
-    ASSERT_TRUE(wire.send(wire.peers()[0], net::Channel::State, bytes, net::Delivery::Reliable));
+    ASSERT_TRUE(send_raw(wire, wire.peers()[0], forged, net::Delivery::Reliable));
 
     ASSERT_TRUE(h.pump_until([&] { return all_at(h, tick + 20); }, 20000));
     EXPECT_EQ(m.stats().halo_rejects, 1U);
@@ -675,11 +689,7 @@ TEST(SessionExact, AHaloCarryingNodesItsSenderDoesNotOwnIsDropped)
 TEST(SessionExact, ALeafStateFromAPeerThatDoesNotOwnTheLeafIsDropped)
 {
     Harness h;
-    SessionSettings master = settings_for(Coupling::Exact, "m");
-    master.session_id = 4243;
-    h.host(3, master);
-    h.join(net::Role::Participant, settings_for(Coupling::Exact, "p"));
-    ASSERT_TRUE(pump_until_partitioned(h, 2));
+    ASSERT_TRUE(master_and_participant(h, 4243));
     h.join(net::Role::Viewer, settings_for(Coupling::Exact, "v"));
     ASSERT_TRUE(h.pump_until([&] { return h.peers[2]->ready() && all_at(h, 60); }, 20000));
     const Session& m = *h.peers[0];
@@ -710,9 +720,7 @@ TEST(SessionExact, ALeafStateFromAPeerThatDoesNotOwnTheLeafIsDropped)
         ls.u.assign(graph.nodes(leaf).size(), 0.125);
         ls.v.assign(graph.nodes(leaf).size(), -0.25);
         forged.body = ls;
-        std::vector<std::byte> bytes(net::encoded_size(forged));
-        ASSERT_TRUE(net::encode(forged, bytes));
-        ASSERT_TRUE(wire.send(*to_viewer, net::Channel::State, bytes, net::Delivery::Unsequenced));
+        ASSERT_TRUE(send_raw(wire, *to_viewer, forged, net::Delivery::Unsequenced));
     };
     forge(m.epoch());     // not the owner in this partition: dropped
     forge(0xFFFF'FFF0U);  // no epoch a master will issue: dropped
