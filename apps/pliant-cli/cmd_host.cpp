@@ -11,6 +11,7 @@
 #include <pliant/sim/membrane.h>
 #include <pliant/sim/rkf45.h>
 
+#include <spdlog/fmt/fmt.h>
 #include <spdlog/spdlog.h>
 
 #include "cli_common.h"
@@ -50,6 +51,7 @@ struct HostOptions
     double density = 1.0;     ///< rho [kg/m^2]
     double damping = 0.5;     ///< beta [1/s]
     double foundation = 1.0;  ///< k_f [1/s^2]
+    std::optional<double> max_force;  ///< N; unset: sim::default_max_force; 0: no limit
     std::string name = "master";
     std::string passphrase;
     std::string key_file;
@@ -150,6 +152,7 @@ int run_host(const HostOptions& opt)
         settings.point_clearance = session::PointClearance::AsGrown;
     else if (opt.clearance == "inside")
         settings.point_clearance = session::PointClearance::Inside;
+    settings.max_force = opt.max_force;
     settings.name = opt.name;
     settings.listen_port = bound->port;
     settings.max_ticks = opt.ticks;
@@ -158,10 +161,11 @@ int run_host(const HostOptions& opt)
                                     start ? &*start : nullptr);
     if (!s)
         return report(s.error());
-    spdlog::info("hosting level {} ({} mode, point clearance {}) on port {}", grid.level(),
-                 opt.mode,
+    const double limit = (*s)->model()->settings().max_force;
+    spdlog::info("hosting level {} ({} mode, point clearance {}, force limit {}) on port {}",
+                 grid.level(), opt.mode,
                  (*s)->point_clearance() == session::PointClearance::Inside ? "inside" : "grown",
-                 bound->port);
+                 limit > 0.0 ? fmt::format("{:.3g} N", limit) : std::string("none"), bound->port);
     std::printf("hosting on port %u\n", static_cast<unsigned>(bound->port));
     std::fflush(stdout);
     if (!opt.record.empty())
@@ -281,6 +285,12 @@ void add_host_command(CLI::App& app, const GlobalOptions& global)
                     "Elastic foundation k_f [1/s^2]: pulls the surface back to rest")
         ->check(CLI::NonNegativeNumber)
         ->capture_default_str();
+    cmd->add_option("--max-force", opt->max_force,
+                    "Largest force [N] any peer's grab applies; a longer one acts scaled down "
+                    "to it. Default: the force that holds a patch of a tenth of the object's "
+                    "radius R a diameter from rest, (rho pi (R/10)^2 k_f + 2 pi T) 2R; 0: no "
+                    "limit")
+        ->check(CLI::NonNegativeNumber);
     cmd->add_option("--name", opt->name, "Peer name (printable ASCII, 1..32)")
         ->capture_default_str();
     add_secret_options(cmd, opt->passphrase, opt->key_file);

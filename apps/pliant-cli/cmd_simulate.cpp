@@ -279,11 +279,12 @@ core::Result<Scenario> parse_scenario(const std::filesystem::path& path)
         if (!node->is_table())
             return scenario_error(path, node->source(), "material", "must be a table");
         const Reader r(path, *node->as_table(), "material.");
-        PLIANT_TRY(r.unknown_keys({"T", "rho", "beta", "k_f"}));
+        PLIANT_TRY(r.unknown_keys({"T", "rho", "beta", "k_f", "max_force"}));
         PLIANT_TRY(r.number("T", s.T, 1e-12, 1e12));
         PLIANT_TRY(r.number("rho", s.rho, 1e-12, 1e12));
         PLIANT_TRY(r.number("beta", s.beta, 0.0, 1e12));
         PLIANT_TRY(r.number("k_f", s.k_f, 0.0, 1e12));
+        PLIANT_TRY(r.number("max_force", s.max_force, 0.0, 1e300));
         r.record_lines(sc.lines);
     }
     if (const toml::node* node = root.get("integrator"))
@@ -654,7 +655,11 @@ public:
         json_["resume"] = opt.resume.empty() ? nlohmann::ordered_json(nullptr)
                                              : nlohmann::ordered_json(opt.resume.string());
         json_["format"] = opt.format;
-        json_["material"] = {{"T", m.T}, {"rho", m.rho}, {"beta", m.beta}, {"k_f", m.k_f}};
+        json_["material"] = {{"T", m.T},
+                             {"rho", m.rho},
+                             {"beta", m.beta},
+                             {"k_f", m.k_f},
+                             {"max_force", m.max_force}};
         nlohmann::ordered_json integrator;
         integrator["precision"] = std::string(sim::to_string(m.precision));
         integrator["fixed_step"] = m.fixed_step;

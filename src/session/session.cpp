@@ -29,9 +29,10 @@ namespace
 {
 
 constexpr std::uint32_t k_model_magic = 0x4D534C50;  // "PLSM"
-/// Version 2 adds the point clearance byte after the coupling; version 1 blobs (recordings
-/// made before it) still decode, with the coupling's rule.
-constexpr std::uint8_t k_model_version = 2;
+/// Version 2 adds the point clearance byte after the coupling; version 3 the force limit after
+/// the step settings. Older blobs (recordings made before them) still decode: version 1 with
+/// the coupling's rule, versions 1 and 2 with no force limit (as they were made).
+constexpr std::uint8_t k_model_version = 3;
 constexpr double k_leave_timeout_s = 5.0;
 /// The most wall time one advance() call spends stepping in exact coupling before it returns to
 /// let the caller poll() (s). ENet moves at most its window (64 KiB) of reliable data per
@@ -179,8 +180,9 @@ std::vector<std::byte> encode_model(const sim::MembraneModel& model, Coupling co
     w.u8(clearance_byte(clearance));
     w.u8(s.fixed_step ? 1 : 0);
     w.u32(static_cast<std::uint32_t>(std::max(0, s.reassemble_every)));
-    for (const double v : {s.T, s.rho, s.beta, s.k_f, s.rtol, s.atol, s.dt_min, s.dt_max,
-                           s.dt_initial, s.safety, s.max_growth, s.min_shrink, s.fixed_dt})
+    for (const double v :
+         {s.T, s.rho, s.beta, s.k_f, s.rtol, s.atol, s.dt_min, s.dt_max, s.dt_initial, s.safety,
+          s.max_growth, s.min_shrink, s.fixed_dt, s.max_force})
         w.f64(v);
     for (int y = 0; y < g.ny(); ++y)
         for (int x = 0; x < g.nx(); ++x)
@@ -214,8 +216,11 @@ core::Result<DecodedModel> decode_model(std::span<const std::byte> blob)
     for (double* v : {&s.T, &s.rho, &s.beta, &s.k_f, &s.rtol, &s.atol, &s.dt_min, &s.dt_max,
                       &s.dt_initial, &s.safety, &s.max_growth, &s.min_shrink, &s.fixed_dt})
         *v = r.f64();
+    if (version >= 3)
+        s.max_force = r.f64();
     const core::TetraGrid g = core::TetraGrid::create(level).value();
-    const std::size_t expect = (version >= 2 ? 13 : 12) + 13 * 8 + g.node_count() * 24;
+    const std::size_t expect =
+        (version >= 2 ? 13 : 12) + (version >= 3 ? 14 : 13) * 8 + g.node_count() * 24;
     if (!r.ok || blob.size() != expect)
         return core::fail(core::ErrorCode::InvalidArgument, "model blob: bad length or value");
     core::Vec3Field<double> rest{core::Field<double>(g), core::Field<double>(g),
@@ -359,6 +364,9 @@ core::Result<void> check_settings(const SessionSettings& s, const char* who)
     if (s.halo_rings < 3)
         return bad("exact coupling needs at least 3 halo rings, not " +
                    std::to_string(s.halo_rings));
+    if (s.max_force && (!(*s.max_force >= 0.0) || !std::isfinite(*s.max_force)))
+        return bad("the force limit must be finite and >= 0 N (0: no limit), not " +
+                   num(*s.max_force));
     return {};
 }
 
@@ -434,6 +442,7 @@ struct RemotePeer
     bool has_heartbeat = false;
     std::uint64_t heartbeat = 0;  ///< newest Heartbeat tick (exact mode)
     std::vector<ForceEntry> forces;
+    bool warned_force_limit = false;  ///< a force of it above the session's limit was logged
     std::vector<net::Target> points;
     bool ready = false;  ///< sent its points of interest (participants): may be partitioned
     /// Sent Ready: it holds the model and can show leaf states, so they are streamed to it. A
@@ -670,6 +679,7 @@ struct Session::Impl
     double leave_started = 0.0;
 
     SessionStats counters;
+    bool warned_own_force_limit = false;  ///< count_limited's flag for this peer's own forces
 
     Impl(Session& session, net::Transport& t, const SessionSettings& set)
         : s(session), transport(t), messenger(t), settings(set)
@@ -1184,6 +1194,28 @@ struct Session::Impl
         return out;
     }
 
+    /// Counts the forces of `list` above the session's limit (they act scaled down to it) and
+    /// logs the first of each peer's (`warned`), with the magnitude asked for and the limit.
+    void count_limited(std::span<const net::UserForce> list, std::uint16_t from, bool& warned)
+    {
+        if (s.model_ == nullptr)
+            return;
+        const double limit = s.model_->settings().max_force;
+        for (const net::UserForce& f : list)
+        {
+            const double magnitude = std::hypot(f.force[0], f.force[1], f.force[2]);
+            if (!(limit > 0.0) || !(magnitude > limit))
+                continue;
+            ++counters.limited_forces;
+            if (!warned)
+                spdlog::warn(
+                    "session: peer {} applies a force of {:.3g} N, above the session's "
+                    "limit of {:.3g} N: it acts scaled down to the limit",
+                    from, magnitude, limit);
+            warned = true;
+        }
+    }
+
     /// Sends the queued force lists; none applies before `earliest` (exact mode: the tick after
     /// the one being published, so every peer has it before it steps that tick).
     void flush_forces(std::uint64_t earliest)
@@ -1193,6 +1225,7 @@ struct Session::Impl
             e.apply_tick = std::max(e.apply_tick, earliest);
             net::Force msg;
             msg.forces = e.forces;
+            count_limited(e.forces, s.id_.value, warned_own_force_limit);
             send_all(make(msg, e.apply_tick));
             if (recording)
                 force_log.push_back(ForceRecord{s.id_.value, e.apply_tick, e.forces});
@@ -3217,6 +3250,7 @@ struct Session::Impl
             return;
         case net::MessageType::Force:
             p.forces.push_back(ForceEntry{m.header.tick, std::get<net::Force>(m.body).forces});
+            count_limited(p.forces.back().forces, from, p.warned_force_limit);
             if (recording)
                 force_log.push_back(
                     ForceRecord{from, m.header.tick, std::get<net::Force>(m.body).forces});
@@ -3593,6 +3627,7 @@ core::Result<std::unique_ptr<Session>> Session::host(net::Transport& transport,
     // Every peer steps in double (docs/physics.md §9): the model blob carries no precision, and
     // exact coupling equals one process's double steps bit for bit.
     m.precision = sim::Precision::Double;
+    m.max_force = settings.max_force ? *settings.max_force : sim::default_max_force(grid, rest, m);
     if (settings.coupling == Coupling::Exact)
     {
         // Lockstep needs a common fixed step, and re-assembly would need the whole state.

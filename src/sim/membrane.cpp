@@ -73,6 +73,10 @@ core::Result<void> validate(const MembraneSettings& s)
         return r;
     if (auto r = check(s.k_f >= 0.0 && std::isfinite(s.k_f), "k_f (1/s^2) must be >= 0"); !r)
         return r;
+    if (auto r = check(s.max_force >= 0.0 && std::isfinite(s.max_force),
+                       "max_force (N) must be >= 0 (0: no limit)");
+        !r)
+        return r;
     if (auto r = check(s.reassemble_every >= 0, "reassemble_every must be >= 0"); !r)
         return r;
     if (auto r = check(s.rtol >= 0.0 && s.rtol < 1.0, "rtol must be in [0, 1)"); !r)

@@ -10,6 +10,7 @@
 #include <array>
 #include <cmath>
 #include <complex>
+#include <numbers>
 #include <string>
 
 namespace pliant::sim
@@ -351,8 +352,10 @@ void write_forces(const MembraneModel& model, AccelTarget to, std::span<const Fo
     clear_written(to);
     const core::TetraGrid& g = model.grid();
     const int w2 = 2 * g.w();
-    for (const Force& f : forces)
+    const double max_force = model.settings().max_force;
+    for (Force f : forces)
     {
+        f.vector = limit_force(f.vector, max_force);
         if (f.face >= 0)
         {
             PLIANT_ASSERT(static_cast<std::size_t>(f.face) < g.face_count(),
@@ -465,6 +468,35 @@ bool stable_at(double h, double omega_max, double beta, double growth) noexcept
 }
 
 }  // namespace
+
+core::Vec3 limit_force(core::Vec3 force, double max_force) noexcept
+{
+    // hypot: the magnitude of a force near the double range's end does not overflow to inf.
+    const double magnitude = std::hypot(force.x, force.y, force.z);
+    if (!(max_force > 0.0) || !(magnitude > max_force))
+        return force;
+    return force * (max_force / magnitude);
+}
+
+double default_max_force(const core::TetraGrid& g, const core::Vec3Field<double>& rest,
+                         const MembraneSettings& s) noexcept
+{
+    core::Vec3 lo{}, hi{};
+    bool first = true;
+    for (const core::NodeIndex n : g.node_of_unique())
+    {
+        const core::GridCoord c = g.coord(n);
+        const core::Vec3 p{rest[0].at(c.x, c.y), rest[1].at(c.x, c.y), rest[2].at(c.x, c.y)};
+        lo = first ? p : core::Vec3{std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+        hi = first ? p : core::Vec3{std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+        first = false;
+    }
+    const double radius = 0.5 * core::norm(hi - lo);
+    const double patch = 0.1 * radius;
+    const double stiffness =
+        s.rho * std::numbers::pi * patch * patch * s.k_f + 2.0 * std::numbers::pi * s.T;
+    return stiffness * 2.0 * radius;
+}
 
 double stable_fixed_step(const MembraneModel& model) noexcept
 {

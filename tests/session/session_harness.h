@@ -79,14 +79,17 @@ inline net::UserForce turning_drag(int k, double t)
 }
 
 /// The obvious single-process run: forces of tick t are each sender's newest list with
-/// from <= t, concatenated by increasing sender id; from rest, or from `start`.
+/// from <= t, concatenated by increasing sender id; from rest, or from `start`; forces longer
+/// than `max_force` (N, 0: no limit) act at that length.
 inline sim::MembraneState reference_run(int level, std::uint64_t ticks,
                                         const std::vector<Scheduled>& schedule,
-                                        const sim::MembraneState* start = nullptr)
+                                        const sim::MembraneState* start = nullptr,
+                                        double max_force = 0.0)
 {
     const core::TetraGrid grid = core::TetraGrid::create(level).value();
-    auto model =
-        sim::MembraneModel::create(grid, scenes::sphere_grid(grid, 1.0), material()).value();
+    sim::MembraneSettings m = material();
+    m.max_force = max_force;
+    auto model = sim::MembraneModel::create(grid, scenes::sphere_grid(grid, 1.0), m).value();
     sim::MembraneState state = start != nullptr ? *start : sim::MembraneState::at_rest(grid);
     sim::Rkf45Workspace ws(model, 1);
     for (std::uint64_t t = 0; t < ticks; ++t)

@@ -445,7 +445,10 @@ TEST(SessionModelBlob, CarriesThePointClearanceAndReadsVersionOne)
     }
     auto blob = encode_model(*model, Coupling::Exact, PointClearance::AsGrown);
     constexpr std::size_t k_clearance_at = 7;  // magic (4), version, level, coupling
-    ASSERT_EQ(std::to_integer<int>(blob[4]), 2);
+    ASSERT_EQ(std::to_integer<int>(blob[4]), 3);
+    // Back to version 2: without the force limit (the 14th setting).
+    blob.erase(blob.begin() + 13 + 13 * 8, blob.begin() + 13 + 14 * 8);
+    blob[4] = std::byte{2};
     ASSERT_EQ(std::to_integer<int>(blob[k_clearance_at]), 1);
     auto bad = blob;
     bad[k_clearance_at] = std::byte{3};
@@ -459,8 +462,40 @@ TEST(SessionModelBlob, CarriesThePointClearanceAndReadsVersionOne)
     EXPECT_FALSE(old->clearance.has_value());
     EXPECT_EQ(old->model.rest_positions()[0].at(3, 2), model->rest_positions()[0].at(3, 2));
     EXPECT_FALSE(decode_model(std::span(v1).first(v1.size() - 1)));  // exact lengths
-    v1[4] = std::byte{3};
+    v1[4] = std::byte{4};
     EXPECT_FALSE(decode_model(v1));  // a version from the future
+}
+
+// Version 3 carries the session's force limit; versions 1 and 2 read as no limit, as they were
+// made; a negative limit is refused.
+TEST(SessionModelBlob, CarriesTheForceLimit)
+{
+    const core::TetraGrid g = core::TetraGrid::create(3).value();
+    sim::MembraneSettings m = material();
+    m.max_force = 2.75;
+    const auto model = sim::MembraneModel::create(g, scenes::sphere_grid(g, 1.0), m);
+    ASSERT_TRUE(model);
+    auto blob = encode_model(*model, Coupling::Exact);
+    const auto back = decode_model(blob);
+    ASSERT_TRUE(back) << back.error().message;
+    EXPECT_EQ(back->model.settings().max_force, 2.75);
+    constexpr std::size_t k_limit_at = 13 + 13 * 8;  // header (13), 13 settings
+    double limit = 0.0;
+    std::memcpy(&limit, blob.data() + k_limit_at, sizeof limit);  // little-endian hosts
+    ASSERT_EQ(limit, 2.75);
+    auto negative = blob;
+    const double minus = -1.0;
+    std::memcpy(negative.data() + k_limit_at, &minus, sizeof minus);
+    const auto refused = decode_model(negative);
+    ASSERT_FALSE(refused);
+    EXPECT_NE(refused.error().message.find("max_force"), std::string::npos)
+        << refused.error().message;
+    auto v2 = blob;
+    v2.erase(v2.begin() + k_limit_at, v2.begin() + k_limit_at + 8);
+    v2[4] = std::byte{2};
+    const auto old = decode_model(v2);
+    ASSERT_TRUE(old) << old.error().message;
+    EXPECT_EQ(old->model.settings().max_force, 0.0);
 }
 
 // Every field of a model blob is checked: a twin whose rest position is not its canonical
@@ -478,7 +513,7 @@ TEST(SessionModelBlob, RefusesTwinsThatDifferAndAHugeReassemblyPeriod)
     EXPECT_EQ(encode_model(back->model, back->coupling, back->clearance), blob);
 
     constexpr std::size_t k_reassemble_at = 9;  // magic, version, level, coupling, clearance, fixed
-    constexpr std::size_t k_positions_at = k_reassemble_at + 4 + 13 * 8;
+    constexpr std::size_t k_positions_at = k_reassemble_at + 4 + 14 * 8;  // 14 settings
     auto huge = blob;
     huge[k_reassemble_at + 3] = std::byte{0x41};  // 0x41000000 > 2^30
     const auto refused = decode_model(huge);
@@ -934,6 +969,40 @@ TEST(SessionForces, ABadForceIsLeftOutAlone)
     EXPECT_EQ(out[0].face, 7);
     EXPECT_EQ(out[1].face, -1);
     EXPECT_EQ(out[2].face, static_cast<std::int64_t>(faces) - 1);
+}
+
+// A force above the session's limit (a buggy or hostile peer's 1e200 N pull) acts scaled down to
+// the limit on every peer: the master's choice travels in the model blob, so both members' owned
+// nodes equal, bit for bit, one process that applies the limit, and the state stays bounded
+// (without the limit one step throws the face ~1e197 m). Both count the force.
+TEST(SessionForces, AForceAboveTheSessionsLimitActsAtTheLimitEverywhere)
+{
+    Harness h;
+    SessionSettings master = settings_for(Coupling::Exact, "m");
+    master.max_force = 0.5;
+    h.host(3, master);
+    h.join(net::Role::Participant, settings_for(Coupling::Exact, "p"));
+    ASSERT_TRUE(pump_until_partitioned(h, 2));
+    EXPECT_EQ(h.peers[1]->model()->settings().max_force, 0.5);
+    const std::vector<Scheduled> sched{{1, 60, {face_pull(10, 1e200)}}};
+    apply_schedule(h, sched);
+    ASSERT_TRUE(h.pump_until([&] { return all_at(h, k_ticks, 2); }, 40000));
+    const sim::MembraneState ref = reference_run(3, k_ticks, sched, nullptr, 0.5);
+    const core::TetraGrid& g = h.peers[0]->model()->grid();
+    for (std::size_t k = 0; k < 2; ++k)
+    {
+        const Session& p = *h.peers[k];
+        const Diff du = compare(g, p.state().u, ref.u, owned_by(p));
+        const Diff dv = compare(g, p.state().v, ref.v, owned_by(p));
+        EXPECT_EQ(du.max_abs, 0.0) << "peer " << k;
+        EXPECT_EQ(dv.max_abs, 0.0) << "peer " << k;
+        EXPECT_EQ(p.stats().limited_forces, 1U) << "peer " << k;
+    }
+    double largest = 0.0;
+    for (const core::NodeIndex n : g.node_of_unique())
+        largest = std::max(largest, std::abs(ref.u[n]));
+    EXPECT_GT(largest, 1e-3);
+    EXPECT_LT(largest, 1.0);
 }
 
 // Settings a peer cannot run with are refused naming the rule: a name the wire cannot carry

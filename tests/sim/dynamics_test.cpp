@@ -248,5 +248,72 @@ TEST(Dynamics, PointForceSpreadsOverTheRadius)
         ASSERT_EQ(a, 0.0);
 }
 
+// MembraneSettings::max_force: a force longer than the limit acts as the same direction at the
+// limit's length (the nodal forces are those of the scaled force, to rounding), a shorter one
+// acts bit for bit as without a limit, and a force near the double range's end (1e300 N, whose
+// squared length overflows) is still scaled, not dropped or turned into inf.
+TEST(Dynamics, AForceAboveTheLimitActsAtTheLimit)
+{
+    EXPECT_EQ(limit_force({3.0, 4.0, 0.0}, 10.0).x, 3.0);       // shorter: the same bits
+    EXPECT_EQ(limit_force({3e300, 4e300, 0.0}, 0.0).y, 4e300);  // 0: no limit
+    const core::Vec3 huge = limit_force({3e300, -4e300, 0.0}, 2.5);
+    EXPECT_NEAR(huge.x, 1.5, 1e-15);
+    EXPECT_NEAR(huge.y, -2.0, 1e-15);
+    EXPECT_EQ(huge.z, 0.0);
+
+    MembraneSettings set;
+    set.k_f = 1.0;
+    set.max_force = 2.0;
+    MembraneModel limited = test::sphere_model(4, set);
+    set.max_force = 0.0;
+    MembraneModel free = test::sphere_model(4, set);
+    const core::Vec3 point{0.0, 0.0, 1.0};
+    const auto accel = [](const MembraneModel& m, const Force& f)
+    {
+        Rkf45Workspace ws(m);
+        set_forces(m, ws, std::span<const Force>(&f, 1));
+        return ws.accel;
+    };
+    const Force below{-1, point, 0.3, {0.0, 0.6, 1.8}};  // |F| = 1.897 N
+    const auto a = accel(limited, below);
+    const auto b = accel(free, below);
+    for (std::size_t k = 0; k < a.padded().size(); ++k)
+        ASSERT_EQ(a.padded()[k], b.padded()[k]);
+    for (const double scale : {1.0e3, 1.0e200, 1.0e300})
+    {
+        const Force above{-1, point, 0.3, {0.0, 0.6 * scale, 1.8 * scale}};
+        const Force at{-1, point, 0.3, below.vector * (2.0 / core::norm(below.vector))};
+        const auto c = accel(limited, above);
+        const auto d = accel(free, at);
+        double largest = 0.0;
+        for (std::size_t k = 0; k < c.padded().size(); ++k)
+        {
+            ASSERT_TRUE(std::isfinite(c.padded()[k]));
+            EXPECT_NEAR(c.padded()[k], d.padded()[k], 1e-13 * std::abs(d.padded()[k]))
+                << "scale " << scale << " at " << k;
+            largest = std::max(largest, std::abs(c.padded()[k]));
+        }
+        EXPECT_GT(largest, 0.0);
+    }
+}
+
+// The default limit of sessions (sim::default_max_force): on a sphere of radius r the bounding
+// box's half-diagonal is R = sqrt(3) r, and the limit (rho pi (R/10)^2 k_f + 2 pi T) 2R.
+TEST(Dynamics, TheDefaultForceLimitFollowsItsFormula)
+{
+    MembraneSettings set;
+    set.T = 2.0;
+    set.rho = 0.5;
+    set.k_f = 3.0;
+    const double r = 1.5;
+    const MembraneModel m = test::sphere_model(5, set, r);
+    const double limit = default_max_force(m.grid(), m.rest_positions(), m.settings());
+    // The grid's nodes reach the sphere's extreme points (the octahedron's vertices).
+    const double big_r = std::sqrt(3.0) * r;
+    const double expect =
+        (0.5 * k_pi * (0.1 * big_r) * (0.1 * big_r) * 3.0 + 2.0 * k_pi * 2.0) * 2.0 * big_r;
+    EXPECT_NEAR(limit, expect, 1e-12 * expect);
+}
+
 }  // namespace
 }  // namespace pliant::sim

@@ -137,6 +137,10 @@ void Viewer::draw_panels()
         {
             const sim::MembraneSettings& s = m->settings();
             ImGui::Text("T %.3g  rho %.3g  beta %.3g  k_f %.3g", s.T, s.rho, s.beta, s.k_f);
+            if (s.max_force > 0.0)
+                ImGui::Text("force limit %.3g N (a longer grab acts at it)", s.max_force);
+            else
+                ImGui::Text("no force limit");
             ImGui::TextDisabled("(set by the session's master)");
         }
         else

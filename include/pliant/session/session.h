@@ -107,6 +107,13 @@ struct SessionSettings
     /// bands' lower step cost (measured in docs/session.md §3). The master's choice, carried in
     /// the model blob: joiners, and a master's successor, take it.
     std::optional<PointClearance> point_clearance;
+    /// Master only: the largest user force [N] any peer's grab applies; a longer one acts scaled
+    /// down to it, its direction kept (sim::limit_force), so that no peer, buggy or hostile, can
+    /// throw the shared object arbitrarily far or overflow it. Unset: sim::default_max_force of
+    /// the model (the force holding a patch of a tenth of the object's radius a diameter from
+    /// rest); 0: no limit. Carried in the model blob (sim::MembraneSettings::max_force), so
+    /// every peer and a replay apply the same forces; the material's own max_force is replaced.
+    std::optional<double> max_force;
     double stream_rate_hz = 60.0;  ///< LeafState rate per owned leaf, > 0
     /// LeafState values: F64, F32, or QuantisedDelta (compressed, see the file comment).
     net::ValueEncoding stream_encoding = net::ValueEncoding::F64;
@@ -251,6 +258,9 @@ struct SessionStats
     /// User forces acting in this peer's last step (every peer's grabs; fast coupling drops a
     /// departed peer's, exact coupling keeps them, docs/session.md §6).
     std::size_t active_forces = 0;
+    /// Forces received (in Force lists of other peers, or set here) longer than the session's
+    /// max_force: they act scaled down to it (SessionSettings::max_force).
+    std::uint64_t limited_forces = 0;
 };
 
 /// What a peer knows of another one (Session::peer_status), for a peer list.

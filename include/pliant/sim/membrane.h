@@ -99,6 +99,11 @@ struct MembraneSettings
     int threads = 0;                          ///< OpenMP threads for a step; 0 = OpenMP's default
     int leaf_depth = -1;  ///< quad-tree depth of the parallel work split; -1 = level - 6 (64 x 64
                           ///< node leaves), clamped to 0..level
+    /// The largest user force [N] a step applies: a force of greater magnitude acts scaled down
+    /// to it, its direction kept (sim::limit_force); 0 = no limit (the default), >= 0. Sessions
+    /// set it for every peer (session::SessionSettings::max_force), so that one peer's grab
+    /// cannot throw the shared object arbitrarily far or overflow it.
+    double max_force = 0.0;
 };
 
 /// Kinetic, strain and foundation energy [J] over the unique vertices.

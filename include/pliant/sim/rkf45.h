@@ -69,6 +69,21 @@ struct Force
     core::Vec3 vector{};     ///< the force [N]
 };
 
+/// `force` scaled down to magnitude `max_force` when it is longer (its direction kept), else
+/// `force` itself, bit for bit; `max_force` 0 means no limit. Every step applies its forces
+/// through it with MembraneSettings::max_force.
+[[nodiscard]] core::Vec3 limit_force(core::Vec3 force, double max_force) noexcept;
+
+/// A limit for user forces that real use stays under (session::SessionSettings::max_force's
+/// default): the force that holds a patch of a tenth of the object's radius R one diameter 2R
+/// away from rest, F = (rho pi (R/10)^2 k_f + 2 pi T) 2R, with R half the diagonal of the rest
+/// positions' bounding box (canonical nodes of `rest`, any ghost width). The patch's stiffness
+/// is the viewer's default grab spring's (docs/viewer.md): a drag at that stiffness reaches the
+/// limit only a whole diameter away. Only T, rho and k_f of `material` count.
+[[nodiscard]] double default_max_force(const core::TetraGrid& grid,
+                                       const core::Vec3Field<double>& rest,
+                                       const MembraneSettings& material) noexcept;
+
 /// The largest fixed step [s] (within 1 %) at which no mode of `model` grows by more than 1e-7
 /// per step: omega_max is bounded by Gershgorin's theorem on M^-1 K + k_f (row sums of the
 /// stencil, 2 sum|w| / m per node, an over-estimate), and every mode's eigenvalues
