@@ -159,7 +159,7 @@ int run_join(const JoinOptions& opt)
         static_cast<unsigned long long>(summary->stats.bytes_sent),
         static_cast<unsigned long long>(summary->stats.bytes_received),
         static_cast<unsigned long long>(summary->auth_refused));
-    return 0;
+    return end_status(**s, "join");
 }
 
 void add_join_command(CLI::App& app, const GlobalOptions& global)

@@ -9,6 +9,7 @@
 #include <spdlog/spdlog.h>
 
 #include "../../scenes/grid_shapes.h"
+#include "cli_common.h"
 
 #include <algorithm>
 #include <cmath>
@@ -19,6 +20,19 @@
 
 namespace pliant::cli
 {
+
+int end_status(const session::Session& peer, const std::string& command)
+{
+    const auto tick = peer.diverged();
+    if (!tick)
+        return 0;
+    spdlog::error(
+        "{}: the simulation diverged at tick {} and this peer held its state from "
+        "there; leave --dt out (the host picks a stable step) or keep a force limit "
+        "(--max-force)",
+        command, *tick);
+    return k_exit_failure;
+}
 
 core::Result<void> save_peer_state(const session::Session& peer, const std::filesystem::path& path)
 {

@@ -1393,6 +1393,21 @@ struct Session::Impl
         return true;
     }
 
+    /// A step from `tick` gave non-finite values on this peer's nodes (sim::step kept the state
+    /// of `tick`): the state diverged. Retrying would fail the same way (in exact coupling it
+    /// republished the tick and logged a warning per try, hundreds per call), so the peer holds
+    /// its last finite state and steps no further; said once, as an error.
+    void on_non_finite_step(std::uint64_t tick)
+    {
+        s.diverged_tick_ = tick;
+        spdlog::error(
+            "session: the step from tick {} (t = {:.6g} s) gives non-finite values on this "
+            "peer's nodes: the state diverged (a fixed step above the grid's stable step, "
+            "docs/physics.md §5, or forces without a limit, docs/session.md §7); this peer holds "
+            "its last finite state and steps no further",
+            tick, s.state_.time);
+    }
+
     bool may_step(std::uint64_t t) const
     {
         if (settings.max_ticks != 0 && t >= settings.max_ticks)
@@ -1415,7 +1430,7 @@ struct Session::Impl
         const auto call_start = std::chrono::steady_clock::now();
         const double call_budget = std::min(1.0 / settings.frame_rate_hz, k_step_slice_s);
         // Bounded: each pass either steps once or returns.
-        for (int guard = 0; guard < 100000; ++guard)
+        for (int guard = 0; guard < 100000 && !s.diverged_tick_; ++guard)
         {
             const std::uint64_t t = s.state_.tick;
             if (!member(partition_at(t), s.id_) &&
@@ -1465,7 +1480,10 @@ struct Session::Impl
             counters.step_seconds += seconds_since(t0);
             ++counters.steps;
             if (sim::has_flag(r.status, sim::StepStatus::NonFinite))
-                spdlog::warn("session: non-finite step at tick {}", t);
+            {
+                on_non_finite_step(t);
+                return;  // held: the state stays that of tick t, published once
+            }
             published = false;
             copy_own_to_display(partition_at(t));
             disconnect_finished_leavers();
@@ -1726,7 +1744,7 @@ struct Session::Impl
             sim::set_forces(*s.model_, *ws, forces);
             const sim::MembraneSettings& ms = s.model_->settings();
             const double slack = 1e-12 * std::max(1.0, std::fabs(target));
-            for (int k = 0; k < 100000; ++k)
+            for (int k = 0; k < 100000 && !s.diverged_tick_; ++k)
             {
                 const double remaining = target - s.state_.time;
                 if (ms.fixed_step ? remaining + slack < ms.fixed_dt : remaining <= slack)
@@ -1735,7 +1753,10 @@ struct Session::Impl
                 const double start = s.state_.time;
                 const sim::StepReport r = sim::step_prepared(*s.model_, s.state_, *ws, opt);
                 if (sim::has_flag(r.status, sim::StepStatus::NonFinite))
+                {
+                    on_non_finite_step(s.state_.tick);
                     break;
+                }
                 ++counters.steps;
                 if (!ms.fixed_step && r.dt >= remaining)
                     s.state_.time = target;  // land exactly, as sim::advance_to

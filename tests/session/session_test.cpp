@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include "session_harness.h"
+#include "support/fp_traps.h"
 
 #include <bit>
 #include <cstdio>
@@ -1003,6 +1004,44 @@ TEST(SessionForces, AForceAboveTheSessionsLimitActsAtTheLimitEverywhere)
         largest = std::max(largest, std::abs(ref.u[n]));
     EXPECT_GT(largest, 1e-3);
     EXPECT_LT(largest, 1.0);
+}
+
+// A peer whose own step gives non-finite values (here: no force limit and a 1e308 N pull, whose
+// acceleration overflows) holds its last finite state and steps no more, saying so once
+// (Session::diverged). Before, exact coupling re-published the tick and retried the step, with a
+// warning per try, hundreds per call, for as long as the session ran.
+TEST(SessionForces, APeerWhoseStepDivergesHoldsItsLastFiniteState)
+{
+    Harness h;
+    SessionSettings master = settings_for(Coupling::Exact, "m");
+    master.max_force = 0.0;
+    h.host(3, master);
+    h.join(net::Role::Participant, settings_for(Coupling::Exact, "p"));
+    ASSERT_TRUE(pump_until_partitioned(h, 2));
+    apply_schedule(h, {{1, 60, {face_pull(10, 1e308)}}});
+    pliant::test::FpTrapsOff traps_off;  // the overflowing step computes inf and NaN
+    const auto diverged = [&]() -> const Session*
+    {
+        for (const auto& p : h.peers)
+            if (p->diverged())
+                return p.get();
+        return nullptr;
+    };
+    ASSERT_TRUE(h.pump_until([&] { return diverged() != nullptr; }, 20000));
+    const Session& d = *diverged();
+    EXPECT_GE(*d.diverged(), 60U);
+    EXPECT_EQ(d.tick(), *d.diverged());
+    const std::uint64_t steps = d.stats().steps;
+    for (int k = 0; k < 400; ++k)
+        h.pump_once(0.0005);
+    EXPECT_EQ(d.tick(), *d.diverged());
+    EXPECT_EQ(d.stats().steps, steps);
+    const core::TetraGrid& g = d.model()->grid();
+    for (const core::NodeIndex n : g.node_of_unique())
+    {
+        ASSERT_TRUE(std::isfinite(d.state().u[n]));
+        ASSERT_TRUE(std::isfinite(d.state().v[n]));
+    }
 }
 
 // Settings a peer cannot run with are refused naming the rule: a name the wire cannot carry

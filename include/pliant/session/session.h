@@ -398,6 +398,11 @@ public:
     /// only from the model (e.g. stream_coarsen in a fast session, docs/session.md §5.2), and
     /// decodes the blobs only once they are in (docs/protocol.md, Blob).
     [[nodiscard]] std::string refusal() const;
+    /// The tick from which this peer's own step gave non-finite values (the state diverged: a
+    /// fixed step above the stable one, or forces without a limit), after which it holds its
+    /// last finite state and steps no more; nullopt while it steps normally. `pliant host` and
+    /// `join` then end with an error.
+    [[nodiscard]] std::optional<std::uint64_t> diverged() const noexcept { return diverged_tick_; }
     /// A joiner whose connection to the master ended before it was welcomed: the reason the
     /// transport gave (net::DisconnectReason::Refused: the master, or its SecureTransport,
     /// turned it away; TimedOut: no answer; ...). nullopt otherwise (still joining, welcomed, or
@@ -412,7 +417,8 @@ private:
     SessionRole role_ = SessionRole::Participant;
     net::PeerId id_ = net::k_no_peer;
     Coupling coupling_ = Coupling::Exact;
-    std::optional<PointClearance> clearance_;  ///< the master's SessionSettings::point_clearance
+    std::optional<PointClearance> clearance_;     ///< the master's SessionSettings::point_clearance
+    std::optional<std::uint64_t> diverged_tick_;  ///< diverged()
     bool left_ = false;
     std::unique_ptr<sim::MembraneModel> model_;
     std::unique_ptr<LeafGraph> graph_;
