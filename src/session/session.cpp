@@ -3270,6 +3270,13 @@ struct Session::Impl
                 on_partition(from, m, std::get<net::Partition>(m.body));
             return;
         case net::MessageType::Force:
+            // A viewer only watches (docs/session.md §1): its forces, a modified peer's or a
+            // forger's, are dropped, not applied by every member and recorded.
+            if (p.info.role == net::Role::Viewer)
+            {
+                ++counters.viewer_forces;
+                return;
+            }
             p.forces.push_back(ForceEntry{m.header.tick, std::get<net::Force>(m.body).forces});
             count_limited(p.forces.back().forces, from, p.warned_force_limit);
             if (recording)
@@ -3755,6 +3762,8 @@ void Session::set_points_of_interest(std::vector<net::Target> points)
 
 void Session::set_forces(std::vector<net::UserForce> forces, std::uint64_t from_tick)
 {
+    if (role_ == SessionRole::Viewer)
+        return;  // a viewer only watches; the others would drop its forces
     if (forces.size() > net::k_max_points)
         forces.resize(net::k_max_points);
     impl_->pending_forces.push_back(ForceEntry{from_tick, std::move(forces)});

@@ -657,13 +657,13 @@ bool master_and_participant(Harness& h, std::uint32_t session)
     return pump_until_partitioned(h, 2);
 }
 
-/// Puts `m` on `wire` to `to`, on the state channel, as it is: what a peer's bug or a forger on a
-/// member's connection sends. \return whether it went out.
+/// Puts `m` on `wire` to `to`, on its type's channel, as it is: what a peer's bug or a forger on
+/// a member's connection sends. \return whether it went out.
 bool send_raw(net::Transport& wire, net::PeerHandle to, const net::Message& m,
               net::Delivery delivery)
 {
     std::vector<std::byte> bytes(net::encoded_size(m));
-    return net::encode(m, bytes) && wire.send(to, net::Channel::State, bytes, delivery);
+    return net::encode(m, bytes) && wire.send(to, net::default_channel(m.type()), bytes, delivery);
 }
 
 // An honest peer's halo carries only nodes it owns; one that carries a node of the receiver (a
@@ -1004,6 +1004,46 @@ TEST(SessionForces, AForceAboveTheSessionsLimitActsAtTheLimitEverywhere)
         largest = std::max(largest, std::abs(ref.u[n]));
     EXPECT_GT(largest, 1e-3);
     EXPECT_LT(largest, 1.0);
+}
+
+// A viewer only watches: a Force list from one (a modified viewer, or a forger on its
+// connection) is dropped and counted by the member it reaches, never applied, so the object stays
+// at rest as one process without forces; Session::set_forces on a viewer sends nothing.
+TEST(SessionForces, AViewersForcesAreDropped)
+{
+    Harness h;
+    ASSERT_TRUE(master_and_participant(h, 4343));
+    Session& viewer = h.join(net::Role::Viewer, settings_for(Coupling::Exact, "v"));
+    net::Transport& wire = *h.transports[2];
+    ASSERT_TRUE(h.pump_until(
+        [&]
+        {
+            return viewer.ready() && viewer.stats().peers_connected == 2 &&
+                   wire.peers().size() == 2 && all_at(h, 30, 2);
+        },
+        20000));
+    viewer.set_forces({face_pull(10, 0.5)});
+    const Session& m = *h.peers[0];
+    net::Message forged;
+    forged.header.session = 4343;
+    forged.header.sender = viewer.id();
+    forged.header.sequence = 60000;
+    forged.header.tick = m.tick() + 20;
+    forged.body = net::Force{{face_pull(10, 0.5)}};
+    std::size_t sent = 0;
+    for (const net::PeerHandle to : wire.peers())
+        sent += send_raw(wire, to, forged, net::Delivery::Reliable) ? 1 : 0;
+    ASSERT_EQ(sent, 2U);  // to the master and the participant
+    ASSERT_TRUE(h.pump_until([&] { return all_at(h, forged.header.tick + 40, 2); }, 20000));
+    const core::TetraGrid& g = m.model()->grid();
+    for (std::size_t k = 0; k < 2; ++k)
+    {
+        const Session& p = *h.peers[k];
+        EXPECT_EQ(p.stats().viewer_forces, 1U) << "peer " << k;
+        EXPECT_EQ(p.stats().active_forces, 0U) << "peer " << k;
+        EXPECT_EQ(compare(g, p.state().u, core::Field<double>(g), owned_by(p)).max_abs, 0.0)
+            << "peer " << k;
+    }
 }
 
 // A peer whose own step gives non-finite values (here: no force limit and a 1e308 N pull, whose

@@ -261,6 +261,8 @@ struct SessionStats
     /// Forces received (in Force lists of other peers, or set here) longer than the session's
     /// max_force: they act scaled down to it (SessionSettings::max_force).
     std::uint64_t limited_forces = 0;
+    /// Force lists from a viewer (which only watches): dropped, never applied or recorded.
+    std::uint64_t viewer_forces = 0;
 };
 
 /// What a peer knows of another one (Session::peer_status), for a peer list.
@@ -318,7 +320,8 @@ public:
     void set_points_of_interest(std::vector<net::Target> points);
     /// This peer's user forces (replacing its previous list) from tick `from_tick` on, or from
     /// the earliest tick every peer can still honour if that is later (exact mode: the tick after
-    /// the next one this peer publishes; fast mode: at once). Several calls queue in order.
+    /// the next one this peer publishes; fast mode: at once). Several calls queue in order. A
+    /// viewer's are ignored: it only watches (and the others drop a viewer's Force lists).
     void set_forces(std::vector<net::UserForce> forces, std::uint64_t from_tick = 0);
     /// Leaves the session; `left()` becomes true when done. Participants and viewers leave as
     /// described in the file comment; the master streams its leaves once more and disconnects
