@@ -73,6 +73,12 @@ constexpr std::size_t k_max_foreign_partitions = 8;
 constexpr std::uint32_t k_max_epoch_lead = 2 * k_successor_epoch_gap;
 /// How long a leaf state of an epoch ahead of the partitions held counts without its Partition.
 constexpr double k_provisional_s = 3.0;
+/// A participant's new points of interest re-partition the session at most this often (s, the
+/// master's clock); a change within it waits for its end. Each change cost the master a partition
+/// computed and broadcast (and every peer a hand-over), so a peer changing its points on every
+/// frame, by a bug or on purpose, kept the whole session re-partitioning. A participant's first
+/// points (its admission to the partition) go at once.
+constexpr double k_points_interval_s = 0.1;
 
 // --- little-endian byte writer/reader for the blobs -------------------------------------------
 
@@ -444,6 +450,10 @@ struct RemotePeer
     std::vector<ForceEntry> forces;
     bool warned_force_limit = false;  ///< a force of it above the session's limit was logged
     std::vector<net::Target> points;
+    /// Master: when its points last re-partitioned the session (the master's clock), and
+    /// whether newer ones wait for k_points_interval_s to pass.
+    double points_applied_at = 0.0;
+    bool points_waiting = false;
     bool ready = false;  ///< sent its points of interest (participants): may be partitioned
     /// Sent Ready: it holds the model and can show leaf states, so they are streamed to it. A
     /// joiner still downloading the model gets none (they would only compete with the download).
@@ -1478,12 +1488,12 @@ struct Session::Impl
             const auto t0 = std::chrono::steady_clock::now();
             const sim::StepReport r = sim::step(*s.model_, s.state_, *ws, forces, opt);
             counters.step_seconds += seconds_since(t0);
-            ++counters.steps;
             if (sim::has_flag(r.status, sim::StepStatus::NonFinite))
             {
                 on_non_finite_step(t);
                 return;  // held: the state stays that of tick t, published once
             }
+            ++counters.steps;
             published = false;
             copy_own_to_display(partition_at(t));
             disconnect_finished_leavers();
@@ -3256,9 +3266,19 @@ struct Session::Impl
             if (p.info.role == net::Role::Participant && !p.leaving)
             {
                 p.points = std::get<net::PointsOfInterest>(m.body).points;
+                const bool admitted = p.ready;
                 p.ready = true;
                 if (s.role_ == SessionRole::Master)
                 {
+                    if (admitted && last_now - p.points_applied_at < k_points_interval_s)
+                    {
+                        if (!p.points_waiting)
+                            ++counters.points_waits;
+                        p.points_waiting = true;  // apply_waiting_points takes them later
+                        return;
+                    }
+                    p.points_applied_at = last_now;
+                    p.points_waiting = false;
                     repartition_pending = true;
                     if (s.coupling_ == Coupling::Fast)
                         master_repartition(s.state_.tick);
@@ -3562,6 +3582,19 @@ struct Session::Impl
         s.model_->sync(view_u);
     }
 
+    /// Master: the points of interest that waited for k_points_interval_s re-partition now.
+    void apply_waiting_points()
+    {
+        for (auto& [id, p] : peers)
+            if (p.points_waiting && last_now - p.points_applied_at >= k_points_interval_s)
+            {
+                p.points_waiting = false;
+                p.points_applied_at = last_now;
+                if (!p.departed && !p.leaving)
+                    repartition_pending = true;
+            }
+    }
+
     void advance(double now)
     {
         last_now = now;
@@ -3576,6 +3609,8 @@ struct Session::Impl
             next_frame = now;
         }
         send_points();
+        if (s.role_ == SessionRole::Master)
+            apply_waiting_points();
         if (s.role_ == SessionRole::Master && repartition_pending && s.coupling_ == Coupling::Fast)
             master_repartition(s.state_.tick);
         if (s.coupling_ == Coupling::Exact)

@@ -646,12 +646,15 @@ TEST(SessionJoin, AStateBlobThatDoesNotDecodeIsRefused)
     EXPECT_FALSE((*joiner)->ready());
 }
 
-/// An exact session at level 3 on `h`: a master (session id `session`) and a participant,
-/// partitioned. \return whether that happened within its bound.
-bool master_and_participant(Harness& h, std::uint32_t session)
+/// An exact session at level 3 on `h`: a master (session id `session`, force limit `max_force`,
+/// unset: the default) and a participant, partitioned. \return whether that happened within its
+/// bound.
+bool master_and_participant(Harness& h, std::uint32_t session,
+                            std::optional<double> max_force = std::nullopt)
 {
     SessionSettings master = settings_for(Coupling::Exact, "m");
     master.session_id = session;
+    master.max_force = max_force;
     h.host(3, master);
     h.join(net::Role::Participant, settings_for(Coupling::Exact, "p"));
     return pump_until_partitioned(h, 2);
@@ -972,6 +975,57 @@ TEST(SessionForces, ABadForceIsLeftOutAlone)
     EXPECT_EQ(out[2].face, static_cast<std::int64_t>(faces) - 1);
 }
 
+// The partitions the master computes and broadcasts when `flood` (true: the participant's point
+// of interest alternates between two faces every 0.5 ms for 20 ms, then settles on the second;
+// false: it moves there once) ends, and how many epochs that took. Fast coupling, level 5.
+struct PointsRun
+{
+    std::uint32_t epochs = 0;
+    std::vector<net::PeerId> owners;
+    std::uint64_t waits = 0;
+};
+
+PointsRun points_run(bool flood)
+{
+    Harness h;
+    h.host(k_level, settings_for(Coupling::Fast, "m"));
+    Session& part = h.join(net::Role::Participant, settings_for(Coupling::Fast, "p"));
+    const auto face = [](std::uint32_t f) {
+        return std::vector{net::Target{net::TargetKind::Face, f, {0, 0, 0}, 0.0}};
+    };
+    part.set_points_of_interest(face(600));
+    EXPECT_TRUE(pump_until_partitioned(h, 2));
+    for (int k = 0; k < 200; ++k)  // past the interval after the first points
+        h.pump_once(0.0005);
+    const std::uint32_t epoch = h.peers[0]->epoch();
+    for (int k = 0; k < (flood ? 40 : 1); ++k)
+    {
+        part.set_points_of_interest(face(k % 2 == 0 ? 3100 : 600));
+        h.pump_once(0.0005);
+    }
+    if (flood)
+        part.set_points_of_interest(face(3100));
+    for (int k = 0; k < 600; ++k)  // 0.3 s: every change has been taken
+        h.pump_once(0.0005);
+    return {h.peers[0]->epoch() - epoch, h.peers[0]->owners(), h.peers[0]->stats().points_waits};
+}
+
+// A participant whose points of interest change on every frame (a bug, or a hostile member)
+// re-partitions the session at most every 0.1 s: 40 changes in 20 ms give at most three
+// partitions, not forty, and the last points still decide the final partition, the same as
+// one change to them.
+TEST(SessionPartition, PointsChangingEveryFrameRepartitionAtMostEveryTenthOfASecond)
+{
+    const PointsRun once = points_run(false);
+    const PointsRun flood = points_run(true);
+    EXPECT_EQ(once.epochs, 1U);
+    EXPECT_EQ(once.waits, 0U);
+    EXPECT_GE(flood.epochs, 1U);
+    EXPECT_LE(flood.epochs, 3U);
+    EXPECT_GE(flood.waits, 1U);
+    EXPECT_EQ(flood.owners, once.owners);
+}
+
 // A force above the session's limit (a buggy or hostile peer's 1e200 N pull) acts scaled down to
 // the limit on every peer: the master's choice travels in the model blob, so both members' owned
 // nodes equal, bit for bit, one process that applies the limit, and the state stays bounded
@@ -979,11 +1033,7 @@ TEST(SessionForces, ABadForceIsLeftOutAlone)
 TEST(SessionForces, AForceAboveTheSessionsLimitActsAtTheLimitEverywhere)
 {
     Harness h;
-    SessionSettings master = settings_for(Coupling::Exact, "m");
-    master.max_force = 0.5;
-    h.host(3, master);
-    h.join(net::Role::Participant, settings_for(Coupling::Exact, "p"));
-    ASSERT_TRUE(pump_until_partitioned(h, 2));
+    ASSERT_TRUE(master_and_participant(h, 4444, 0.5));
     EXPECT_EQ(h.peers[1]->model()->settings().max_force, 0.5);
     const std::vector<Scheduled> sched{{1, 60, {face_pull(10, 1e200)}}};
     apply_schedule(h, sched);
@@ -1053,11 +1103,7 @@ TEST(SessionForces, AViewersForcesAreDropped)
 TEST(SessionForces, APeerWhoseStepDivergesHoldsItsLastFiniteState)
 {
     Harness h;
-    SessionSettings master = settings_for(Coupling::Exact, "m");
-    master.max_force = 0.0;
-    h.host(3, master);
-    h.join(net::Role::Participant, settings_for(Coupling::Exact, "p"));
-    ASSERT_TRUE(pump_until_partitioned(h, 2));
+    ASSERT_TRUE(master_and_participant(h, 4444, 0.0));
     apply_schedule(h, {{1, 60, {face_pull(10, 1e308)}}});
     pliant::test::FpTrapsOff traps_off;  // the overflowing step computes inf and NaN
     const auto diverged = [&]() -> const Session*

@@ -263,6 +263,9 @@ struct SessionStats
     std::uint64_t limited_forces = 0;
     /// Force lists from a viewer (which only watches): dropped, never applied or recorded.
     std::uint64_t viewer_forces = 0;
+    /// Master: times a participant's new points of interest waited before re-partitioning,
+    /// because its previous ones had done so less than 0.1 s before (docs/session.md §3).
+    std::uint64_t points_waits = 0;
 };
 
 /// What a peer knows of another one (Session::peer_status), for a peer list.
