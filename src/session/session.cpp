@@ -2596,11 +2596,24 @@ struct Session::Impl
         // A peer greeting us after its Welcome.
         if (handle_ids.count(h) != 0)
             return;
+        // Each joiner dials each peer once and ids are never reused: a second connection for
+        // an id already connected, or departed, is someone else's claim to that peer's place
+        // (its forces, its leaves' halos), refused before it could take the first one's link.
+        if (const auto known = peers.find(m.header.sender.value);
+            known != peers.end() && (known->second.handle || known->second.departed))
+        {
+            ++counters.peer_claim_rejects;
+            transport.disconnect(h, net::DisconnectReason::Refused);
+            return;
+        }
         bind(h, m.header.sender.value);
         RemotePeer& p = peers[m.header.sender.value];
-        p.info.role = hello.role;
-        if (p.info.name.empty())
-            p.info.name = hello.name;  // its PeerJoined may still be on its way
+        if (!p.info_known)
+        {
+            // Its PeerJoined may still be on its way; the master's word replaces this then.
+            p.info.role = hello.role;
+            p.info.name = hello.name;
+        }
         greet_new_peer(m.header.sender.value);
     }
 
@@ -3220,6 +3233,14 @@ struct Session::Impl
         {
         case net::MessageType::PeerJoined:
         {
+            // Only the master admits peers. From anyone else it could rename or re-role a
+            // member (a participant taken for a viewer has its forces dropped here only: the
+            // peers' states part) or add phantoms that every reliable message is queued for.
+            if (net::PeerId{from} != master_id)
+            {
+                ++counters.peer_claim_rejects;
+                return;
+            }
             const auto& pj = std::get<net::PeerJoined>(m.body);
             if (pj.peer.id == s.id_)
                 return;

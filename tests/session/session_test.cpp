@@ -1096,6 +1096,71 @@ TEST(SessionForces, AViewersForcesAreDropped)
     }
 }
 
+// Who is in the session, and in what role, is the master's word and each member's own: a
+// PeerJoined from a participant (here re-roling itself as a viewer, which would have made the
+// master drop its forces while the other members applied them) is dropped and counted, and a
+// second connection greeting with a member's id (taking over its link, its forces, its halos)
+// is refused; the member's grab still acts.
+TEST(SessionPeers, OnlyTheMasterAdmitsAndNoSecondConnectionTakesAMembersId)
+{
+    Harness h;
+    ASSERT_TRUE(master_and_participant(h, 4545));
+    const Session& m = *h.peers[0];
+    Session& part = *h.peers[1];
+    net::Transport& wire = *h.transports[1];
+    ASSERT_EQ(wire.peers().size(), 1U);
+    net::Message forged;
+    forged.header.session = 4545;
+    forged.header.sender = part.id();
+    forged.header.sequence = 60000;
+    forged.header.tick = m.tick();
+    net::PeerInfo me{part.id(), net::Role::Viewer, {127, 0, 0, 1}, 9, "p"};
+    forged.body = net::PeerJoined{me};
+    ASSERT_TRUE(send_raw(wire, wire.peers()[0], forged, net::Delivery::Reliable));
+
+    auto rogue = h.net.create_endpoint();
+    ASSERT_TRUE(rogue->open({}));
+    const auto link = rogue->connect(h.master_address);
+    ASSERT_TRUE(link);
+    bool connected = false;
+    bool refused = false;
+    const auto drain = [&]
+    {
+        while (const auto e = rogue->poll())
+        {
+            connected |= e->kind == net::TransportEvent::Kind::Connected;
+            refused |= e->kind == net::TransportEvent::Kind::Disconnected;
+        }
+    };
+    ASSERT_TRUE(h.pump_until(
+        [&]
+        {
+            drain();
+            return connected;
+        },
+        2000));
+    net::Message hello;
+    hello.header.session = 4545;
+    hello.header.sender = part.id();
+    hello.header.tick = m.tick();
+    hello.body = net::Hello{net::Role::Participant, 9, "p"};
+    ASSERT_TRUE(send_raw(*rogue, *link, hello, net::Delivery::Reliable));
+    ASSERT_TRUE(h.pump_until(
+        [&]
+        {
+            drain();
+            return refused;
+        },
+        2000));
+    EXPECT_EQ(m.stats().peer_claim_rejects, 2U);
+
+    part.set_forces({face_pull(10, 0.5)});
+    ASSERT_TRUE(h.pump_until([&] { return m.stats().active_forces == 1; }, 2000));
+    EXPECT_EQ(m.stats().viewer_forces, 0U);
+    for (const PeerStatus& st : m.peer_status())
+        EXPECT_EQ(st.role, net::Role::Participant);
+}
+
 // A peer whose own step gives non-finite values (here: no force limit and a 1e308 N pull, whose
 // acceleration overflows) holds its last finite state and steps no more, saying so once
 // (Session::diverged). Before, exact coupling re-published the tick and retried the step, with a

@@ -266,6 +266,11 @@ struct SessionStats
     /// Master: times a participant's new points of interest waited before re-partitioning,
     /// because its previous ones had done so less than 0.1 s before (docs/session.md §3).
     std::uint64_t points_waits = 0;
+    /// Claims about who is in the session that did not hold: a PeerJoined from a peer other than
+    /// the master (dropped: only the master admits peers), or a greeting Hello on a new
+    /// connection for a peer id already connected or departed (refused: ids are never reused,
+    /// and each peer dials each other once). docs/session.md §2.
+    std::uint64_t peer_claim_rejects = 0;
 };
 
 /// What a peer knows of another one (Session::peer_status), for a peer list.
