@@ -3201,7 +3201,16 @@ struct Session::Impl
                 join_lost = std::get<net::Reject>(m.body).reason;
             close_all(net::DisconnectReason::Refused);
             return;
-        case net::MessageType::Blob: on_blob(std::get<net::Blob>(m.body)); return;
+        case net::MessageType::Blob:
+            // The model and state come from the master only: another peer's chunk (a joiner
+            // dials every listed peer while it downloads) could fill the blobs with its bytes.
+            if (!master_handle || h != *master_handle)
+            {
+                ++counters.foreign_blobs;
+                return;
+            }
+            on_blob(std::get<net::Blob>(m.body));
+            return;
         default: break;
         }
         if (!s.model_ &&

@@ -646,6 +646,91 @@ TEST(SessionJoin, AStateBlobThatDoesNotDecodeIsRefused)
     EXPECT_FALSE((*joiner)->ready());
 }
 
+// The Welcome's blobs come from the master only: a listed peer that the joiner dials while it
+// downloads (here a raw endpoint) sends a state blob of the right size but other bytes before the
+// master's; the joiner drops it, counts it, and installs the master's model and state (before, it
+// took the chunk, found both blobs complete, failed the hash check and left).
+TEST(SessionJoin, BlobChunksFromAnotherPeerAreDropped)
+{
+    net::SimulatedNetwork net;
+    auto master = net.create_endpoint();
+    const net::Address master_address = master->open({}).value();
+    auto rogue = net.create_endpoint();
+    const net::Address rogue_address = rogue->open({}).value();
+    auto end = net.create_endpoint();
+    ASSERT_TRUE(end->open({}));
+    auto joiner = Session::join(*end, master_address, net::Role::Participant,
+                                settings_for(Coupling::Exact, "j"));
+    ASSERT_TRUE(joiner) << joiner.error().message;
+
+    const core::TetraGrid g = core::TetraGrid::create(3).value();
+    const auto model = sim::MembraneModel::create(g, scenes::sphere_grid(g, 1.0), material());
+    ASSERT_TRUE(model);
+    const auto model_blob = encode_model(*model, Coupling::Exact);
+    core::Field<double> u(g), v(g);
+    const auto state_blob = encode_state(g, u, v, 0, 0.0);
+    auto other_state = state_blob;
+    other_state[16 + 7] = std::byte{0x40};  // u of node 0: 2.0
+
+    const auto send =
+        [](net::Transport& from, net::PeerHandle to, std::uint16_t sender, net::Body body)
+    {
+        net::Message m;
+        m.header.session = 77;
+        m.header.sender = net::PeerId{sender};
+        m.body = std::move(body);
+        std::vector<std::byte> bytes(net::encoded_size(m));
+        return net::encode(m, bytes) &&
+               from.send(to, net::Channel::Control, bytes, net::Delivery::Reliable);
+    };
+    const auto blob = [](net::BlobKind kind, const std::vector<std::byte>& b)
+    {
+        return net::Blob{.kind = kind,
+                         .total_size = static_cast<std::uint32_t>(b.size()),
+                         .offset = 0,
+                         .data = b};
+    };
+    std::optional<net::PeerHandle> to_joiner;
+    bool forged = false;
+    bool state_sent = false;
+    for (int k = 0; k < 3000 && !(*joiner)->ready() && (*joiner)->refusal().empty(); ++k)
+    {
+        while (auto ev = master->poll(0))
+        {
+            if (ev->kind != net::TransportEvent::Kind::Received || to_joiner)
+                continue;
+            to_joiner = ev->peer;
+            net::Welcome w;
+            w.your_id = net::PeerId{1};
+            w.master_id = net::PeerId{0};
+            w.grid_level = 3;
+            w.leaf_depth = 0;
+            w.model_size = static_cast<std::uint32_t>(model_blob.size());
+            w.model_hash = core::hash_bytes(model_blob);
+            w.state_size = static_cast<std::uint32_t>(state_blob.size());
+            w.state_hash = core::hash_bytes(state_blob);
+            w.peers = {{net::PeerId{0}, net::Role::Participant, {127, 0, 0, 1}, 7000, "m"},
+                       {net::PeerId{1}, net::Role::Participant, {127, 0, 0, 1}, 7001, "j"},
+                       {net::PeerId{2}, net::Role::Participant, rogue_address.ipv4,
+                        rogue_address.port, "r"}};
+            ASSERT_TRUE(send(*master, ev->peer, 0, w));
+            ASSERT_TRUE(send(*master, ev->peer, 0, blob(net::BlobKind::Model, model_blob)));
+        }
+        while (auto ev = rogue->poll(0))
+            if (ev->kind == net::TransportEvent::Kind::Connected && !forged)
+                forged = send(*rogue, ev->peer, 2, blob(net::BlobKind::State, other_state));
+        if (forged && !state_sent && k % 50 == 0)
+            state_sent = send(*master, *to_joiner, 0, blob(net::BlobKind::State, state_blob));
+        (*joiner)->poll();
+        (*joiner)->advance(1e-3 * k);
+        net.advance(1e-3);
+    }
+    ASSERT_TRUE(forged);
+    EXPECT_TRUE((*joiner)->ready()) << (*joiner)->refusal();
+    EXPECT_EQ((*joiner)->stats().foreign_blobs, 1U);
+    EXPECT_EQ((*joiner)->display_u()[g.index(0, 0)], 0.0);
+}
+
 /// An exact session at level 3 on `h`: a master (session id `session`, force limit `max_force`,
 /// unset: the default) and a participant, partitioned. \return whether that happened within its
 /// bound.

@@ -271,6 +271,9 @@ struct SessionStats
     /// connection for a peer id already connected or departed (refused: ids are never reused,
     /// and each peer dials each other once). docs/session.md §2.
     std::uint64_t peer_claim_rejects = 0;
+    /// Blob chunks (the Welcome's model and state) from a connection other than the master's:
+    /// dropped (docs/protocol.md, Blob).
+    std::uint64_t foreign_blobs = 0;
 };
 
 /// What a peer knows of another one (Session::peer_status), for a peer list.
