@@ -568,6 +568,53 @@ TEST(SessionStateBlob, RoundTripsAndRefusesWrongLengthsAndNonFiniteValues)
         << refused.error().message;
 }
 
+/// A hand-made master's pieces (transport endpoints standing in for peers, session id 77): the
+/// model and rest state blobs of a level-3 sphere, a whole blob in one chunk, a Welcome for
+/// joiner id 1 announcing `model` and `state` and listing `peers`, and a reliable send as `sender`.
+struct HandMadeMaster
+{
+    core::TetraGrid grid = core::TetraGrid::create(3).value();
+    std::vector<std::byte> model = encode_model(
+        sim::MembraneModel::create(grid, scenes::sphere_grid(grid, 1.0), material()).value(),
+        Coupling::Exact);
+    std::vector<std::byte> state =
+        encode_state(grid, core::Field<double>(grid), core::Field<double>(grid), 0, 0.0);
+
+    static net::Blob whole(net::BlobKind kind, const std::vector<std::byte>& b)
+    {
+        return net::Blob{.kind = kind,
+                         .total_size = static_cast<std::uint32_t>(b.size()),
+                         .offset = 0,
+                         .data = b};
+    }
+
+    net::Welcome welcome(std::vector<net::PeerInfo> peers) const
+    {
+        net::Welcome w;
+        w.your_id = net::PeerId{1};
+        w.master_id = net::PeerId{0};
+        w.grid_level = 3;
+        w.leaf_depth = 0;
+        w.model_size = static_cast<std::uint32_t>(model.size());
+        w.model_hash = core::hash_bytes(model);
+        w.state_size = static_cast<std::uint32_t>(state.size());
+        w.state_hash = core::hash_bytes(state);
+        w.peers = std::move(peers);
+        return w;
+    }
+
+    static bool send(net::Transport& from, net::PeerHandle to, std::uint16_t sender, net::Body body)
+    {
+        net::Message m;
+        m.header.session = 77;
+        m.header.sender = net::PeerId{sender};
+        m.body = std::move(body);
+        std::vector<std::byte> bytes(net::encoded_size(m));
+        return net::encode(m, bytes) &&
+               from.send(to, net::Channel::Control, bytes, net::Delivery::Reliable);
+    }
+};
+
 // A master whose state blob holds a non-finite value, its announced hash matching, so that
 // only decoding can tell: the joiner refuses the welcome, says why and never installs the model,
 // rather than step on from rest apart from the session. The master here is hand-made: a
@@ -583,32 +630,10 @@ TEST(SessionJoin, AStateBlobThatDoesNotDecodeIsRefused)
                                 settings_for(Coupling::Exact, "j"));
     ASSERT_TRUE(joiner) << joiner.error().message;
 
-    const core::TetraGrid g = core::TetraGrid::create(3).value();
-    const auto model = sim::MembraneModel::create(g, scenes::sphere_grid(g, 1.0), material());
-    ASSERT_TRUE(model);
-    const auto model_blob = encode_model(*model, Coupling::Exact);
-    core::Field<double> u(g), v(g);
-    auto state_blob = encode_state(g, u, v, 0, 0.0);
+    HandMadeMaster hand;
     const double inf = std::numeric_limits<double>::infinity();
-    std::memcpy(state_blob.data() + 16 + 16 * 40, &inf, 8);  // u of node 40
-
-    const auto send = [&](net::PeerHandle to, net::Body body)
-    {
-        net::Message m;
-        m.header.session = 77;
-        m.header.sender = net::PeerId{0};
-        m.body = std::move(body);
-        std::vector<std::byte> bytes(net::encoded_size(m));
-        ASSERT_TRUE(net::encode(m, bytes));
-        ASSERT_TRUE(master->send(to, net::Channel::Control, bytes, net::Delivery::Reliable));
-    };
-    const auto blob = [](net::BlobKind kind, const std::vector<std::byte>& b)
-    {
-        return net::Blob{.kind = kind,
-                         .total_size = static_cast<std::uint32_t>(b.size()),
-                         .offset = 0,
-                         .data = b};
-    };
+    std::memcpy(hand.state.data() + 16 + 16 * 40, &inf, 8);  // u of node 40
+    ASSERT_LE(hand.model.size(), 32768U);
     bool welcomed = false;
     for (int k = 0; k < 2000 && (*joiner)->refusal().empty(); ++k)
     {
@@ -619,21 +644,14 @@ TEST(SessionJoin, AStateBlobThatDoesNotDecodeIsRefused)
             auto hello = net::decode(ev->data);
             ASSERT_TRUE(hello);
             ASSERT_EQ(hello->type(), net::MessageType::Hello);
-            net::Welcome w;
-            w.your_id = net::PeerId{1};
-            w.master_id = net::PeerId{0};
-            w.grid_level = 3;
-            w.leaf_depth = 0;
-            w.model_size = static_cast<std::uint32_t>(model_blob.size());
-            w.model_hash = core::hash_bytes(model_blob);
-            w.state_size = static_cast<std::uint32_t>(state_blob.size());
-            w.state_hash = core::hash_bytes(state_blob);
-            w.peers = {{net::PeerId{0}, net::Role::Participant, {127, 0, 0, 1}, 7000, "m"},
-                       {net::PeerId{1}, net::Role::Participant, {127, 0, 0, 1}, 7001, "j"}};
-            send(ev->peer, w);
-            ASSERT_LE(model_blob.size(), 32768U);
-            send(ev->peer, blob(net::BlobKind::Model, model_blob));
-            send(ev->peer, blob(net::BlobKind::State, state_blob));
+            const auto w =
+                hand.welcome({{net::PeerId{0}, net::Role::Participant, {127, 0, 0, 1}, 7000, "m"},
+                              {net::PeerId{1}, net::Role::Participant, {127, 0, 0, 1}, 7001, "j"}});
+            ASSERT_TRUE(hand.send(*master, ev->peer, 0, w));
+            ASSERT_TRUE(hand.send(*master, ev->peer, 0,
+                                  HandMadeMaster::whole(net::BlobKind::Model, hand.model)));
+            ASSERT_TRUE(hand.send(*master, ev->peer, 0,
+                                  HandMadeMaster::whole(net::BlobKind::State, hand.state)));
             welcomed = true;
         }
         (*joiner)->poll();
@@ -663,33 +681,9 @@ TEST(SessionJoin, BlobChunksFromAnotherPeerAreDropped)
                                 settings_for(Coupling::Exact, "j"));
     ASSERT_TRUE(joiner) << joiner.error().message;
 
-    const core::TetraGrid g = core::TetraGrid::create(3).value();
-    const auto model = sim::MembraneModel::create(g, scenes::sphere_grid(g, 1.0), material());
-    ASSERT_TRUE(model);
-    const auto model_blob = encode_model(*model, Coupling::Exact);
-    core::Field<double> u(g), v(g);
-    const auto state_blob = encode_state(g, u, v, 0, 0.0);
-    auto other_state = state_blob;
+    const HandMadeMaster hand;
+    auto other_state = hand.state;
     other_state[16 + 7] = std::byte{0x40};  // u of node 0: 2.0
-
-    const auto send =
-        [](net::Transport& from, net::PeerHandle to, std::uint16_t sender, net::Body body)
-    {
-        net::Message m;
-        m.header.session = 77;
-        m.header.sender = net::PeerId{sender};
-        m.body = std::move(body);
-        std::vector<std::byte> bytes(net::encoded_size(m));
-        return net::encode(m, bytes) &&
-               from.send(to, net::Channel::Control, bytes, net::Delivery::Reliable);
-    };
-    const auto blob = [](net::BlobKind kind, const std::vector<std::byte>& b)
-    {
-        return net::Blob{.kind = kind,
-                         .total_size = static_cast<std::uint32_t>(b.size()),
-                         .offset = 0,
-                         .data = b};
-    };
     std::optional<net::PeerHandle> to_joiner;
     bool forged = false;
     bool state_sent = false;
@@ -700,27 +694,22 @@ TEST(SessionJoin, BlobChunksFromAnotherPeerAreDropped)
             if (ev->kind != net::TransportEvent::Kind::Received || to_joiner)
                 continue;
             to_joiner = ev->peer;
-            net::Welcome w;
-            w.your_id = net::PeerId{1};
-            w.master_id = net::PeerId{0};
-            w.grid_level = 3;
-            w.leaf_depth = 0;
-            w.model_size = static_cast<std::uint32_t>(model_blob.size());
-            w.model_hash = core::hash_bytes(model_blob);
-            w.state_size = static_cast<std::uint32_t>(state_blob.size());
-            w.state_hash = core::hash_bytes(state_blob);
-            w.peers = {{net::PeerId{0}, net::Role::Participant, {127, 0, 0, 1}, 7000, "m"},
-                       {net::PeerId{1}, net::Role::Participant, {127, 0, 0, 1}, 7001, "j"},
-                       {net::PeerId{2}, net::Role::Participant, rogue_address.ipv4,
-                        rogue_address.port, "r"}};
-            ASSERT_TRUE(send(*master, ev->peer, 0, w));
-            ASSERT_TRUE(send(*master, ev->peer, 0, blob(net::BlobKind::Model, model_blob)));
+            const auto w =
+                hand.welcome({{net::PeerId{0}, net::Role::Participant, {127, 0, 0, 1}, 7000, "m"},
+                              {net::PeerId{1}, net::Role::Participant, {127, 0, 0, 1}, 7001, "j"},
+                              {net::PeerId{2}, net::Role::Participant, rogue_address.ipv4,
+                               rogue_address.port, "r"}});
+            ASSERT_TRUE(hand.send(*master, ev->peer, 0, w));
+            ASSERT_TRUE(hand.send(*master, ev->peer, 0,
+                                  HandMadeMaster::whole(net::BlobKind::Model, hand.model)));
         }
         while (auto ev = rogue->poll(0))
             if (ev->kind == net::TransportEvent::Kind::Connected && !forged)
-                forged = send(*rogue, ev->peer, 2, blob(net::BlobKind::State, other_state));
+                forged = hand.send(*rogue, ev->peer, 2,
+                                   HandMadeMaster::whole(net::BlobKind::State, other_state));
         if (forged && !state_sent && k % 50 == 0)
-            state_sent = send(*master, *to_joiner, 0, blob(net::BlobKind::State, state_blob));
+            state_sent = hand.send(*master, *to_joiner, 0,
+                                   HandMadeMaster::whole(net::BlobKind::State, hand.state));
         (*joiner)->poll();
         (*joiner)->advance(1e-3 * k);
         net.advance(1e-3);
@@ -728,7 +717,7 @@ TEST(SessionJoin, BlobChunksFromAnotherPeerAreDropped)
     ASSERT_TRUE(forged);
     EXPECT_TRUE((*joiner)->ready()) << (*joiner)->refusal();
     EXPECT_EQ((*joiner)->stats().foreign_blobs, 1U);
-    EXPECT_EQ((*joiner)->display_u()[g.index(0, 0)], 0.0);
+    EXPECT_EQ((*joiner)->display_u()[hand.grid.index(0, 0)], 0.0);
 }
 
 /// An exact session at level 3 on `h`: a master (session id `session`, force limit `max_force`,
