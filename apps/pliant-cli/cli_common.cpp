@@ -12,11 +12,14 @@
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <optional>
+#include <string>
+#include <variant>
 
 namespace pliant::cli
 {
@@ -140,6 +143,80 @@ const volatile std::sig_atomic_t* install_interrupt_flag()
     std::signal(SIGINT, on_interrupt);
     std::signal(SIGTERM, on_interrupt);
     return &g_interrupted;
+}
+
+namespace
+{
+/// A finite number from all of `text` (as CLI11 converts a double), or why it is not one.
+std::variant<double, std::string> finite_number(const std::string& text)
+{
+    double value = 0.0;
+    if (!CLI::detail::lexical_cast(text, value))
+        return text + " is not a number";
+    if (!std::isfinite(value))
+        return text + " is not a finite number";
+    return value;
+}
+
+/// `%g` of a bound: 0.5, 120, 1e-06.
+std::string bound(double v)
+{
+    char buffer[32];
+    std::snprintf(buffer, sizeof buffer, "%g", v);
+    return buffer;
+}
+}  // namespace
+
+CLI::Validator positive_number()
+{
+    return {[](std::string& text)
+            {
+                auto v = finite_number(text);
+                if (const auto* why = std::get_if<std::string>(&v))
+                    return *why;
+                return std::get<double>(v) > 0.0 ? std::string()
+                                                 : text + " is not positive; give a number > 0";
+            },
+            "POSITIVE", "POSITIVE"};
+}
+
+CLI::Validator non_negative_number()
+{
+    return {[](std::string& text)
+            {
+                auto v = finite_number(text);
+                if (const auto* why = std::get_if<std::string>(&v))
+                    return *why;
+                return std::get<double>(v) >= 0.0 ? std::string()
+                                                  : text + " is negative; give a number >= 0";
+            },
+            "NONNEGATIVE", "NONNEGATIVE"};
+}
+
+CLI::Validator number_in(double lo, double hi)
+{
+    const std::string range = "[" + bound(lo) + ", " + bound(hi) + "]";
+    return {[lo, hi, range](std::string& text)
+            {
+                auto v = finite_number(text);
+                if (const auto* why = std::get_if<std::string>(&v))
+                    return *why;
+                const double x = std::get<double>(v);
+                return x >= lo && x <= hi ? std::string()
+                                          : text + " is outside " + range + "; give a number in it";
+            },
+            range, "RANGE"};
+}
+
+CLI::Validator no_minus_sign()
+{
+    return {[](std::string& text)
+            {
+                return text.find('-') == std::string::npos
+                           ? std::string()
+                           : text + " is negative; give a whole number >= 0";
+            },
+            "", "UNSIGNED"};
 }
 
 std::string lower_extension(const std::filesystem::path& p)

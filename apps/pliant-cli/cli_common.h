@@ -68,6 +68,17 @@ auto command_callback(const GlobalOptions& global, Body body)
     };
 }
 
+/// Checks for floating-point options. CLI11's own `Range`, `PositiveNumber` and
+/// `NonNegativeNumber` let "nan" through (every comparison with it is false, so `--duration nan`
+/// ran until Ctrl-C) and print their bound as DBL_MAX in full. These refuse anything but a
+/// finite number and say which rule the value breaks ("--max-force: -2 is negative; give a
+/// number >= 0"); --help shows them as FLOAT:POSITIVE, FLOAT:NONNEGATIVE, FLOAT:[LO, HI].
+[[nodiscard]] CLI::Validator positive_number();
+[[nodiscard]] CLI::Validator non_negative_number();
+[[nodiscard]] CLI::Validator number_in(double lo, double hi);
+/// For unsigned integer options: CLI11 converts "-5" to 2^64 - 5 without a word.
+[[nodiscard]] CLI::Validator no_minus_sign();
+
 /// Whether `path` can be written (it is created if missing, and left as it was otherwise):
 /// checked before a long run starts, so a bad --stats or output path fails at once, with the
 /// reason. \return IoError naming `what`, the file and the system's reason.

@@ -896,17 +896,17 @@ void add_demo_command(CLI::App& app, const GlobalOptions& global)
         ->check(CLI::Range(0, 3))
         ->capture_default_str();
     cmd->add_option("--duration", opt->duration, "Session time [s]")
-        ->check(CLI::Range(0.5, 120.0))
+        ->check(number_in(0.5, 120.0))
         ->capture_default_str();
     cmd->add_option("--fps", opt->fps, "Frames per second of session time")
-        ->check(CLI::Range(1.0, 60.0))
+        ->check(number_in(1.0, 60.0))
         ->capture_default_str();
     cmd->add_option("--dt", opt->dt, "Fixed step [s] (default: 0.9 x the stability bound)")
-        ->check(CLI::PositiveNumber);
+        ->check(positive_number());
     cmd->add_option("--width", opt->width, "Frame width [pixels]")->check(CLI::Range(16, 4096));
     cmd->add_option("--height", opt->height, "Frame height [pixels]")->check(CLI::Range(16, 4096));
     cmd->add_option("--wall-limit", opt->wall_limit, "Give up after this many wall seconds")
-        ->check(CLI::PositiveNumber)
+        ->check(positive_number())
         ->capture_default_str();
     cmd->add_flag("--quick", opt->quick, "Level 5, 2 s, 6 fps, 320x240 (for tests)");
     cmd->add_flag("!--no-render", opt->render, "Skip the pictures (no OpenGL needed)");
@@ -916,7 +916,7 @@ void add_demo_command(CLI::App& app, const GlobalOptions& global)
                     "With --view: write a PNG of the viewer's last frame at exit");
     cmd->add_option("--exit-after", opt->exit_after,
                     "With --view: close the viewer this many seconds after the object shows")
-        ->check(CLI::PositiveNumber);
+        ->check(positive_number());
     cmd->callback(command_callback(
         global,
         [opt, &global]()

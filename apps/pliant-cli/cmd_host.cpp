@@ -234,7 +234,9 @@ void add_host_command(CLI::App& app, const GlobalOptions& global)
                     "cells) or gnomonic (the paper's central projection)")
         ->check(CLI::IsMember({"equal-area", "gnomonic"}))
         ->capture_default_str();
-    cmd->add_option("-p,--port", opt->port, "UDP port to listen on")->capture_default_str();
+    cmd->add_option("-p,--port", opt->port, "UDP port to listen on")
+        ->check(no_minus_sign())
+        ->capture_default_str();
     cmd->add_option("--mode", opt->mode, "Coupling: exact or fast")
         ->check(CLI::IsMember({"exact", "fast"}))
         ->capture_default_str();
@@ -247,7 +249,7 @@ void add_host_command(CLI::App& app, const GlobalOptions& global)
         ->check(CLI::IsMember({"auto", "grown", "inside"}))
         ->capture_default_str();
     cmd->add_option("--duration", opt->duration, "Run time [s]")
-        ->check(CLI::PositiveNumber)
+        ->check(positive_number())
         ->capture_default_str();
     cmd->add_option("--script", opt->script, "Script of timed grabs / leave")
         ->check(CLI::ExistingFile);
@@ -255,11 +257,12 @@ void add_host_command(CLI::App& app, const GlobalOptions& global)
     cmd->add_option("--dt", opt->dt,
                     "Fixed step of exact mode [s]; default: the smaller of 1 ms and 0.9 x the "
                     "grid's stable step (a warning says when a given step is above it)")
-        ->check(CLI::PositiveNumber);
+        ->check(positive_number());
     cmd->add_option("--ticks", opt->ticks,
                     "Exact mode: stop stepping at this tick (0: never) and stream on until "
                     "--duration; give the participants the same --ticks, so that all end on the "
                     "same state")
+        ->check(no_minus_sign())
         ->capture_default_str();
     cmd->add_option("--record", opt->record,
                     "Exact mode: record every peer's forces into FILE.prec, with the hash of the "
@@ -273,24 +276,24 @@ void add_host_command(CLI::App& app, const GlobalOptions& global)
                     "at 0; not with --record")
         ->check(CLI::ExistingFile);
     cmd->add_option("--tension", opt->tension, "Membrane tension T [N/m]")
-        ->check(CLI::PositiveNumber)
+        ->check(positive_number())
         ->capture_default_str();
     cmd->add_option("--density", opt->density, "Areal density rho [kg/m^2]")
-        ->check(CLI::PositiveNumber)
+        ->check(positive_number())
         ->capture_default_str();
     cmd->add_option("--damping", opt->damping, "Nodal velocity damping beta [1/s]")
-        ->check(CLI::NonNegativeNumber)
+        ->check(non_negative_number())
         ->capture_default_str();
     cmd->add_option("--foundation", opt->foundation,
                     "Elastic foundation k_f [1/s^2]: pulls the surface back to rest")
-        ->check(CLI::NonNegativeNumber)
+        ->check(non_negative_number())
         ->capture_default_str();
     cmd->add_option("--max-force", opt->max_force,
                     "Largest force [N] any peer's grab applies; a longer one acts scaled down "
                     "to it. Default: the force that holds a patch of a tenth of the object's "
                     "radius R a diameter from rest, (rho pi (R/10)^2 k_f + 2 pi T) 2R; 0: no "
                     "limit")
-        ->check(CLI::NonNegativeNumber);
+        ->check(non_negative_number());
     cmd->add_option("--name", opt->name, "Peer name (printable ASCII, 1..32)")
         ->capture_default_str();
     add_secret_options(cmd, opt->passphrase, opt->key_file);

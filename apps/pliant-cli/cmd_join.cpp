@@ -180,9 +180,10 @@ void add_join_command(CLI::App& app, const GlobalOptions& global)
         ->required();
     cmd->add_flag("--viewer", opt->viewer, "Only watch (simulate nothing)");
     cmd->add_option("-p,--port", opt->port, "UDP port to listen on for other peers (0: any)")
+        ->check(no_minus_sign())
         ->capture_default_str();
     cmd->add_option("--duration", opt->duration, "Run time [s]")
-        ->check(CLI::PositiveNumber)
+        ->check(positive_number())
         ->capture_default_str();
     cmd->add_option("--script", opt->script, "Script of timed grabs / leave")
         ->check(CLI::ExistingFile);
@@ -190,6 +191,7 @@ void add_join_command(CLI::App& app, const GlobalOptions& global)
     cmd->add_option("--ticks", opt->ticks,
                     "Exact sessions: stop stepping at this tick (0: never); give every peer the "
                     "master's --ticks, so that all end on the same state")
+        ->check(no_minus_sign())
         ->capture_default_str();
     cmd->add_option("--save", opt->save,
                     "Write what this peer shows at the end to FILE.pgrid (positions, u, v and "

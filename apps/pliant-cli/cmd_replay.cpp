@@ -147,7 +147,8 @@ void add_replay_command(CLI::App& app, const GlobalOptions& global)
         ->check(CLI::ExistingFile);
     cmd->add_option("-o,--out", opt->out,
                     "Write the final surface: .pgrid, .obj, .ply, .gltf or .glb");
-    cmd->add_option("--until", opt->until, "Stop at this tick (default: the recording's end)");
+    cmd->add_option("--until", opt->until, "Stop at this tick (default: the recording's end)")
+        ->check(no_minus_sign());
     cmd->add_option("-j,--threads", opt->threads, "Threads of the replay (same result)")
         ->check(CLI::Range(1, 256))
         ->capture_default_str();

@@ -572,7 +572,7 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global)
         ->check(CLI::Range(1, 10))
         ->capture_default_str();
     cmd->add_option("--radius", opt->radius, "Sphere radius [m] when GRID is omitted")
-        ->check(CLI::PositiveNumber)
+        ->check(positive_number())
         ->capture_default_str();
     cmd->add_option("--sphere-map", opt->sphere_map,
                     "How the sphere's grid lies on it when GRID is omitted: equal-area (even "

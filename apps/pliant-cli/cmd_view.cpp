@@ -142,12 +142,13 @@ void add_view_command(CLI::App& app, const GlobalOptions& global)
     cmd->add_option("--screenshot", opt->screenshot, "Write a PNG of the last frame at exit");
     cmd->add_option("--exit-after", opt->exit_after,
                     "Quit this many seconds after the object first shows (0: never)")
-        ->check(CLI::NonNegativeNumber)
+        ->check(non_negative_number())
         ->capture_default_str();
     cmd->add_flag("--participant", opt->participant,
                   "Join HOST:PORT as a participant (simulates, may pull)");
     cmd->add_option("--name", opt->name, "Peer name in sessions")->capture_default_str();
     cmd->add_option("-p,--port", opt->port, "UDP port for sessions (0: any)")
+        ->check(no_minus_sign())
         ->capture_default_str();
     cmd->add_flag("--no-vsync", opt->no_vsync, "Draw as fast as possible (for measuring fps)");
     cmd->add_flag("--hide-panels", opt->hide_panels, "Start with the panels hidden (H toggles)");

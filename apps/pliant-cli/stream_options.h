@@ -10,6 +10,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include "cli_common.h"
+
 namespace pliant::cli
 {
 
@@ -36,11 +38,11 @@ inline void add_stream_options(CLI::App* cmd, StreamOptions& opt)
         ->excludes("--compress");
     cmd->add_option("--stream-rate", opt.stream_rate_hz,
                     "Leaf states per second that this peer sends for each leaf it owns [Hz]")
-        ->check(CLI::Range(1.0, 1000.0))
+        ->check(number_in(1.0, 1000.0))
         ->capture_default_str();
     cmd->add_option("--cap", opt.cap_mbit,
                     "With --compress: leaf-state bytes per peer at most [Mbit/s] (0: no cap)")
-        ->check(CLI::NonNegativeNumber)
+        ->check(non_negative_number())
         ->needs("--compress");
     cmd->add_option("--stream-coarsen", opt.stream_coarsen,
                     "Stream leaf states K levels coarser (every 2^K-th node, ~4^-K of the bytes;\n"
@@ -53,7 +55,7 @@ inline void add_stream_options(CLI::App* cmd, StreamOptions& opt)
                     "Fast mode: the oldest a neighbour's streamed state may be when this peer\n"
                     "steps [s]; older, the peer waits for fresher states (0: no bound;\n"
                     "docs/session.md §4.3)")
-        ->check(CLI::Range(0.0, 60.0))
+        ->check(number_in(0.0, 60.0))
         ->capture_default_str();
 }
 

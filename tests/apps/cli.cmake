@@ -57,6 +57,17 @@ if(TARGET pliant)
     pliant_cli_expect(cli_usage_bad_choice 2 STDERR "--mode: bogus not in \\{exact,fast\\}"
                       host --mode bogus)
     pliant_cli_expect(cli_usage_missing_argument 2 STDERR "MASTER is required" join)
+    # Numbers: the rule broken in words, no bound printed as DBL_MAX; and every FLOAT option of
+    # every command refuses nan and the infinities, every UINT option a minus sign.
+    pliant_cli_expect(cli_usage_negative 2 STDERR "--max-force: -2 is negative; give a number >= 0\n"
+                      host --max-force -2)
+    pliant_cli_expect(cli_usage_not_positive 2 STDERR "--color-range: 0 is not positive; give a number > 0\n"
+                      render --color-range 0)
+    pliant_cli_expect(cli_usage_outside 2 STDERR "--fps: 200 is outside \\[1, 60\\]; give a number in it"
+                      demo --fps 200)
+    add_test(NAME cli_usage_numbers_are_finite
+             COMMAND ${CMAKE_COMMAND} -DPLIANT=$<TARGET_FILE:pliant>
+                     -P ${CMAKE_CURRENT_SOURCE_DIR}/number_options.cmake)
     pliant_cli_expect(cli_usage_needs 2 STDERR "--cap requires --compress" join 127.0.0.1:7777 --cap 1)
     pliant_cli_expect(cli_usage_no_command 2 STDERR "A subcommand is required")
     pliant_cli_expect(cli_usage_unknown_command 2 STDERR
