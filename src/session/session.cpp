@@ -1406,7 +1406,8 @@ struct Session::Impl
     /// A step from `tick` gave non-finite values on this peer's nodes (sim::step kept the state
     /// of `tick`): the state diverged. Retrying would fail the same way (in exact coupling it
     /// republished the tick and logged a warning per try, hundreds per call), so the peer holds
-    /// its last finite state and steps no further; said once, as an error.
+    /// its last finite state and steps no further; said once, as an error. advance() then
+    /// streams that state and leaves (drop_out_diverged).
     void on_non_finite_step(std::uint64_t tick)
     {
         s.diverged_tick_ = tick;
@@ -1414,8 +1415,19 @@ struct Session::Impl
             "session: the step from tick {} (t = {:.6g} s) gives non-finite values on this "
             "peer's nodes: the state diverged (a fixed step above the grid's stable step, "
             "docs/physics.md §5, or forces without a limit, docs/session.md §7); this peer holds "
-            "its last finite state and steps no further",
+            "its last finite state, streams it and leaves the session",
             tick, s.state_.time);
+    }
+
+    /// After on_non_finite_step: our leaves' last finite state goes out once more, then we
+    /// disconnect from everyone, as a master's leave() does. The others treat it as a departure
+    /// (a participant's: the master re-partitions; the master's: failover) and take our leaves
+    /// over from that state, instead of waiting for our halos for ever (exact coupling) or
+    /// holding our leaves at their last streamed values with nobody stepping them (fast).
+    void drop_out_diverged()
+    {
+        stream();
+        close_all(net::DisconnectReason::Quit);
     }
 
     bool may_step(std::uint64_t t) const
@@ -3653,6 +3665,11 @@ struct Session::Impl
             flush_forces(0);
             fast_advance();
         }
+        if (s.diverged_tick_)
+        {
+            drop_out_diverged();
+            return;
+        }
         if (leaving && s.coupling_ == Coupling::Fast)
             close_all(net::DisconnectReason::Quit);
         if (leaving && !lockstep && s.coupling_ == Coupling::Exact)
@@ -3885,7 +3902,10 @@ Recording Session::recording() const
 
 void Session::shutdown()
 {
-    impl_->close_all(net::DisconnectReason::Shutdown);
+    // A peer that left already (a diverged master's drop-out handed the session over with
+    // Quit) must not end it for the others now.
+    if (!left_)
+        impl_->close_all(net::DisconnectReason::Shutdown);
 }
 
 const core::Field<double>& Session::display_u() const noexcept

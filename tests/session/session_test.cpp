@@ -10,7 +10,10 @@
 #include "session_harness.h"
 #include "support/fp_traps.h"
 
+#include <algorithm>
+#include <array>
 #include <bit>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -19,6 +22,7 @@
 #include <random>
 #include <span>
 #include <string>
+#include <tuple>
 
 namespace pliant::session::test
 {
@@ -1235,39 +1239,122 @@ TEST(SessionPeers, OnlyTheMasterAdmitsAndNoSecondConnectionTakesAMembersId)
         EXPECT_EQ(st.role, net::Role::Participant);
 }
 
-// A peer whose own step gives non-finite values (here: no force limit and a 1e308 N pull, whose
-// acceleration overflows) holds its last finite state and steps no more, saying so once
-// (Session::diverged). Before, exact coupling re-published the tick and retried the step, with a
-// warning per try, hundreds per call, for as long as the session ran.
-TEST(SessionForces, APeerWhoseStepDivergesHoldsItsLastFiniteState)
+// A peer whose own step gives non-finite values (here: no force limit and a 1e308 N push on a
+// node deep inside its share, whose acceleration overflows) holds its last finite state, says
+// so once (Session::diverged), streams that state and leaves; the other takes its leaves over
+// from it and goes on. Before, it stayed in the session: in exact coupling the other waited for
+// its halos for ever (its tick stood one above the diverged one), in fast coupling its leaves
+// stayed frozen at their last streamed values, owned by nobody who stepped. Either peer may be
+// the one that diverges: a diverged master's successor takes over (docs/session.md §6).
+class SessionDiverged : public ::testing::TestWithParam<std::tuple<Coupling, bool>>
 {
+};
+
+TEST_P(SessionDiverged, APeerWhoseStepDivergesLeavesAndTheOtherGoesOn)
+{
+    const auto [coupling, master_diverges] = GetParam();
     Harness h;
-    ASSERT_TRUE(master_and_participant(h, 4444, 0.0));
-    apply_schedule(h, {{1, 60, {face_pull(10, 1e308)}}});
-    pliant::test::FpTrapsOff traps_off;  // the overflowing step computes inf and NaN
-    const auto diverged = [&]() -> const Session*
+    SessionSettings ms = settings_for(coupling, "m");
+    ms.session_id = 4444;
+    ms.max_force = 0.0;  // no limit
+    ms.max_ticks = 0;
+    SessionSettings ps = settings_for(coupling, "p");
+    ps.max_ticks = 0;
+    h.host(4, ms);
+    h.join(net::Role::Participant, ps);
+    ASSERT_TRUE(pump_until_partitioned(h, 2));
+    ASSERT_TRUE(h.pump_until([&] { return all_at(h, 40, 2); }, 20000));
+    const std::size_t x = master_diverges ? 0 : 1;
+    Session& diverging = *h.peers[x];
+    Session& other = *h.peers[1 - x];
+    const core::TetraGrid& g = diverging.model()->grid();
+    const core::Vec3Field<double>& rest = diverging.model()->rest_positions();
+    const auto position = [&](core::NodeIndex n)
     {
-        for (const auto& p : h.peers)
-            if (p->diverged())
-                return p.get();
-        return nullptr;
+        const core::GridCoord c = g.coord(n);
+        return std::array<double, 3>{rest[0].at(c.x, c.y), rest[1].at(c.x, c.y),
+                                     rest[2].at(c.x, c.y)};
     };
-    ASSERT_TRUE(h.pump_until([&] { return diverged() != nullptr; }, 20000));
-    const Session& d = *diverged();
-    EXPECT_GE(*d.diverged(), 60U);
-    EXPECT_EQ(d.tick(), *d.diverged());
-    const std::uint64_t steps = d.stats().steps;
-    for (int k = 0; k < 400; ++k)
-        h.pump_once(0.0005);
-    EXPECT_EQ(d.tick(), *d.diverged());
-    EXPECT_EQ(d.stats().steps, steps);
-    const core::TetraGrid& g = d.model()->grid();
+    // The diverging peer's node farthest from every node the other owns.
+    const auto mine = owned_by(diverging);
+    const auto theirs = owned_by(other);
+    core::NodeIndex deep{0};
+    double deepest = -1.0;
     for (const core::NodeIndex n : g.node_of_unique())
     {
-        ASSERT_TRUE(std::isfinite(d.state().u[n]));
-        ASSERT_TRUE(std::isfinite(d.state().v[n]));
+        if (!mine(n))
+            continue;
+        double nearest = 1e300;
+        const auto p = position(n);
+        for (const core::NodeIndex m : g.node_of_unique())
+            if (theirs(m))
+            {
+                const auto q = position(m);
+                nearest = std::min(nearest, std::hypot(p[0] - q[0], p[1] - q[1], p[2] - q[2]));
+            }
+        if (nearest > deepest)
+        {
+            deepest = nearest;
+            deep = n;
+        }
     }
+    ASSERT_GT(deepest, 0.5);
+    const auto p = position(deep);
+    // Each peer pushes a little at a pole (so the states are not rest), and the other peer
+    // adds 1e308 N on the deep node, for one tick in exact coupling.
+    const std::uint64_t t0 = other.tick() + 10;
+    const std::uint64_t at = coupling == Coupling::Exact ? t0 : 0;
+    const net::UserForce mild = point_push(0.0, x == 0 ? -1.0 : 1.0, 0.0, 0.4, 0.3);
+    diverging.set_forces({point_push(0.0, x == 0 ? 1.0 : -1.0, 0.0, 0.4, 0.3)}, at);
+    other.set_forces({mild}, at);
+    pliant::test::FpTrapsOff traps_off;  // the overflowing step computes inf and NaN
+    const net::UserForce huge = point_push(p[0], p[1], p[2], 0.05, 1e308);
+    other.set_forces({mild, huge}, coupling == Coupling::Exact ? t0 + 5 : 0);
+    if (coupling == Coupling::Exact)
+        other.set_forces({mild}, t0 + 6);
+    ASSERT_TRUE(h.pump_until([&] { return diverging.diverged().has_value(); }, 20000));
+    if (coupling == Coupling::Fast)
+        other.set_forces({mild});
+    ASSERT_TRUE(h.pump_until([&] { return diverging.left(); }, 200));
+    if (coupling == Coupling::Exact)
+    {
+        EXPECT_EQ(*diverging.diverged(), t0 + 5);
+    }
+    EXPECT_EQ(diverging.tick(), *diverging.diverged());
+    for (const core::NodeIndex n : g.node_of_unique())
+    {
+        ASSERT_TRUE(std::isfinite(diverging.state().u[n]));
+        ASSERT_TRUE(std::isfinite(diverging.state().v[n]));
+    }
+    // The other takes every node over and steps on, finite.
+    const std::uint64_t from = *diverging.diverged();
+    ASSERT_TRUE(h.pump_until(
+        [&] { return other.tick() > from + 200 && other.stats().owned_nodes == g.unique_count(); },
+        40000));
+    EXPECT_FALSE(other.diverged().has_value());
+    EXPECT_EQ(other.role(), SessionRole::Master);
+    if (coupling == Coupling::Exact)
+    {
+        EXPECT_GE(other.stats().adopted_leaves, 1U);
+    }
+    double largest = 0.0;
+    for (const core::NodeIndex n : g.node_of_unique())
+    {
+        ASSERT_TRUE(std::isfinite(other.state().u[n]));
+        largest = std::max(largest, std::fabs(other.state().u[n]));
+    }
+    EXPECT_GT(largest, 0.0);
+    EXPECT_LT(largest, 1.0);
 }
+
+INSTANTIATE_TEST_SUITE_P(
+    CouplingAndWho, SessionDiverged,
+    ::testing::Combine(::testing::Values(Coupling::Exact, Coupling::Fast), ::testing::Bool()),
+    [](const ::testing::TestParamInfo<std::tuple<Coupling, bool>>& param_info)
+    {
+        return std::string(std::get<0>(param_info.param) == Coupling::Exact ? "Exact" : "Fast") +
+               (std::get<1>(param_info.param) ? "MasterDiverges" : "ParticipantDiverges");
+    });
 
 // Settings a peer cannot run with are refused naming the rule: a name the wire cannot carry
 // (non-ASCII, empty, too long) used to pass here and fail every join later without a word.

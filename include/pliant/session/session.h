@@ -344,7 +344,8 @@ public:
     core::Result<void> start_recording();
     /// The inputs recorded so far, with `final_tick` = this peer's tick (final_hash unset).
     [[nodiscard]] Recording recording() const;
-    /// Ends the session (master): disconnects every peer. `left()` becomes true.
+    /// Ends the session (master): disconnects every peer. `left()` becomes true. Nothing if this
+    /// peer has left already.
     void shutdown();
 
     [[nodiscard]] SessionRole role() const noexcept { return role_; }
@@ -414,8 +415,10 @@ public:
     [[nodiscard]] std::string refusal() const;
     /// The tick from which this peer's own step gave non-finite values (the state diverged: a
     /// fixed step above the stable one, or forces without a limit), after which it holds its
-    /// last finite state and steps no more; nullopt while it steps normally. `pliant host` and
-    /// `join` then end with an error.
+    /// last finite state and steps no more; nullopt while it steps normally. It then streams
+    /// that state once more and leaves (`left()`): the others take its leaves over from it (a
+    /// diverged master's successor takes over, docs/session.md §6). `pliant host` and `join`
+    /// then end with an error.
     [[nodiscard]] std::optional<std::uint64_t> diverged() const noexcept { return diverged_tick_; }
     /// A joiner whose connection to the master ended before it was welcomed: the reason the
     /// transport gave (net::DisconnectReason::Refused: the master, or its SecureTransport,
