@@ -474,10 +474,15 @@ void Viewer::pump_session(double now_s)
     } while (Clock::now() < budget_end && !session_->left());
     if (session_->left())
     {
-        // Why: the session refused this peer's settings, the master never answered (a joiner
-        // gets the model right after the greeting), or the link broke or the master ended it.
+        // Why: this peer's step diverged, the session refused its settings, the master never
+        // answered (a joiner gets the model right after the greeting), or the link broke or the
+        // master ended it.
         std::string why;
-        if (!session_->refusal().empty())
+        if (const auto tick = session_->diverged())
+            why = "the simulation diverged at tick " + std::to_string(*tick) +
+                  ": this peer left the session and the others took its share over (a step "
+                  "above the stable one, or forces without a limit; docs/session.md §7)";
+        else if (!session_->refusal().empty())
             why =
                 "the session at " + session_address_ + " refused this peer: " + session_->refusal();
         else if (session_->role() == session::SessionRole::Master)
