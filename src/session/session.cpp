@@ -466,6 +466,10 @@ struct RemotePeer
     bool heard = false;  ///< a message came from it on a bound connection: it knows us
     bool leaving = false;
     bool departed = false;
+    /// Exact coupling: the apply tick of the first partition it is no longer a member of, after
+    /// one it was in (it left, was lost, or was the lost master): its forces end there, on every
+    /// peer alike, since every peer holds the same partitions (docs/session.md §6).
+    std::optional<std::uint64_t> forces_end;
 };
 
 /// A quantised leaf state an owner sent (per leaf) or a receiver holds (per leaf, with sender).
@@ -982,6 +986,11 @@ struct Session::Impl
         e.members = e.owners;
         std::sort(e.members.begin(), e.members.end());
         e.members.erase(std::unique(e.members.begin(), e.members.end()), e.members.end());
+        if (s.coupling_ == Coupling::Exact && apply > 0)
+            if (const PartitionEntry* before = partition_at(apply - 1))
+                for (const net::PeerId id : before->members)
+                    if (id != s.id_ && !member(&e, id))
+                        end_forces(id.value, apply);
         partitions.push_back(std::move(e));
         // Keep the table short: drop entries superseded before the oldest tick still needed.
         const std::uint64_t keep = s.state_.tick > 2 ? s.state_.tick - 2 : 0;
@@ -992,6 +1001,19 @@ struct Session::Impl
             std::erase_if(partitions,
                           [&](const PartitionEntry& p) { return p.epoch < base_epoch; });
         }
+    }
+
+    /// Exact coupling: peer `id` is not a member of the partition that applies from `tick`,
+    /// though it was of the one before: its forces end at `tick` (a recording master logs an
+    /// empty list for it there, so that the replay ends them too).
+    void end_forces(std::uint16_t id, std::uint64_t tick)
+    {
+        auto it = peers.find(id);
+        if (it == peers.end() || (it->second.forces_end && *it->second.forces_end <= tick))
+            return;
+        it->second.forces_end = tick;
+        if (recording)
+            force_log.push_back(ForceRecord{id, tick, {}});
     }
 
     std::optional<core::NodeIndex> seed_of(const std::vector<net::Target>& pts) const
@@ -1191,9 +1213,11 @@ struct Session::Impl
         std::vector<std::pair<std::uint16_t, const ForceEntry*>> entries;
         entries.emplace_back(s.id_.value, active(my_forces, tick));
         for (const auto& [id, p] : peers)
-            // A departed peer's grab ends with it in fast coupling. Exact coupling keeps applying
-            // its last list, as its replay does (docs/session.md §6, limits).
-            if (!p.departed || s.coupling_ == Coupling::Exact)
+            // A departed peer's grab ends with it in fast coupling; in exact coupling at the
+            // first partition without it, the same tick on every peer and in the replay
+            // (docs/session.md §6).
+            if ((!p.departed || s.coupling_ == Coupling::Exact) &&
+                !(p.forces_end && tick >= *p.forces_end))
                 entries.emplace_back(id, active(p.forces, tick));
         std::sort(entries.begin(), entries.end(),
                   [](const auto& a, const auto& b) { return a.first < b.first; });
@@ -3341,7 +3365,8 @@ struct Session::Impl
             }
             p.forces.push_back(ForceEntry{m.header.tick, std::get<net::Force>(m.body).forces});
             count_limited(p.forces.back().forces, from, p.warned_force_limit);
-            if (recording)
+            // A list from after its forces ended never applies, so the replay must not see it.
+            if (recording && !(p.forces_end && m.header.tick >= *p.forces_end))
                 force_log.push_back(
                     ForceRecord{from, m.header.tick, std::get<net::Force>(m.body).forces});
             trim(p.forces);
