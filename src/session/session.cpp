@@ -66,6 +66,10 @@ constexpr double k_view_snap_s = 0.25;
 /// lost master sent to only some peers just before it went cannot share an epoch with the
 /// successor's (docs/session.md §6).
 constexpr std::uint32_t k_successor_epoch_gap = 16;
+/// Likewise its first peer id is this far above the highest it knows: a joiner the lost master
+/// welcomed just before it went, whose greeting has not reached the successor, holds an id just
+/// above it, which the successor must not give to another joiner.
+constexpr std::uint16_t k_successor_id_gap = 16;
 /// Partitions kept aside per peer that is not (yet) our master (failover, docs/session.md §6).
 constexpr std::size_t k_max_foreign_partitions = 8;
 /// How far a leaf state's epoch may run ahead of the newest partition held: a successor's gap
@@ -2558,7 +2562,9 @@ struct Session::Impl
         std::uint16_t top = s.id_.value;
         for (const auto& [id, p] : peers)
             top = std::max(top, id);
-        next_peer_id = std::max<std::uint16_t>(next_peer_id, static_cast<std::uint16_t>(top + 1));
+        next_peer_id = std::max<std::uint16_t>(
+            next_peer_id,
+            static_cast<std::uint16_t>(std::min<int>(top + k_successor_id_gap, 0xFFFE)));
         // Participants partitioned before are ready even if their points never reached us.
         for (auto& [id, p] : peers)
             if (member(cur, net::PeerId{id}) && p.info.role == net::Role::Participant)

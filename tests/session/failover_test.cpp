@@ -318,7 +318,9 @@ void run_failover(Coupling c, bool lossy = false, std::uint64_t seed = 1)
                    late.stats().owned_nodes > 0;
         },
         8000));
-    EXPECT_GT(late.id().value, 4);  // ids are never reused
+    // Ids are never reused, and a successor's start 16 above the highest it knows: a joiner the
+    // lost master welcomed just before it went may hold the ids right above.
+    EXPECT_GE(late.id().value, 4 + 16);
     EXPECT_EQ(late.master(), succ_id);
     const std::uint64_t t2 = h.peers[succ]->tick();
     ASSERT_TRUE(h.pump_until([&] { return h.peers[late_k]->tick() >= t2 + 50; }, 8000));
