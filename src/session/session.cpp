@@ -990,7 +990,9 @@ struct Session::Impl
         e.members = e.owners;
         std::sort(e.members.begin(), e.members.end());
         e.members.erase(std::unique(e.members.begin(), e.members.end()), e.members.end());
-        if (s.coupling_ == Coupling::Exact && apply > 0)
+        // Only where every participant present gets a share (fewer members than leaves): with
+        // more participants than leaves one may lose its share and still be here.
+        if (s.coupling_ == Coupling::Exact && apply > 0 && e.members.size() < e.owners.size())
             if (const PartitionEntry* before = partition_at(apply - 1))
                 for (const net::PeerId id : before->members)
                     if (id != s.id_ && !member(&e, id))
