@@ -1387,6 +1387,58 @@ INSTANTIATE_TEST_SUITE_P(
                (std::get<1>(param_info.param) ? "MasterDiverges" : "ParticipantDiverges");
     });
 
+// Where there are as many participants as leaves (level 3: 2 leaves), a participant present may
+// lose its share when another joins; its grab must go on acting (exact coupling ends a peer's
+// forces with its share only where every participant present has one, docs/session.md §6).
+TEST(SessionExact, AParticipantWithoutAShareKeepsPulling)
+{
+    Harness h;
+    SessionSettings ms = settings_for(Coupling::Exact, "m");
+    ms.max_ticks = 0;
+    SessionSettings ps = settings_for(Coupling::Exact, "p");
+    ps.max_ticks = 0;
+    h.host(3, ms);
+    h.join(net::Role::Participant, ps);
+    ASSERT_TRUE(pump_until_partitioned(h, 2));
+    h.peers[1]->set_forces({face_pull(10, 0.5)});
+    ASSERT_TRUE(h.pump_until([&] { return h.peers[0]->stats().active_forces == 1; }, 4000));
+    // A second participant whose point lies in the first one's leaf: three members for two
+    // leaves, and the seeds go to points first, then to the master, so the first participant
+    // is left without a share.
+    const std::uint32_t epoch = h.peers[0]->epoch();
+    Session& second = h.join(net::Role::Participant, ps);
+    const auto first_owns = owned_by(*h.peers[1]);
+    const core::TetraGrid& g = h.peers[0]->model()->grid();
+    std::uint32_t face = 0;
+    for (std::uint32_t f = 0; f < g.face_count(); f += 2)
+    {
+        const std::uint32_t cell = f / 2;
+        const int x = static_cast<int>(cell % static_cast<std::uint32_t>(2 * g.w()));
+        const int y = static_cast<int>(cell / static_cast<std::uint32_t>(2 * g.w()));
+        if (first_owns(g.canonical(g.index(x, y))))
+            face = f;
+    }
+    second.set_points_of_interest({net::Target{net::TargetKind::Face, face, {0, 0, 0}, 0.0}});
+    ASSERT_TRUE(h.pump_until(
+        [&]
+        {
+            const auto o = h.peers[0]->owners();
+            return second.ready() && h.peers[0]->epoch() > epoch &&
+                   std::find(o.begin(), o.end(), h.peers[1]->id()) == o.end();
+        },
+        8000));
+    const std::uint64_t t = h.peers[0]->tick();
+    ASSERT_TRUE(h.pump_until(
+        [&] { return h.peers[0]->tick() >= t + 20 && second.tick() >= t + 20; }, 8000));
+    const auto owners = h.peers[0]->owners();
+    std::vector<net::PeerId> members(owners.begin(), owners.end());
+    std::sort(members.begin(), members.end());
+    members.erase(std::unique(members.begin(), members.end()), members.end());
+    ASSERT_EQ(members.size(), 2U) << "two leaves, three participants";
+    for (const std::size_t k : {0U, 2U})  // the members, which step
+        EXPECT_EQ(h.peers[k]->stats().active_forces, 1U) << "peer " << k;
+}
+
 // Settings a peer cannot run with are refused naming the rule: a name the wire cannot carry
 // (non-ASCII, empty, too long) used to pass here and fail every join later without a word.
 TEST(SessionSettings, ANameTheWireCannotCarryIsRefusedNamingTheRule)
