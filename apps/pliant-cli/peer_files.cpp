@@ -28,8 +28,8 @@ int end_status(const session::Session& peer, const std::string& command)
         return 0;
     spdlog::error(
         "{}: the simulation diverged at tick {}: this peer kept its last finite state (what "
-        "--save writes) and left the session, whose other members took its share over; leave --dt "
-        "out (the host picks a stable step) or keep a force limit (--max-force)",
+        "--save writes) and left the session (the other members, if any, took its share over); "
+        "leave --dt out (the host picks a stable step) or keep a force limit (--max-force)",
         command, *tick);
     return k_exit_failure;
 }
