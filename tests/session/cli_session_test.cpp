@@ -169,6 +169,50 @@ TEST(SessionCli, KillingAParticipantThenTheMasterLeavesTheOthersRunning)
     }
 }
 
+// A host whose step diverges (a 1e308 N grab with --max-force 0, exact coupling) says so, leaves
+// and exits 3 at once, not at its --duration; the participant takes over its share and runs to
+// its own end with status 0. Bounded by the durations (host 20 s, participant 6 s).
+TEST(SessionCli, ADivergingHostLeavesAndTheParticipantGoesOn)
+{
+    const auto dir = pliant::test::scratch_dir("session_cli_diverge");
+    const int port = test_port(11);
+    const std::string exe = PLIANT_EXE;
+    const std::string d = dir.string();
+    const std::string p = std::to_string(port);
+    {
+        std::ofstream script(dir / "huge.txt");
+        script << "2.0 grab face 100 force 0 0 1e308 for 30\n";
+    }
+    const std::string cmd =
+        "cd '" + d + "' && rm -f *.rc *.csv *.log; ('" + exe + "' host --level 4 --port " + p +
+        " --max-force 0 --script huge.txt --duration 20 > host.log 2>&1; echo $? > host.rc) & "
+        "sleep 0.5; '" +
+        exe + "' join 127.0.0.1:" + p +
+        " --duration 6 --stats a.csv > a.log 2>&1; echo $? > a.rc; wait";
+    ASSERT_EQ(std::system(cmd.c_str()), 0);
+    PLIANT_SKIP_IF_UNBOUND(dir, "host", port);
+    const std::string host_log = read(dir / "host.log");
+    const std::string a_log = read(dir / "a.log");
+    EXPECT_EQ(read(dir / "host.rc"), "3\n") << host_log;
+    EXPECT_NE(host_log.find("host: the simulation diverged at tick"), std::string::npos)
+        << host_log;
+    // Its summary line: "host: S s, tick T, ...", S well below its --duration of 20 s.
+    const auto at = host_log.find("\nhost: ");
+    ASSERT_NE(at, std::string::npos) << host_log;
+    EXPECT_LT(std::stod(host_log.substr(at + 7)), 10.0) << host_log;
+    EXPECT_EQ(read(dir / "a.rc"), "0\n") << a_log;
+    EXPECT_NE(a_log.find("peer 1 takes over"), std::string::npos) << a_log;
+    EXPECT_NE(a_log.find("took over leaves of a lost peer"), std::string::npos) << a_log;
+    // Its last full rows: it owns every node (level 4: 514) and steps.
+    const auto a = rows(dir / "a.csv");
+    ASSERT_GE(a.size(), 4U);
+    for (std::size_t k = a.size() - 3; k < a.size() - 1; ++k)
+    {
+        EXPECT_EQ(value(a[k], "owned_nodes"), 514.0) << "row " << k;
+        EXPECT_GT(value(a[k], "steps"), 0.0) << "row " << k;
+    }
+}
+
 // Ctrl-C (SIGINT) or SIGTERM ends `pliant join` and `pliant host` cleanly long before their
 // --duration: the participant leaves (its summary is printed, exit 0), then the master ends the
 // session, and a viewer still connected sees the end and exits 0 too. Bounded: the durations
