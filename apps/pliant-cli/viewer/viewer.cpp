@@ -480,7 +480,7 @@ void Viewer::pump_session(double now_s)
         std::string why;
         if (const auto tick = session_->diverged())
             why = "the simulation diverged at tick " + std::to_string(*tick) +
-                  ": this peer left the session and the others took its share over (a step "
+                  ": this peer left the session (the others, if any, took its share over; a step "
                   "above the stable one, or forces without a limit; docs/session.md §7)";
         else if (!session_->refusal().empty())
             why =
