@@ -2,6 +2,7 @@
 // SPDX-FileCopyrightText: 2026 pliant contributors
 #include "cli_common.h"
 
+#include <pliant/core/file_io.h>
 #include <pliant/net/secure_transport.h>
 #include <pliant/net/transport.h>
 
@@ -48,14 +49,7 @@ int report(const core::Error& error)
 
 core::Result<void> check_writable(const std::filesystem::path& path, std::string_view what)
 {
-    errno = 0;
-    std::FILE* f = std::fopen(path.c_str(), "a");
-    if (f == nullptr)
-        return core::fail(
-            core::ErrorCode::IoError,
-            std::string(what) + ": cannot write '" + path.string() + "': " + std::strerror(errno));
-    std::fclose(f);
-    return {};
+    return core::check_output_path(path, what);
 }
 
 std::filesystem::path bundled_mesh()

@@ -79,9 +79,9 @@ auto command_callback(const GlobalOptions& global, Body body)
 /// For unsigned integer options: CLI11 converts "-5" to 2^64 - 5 without a word.
 [[nodiscard]] CLI::Validator no_minus_sign();
 
-/// Whether `path` can be written (it is created if missing, and left as it was otherwise):
-/// checked before a long run starts, so a bad --stats or output path fails at once, with the
-/// reason. \return IoError naming `what`, the file and the system's reason.
+/// Whether `path` can be written (core::check_output_path: nothing is created): checked before
+/// a long run starts, so a bad --stats or output path fails at once, with the reason.
+/// \return IoError naming `what`, the file and the system's reason.
 core::Result<void> check_writable(const std::filesystem::path& path, std::string_view what);
 
 /// The bundled default mesh (data/spot.obj), found next to the executable's install or in the

@@ -101,7 +101,7 @@ void print_text(const InfoOptions& opt, const mesh::ImportReport& r, const mesh:
                          : std::string("valid: closed, connected, genus-0 2-manifold"));
 }
 
-int run_info(const InfoOptions& opt)
+int run_info(const InfoOptions& opt, const GlobalOptions& global)
 {
     mesh::ImportReport report;
     auto m = mesh::import_mesh(opt.mesh, &report);
@@ -118,7 +118,7 @@ int run_info(const InfoOptions& opt)
         error = verdict.error();
     if (opt.json)
         print_json(opt, &report, &stats, error);
-    else
+    else if (!global.quiet)  // -q: the exit status is the answer, an error its reason
         print_text(opt, report, stats, error);
     return error ? cli::report(*error) : 0;
 }
@@ -136,7 +136,8 @@ void add_info_command(CLI::App& app, const GlobalOptions& global)
         "consistent orientation, one connected component, genus 0 (Euler characteristic 2).\n"
         "The first rule that fails is the verdict (docs/mesh.md lists them all).\n\n"
         "Exit codes: 0 valid closed genus-0 mesh; 1 unreadable file or a failed rule (the\n"
-        "message says which, with numbers and a location); 2 usage error.\n\n"
+        "message says which, with numbers and a location); 2 usage error. With -q only an\n"
+        "error is printed (--json still prints its object).\n\n"
         "Example:\n"
         "  pliant info data/spot.obj\n"
         "  pliant info scan.ply --json | jq .genus");
@@ -145,7 +146,8 @@ void add_info_command(CLI::App& app, const GlobalOptions& global)
                   "Print one JSON object on stdout (fields: valid, error_code, message, vertices, "
                   "faces, edges, components, boundary_edges, euler_characteristic, genus (null "
                   "when undefined), bbox_diagonal, ...)");
-    cmd->callback(command_callback(global, [opt]() -> int { return run_info(*opt); }));
+    cmd->callback(
+        command_callback(global, [opt, &global]() -> int { return run_info(*opt, global); }));
 }
 
 const CommandRegistrar k_register_info{{"info", 10, &add_info_command}};

@@ -17,6 +17,7 @@
 #include <algorithm>
 #include <cctype>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -36,7 +37,7 @@ struct RefineOptions
     int threads = 1;
 };
 
-int run_refine(const RefineOptions& opt)
+int run_refine(const RefineOptions& opt, const GlobalOptions& global)
 {
     using core::ErrorCode;
     const std::string ext = lower_extension(opt.out);
@@ -51,6 +52,14 @@ int run_refine(const RefineOptions& opt)
                            (std::filesystem::exists(opt.grid, ec) ? ": not a regular file"
                                                                   : ": no such file") +
                            " (expected a .pgrid grid file; make one with `pliant remesh`)"});
+    // Before the work, not after it; nothing is created (the output is written whole at the end).
+    if (auto ok = check_writable(opt.out, "refine: -o"); !ok)
+        return report(ok.error());
+    if (ext == ".gltf")
+        if (auto ok = check_writable(std::filesystem::path(opt.out).replace_extension(".bin"),
+                                     "refine: -o (the .gltf's buffer)");
+            !ok)
+            return report(ok.error());
 
     auto file = core::load_grid(opt.grid);
     if (!file)
@@ -124,7 +133,17 @@ int run_refine(const RefineOptions& opt)
         core::Field<double> plain(fine, 0);
         for (int y = 0; y < plain.ny(); ++y)
             for (int x = 0; x < plain.nx(); ++x)
-                plain.at(x, y) = channels[i].at(x, y);
+            {
+                // The mask's sums can overflow values near the largest double.
+                const double v = channels[i].at(x, y);
+                if (!std::isfinite(v))
+                    return report({ErrorCode::InvalidArgument,
+                                   "refine: " + opt.grid.string() + ": refining channel '" +
+                                       file->fields[i].name + "' gave a value that is not finite " +
+                                       "(the input's values are too large for the mask's sums); "
+                                       "nothing written"});
+                plain.at(x, y) = v;
+            }
         out.fields.push_back({file->fields[i].name, std::move(plain)});
     }
 
@@ -143,9 +162,10 @@ int run_refine(const RefineOptions& opt)
             return report(saved.error());
     }
     spdlog::debug("refine: {} levels in {:.3f} ms", opt.levels, total_ms);
-    std::printf("%s: level %d -> %d, %zu vertices, %zu faces, %zu channel(s) -> %s\n",
-                opt.grid.string().c_str(), level, fine.level(), fine.unique_count(),
-                fine.face_count(), channels.size(), opt.out.string().c_str());
+    if (!global.quiet)
+        std::printf("%s: level %d -> %d, %zu vertices, %zu faces, %zu channel(s) -> %s\n",
+                    opt.grid.string().c_str(), level, fine.level(), fine.unique_count(),
+                    fine.face_count(), channels.size(), opt.out.string().c_str());
     return 0;
 }
 
@@ -176,7 +196,8 @@ void add_refine_command(CLI::App& app, const GlobalOptions& global)
                     "Threads for the convolution (results are identical for any count)")
         ->check(CLI::Range(1, 256))
         ->capture_default_str();
-    cmd->callback(command_callback(global, [opt]() -> int { return run_refine(*opt); }));
+    cmd->callback(
+        command_callback(global, [opt, &global]() -> int { return run_refine(*opt, global); }));
 }
 
 const CommandRegistrar k_register_refine{{"refine", 30, &add_refine_command}};

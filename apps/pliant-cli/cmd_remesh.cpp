@@ -5,6 +5,7 @@
 // docs/grid-format.md), .obj, .ply, .pfm. `--gpu` samples through an offscreen OpenGL context
 // (render::sample_on_gpu on the gnomonic domain map, render::locate_on_gpu plus exact CPU
 // interpolation on the equal-area one; docs/remesh.md, "GPU sampling").
+#include <pliant/core/file_io.h>
 #include <pliant/core/grid_io.h>
 #include <pliant/mesh/io.h>
 #include <pliant/mesh/validate.h>
@@ -55,32 +56,39 @@ int run_remesh(const RemeshOptions& opt, const GlobalOptions& global)
                        "remesh: output '" + opt.output.string() +
                            "' must end in .pgrid, .obj, .ply, .gltf, .glb or .pfm"});
 
-    // fail before minutes of work, not after: a path that cannot be written is refused now (a
-    // file the check creates is removed again if the remeshing fails)
-    const bool output_existed = std::filesystem::exists(opt.output);
-    const bool report_existed = !opt.report.empty() && std::filesystem::exists(opt.report);
+    // fail before minutes of work, not after: a path that cannot be written is refused now
+    // (nothing is created; the outputs are written whole at the end, core::write_files)
     if (auto ok = check_writable(opt.output, "remesh: -o"); !ok)
         return report(ok.error());
-    if (!opt.report.empty())
-        if (auto ok = check_writable(opt.report, "remesh: --report"); !ok)
-        {
-            if (!output_existed)
-                std::filesystem::remove(opt.output);
+    // A .gltf's buffer goes to <stem>.bin beside it.
+    const std::filesystem::path side =
+        ext == ".gltf" ? std::filesystem::path(opt.output).replace_extension(".bin")
+                       : std::filesystem::path();
+    if (!side.empty())
+        if (auto ok = check_writable(side, "remesh: -o (the .gltf's buffer)"); !ok)
             return report(ok.error());
-        }
-    struct RemoveOnFailure
+    if (!opt.report.empty())
     {
-        const std::filesystem::path* path;
-        bool keep;
-        ~RemoveOnFailure()
+        if (auto ok = check_writable(opt.report, "remesh: --report"); !ok)
+            return report(ok.error());
+        const auto resolved = [](const std::filesystem::path& p)
         {
             std::error_code ec;
-            if (!keep && !path->empty())
-                std::filesystem::remove(*path, ec);
+            auto r = std::filesystem::weakly_canonical(p, ec);
+            return ec ? std::filesystem::absolute(p, ec).lexically_normal() : r;
+        };
+        const auto same = [&](const std::filesystem::path& a, const std::filesystem::path& b)
+        { return resolved(a) == resolved(b); };
+        if (same(opt.report, opt.output) || (!side.empty() && same(opt.report, side)))
+        {
+            spdlog::error(
+                "remesh: --report {} names the same file as {}; give the report "
+                "another name",
+                opt.report.string(),
+                same(opt.report, opt.output) ? "-o" : "the .gltf's buffer file");
+            return k_exit_usage;
         }
-    };
-    RemoveOnFailure keep_output{&opt.output, output_existed};
-    RemoveOnFailure keep_report{&opt.report, report_existed};
+    }
 
     auto m = mesh::import_mesh(input);
     if (!m)
@@ -188,18 +196,11 @@ int run_remesh(const RemeshOptions& opt, const GlobalOptions& global)
             mesh::export_mesh(opt.output, remesh::grid_surface(result->grid, result->positions));
     if (!written)
         return report(written.error());
-    keep_output.keep = true;
 
     const std::string json = remesh::to_json(result->report);
     if (!opt.report.empty())
-    {
-        std::ofstream out(opt.report, std::ios::binary);
-        out << json;
-        if (!out)
-            return report({core::ErrorCode::IoError,
-                           "remesh: cannot write report '" + opt.report.string() + "'"});
-    }
-    keep_report.keep = true;
+        if (auto ok = core::write_text_file(opt.report, json, "remesh: --report"); !ok)
+            return report(ok.error());
     if (!global.quiet)
         std::fputs(remesh::to_text(result->report).c_str(), stdout);
     spdlog::debug("remesh: wrote {}", opt.output.string());

@@ -81,7 +81,9 @@ core::Result<std::array<int, 2>> parse_size(const std::string& text)
     int w = 0;
     int h = 0;
     char x = 0;
-    if (std::sscanf(text.c_str(), "%d%c%d", &w, &x, &h) != 3 || (x != 'x' && x != 'X') || w < 16 ||
+    int used = 0;  // the whole text must be read: "64x64junk" is not a size
+    if (std::sscanf(text.c_str(), "%d%c%d%n", &w, &x, &h, &used) != 3 ||
+        static_cast<std::size_t>(used) != text.size() || (x != 'x' && x != 'X') || w < 16 ||
         h < 16 || w > 8192 || h > 8192)
         return core::fail(ErrorCode::InvalidArgument,
                           "render: --size " + text + " is not WxH with 16 <= W, H <= 8192");
@@ -96,22 +98,30 @@ core::Result<render::CameraSettings> parse_camera(const std::string& text)
     double az = 0.0;
     double el = 0.0;
     double dist = 0.0;
-    const int n = std::sscanf(text.c_str(), "%lf,%lf,%lf", &az, &el, &dist);
-    if (n < 2 || !std::isfinite(az) || !std::isfinite(el) || !std::isfinite(dist) || dist < 0.0)
+    int used2 = 0;  // the whole text must be read, as two numbers or three
+    int used3 = 0;
+    const int n2 = std::sscanf(text.c_str(), "%lf,%lf%n", &az, &el, &used2);
+    const int n3 = std::sscanf(text.c_str(), "%lf,%lf,%lf%n", &az, &el, &dist, &used3);
+    const bool three = n3 == 3 && static_cast<std::size_t>(used3) == text.size();
+    const bool two = !three && n2 == 2 && static_cast<std::size_t>(used2) == text.size();
+    if (!three)
+        dist = 0.0;
+    if ((!two && !three) || !std::isfinite(az) || !std::isfinite(el) || !std::isfinite(dist) ||
+        dist < 0.0)
         return core::fail(ErrorCode::InvalidArgument,
                           "render: --camera " + text +
                               " is not AZIMUTH,ELEVATION[,DISTANCE] (degrees, degrees, model "
                               "units >= 0; 0 fits the object)");
     camera.azimuth_deg = az;
     camera.elevation_deg = el;
-    camera.distance = n == 3 ? dist : 0.0;
+    camera.distance = dist;
     return camera;
 }
 
 /// Owners from a channel "owner" (the owning peer's id per node, rounded; written by
-/// `pliant demo` into final.pgrid, docs/grid-format.md), or the quad-tree leaves at `depth`
-/// (DESIGN §5) as a stand-in partition: each canonical node belongs to exactly one leaf, twins
-/// follow it.
+/// `pliant demo` into final.pgrid and by `pliant host/join --save`, docs/grid-format.md), or the
+/// quad-tree leaves at `depth` (DESIGN §5) as a stand-in partition: each canonical node belongs to
+/// exactly one leaf, twins follow it.
 Owners owners_of(const core::TetraGrid& grid, const core::GridFile& file, int depth)
 {
     Owners owners{std::vector<std::uint16_t>(grid.node_count(), render::k_no_owner), {}};
@@ -153,6 +163,20 @@ Owners owners_of(const core::TetraGrid& grid, const core::GridFile& file, int de
     return owners;
 }
 
+/// --level-up on a grid of `level` stays within the finest level.
+core::Result<void> check_level_up(const fs::path& path, int level, int level_up)
+{
+    if (level + level_up <= core::k_max_level)
+        return {};
+    return core::fail(ErrorCode::InvalidArgument,
+                      "render: " + path.string() + " is level " + std::to_string(level) +
+                          "; level " + std::to_string(level) + " + --level-up " +
+                          std::to_string(level_up) + " = " + std::to_string(level + level_up) +
+                          " exceeds the finest level " + std::to_string(core::k_max_level) +
+                          " (use --level-up " + std::to_string(core::k_max_level - level) +
+                          " or fewer)");
+}
+
 /// Loads a grid file; `rest` supplies positions for a frame that carries only "u".
 core::Result<GridScene> load_grid_scene(const fs::path& path, const RenderOptions& opt,
                                         const core::GridFile* rest)
@@ -163,6 +187,8 @@ core::Result<GridScene> load_grid_scene(const fs::path& path, const RenderOption
     auto grid = core::TetraGrid::create(file->level);
     if (!grid)
         return grid.error();
+    if (auto ok = check_level_up(path, file->level, opt.level_up); !ok)
+        return ok.error();
     // `pliant simulate` frames carry deformed positions px/py/pz plus "u" (docs/physics.md):
     // u only colours them. A frame with "u" alone is displaced from the rest grid.
     const core::GridFile* geometry_file = &*file;
@@ -236,9 +262,12 @@ core::Result<void> save(const Target& target, const fs::path& path)
     return render::write_png(path, target.framebuffer.read_rgba8());
 }
 
-/// The largest |u| over the "u" channels of `files` (0 when none has one): a first pass over
-/// the sequence, so that one colour range serves every frame.
-core::Result<double> largest_displacement(const std::vector<fs::path>& files)
+/// The first pass over a sequence: every frame read and checked before any PNG is written (a
+/// bad frame stops the run with nothing written, not with part of an earlier sequence
+/// replaced), and the largest |u| over the "u" channels (0 when none has one), so that one
+/// colour range serves every frame.
+core::Result<double> check_frames(const std::vector<fs::path>& files, const RenderOptions& opt,
+                                  const core::GridFile* rest)
 {
     double largest = 0.0;
     for (const fs::path& path : files)
@@ -246,6 +275,20 @@ core::Result<double> largest_displacement(const std::vector<fs::path>& files)
         auto file = core::load_grid(path);
         if (!file)
             return file.error();
+        if (auto ok = check_level_up(path, file->level, opt.level_up); !ok)
+            return ok.error();
+        const bool positions = file->find("px") != nullptr && file->find("py") != nullptr &&
+                               file->find("pz") != nullptr;
+        if (!positions && rest == nullptr)
+            return core::fail(ErrorCode::BadGrid,
+                              "render: " + path.string() +
+                                  " has no positions px/py/pz (for frames that carry only \"u\", "
+                                  "give the rest geometry .pgrid as GRID)");
+        if (!positions && rest->level != file->level)
+            return core::fail(ErrorCode::BadGrid, "render: " + path.string() + " is level " +
+                                                      std::to_string(file->level) +
+                                                      " but the rest grid is level " +
+                                                      std::to_string(rest->level));
         if (const core::Field<double>* u = file->find("u"); u != nullptr)
             for (int y = 0; y < u->ny(); ++y)
                 for (int x = 0; x < u->nx(); ++x)
@@ -272,7 +315,7 @@ int run_frames(const RenderOptions& opt, render::DrawSettings settings, Target& 
             {ErrorCode::IoError, "render: --frames " + opt.frames.string() + " is not a folder"});
     std::vector<fs::path> files;
     for (const auto& entry : fs::directory_iterator(opt.frames, ec))
-        if (entry.is_regular_file() && entry.path().extension() == ".pgrid")
+        if (entry.is_regular_file() && lower_extension(entry.path()) == ".pgrid")
             files.push_back(entry.path());
     std::sort(files.begin(), files.end());
     if (files.empty())
@@ -290,14 +333,10 @@ int run_frames(const RenderOptions& opt, render::DrawSettings settings, Target& 
     // largest |u| of any frame (frame 0 of `pliant simulate` is the rest state, whose own
     // largest |u| is 0), or --color-range.
     std::string note;
-    double largest = 0.0;
-    if (settings.color == render::ColorMode::Displacement && opt.color_range <= 0.0)
-    {
-        auto found = largest_displacement(files);
-        if (!found)
-            return report(found.error());
-        largest = *found;
-    }
+    auto checked = check_frames(files, opt, rest ? &*rest : nullptr);
+    if (!checked)
+        return report(checked.error());
+    const double largest = *checked;
     auto renderer = render::GridRenderer::create();
     if (!renderer)
         return report(renderer.error());
@@ -341,8 +380,11 @@ int run_frames(const RenderOptions& opt, render::DrawSettings settings, Target& 
                     const double range =
                         std::max(largest, 1e-9 * std::max(renderer->bounds().radius(), 1e-30));
                     settings.displacement_range = static_cast<float>(range);
-                    note = range_note(range, "the largest |u| over the " +
-                                                 std::to_string(files.size()) + " frames");
+                    note = range_note(range, largest > 0.0
+                                                 ? "the largest |u| over the " +
+                                                       std::to_string(files.size()) + " frames"
+                                                 : "no frame is displaced: a floor of 1e-9 of the "
+                                                   "object's size; every frame shows grey");
                 }
             }
             else if (settings.color == render::ColorMode::Owner)
@@ -357,26 +399,44 @@ int run_frames(const RenderOptions& opt, render::DrawSettings settings, Target& 
             return report(saved.error());
         progress.update("render", static_cast<double>(i + 1) / static_cast<double>(files.size()));
     }
-    std::printf("%zu frames from %s -> %s%s%s\n", files.size(), opt.frames.string().c_str(),
-                (dir / (stem + "_NNNN.png")).string().c_str(), note.empty() ? "" : "; ",
-                note.c_str());
+    if (!global.quiet)
+        std::printf("%zu frames from %s -> %s%s%s\n", files.size(), opt.frames.string().c_str(),
+                    (dir / (stem + "_NNNN.png")).string().c_str(), note.empty() ? "" : "; ",
+                    note.c_str());
     return 0;
 }
 
 int run_render(const RenderOptions& opt, const GlobalOptions& global)
 {
     const auto start = std::chrono::steady_clock::now();
+    // Usage errors (exit 2), before any file is read.
+    const auto usage = [](const std::string& message)
+    {
+        spdlog::error("{}", message);
+        return k_exit_usage;
+    };
     auto size = parse_size(opt.size);
     if (!size)
-        return report(size.error());
+        return usage(size.error().message);
     auto camera = parse_camera(opt.camera);
     if (!camera)
-        return report(camera.error());
+        return usage(camera.error().message);
     if (opt.frames.empty() && opt.input.empty())
-        return report({ErrorCode::InvalidArgument, "render: give GRID or MESH, or --frames DIR"});
-    if (opt.out.extension() != ".png")
-        return report({ErrorCode::UnsupportedFormat,
-                       "render: output " + opt.out.string() + " must end in .png"});
+        return usage("render: give GRID or MESH, or --frames DIR");
+    if (lower_extension(opt.out) != ".png")
+        return usage("render: output " + opt.out.string() + " must end in .png");
+    if (opt.frames.empty())
+    {
+        std::error_code ec;
+        const fs::file_status st = fs::status(opt.input, ec);
+        if (!fs::exists(st))
+            return report({ErrorCode::IoError, "render: " + opt.input.string() + ": no such file"});
+        if (!fs::is_regular_file(st))
+            return report({ErrorCode::IoError,
+                           "render: " + opt.input.string() + ": not a regular file (" +
+                               (fs::is_directory(st) ? "a folder" : "a device, pipe or socket") +
+                               ")"});
+    }
 
     render::DrawSettings settings;
     settings.camera = *camera;
@@ -405,12 +465,9 @@ int run_render(const RenderOptions& opt, const GlobalOptions& global)
     if (!opt.frames.empty())
         return run_frames(opt, settings, target, global);
 
-    std::error_code ec;
-    if (!fs::is_regular_file(opt.input, ec))
-        return report({ErrorCode::IoError, "render: " + opt.input.string() + ": no such file"});
     std::string what;
     std::string note;
-    if (opt.input.extension() == ".pgrid")
+    if (lower_extension(opt.input) == ".pgrid")
     {
         auto scene = load_grid_scene(opt.input, opt, nullptr);
         if (!scene)
@@ -428,7 +485,11 @@ int run_render(const RenderOptions& opt, const GlobalOptions& global)
             const double range = opt.color_range > 0.0 ? opt.color_range
                                                        : std::max(renderer->max_abs_value(), 1e-12);
             settings.displacement_range = static_cast<float>(range);
-            note = range_note(range, opt.color_range > 0.0 ? "--color-range" : "its largest |u|");
+            note = range_note(range, opt.color_range > 0.0             ? "--color-range"
+                                     : renderer->max_abs_value() > 0.0 ? "its largest |u|"
+                                                                       : "it is not displaced: a "
+                                                                         "floor of 1e-12 m; it "
+                                                                         "shows grey");
         }
         else if (settings.color == render::ColorMode::Owner)
             note = "owners from " + scene->owner_source;
@@ -460,6 +521,8 @@ int run_render(const RenderOptions& opt, const GlobalOptions& global)
         return report(saved.error());
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (global.quiet)
+        return 0;
     std::printf("%s: %dx%d, %s (%s) in %.2f s -> %s\n", opt.input.string().c_str(), target.width,
                 target.height, what.c_str(), render::to_string(context->backend()), seconds,
                 opt.out.string().c_str());

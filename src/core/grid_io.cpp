@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: 2026 pliant contributors
+#include <pliant/core/file_io.h>
 #include <pliant/core/grid_io.h>
 #include <pliant/core/hash.h>
 
@@ -52,9 +53,11 @@ private:
 
 /// The rules of a channel (docs/grid-format.md) that both save_grid and load_grid enforce, so
 /// that every file written can be read: a name of 1..15 printable ASCII characters, finite
-/// values, twin nodes equal to their canonical nodes. `where` prefixes the message.
+/// values, twin nodes equal to their canonical nodes: bit for bit when reading (`bitwise`), by
+/// value when saving (the writer copies the canonical node's bits onto its twins, so +0 and -0
+/// become one). `where` prefixes the message.
 Result<void> check_channel(const TetraGrid& grid, const std::string& name,
-                           const Field<double>& values, const std::string& where)
+                           const Field<double>& values, const std::string& where, bool bitwise)
 {
     const bool printable =
         std::all_of(name.begin(), name.end(), [](char c) { return c > 0x20 && c < 0x7f; });
@@ -67,13 +70,16 @@ Result<void> check_channel(const TetraGrid& grid, const std::string& name,
                                                 "' has a non-finite value at node " +
                                                 std::to_string(i));
     for (const TwinPair& t : grid.twins())
-        if (values[t.twin] != values[t.canonical])
+        if (bitwise ? std::bit_cast<std::uint64_t>(values[t.twin]) !=
+                          std::bit_cast<std::uint64_t>(values[t.canonical])
+                    : values[t.twin] != values[t.canonical])
         {
             const GridCoord a = grid.coord(t.twin), b = grid.coord(t.canonical);
             return fail(ErrorCode::BadGrid,
                         where + "channel '" + name + "': twin node (" + std::to_string(a.x) + "," +
                             std::to_string(a.y) + ") differs from its canonical node (" +
-                            std::to_string(b.x) + "," + std::to_string(b.y) + ")");
+                            std::to_string(b.x) + "," + std::to_string(b.y) + ")" +
+                            (bitwise ? " (twins hold bit-identical values)" : ""));
         }
     return {};
 }
@@ -107,7 +113,8 @@ Result<std::vector<std::byte>> encode_grid(const GridFile& file, const std::stri
                         "save_grid: channel '" + f.name + "' is of level " +
                             std::to_string(f.values.level()) + ", the file of level " +
                             std::to_string(file.level));
-        if (auto ok = check_channel(*grid, f.name, f.values, "save_grid: " + source + ": "); !ok)
+        if (auto ok = check_channel(*grid, f.name, f.values, "save_grid: " + source + ": ", false);
+            !ok)
             return fail(ErrorCode::InvalidArgument, ok.error().message);
         if (file.find(f.name) != &f.values)
             return fail(ErrorCode::InvalidArgument,
@@ -117,6 +124,8 @@ Result<std::vector<std::byte>> encode_grid(const GridFile& file, const std::stri
         out.insert(out.end(), reinterpret_cast<const std::byte*>(name),
                    reinterpret_cast<const std::byte*>(name) + k_name_bytes);
         f.values.copy_to(plane);
+        for (const TwinPair& t : grid->twins())
+            plane[t.twin.value] = plane[t.canonical.value];
         const auto bytes = std::as_bytes(std::span<const double>(plane));
         out.insert(out.end(), bytes.begin(), bytes.end());
     }
@@ -129,13 +138,7 @@ Result<void> save_grid(const std::filesystem::path& path, const GridFile& file)
     auto out = encode_grid(file, path.string());
     if (!out)
         return out.error();
-    std::ofstream os(path, std::ios::binary | std::ios::trunc);
-    if (!os)
-        return fail(ErrorCode::IoError, path.string() + ": cannot open for writing");
-    os.write(reinterpret_cast<const char*>(out->data()), static_cast<std::streamsize>(out->size()));
-    if (!os)
-        return fail(ErrorCode::IoError, path.string() + ": write failed (disk full?)");
-    return {};
+    return write_file(path, *out, "save_grid");
 }
 
 Result<GridFile> decode_grid(std::span<const std::byte> bytes, const std::string& source)
@@ -166,12 +169,18 @@ Result<GridFile> decode_grid(std::span<const std::byte> bytes, const std::string
         return fail(ErrorCode::BadGrid,
                     where + "level " + std::to_string(level) + " is outside 1..10");
     const std::size_t plane_bytes = grid->node_count() * sizeof(double);
-    if (channels > 64 || r.remaining() != channels * (k_name_bytes + plane_bytes))
+    if (channels > 64)
         return fail(ErrorCode::ParseError,
-                    where + std::to_string(channels) + " channels of level " +
-                        std::to_string(level) + " need " +
-                        std::to_string(channels * (k_name_bytes + plane_bytes)) +
-                        " bytes, the file has " + std::to_string(r.remaining()));
+                    where + std::to_string(channels) + " channels; a grid file holds at most 64");
+    // Sizes of the whole file: header, channels, checksum.
+    const std::size_t header_bytes = sizeof(k_magic) + 12;
+    const std::size_t expected = header_bytes + channels * (k_name_bytes + plane_bytes) + 8;
+    if (bytes.size() != expected)
+        return fail(ErrorCode::ParseError, where + std::to_string(channels) + " channel" +
+                                               (channels == 1 ? "" : "s") + " of level " +
+                                               std::to_string(level) + " make a file of " +
+                                               std::to_string(expected) + " bytes; this one has " +
+                                               std::to_string(bytes.size()));
     GridFile file;
     file.level = static_cast<int>(level);
     std::vector<double> plane(grid->node_count());
@@ -187,7 +196,7 @@ Result<GridFile> decode_grid(std::span<const std::byte> bytes, const std::string
                                                 f.name +
                                                 "'): its name field is not padded with NUL bytes");
         f.values.copy_from(plane);
-        if (auto ok = check_channel(*grid, f.name, f.values, where); !ok)
+        if (auto ok = check_channel(*grid, f.name, f.values, where, true); !ok)
             return ok.error();
         for (const NamedField& other : file.fields)
             if (other.name == f.name)
@@ -252,22 +261,22 @@ Result<Vec3Field<double>> geometry_of(const TetraGrid& grid, const GridFile& fil
 
 Result<void> save_pfm(const std::filesystem::path& path, const Vec3Field<double>& positions)
 {
-    std::ofstream os(path, std::ios::binary | std::ios::trunc);
-    if (!os)
-        return fail(ErrorCode::IoError, path.string() + ": cannot open for writing");
     const int nx = positions[0].nx(), ny = positions[0].ny();
-    os << "PF\n" << nx << " " << ny << "\n-1.0\n";  // negative scale: little-endian
+    // negative scale: little-endian
+    const std::string head = "PF\n" + std::to_string(nx) + " " + std::to_string(ny) + "\n-1.0\n";
+    std::vector<std::byte> out(reinterpret_cast<const std::byte*>(head.data()),
+                               reinterpret_cast<const std::byte*>(head.data()) + head.size());
+    out.reserve(head.size() + static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny) * 12U);
     // PFM rows run bottom to top, which is the grid's y order.
     for (int y = 0; y < ny; ++y)
         for (int x = 0; x < nx; ++x)
             for (int k = 0; k < 3; ++k)
             {
                 const auto v = static_cast<float>(positions[static_cast<std::size_t>(k)].at(x, y));
-                os.write(reinterpret_cast<const char*>(&v), sizeof v);
+                const auto* b = reinterpret_cast<const std::byte*>(&v);
+                out.insert(out.end(), b, b + sizeof v);
             }
-    if (!os)
-        return fail(ErrorCode::IoError, path.string() + ": write failed");
-    return {};
+    return write_file(path, out, "save_pfm");
 }
 
 }  // namespace pliant::core

@@ -22,6 +22,7 @@
 //   relative name (Assimp cannot embed a data URI, and writing through Assimp's file system
 //   would put the absolute path into the URI).
 
+#include <pliant/core/file_io.h>
 #include <pliant/core/vec3.h>
 #include <pliant/mesh/io.h>
 
@@ -121,16 +122,23 @@ std::vector<char> ply_bytes(const TriMesh& mesh)
 
 using detail::FpHold;
 
-core::Result<void> write_file(const std::filesystem::path& path, const char* data, std::size_t size)
+std::span<const std::byte> bytes_of(std::string_view text)
 {
-    std::ofstream out(path, std::ios::binary | std::ios::trunc);
-    if (!out)
-        return fail(ErrorCode::IoError,
-                    "export_mesh: " + path.string() + ": cannot open for writing");
-    out.write(data, static_cast<std::streamsize>(size));
-    out.close();
-    if (!out)
-        return fail(ErrorCode::IoError, "export_mesh: " + path.string() + ": write failed");
+    return std::as_bytes(std::span<const char>(text.data(), text.size()));
+}
+
+/// Every vertex coordinate finite: a file with nan or inf in it is one no reader takes back
+/// (pliant's own import refuses it).
+core::Result<void> check_finite(const std::filesystem::path& path, const TriMesh& mesh)
+{
+    for (std::size_t i = 0; i < mesh.positions.size(); ++i)
+    {
+        const core::Vec3& p = mesh.positions[i];
+        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+            return fail(ErrorCode::NonFiniteCoordinate,
+                        "export_mesh: " + path.string() + ": vertex " + std::to_string(i) +
+                            " has a coordinate that is not finite; nothing written");
+    }
     return {};
 }
 
@@ -312,7 +320,9 @@ core::Result<void> write_gltf(const std::filesystem::path& path, const TriMesh& 
             why = "no output and no message";
         return fail(ErrorCode::IoError, name + ": Assimp's glTF exporter failed: " + why);
     }
-    // Side files first (the buffer), so a written .gltf never names a missing file.
+    // The side files (the buffer) and the .gltf are written together, all or none, so that a
+    // .gltf never names a missing or mismatched buffer.
+    std::vector<core::FileContent> files;
     for (const aiExportDataBlob* side = blob->next; side != nullptr; side = side->next)
     {
         const std::filesystem::path side_name(side->name.C_Str());
@@ -320,10 +330,9 @@ core::Result<void> write_gltf(const std::filesystem::path& path, const TriMesh& 
             return fail(ErrorCode::IoError,
                         name + ": Assimp's glTF exporter produced an unexpected side file '" +
                             side_name.string() + "'");
-        if (auto ok = write_file(path.parent_path() / side_name,
-                                 static_cast<const char*>(side->data), side->size);
-            !ok)
-            return ok;
+        files.push_back(
+            {path.parent_path() / side_name,
+             std::span<const std::byte>(static_cast<const std::byte*>(side->data), side->size)});
     }
     const std::string_view written(static_cast<const char*>(blob->data), blob->size);
     std::string cleaned;
@@ -348,7 +357,8 @@ core::Result<void> write_gltf(const std::filesystem::path& path, const TriMesh& 
     }
     if (cleaned.empty())
         return fail(ErrorCode::IoError, name + ": Assimp's glTF exporter wrote a malformed .glb");
-    return write_file(path, cleaned.data(), cleaned.size());
+    files.push_back({path, bytes_of(cleaned)});
+    return core::write_files(files, "export_mesh");
 }
 
 }  // namespace
@@ -359,6 +369,9 @@ core::Result<void> export_mesh(const std::filesystem::path& path, const TriMesh&
     std::transform(ext.begin(), ext.end(), ext.begin(),
                    [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
     std::vector<char> bytes;
+    if (ext == ".obj" || ext == ".ply")
+        if (auto ok = check_finite(path, mesh); !ok)
+            return ok;
     if (ext == ".obj")
         bytes = obj_bytes(mesh);
     else if (ext == ".ply")
@@ -369,7 +382,8 @@ core::Result<void> export_mesh(const std::filesystem::path& path, const TriMesh&
         return fail(ErrorCode::UnsupportedFormat,
                     "export_mesh: " + path.string() + ": unsupported format '" + ext +
                         "' (pliant writes .obj, .ply, .gltf and .glb)");
-    return write_file(path, bytes.data(), bytes.size());
+    return core::write_file(path, bytes_of(std::string_view(bytes.data(), bytes.size())),
+                            "export_mesh");
 }
 
 TriMesh from_grid(const core::TetraGrid& grid, const core::Vec3Field<double>& positions)

@@ -2,12 +2,15 @@
 // SPDX-FileCopyrightText: 2026 pliant contributors
 // PNG through libpng's simplified API (png_image, libpng >= 1.6), which reports errors through
 // a message buffer instead of longjmp, so no setjmp crosses C++ frames.
+#include <pliant/core/file_io.h>
 #include <pliant/render/image.h>
 
 #include <png.h>
 
+#include <cstddef>
 #include <cstdio>
 #include <string>
+#include <vector>
 
 namespace pliant::render
 {
@@ -37,19 +40,24 @@ core::Result<void> write_png(const std::filesystem::path& path, const Image& ima
                 rgb[i * 3U + c] = image.rgba[i * 4U + c];
         buffer = rgb.data();
     }
-    std::FILE* file = std::fopen(path.c_str(), "wb");
-    if (file == nullptr)
-        return core::fail(core::ErrorCode::IoError,
-                          "write_png: cannot open " + path.string() + " for writing");
-    const int ok = png_image_write_to_stdio(&png, file, 0, buffer, 0, nullptr);
-    const bool closed = std::fclose(file) == 0;
-    if (ok == 0 || !closed)
+    // Encoded in memory, then written whole (core::write_file): a failed write leaves no
+    // truncated PNG and keeps an earlier file.
+    png_alloc_size_t size = 0;
+    if (png_image_write_to_memory(&png, nullptr, &size, 0, buffer, 0, nullptr) == 0)
     {
-        const std::string message = ok == 0 ? std::string(png.message) : "close failed";
+        const std::string message = png.message;
         png_image_free(&png);
         return core::fail(core::ErrorCode::IoError, "write_png: " + path.string() + ": " + message);
     }
-    return {};
+    std::vector<std::byte> encoded(size);
+    if (png_image_write_to_memory(&png, encoded.data(), &size, 0, buffer, 0, nullptr) == 0)
+    {
+        const std::string message = png.message;
+        png_image_free(&png);
+        return core::fail(core::ErrorCode::IoError, "write_png: " + path.string() + ": " + message);
+    }
+    encoded.resize(size);
+    return core::write_file(path, encoded, "write_png");
 }
 
 core::Result<Image> read_png(const std::filesystem::path& path)

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: 2026 pliant contributors
+#include <pliant/core/file_io.h>
 #include <pliant/core/hash.h>
 #include <pliant/net/codec.h>
 #include <pliant/session/recording.h>
@@ -114,12 +115,7 @@ core::Result<void> save_recording(const std::filesystem::path& path, const Recor
     auto out = encode_recording(recording);
     if (!out)
         return out.error();
-    std::ofstream file(path, std::ios::binary | std::ios::trunc);
-    file.write(reinterpret_cast<const char*>(out->data()),
-               static_cast<std::streamsize>(out->size()));
-    if (!file)
-        return core::fail(core::ErrorCode::IoError, "cannot write recording " + path.string());
-    return {};
+    return core::write_file(path, *out, "save_recording");
 }
 
 core::Result<Recording> load_recording(const std::filesystem::path& path)

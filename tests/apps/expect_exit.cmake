@@ -7,11 +7,15 @@
 # the exit status). TIMEOUT (s, optional) stops COMMAND itself, so a hung program fails here
 # rather than being left behind when ctest stops this script. KEEP (a ;-list of paths,
 # optional): files written before COMMAND runs that must be there, unchanged, after it (an
-# earlier run's outputs that a refused run must not touch).
+# earlier run's outputs that a refused run must not touch). ABSENT (a ;-list of paths,
+# optional): files that must not exist after it (removed before it runs).
 foreach(f IN LISTS KEEP)
     get_filename_component(d "${f}" DIRECTORY)
     file(MAKE_DIRECTORY "${d}")
     file(WRITE "${f}" "an earlier run's file\n")
+endforeach()
+foreach(f IN LISTS ABSENT)
+    file(REMOVE "${f}")
 endforeach()
 set(timeout_args)
 if(DEFINED TIMEOUT)
@@ -35,6 +39,11 @@ foreach(f IN LISTS KEEP)
     file(READ "${f}" kept)
     if(NOT kept STREQUAL "an earlier run's file\n")
         message(FATAL_ERROR "${f} was overwritten:\n${out}${err}")
+    endif()
+endforeach()
+foreach(f IN LISTS ABSENT)
+    if(EXISTS "${f}")
+        message(FATAL_ERROR "${f} was left behind:\n${out}${err}")
     endif()
 endforeach()
 message("${out}${err}")

@@ -136,6 +136,69 @@ TEST(GridIo, RefusesTwinsThatDiffer)
     EXPECT_NE(in.error().message.find("twin"), std::string::npos) << in.error().message;
 }
 
+// +0 and -0 compare equal but are different bits: the writer stores the canonical node's bits
+// on its twins, and the reader wants them bit for bit (docs/grid-format.md).
+TEST(GridIo, TwinsOfOppositeZeroSignsAreWrittenAsOneAndRefusedInAFile)
+{
+    const auto dir = test::scratch_dir("grid_io_zero_twins");
+    const TetraGrid g = TetraGrid::create(2).value();
+    auto p = some_positions(g);
+    const GridCoord twin = g.coord(g.twins().front().twin);
+    const GridCoord canonical = g.coord(g.twins().front().canonical);
+    p[1].at(canonical.x, canonical.y) = 0.0;
+    p[1].at(twin.x, twin.y) = -0.0;
+    ASSERT_TRUE(save_grid(dir / "z.pgrid", make_geometry_file(g, p)));
+    auto in = load_grid(dir / "z.pgrid");
+    ASSERT_TRUE(in) << in.error().message;
+    EXPECT_FALSE(std::signbit(in->find("py")->at(twin.x, twin.y)));
+
+    // The same -0 put into the file's bytes (checksum recomputed) is refused.
+    std::vector<char> raw;
+    {
+        std::ifstream is(dir / "z.pgrid", std::ios::binary);
+        raw.assign(std::istreambuf_iterator<char>(is), std::istreambuf_iterator<char>());
+    }
+    const std::size_t plane = 16 + 8 * static_cast<std::size_t>(g.node_count());
+    const std::size_t at =
+        20 + plane + 16 + 8 * static_cast<std::size_t>(g.index(twin.x, twin.y).value);
+    const double minus_zero = -0.0;
+    std::memcpy(raw.data() + at, &minus_zero, 8);
+    const std::uint64_t h =
+        hash_bytes(std::as_bytes(std::span<const char>(raw.data(), raw.size() - 8)));
+    std::memcpy(raw.data() + raw.size() - 8, &h, 8);
+    auto bad = decode_grid(std::as_bytes(std::span<const char>(raw)), "z.pgrid");
+    ASSERT_FALSE(bad);
+    EXPECT_NE(bad.error().message.find("bit-identical"), std::string::npos) << bad.error().message;
+}
+
+// Sizes are told as whole files; a channel count beyond 64 says that rule.
+TEST(GridIo, SizeMessagesCountTheWholeFile)
+{
+    const TetraGrid g = TetraGrid::create(1).value();
+    auto bytes = encode_grid(make_geometry_file(g, some_positions(g)), "s.pgrid").value();
+    const auto with_channels = [&](std::uint32_t channels, std::size_t extra)
+    {
+        std::vector<std::byte> b = bytes;
+        std::memcpy(b.data() + 16, &channels, 4);
+        b.insert(b.end() - 8, extra, std::byte{0});
+        const std::uint64_t h = hash_bytes(std::span<const std::byte>(b).first(b.size() - 8));
+        std::memcpy(b.data() + b.size() - 8, &h, 8);
+        return decode_grid(b, "s.pgrid");
+    };
+    auto many = with_channels(65, 0);
+    ASSERT_FALSE(many);
+    EXPECT_NE(many.error().message.find("65 channels; a grid file holds at most 64"),
+              std::string::npos)
+        << many.error().message;
+    auto extra = with_channels(3, 8);
+    ASSERT_FALSE(extra);
+    EXPECT_NE(
+        extra.error().message.find("make a file of " + std::to_string(bytes.size()) +
+                                   " bytes; this one has " + std::to_string(bytes.size() + 8)),
+        std::string::npos)
+        << extra.error().message;
+}
+
 TEST(GridIo, ChannelNamesFollowTheFormatBothWays)
 {
     const auto dir = test::scratch_dir("grid_io_names");

@@ -49,16 +49,17 @@ struct GridFile
 
 /// The bytes of `file` as a `.pgrid` file; `source` names it in messages. \return
 /// InvalidArgument for a bad or repeated name, a channel that breaks the rules above or a field
-/// of another level; BadGrid for a level outside 1..10.
+/// of another level; BadGrid for a level outside 1..10. Twins are written with their canonical
+/// node's bits (a twin may hold -0 where its node holds +0; the file holds one of them).
 Result<std::vector<std::byte>> encode_grid(const GridFile& file, const std::string& source);
 
-/// Writes `file` to `path` (encode_grid). \return encode_grid's errors; IoError if the file
-/// cannot be written.
+/// Writes `file` to `path` (encode_grid), whole or not at all (core::write_file: a failed write
+/// keeps an earlier file). \return encode_grid's errors; IoError if the file cannot be written.
 Result<void> save_grid(const std::filesystem::path& path, const GridFile& file);
 
 /// Reads the bytes of a `.pgrid` file; `source` (a path, "the welcome", ...) begins every
 /// message. \return ParseError (truncated, bad magic, bad checksum, wrong sizes), BadGrid (level
-/// out of range, a bad or repeated name, twins that differ, non-finite values).
+/// out of range, a bad or repeated name, twins that differ in any bit, non-finite values).
 Result<GridFile> decode_grid(std::span<const std::byte> bytes, const std::string& source);
 
 /// Reads a `.pgrid` file (decode_grid). \return IoError if it cannot be read; decode_grid's

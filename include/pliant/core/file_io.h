@@ -1,0 +1,54 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+#pragma once
+
+/// \file
+/// Writing output files whole or not at all, and checking an output path before long work.
+///
+/// Every writer of pliant's outputs (grids, meshes, images, recordings, reports) goes through
+/// `write_files`: a failed write (disk full, a quota, a file-size limit) never leaves a
+/// truncated file behind, and never destroys the file that was there before.
+
+#include <pliant/core/result.h>
+
+#include <cstddef>
+#include <filesystem>
+#include <span>
+#include <string_view>
+
+namespace pliant::core
+{
+
+/// One output file: where it goes and its whole content.
+struct FileContent
+{
+    std::filesystem::path path;
+    std::span<const std::byte> bytes;
+};
+
+/// Writes every file whole, or none of them: each into a new file beside it (same folder, a
+/// hidden unique name), every write checked and the file closed, and only when all of them are
+/// written, each renamed over its path. On a failure the new files are removed and every path
+/// keeps what it held (an earlier file stays as it was); the message names the path and the
+/// system's reason ("No space left on device"). An existing file's permission bits carry over
+/// to its replacement, and a symbolic link is followed (the file it names is replaced, the
+/// link stays). A path that exists and is not a regular file (a device such as /dev/stdout, a
+/// pipe) is written in place. `who` begins the message ("save_grid"). The data is not synced to
+/// the disk (no fsync): this guards against failed writes, not against power loss.
+[[nodiscard]] Result<void> write_files(std::span<const FileContent> files, std::string_view who);
+
+/// `write_files` for one file.
+[[nodiscard]] Result<void> write_file(const std::filesystem::path& path,
+                                      std::span<const std::byte> bytes, std::string_view who);
+
+/// `write_file` of a text.
+[[nodiscard]] Result<void> write_text_file(const std::filesystem::path& path, std::string_view text,
+                                           std::string_view who);
+
+/// Checks, before the work that produces it, that an output can be written at `path`, and
+/// creates nothing: `path` is not a folder, its folder exists, is a folder and is writable, and
+/// an existing `path` is writable. The message reads "`what`: cannot write 'PATH': REASON".
+[[nodiscard]] Result<void> check_output_path(const std::filesystem::path& path,
+                                             std::string_view what);
+
+}  // namespace pliant::core

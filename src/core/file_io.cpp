@@ -1,0 +1,206 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+#include <pliant/core/file_io.h>
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cstring>
+#include <string>
+#include <vector>
+
+namespace pliant::core
+{
+
+namespace
+{
+
+namespace fs = std::filesystem;
+
+std::string reason(int err)
+{
+    return std::strerror(err);
+}
+
+/// Writes all of `bytes` to `fd`; \return 0 or the errno of the failed write.
+int write_all(int fd, std::span<const std::byte> bytes)
+{
+    std::size_t done = 0;
+    while (done < bytes.size())
+    {
+        const ::ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+        if (n < 0)
+        {
+            if (errno == EINTR)
+                continue;
+            return errno;
+        }
+        if (n == 0)
+            return EIO;
+        done += static_cast<std::size_t>(n);
+    }
+    return 0;
+}
+
+/// Where a file goes and how: the path to replace (a link's target), whether in place.
+struct Plan
+{
+    fs::path target;
+    bool in_place = false;
+    bool existed = false;
+    ::mode_t mode = 0;
+    fs::path temporary;
+    int fd = -1;
+};
+
+Plan plan_for(const fs::path& path)
+{
+    Plan p;
+    p.target = path;
+    std::error_code ec;
+    if (fs::is_symlink(fs::symlink_status(path, ec)))
+    {
+        const fs::path resolved = fs::canonical(path, ec);
+        if (ec)  // a dangling link: opening it creates the file it names
+        {
+            p.in_place = true;
+            return p;
+        }
+        p.target = resolved;
+    }
+    struct ::stat st
+    {
+    };
+    if (::stat(p.target.c_str(), &st) == 0)
+    {
+        p.existed = true;
+        p.mode = st.st_mode & 07777;
+        p.in_place = !S_ISREG(st.st_mode);
+    }
+    return p;
+}
+
+std::atomic<unsigned> g_counter{0};
+
+/// Opens a new, unique file beside `p.target`; \return 0 or the errno.
+int open_temporary(Plan& p)
+{
+    const fs::path folder = p.target.parent_path();
+    for (int attempt = 0; attempt < 100; ++attempt)
+    {
+        const std::string name = "." + p.target.filename().string() + "." +
+                                 std::to_string(::getpid()) + "." +
+                                 std::to_string(g_counter.fetch_add(1)) + ".tmp";
+        p.temporary = folder.empty() ? fs::path(name) : folder / name;
+        p.fd = ::open(p.temporary.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+        if (p.fd >= 0)
+            return 0;
+        if (errno != EEXIST)
+            return errno;
+    }
+    return EEXIST;
+}
+
+}  // namespace
+
+Result<void> write_files(std::span<const FileContent> files, std::string_view who)
+{
+    std::vector<Plan> plans;
+    plans.reserve(files.size());
+    const auto discard = [&]
+    {
+        for (Plan& p : plans)
+        {
+            if (p.fd >= 0)
+                ::close(p.fd);
+            p.fd = -1;
+            if (!p.temporary.empty())
+                ::unlink(p.temporary.c_str());
+            p.temporary.clear();
+        }
+    };
+    const auto failure = [&](const fs::path& path, const std::string& what, int err)
+    {
+        discard();
+        return fail(ErrorCode::IoError,
+                    std::string(who) + ": " + path.string() + ": " + what + ": " + reason(err));
+    };
+    // Every new file written and closed first; nothing replaced until all of them are.
+    for (const FileContent& f : files)
+    {
+        plans.push_back(plan_for(f.path));
+        Plan& p = plans.back();
+        if (p.in_place)
+        {
+            p.fd = ::open(f.path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+            if (p.fd < 0)
+                return failure(f.path, "cannot open for writing", errno);
+        }
+        else
+        {
+            if (const int err = open_temporary(p); err != 0)
+                return failure(f.path, "cannot create a file beside it", err);
+            if (p.existed)
+                (void)::fchmod(p.fd, p.mode);
+        }
+        if (const int err = write_all(p.fd, f.bytes); err != 0)
+            return failure(f.path, "write failed", err);
+        const int fd = p.fd;
+        p.fd = -1;
+        if (::close(fd) != 0)
+            return failure(f.path, "write failed", errno);
+    }
+    for (std::size_t i = 0; i < plans.size(); ++i)
+    {
+        Plan& p = plans[i];
+        if (p.in_place)
+            continue;
+        if (::rename(p.temporary.c_str(), p.target.c_str()) != 0)
+            return failure(files[i].path, "cannot replace it", errno);
+        p.temporary.clear();
+    }
+    return {};
+}
+
+Result<void> write_file(const fs::path& path, std::span<const std::byte> bytes,
+                        std::string_view who)
+{
+    const FileContent file{path, bytes};
+    return write_files(std::span<const FileContent>(&file, 1), who);
+}
+
+Result<void> write_text_file(const fs::path& path, std::string_view text, std::string_view who)
+{
+    return write_file(path, std::as_bytes(std::span<const char>(text.data(), text.size())), who);
+}
+
+Result<void> check_output_path(const fs::path& path, std::string_view what)
+{
+    const auto refuse = [&](const std::string& why)
+    {
+        return fail(ErrorCode::IoError,
+                    std::string(what) + ": cannot write '" + path.string() + "': " + why);
+    };
+    if (path.empty())
+        return refuse("the path is empty");
+    std::error_code ec;
+    const fs::file_status st = fs::status(path, ec);
+    if (fs::is_directory(st))
+        return refuse(reason(EISDIR));
+    if (fs::exists(st))
+        return ::access(path.c_str(), W_OK) == 0 ? Result<void>{} : refuse(reason(errno));
+    const fs::path folder = path.parent_path().empty() ? fs::path(".") : path.parent_path();
+    const fs::file_status fst = fs::status(folder, ec);
+    if (!fs::exists(fst))
+        return refuse("its folder " + folder.string() + " does not exist");
+    if (!fs::is_directory(fst))
+        return refuse(folder.string() + " is not a folder");
+    if (::access(folder.c_str(), W_OK) != 0)
+        return refuse("its folder " + folder.string() + ": " + reason(errno));
+    return {};
+}
+
+}  // namespace pliant::core

@@ -1,0 +1,105 @@
+# SPDX-License-Identifier: MIT
+# SPDX-FileCopyrightText: 2026 pliant contributors
+# Outputs are written whole or not at all (core::write_files): a write that fails (a file-size
+# limit stands in for a full disk) exits 1 naming the reason, and the files that were at the
+# outputs before stay as they were; outputs are checked before the work and nothing is created
+# by the check; the file-reading commands' messages and exit codes (docs/troubleshooting.md).
+if(TARGET pliant)
+    set(out_dir ${CMAKE_CURRENT_BINARY_DIR}/cli-outputs)
+    file(MAKE_DIRECTORY ${out_dir} ${out_dir}/frames)
+    set(limit sh ${CMAKE_CURRENT_SOURCE_DIR}/file_size_limit.sh 2)
+    pliant_cli_expect(cli_outputs_setup 0 STDOUT "level 3: 130 vertices"
+                      remesh ${PROJECT_SOURCE_DIR}/data/spot.obj --level 3
+                      -o ${out_dir}/spot3.pgrid)
+    set_tests_properties(cli_outputs_setup PROPERTIES FIXTURES_SETUP cli_outputs)
+    # pliant_full_disk(NAME KEEP COMMAND...): COMMAND under the limit exits 1 with "File too
+    # large" and leaves the ;-list of paths KEEP (written before it runs) unchanged.
+    function(pliant_full_disk name keep)
+        list(JOIN ARGN ";" args)
+        add_test(NAME ${name}
+                 COMMAND ${CMAKE_COMMAND}
+                         "-DCOMMAND=${limit};$<TARGET_FILE:pliant>;${args}" -DEXIT=1
+                         "-DSTDERR_REGEX=File too large" "-DKEEP=${keep}"
+                         -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+        set_tests_properties(${name} PROPERTIES TIMEOUT 120 FIXTURES_REQUIRED cli_outputs
+                             ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0")
+    endfunction()
+    foreach(ext pgrid obj ply glb pfm)
+        pliant_full_disk(cli_full_disk_remesh_${ext} ${out_dir}/full.${ext}
+                         remesh ${PROJECT_SOURCE_DIR}/data/spot.obj --level 4 --no-measure
+                         -o ${out_dir}/full.${ext})
+    endforeach()
+    # A .gltf and its buffer: both kept (neither replaced without the other).
+    pliant_full_disk(cli_full_disk_remesh_gltf "${out_dir}/full.gltf;${out_dir}/full.bin"
+                     remesh ${PROJECT_SOURCE_DIR}/data/spot.obj --level 4 --no-measure
+                     -o ${out_dir}/full.gltf)
+    pliant_full_disk(cli_full_disk_refine ${out_dir}/refined.pgrid
+                     refine ${out_dir}/spot3.pgrid --levels 2 -o ${out_dir}/refined.pgrid)
+    pliant_full_disk(cli_full_disk_render ${out_dir}/shot.png
+                     render ${out_dir}/spot3.pgrid -o ${out_dir}/shot.png --size 320x240)
+    # A new output that cannot be written whole is not left in part.
+    add_test(NAME cli_full_disk_leaves_no_part
+             COMMAND ${CMAKE_COMMAND}
+                     "-DCOMMAND=${limit};$<TARGET_FILE:pliant>;refine;${out_dir}/spot3.pgrid;--levels;2;-o;${out_dir}/never.obj"
+                     -DEXIT=1 "-DSTDERR_REGEX=File too large" -DABSENT=${out_dir}/never.obj
+                     -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+    set_tests_properties(cli_full_disk_leaves_no_part PROPERTIES FIXTURES_REQUIRED cli_outputs
+                         ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0")
+
+    # Outputs checked before the work: a missing folder is refused with the reason, nothing
+    # created; --report naming -o's own file is a usage error.
+    pliant_cli_expect(cli_refine_output_checked_first 1 STDERR
+                      "refine: -o: cannot write '.*no-such-dir/x.obj': its folder .* does not exist"
+                      refine ${out_dir}/spot3.pgrid --levels 1 -o ${out_dir}/no-such-dir/x.obj)
+    pliant_cli_expect(cli_remesh_report_is_the_output 2 STDERR
+                      "--report .*same.obj names the same file as -o"
+                      remesh ${PROJECT_SOURCE_DIR}/data/spot.obj --level 3
+                      -o ${out_dir}/same.obj --report ${out_dir}/same.obj)
+    pliant_cli_expect(cli_remesh_report_is_the_buffer 2 STDERR
+                      "--report .*same.bin names the same file as the .gltf's buffer file"
+                      remesh ${PROJECT_SOURCE_DIR}/data/spot.obj --level 3
+                      -o ${out_dir}/same.gltf --report ${out_dir}/same.bin)
+
+    # render: usage errors exit 2; a folder is not "no such file"; --level-up past level 10
+    # says so; extensions in any case.
+    pliant_cli_expect(cli_render_size_with_junk 2 STDERR "--size 64x64junk is not WxH"
+                      render ${out_dir}/spot3.pgrid -o ${out_dir}/x.png --size 64x64junk)
+    pliant_cli_expect(cli_render_camera_with_junk 2 STDERR "--camera 10,20x is not AZIMUTH"
+                      render ${out_dir}/spot3.pgrid -o ${out_dir}/x.png --camera 10,20x)
+    pliant_cli_expect(cli_render_not_png 2 STDERR "output .*x.jpg must end in .png"
+                      render ${out_dir}/spot3.pgrid -o ${out_dir}/x.jpg)
+    pliant_cli_expect(cli_render_folder_input 1 STDERR "cli-outputs: not a regular file \\(a folder\\)"
+                      render ${out_dir} -o ${out_dir}/x.png)
+    pliant_cli_expect(cli_render_level_up_too_far 1 STDERR
+                      "spot3.pgrid is level 3. level 3 \\+ --level-up 8 = 11 exceeds the finest level 10 \\(use --level-up 7 or fewer\\)"
+                      render ${out_dir}/spot3.pgrid -o ${out_dir}/x.png --size 64x64 --level-up 8)
+    pliant_cli_expect(cli_remesh_upper_case_extension 0 STDOUT "level 3"
+                      remesh ${PROJECT_SOURCE_DIR}/data/spot.obj --level 3 -o ${out_dir}/UP.PGRID)
+    set_tests_properties(cli_remesh_upper_case_extension PROPERTIES FIXTURES_SETUP cli_upper)
+    pliant_cli_expect(cli_render_upper_case_extensions 0 STDOUT "level 3 grid"
+                      render ${out_dir}/UP.PGRID -o ${out_dir}/UP.PNG --size 64x64)
+    set_tests_properties(cli_render_upper_case_extensions PROPERTIES FIXTURES_REQUIRED cli_upper)
+    # --frames: every frame is read before any picture is written, so a bad frame stops the run
+    # with the earlier sequence untouched (KEEP writes the bad frame b.pgrid, and f_0000.png).
+    add_test(NAME cli_render_frames_setup
+             COMMAND ${CMAKE_COMMAND} -E copy ${out_dir}/spot3.pgrid ${out_dir}/frames/a.pgrid)
+    set_tests_properties(cli_render_frames_setup PROPERTIES FIXTURES_REQUIRED cli_outputs
+                         FIXTURES_SETUP cli_frames)
+    add_test(NAME cli_render_frames_bad_frame_writes_nothing
+             COMMAND ${CMAKE_COMMAND}
+                     "-DCOMMAND=$<TARGET_FILE:pliant>;render;--frames;${out_dir}/frames;-o;${out_dir}/seq/f.png;--size;64x64"
+                     -DEXIT=1 "-DSTDERR_REGEX=frames/b.pgrid: too short for a pliant grid file"
+                     "-DKEEP=${out_dir}/frames/b.pgrid;${out_dir}/seq/f_0000.png"
+                     -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+    set_tests_properties(cli_render_frames_bad_frame_writes_nothing PROPERTIES
+                         FIXTURES_REQUIRED cli_frames ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0")
+    # -q: only errors. info's answer is then its exit status.
+    pliant_cli_expect(cli_quiet_info 0 STDOUT "^$" -q info ${PROJECT_SOURCE_DIR}/data/spot.obj)
+    pliant_cli_expect(cli_quiet_render 0 STDOUT "^$"
+                      -q render ${out_dir}/spot3.pgrid -o ${out_dir}/q.png --size 64x64)
+    pliant_cli_expect(cli_quiet_refine 0 STDOUT "^$"
+                      -q refine ${out_dir}/spot3.pgrid --levels 1 -o ${out_dir}/q.obj)
+    set_tests_properties(cli_render_size_with_junk cli_render_camera_with_junk cli_render_not_png
+                         cli_render_level_up_too_far cli_quiet_render cli_quiet_refine
+                         cli_refine_output_checked_first PROPERTIES FIXTURES_REQUIRED cli_outputs)
+endif()

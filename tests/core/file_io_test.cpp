@@ -1,0 +1,182 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: 2026 pliant contributors
+// core::write_files: an output is written whole or not at all, and an earlier file survives a
+// failed write; core::check_output_path creates nothing.
+#include <pliant/core/file_io.h>
+
+#include <gtest/gtest.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+
+#include "support/test_paths.h"
+
+#include <algorithm>
+#include <csignal>
+#include <cstddef>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace pliant::core
+{
+namespace
+{
+
+namespace fs = std::filesystem;
+
+std::string read(const fs::path& p)
+{
+    std::ifstream is(p, std::ios::binary);
+    return {std::istreambuf_iterator<char>(is), std::istreambuf_iterator<char>()};
+}
+
+void put(const fs::path& p, const std::string& text)
+{
+    std::ofstream(p, std::ios::binary | std::ios::trunc) << text;
+}
+
+std::vector<std::string> names_in(const fs::path& dir)
+{
+    std::vector<std::string> names;
+    for (const auto& e : fs::directory_iterator(dir))
+        names.push_back(e.path().filename().string());
+    std::sort(names.begin(), names.end());
+    return names;
+}
+
+std::span<const std::byte> bytes_of(const std::string& s)
+{
+    return std::as_bytes(std::span<const char>(s.data(), s.size()));
+}
+
+/// While alive, a write that grows a file past `bytes` fails with EFBIG (as on a full disk)
+/// instead of killing the process with SIGXFSZ.
+class FileSizeLimit
+{
+public:
+    explicit FileSizeLimit(rlim_t bytes)
+    {
+        ::getrlimit(RLIMIT_FSIZE, &old_);
+        old_handler_ = std::signal(SIGXFSZ, SIG_IGN);
+        rlimit limit = old_;
+        limit.rlim_cur = bytes;
+        ::setrlimit(RLIMIT_FSIZE, &limit);
+    }
+    FileSizeLimit(const FileSizeLimit&) = delete;
+    FileSizeLimit& operator=(const FileSizeLimit&) = delete;
+    ~FileSizeLimit()
+    {
+        ::setrlimit(RLIMIT_FSIZE, &old_);
+        std::signal(SIGXFSZ, old_handler_);
+    }
+
+private:
+    rlimit old_{};
+    void (*old_handler_)(int) = nullptr;
+};
+
+TEST(FileIo, WritesANewFileAndReplacesAnOldOneKeepingItsMode)
+{
+    const fs::path dir = test::scratch_dir("file_io_write");
+    ASSERT_TRUE(write_text_file(dir / "a.txt", "first", "test"));
+    EXPECT_EQ(read(dir / "a.txt"), "first");
+    ::chmod((dir / "a.txt").c_str(), 0640);
+    ASSERT_TRUE(write_text_file(dir / "a.txt", "second, longer", "test"));
+    EXPECT_EQ(read(dir / "a.txt"), "second, longer");
+    struct ::stat st
+    {
+    };
+    ASSERT_EQ(::stat((dir / "a.txt").c_str(), &st), 0);
+    EXPECT_EQ(st.st_mode & 07777, 0640U);
+    EXPECT_EQ(names_in(dir), std::vector<std::string>{"a.txt"}) << "no temporary file left";
+}
+
+TEST(FileIo, AFailedWriteKeepsTheEarlierFileAndLeavesNothingElse)
+{
+    const fs::path dir = test::scratch_dir("file_io_full");
+    put(dir / "out.bin", "KEEP");
+    const std::string big(64 * 1024, 'x');
+    {
+        const FileSizeLimit limit(4096);
+        auto written = write_text_file(dir / "out.bin", big, "test");
+        ASSERT_FALSE(written);
+        EXPECT_EQ(written.error().code, ErrorCode::IoError);
+        EXPECT_NE(written.error().message.find("out.bin"), std::string::npos)
+            << written.error().message;
+        EXPECT_NE(written.error().message.find("File too large"), std::string::npos)
+            << written.error().message;
+        // A new file that cannot be written whole is not left behind in part either.
+        EXPECT_FALSE(write_text_file(dir / "new.bin", big, "test"));
+    }
+    EXPECT_EQ(read(dir / "out.bin"), "KEEP");
+    EXPECT_EQ(names_in(dir), std::vector<std::string>{"out.bin"});
+}
+
+TEST(FileIo, SeveralFilesAreWrittenAllOrNone)
+{
+    const fs::path dir = test::scratch_dir("file_io_pair");
+    put(dir / "m.gltf", "old json");
+    put(dir / "m.bin", "old buffer");
+    const std::string json = "new json";
+    const std::string buffer = "new buffer";
+    // The second file's folder does not exist: the first is not replaced either.
+    const std::vector<FileContent> bad{{dir / "m.bin", bytes_of(buffer)},
+                                       {dir / "missing" / "m.gltf", bytes_of(json)}};
+    auto written = write_files(bad, "test");
+    ASSERT_FALSE(written);
+    EXPECT_NE(written.error().message.find("missing"), std::string::npos)
+        << written.error().message;
+    EXPECT_EQ(read(dir / "m.bin"), "old buffer");
+    EXPECT_EQ(names_in(dir), (std::vector<std::string>{"m.bin", "m.gltf"}));
+    const std::vector<FileContent> good{{dir / "m.bin", bytes_of(buffer)},
+                                        {dir / "m.gltf", bytes_of(json)}};
+    ASSERT_TRUE(write_files(good, "test"));
+    EXPECT_EQ(read(dir / "m.bin"), "new buffer");
+    EXPECT_EQ(read(dir / "m.gltf"), "new json");
+}
+
+TEST(FileIo, ALinkIsFollowedAndADeviceIsWrittenInPlace)
+{
+    const fs::path dir = test::scratch_dir("file_io_link");
+    fs::create_directory(dir / "real");
+    put(dir / "real" / "target.txt", "old");
+    fs::create_symlink(dir / "real" / "target.txt", dir / "link.txt");
+    ASSERT_TRUE(write_text_file(dir / "link.txt", "through the link", "test"));
+    EXPECT_TRUE(fs::is_symlink(dir / "link.txt"));
+    EXPECT_EQ(read(dir / "real" / "target.txt"), "through the link");
+    EXPECT_EQ(names_in(dir / "real"), std::vector<std::string>{"target.txt"});
+    // A character device is written in place (no file is made beside it in /dev).
+    EXPECT_TRUE(write_text_file("/dev/null", "anything", "test"));
+    auto full = write_text_file("/dev/full", "anything", "test");
+    ASSERT_FALSE(full);
+    EXPECT_NE(full.error().message.find("No space left on device"), std::string::npos)
+        << full.error().message;
+}
+
+TEST(FileIo, CheckOutputPathCreatesNothingAndSaysWhy)
+{
+    const fs::path dir = test::scratch_dir("file_io_check");
+    EXPECT_TRUE(check_output_path(dir / "new.pgrid", "-o"));
+    EXPECT_FALSE(fs::exists(dir / "new.pgrid"));
+    auto folder = check_output_path(dir, "-o");
+    ASSERT_FALSE(folder);
+    EXPECT_NE(folder.error().message.find("Is a directory"), std::string::npos)
+        << folder.error().message;
+    auto missing = check_output_path(dir / "no" / "x.pgrid", "--save");
+    ASSERT_FALSE(missing);
+    EXPECT_NE(missing.error().message.find("--save: cannot write"), std::string::npos);
+    EXPECT_NE(missing.error().message.find("does not exist"), std::string::npos)
+        << missing.error().message;
+    put(dir / "file", "x");
+    auto under_file = check_output_path(dir / "file" / "x.pgrid", "-o");
+    ASSERT_FALSE(under_file);
+    EXPECT_NE(under_file.error().message.find("not a folder"), std::string::npos)
+        << under_file.error().message;
+    EXPECT_EQ(names_in(dir), std::vector<std::string>{"file"});
+}
+
+}  // namespace
+}  // namespace pliant::core
