@@ -2,7 +2,7 @@
 # SPDX-FileCopyrightText: 2026 pliant contributors
 # pliant_add_module(NAME SOURCES ... [PUBLIC_DEPS ...] [PRIVATE_DEPS ...])
 # One static library per module, aliased pliant::NAME; PUBLIC_DEPS lists exactly the modules
-# STYLE.md §2 allows (scripts/check_includes.py checks the includes).
+# docs/style.md §2 allows (scripts/check_includes.py checks the includes).
 function(pliant_add_module name)
     cmake_parse_arguments(ARG "" "" "SOURCES;PUBLIC_DEPS;PRIVATE_DEPS" ${ARGN})
     add_library(pliant_${name} STATIC ${ARG_SOURCES})
@@ -13,7 +13,7 @@ function(pliant_add_module name)
     target_compile_features(pliant_${name} PUBLIC cxx_std_20)
     target_link_libraries(pliant_${name} PUBLIC ${ARG_PUBLIC_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
     pliant_set_warnings(pliant_${name})
-    # Reproducible floating point across builds and peers (STYLE.md §7): no FMA contraction,
+    # Reproducible floating point across builds and peers (docs/style.md §7): no FMA contraction,
     # never -ffast-math.
     target_compile_options(pliant_${name} PRIVATE -ffp-contract=off)
 endfunction()

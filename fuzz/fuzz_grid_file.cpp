@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: 2026 pliant contributors
-// Fuzz target for core::decode_grid, the reader of `.pgrid` files (STYLE.md §10), in the three
+// Fuzz target for core::decode_grid, the reader of `.pgrid` files (docs/style.md §10), in the three
 // modes of fuzz_support.h (raw bytes; the right checksum appended; a sample file with one byte
 // changed and its checksum fixed; the samples: levels 1 and 2, with and without a displacement
 // channel). A file that decode_grid accepts must encode back to exactly its bytes (the format is

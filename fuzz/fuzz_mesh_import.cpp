@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: 2026 pliant contributors
-// Fuzz target for mesh import + validation (STYLE.md §10): bytes in, an error or a valid mesh
+// Fuzz target for mesh import + validation (docs/style.md §10): bytes in, an error or a valid mesh
 // out, never a crash, a hang or a sanitizer report. The first byte picks the format (its value
 // mod 6: 0 .obj, 1 .off, 2 .ply, 3 .stl, 4 .gltf, 5 .glb; the seed corpus uses the digits
 // '0'..'5'); the rest is written to a temporary file with that extension, because Assimp reads

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: 2026 pliant contributors
-// Fuzz target for net::decode (STYLE.md §10, after netcode's fuzz/fuzz_read_packet.c). Two modes,
-// chosen by the first input byte:
+// Fuzz target for net::decode (docs/style.md §10, after netcode's fuzz/fuzz_read_packet.c). Two
+// modes, chosen by the first input byte:
 // - even: raw bytes. The rest of the input is one datagram. decode() must not crash, and anything
 //   it accepts must re-encode to exactly the same bytes (the wire format is canonical).
 // - odd: build -> encode -> corrupt one byte -> decode. Bytes 1..4 pick a sample message (every

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: 2026 pliant contributors
 // Fuzz target for session::decode_recording, the reader of `.prec` files that `pliant replay`
-// takes (STYLE.md §10), in the three modes of fuzz_support.h (raw bytes; the right checksum
+// takes (docs/style.md §10), in the three modes of fuzz_support.h (raw bytes; the right checksum
 // appended; a sample recording, with and without a hash mask and forces, with one byte changed
 // and its checksum fixed). A recording that decode_recording accepts must encode to a file that
 // decodes to the same recording, and a refusal must explain itself. (A version-1 file, or a force

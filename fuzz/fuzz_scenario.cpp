@@ -1,12 +1,12 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: 2026 pliant contributors
-// Fuzz target for the scenario reader of `pliant simulate --scenario FILE.toml` (STYLE.md §10):
-// the input is the TOML text. A refusal must name the file and its line; an accepted scenario
-// must hold only what the reader promises (docs/physics.md §7): duration and frame rate in their
-// ranges, at most 1,000,000 frames, forces with a finite vector, an end after the start, a face
-// or a point with a positive radius (and a slide target only for points), the line of each; and
-// settings that the sim library accepts once the mixed-precision check has passed, so that no
-// value the reader lets through is refused later without its file and line.
+// Fuzz target for the scenario reader of `pliant simulate --scenario FILE.toml`
+// (docs/style.md §10): the input is the TOML text. A refusal must name the file and its line; an
+// accepted scenario must hold only what the reader promises (docs/physics.md §7): duration and
+// frame rate in their ranges, at most 1,000,000 frames, forces with a finite vector, an end after
+// the start, a face or a point with a positive radius (and a slide target only for points), the
+// line of each; and settings that the sim library accepts once the mixed-precision check has
+// passed, so that no value the reader lets through is refused later without its file and line.
 // Built with libFuzzer under clang, or as a corpus replayer otherwise (fuzz/CMakeLists.txt).
 
 #include <pliant/sim/membrane.h>

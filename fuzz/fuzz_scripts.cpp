@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: 2026 pliant contributors
-// Fuzz target for the two script readers, text a user hands to pliant (STYLE.md §10): the first
-// input byte picks the reader (even: session::parse_script, the timed grabs of `pliant join
+// Fuzz target for the two script readers, text a user hands to pliant (docs/style.md §10): the
+// first input byte picks the reader (even: session::parse_script, the timed grabs of `pliant join
 // --script`; odd: viewer::parse_input_script, the timed mouse events of `pliant view
 // --script`); the rest is the script. A refusal must explain itself with the source and a line;
 // an accepted script must hold only what the readers promise (finite, non-negative times,

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: 2026 pliant contributors
 // Fuzz target for the Welcome's blobs, the bytes a joining peer takes from the master
-// (STYLE.md §10): session::decode_model (level, material, rest positions, the session's
+// (docs/style.md §10): session::decode_model (level, material, rest positions, the session's
 // choices) and session::decode_state (u and v of every node). The first input byte picks:
 // - 0 (mod 4): raw bytes, the rest of the input as a model blob;
 // - 1: raw bytes as a state blob of level (byte 1 mod 2) + 1;

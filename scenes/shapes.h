@@ -3,7 +3,8 @@
 #pragma once
 
 /// \file
-/// Procedural test shapes shared by tests, benchmarks and the viewer (STYLE.md §10), header-only.
+/// Procedural test shapes shared by tests, benchmarks and the viewer (docs/style.md §10),
+/// header-only.
 ///
 /// Valid inputs (closed, 2-manifold, connected, genus 0, outward counter-clockwise faces):
 /// `tetrahedron()`, `octahedron()`, `icosphere(n)`, `ellipsoid(a, b, c, n)`, `dumbbell()`.

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: MIT
 # SPDX-FileCopyrightText: 2026 pliant contributors
-"""Rejects any #include that breaks the module dependency table of STYLE.md §2.
+"""Rejects any #include that breaks the module dependency table of docs/style.md §2.
 
 Checks include/pliant/<m>/, src/<m>/, tests/<m>/ and apps/. Prints one line per violation
 (file:line: module 'a' may not include 'b') and exits 1 if there is any.
@@ -74,7 +74,8 @@ def main() -> int:
     for line in bad:
         print(line)
     if bad:
-        print(f"check_includes: {len(bad)} include(s) break the dependency rules (STYLE.md §2)")
+        print(f"check_includes: {len(bad)} include(s) break the dependency rules "
+              "(docs/style.md §2)")
         return 1
     print("check_includes: all includes follow the dependency rules")
     return 0

@@ -9,8 +9,9 @@
 //   (every UV seam of spot.obj would become a boundary), Triangulate hides how many polygons
 //   there were, and PreTransformVertices rewrites positions even for identity transforms. So the
 //   node tree is walked here (transforms applied in double, skipped when identity), polygons
-//   are fan-split here (as tools/meshstat.py does, so counts match the data table), and
-//   positions are welded here on exact equality (-0 and +0 are equal).
+//   are fan-split here (v0 v1 ... v(k-1) into the triangles (v0, vi, vi+1), the split that the
+//   face counts of tests/data/meshes/README.md assume), and positions are welded here on exact
+//   equality (-0 and +0 are equal).
 // - Vertices are numbered in order of first use by the faces, faces keep the file's order. That
 //   numbering is a function of the face list alone, so two files listing the same triangles in
 //   the same order import to the same TriMesh whatever their vertex order or format, and
@@ -240,7 +241,7 @@ core::Result<TriMesh> convert(const aiScene& scene, const std::string& name, Imp
                     }
                     local[v] = it->second;
                 }
-                // Fan split (0, i, i+1), as tools/meshstat.py does.
+                // Fan split (0, i, i+1): the face counts of tests/data/meshes/README.md assume it.
                 for (unsigned k = 1; k + 1 < face.mNumIndices; ++k)
                     out.faces.push_back({local[face.mIndices[0]], local[face.mIndices[k]],
                                          local[face.mIndices[k + 1]]});

@@ -279,8 +279,8 @@ MeshStats analyze_detailed(const TriMesh& mesh, Examples& ex)
 
     // Fans: the faces around a vertex, joined across the vertex's edges that have exactly two
     // faces. A manifold vertex has one fan (a closed one inside, an open one on a boundary); a
-    // pinch has several, and so does an endpoint of a non-manifold edge (as tools/meshstat.py
-    // counts them).
+    // pinch has several, and so does an endpoint of a non-manifold edge (so the two-cubes test
+    // mesh has 2 non-manifold vertices, as tests/data/meshes/README.md counts them).
     std::vector<std::array<std::uint32_t, 3>> edge_counts;  // (lo, hi, faces), sorted
     for (std::size_t i = 0; i < edges.size();)
     {

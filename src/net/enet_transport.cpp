@@ -3,7 +3,7 @@
 // ENet behind net::Transport: the only file that includes <enet/enet.h> (see enet_transport.h for
 // the mapping). A connection's handle is stored in ENetPeer::data, so ENet's peer slots (which it
 // reuses) never alias an old handle: a handle is issued once per connection and never again.
-// Nothing here throws, so nothing unwinds through ENet's C frames (STYLE.md §5).
+// Nothing here throws, so nothing unwinds through ENet's C frames (docs/style.md §5).
 //
 // Connection-attempt filter: ENet's intercept callback sees every received UDP datagram before
 // ENet parses it. A datagram whose header peer id is ENET_PROTOCOL_MAXIMUM_PEER_ID is addressed

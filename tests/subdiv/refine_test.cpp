@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: 2026 pliant contributors
-// Properties of the butterfly convolution (STYLE.md §10, subdiv): interpolation, restrict as the
-// exact inverse, twins, linear precision, dimensions, convergence on a sphere, thread
+// Properties of the butterfly convolution (docs/style.md §10, subdiv): interpolation, restrict as
+// the exact inverse, twins, linear precision, dimensions, convergence on a sphere, thread
 // independence, and agreement with the slow halfedge reference everywhere.
 #include <pliant/subdiv/refine.h>
 

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: 2026 pliant contributors
-// The test main: floating-point traps on invalid operations and division by zero (STYLE.md §10),
-// so a NaN born in a kernel stops the test where it is made; and each test's scratch folders
-// removed when it passes (kept for a look when it fails).
+// The test main: floating-point traps on invalid operations and division by zero
+// (docs/style.md §10), so a NaN born in a kernel stops the test where it is made; and each test's
+// scratch folders removed when it passes (kept for a look when it fails).
 #include <gtest/gtest.h>
 
 #include "support/fp_traps.h"

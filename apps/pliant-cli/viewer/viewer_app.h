@@ -3,7 +3,7 @@
 #pragma once
 
 // The viewer's state, shared by viewer.cpp (window, frame loop, input, sessions, screenshots)
-// and viewer_panels.cpp (the ImGui panels). A thin shell (STYLE.md §9): the simulation, the
+// and viewer_panels.cpp (the ImGui panels). A thin shell (docs/style.md §9): the simulation, the
 // refinement and the drawing are the library's; this file wires them to a window.
 //
 // One frame: poll window events -> play the script -> poll a finished background load ->

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: 2026 pliant contributors
-// The viewer's ImGui panels (one collapsing section per stage, STYLE.md §9): status and
+// The viewer's ImGui panels (one collapsing section per stage, docs/style.md §9): status and
 // loading, display, export, material and integrator, grab, plots, session.
 #include <pliant/render/draw_settings.h>
 

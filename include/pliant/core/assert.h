@@ -3,10 +3,10 @@
 #pragma once
 
 /// \file
-/// Contract checks (STYLE.md §5, kind 1). `PLIANT_ASSERT` is on unless `PLIANT_DISABLE_ASSERT` is
-/// defined (the release preset keeps it on outside hot loops; kernels use `PLIANT_DEBUG_ASSERT`,
-/// which is on only without NDEBUG: in the dev and asan presets, so CI's sanitizer leg runs
-/// them). The handler can be replaced, e.g. by tests.
+/// Contract checks (docs/style.md §5, kind 1). `PLIANT_ASSERT` is on unless
+/// `PLIANT_DISABLE_ASSERT` is defined (the release preset keeps it on outside hot loops; kernels
+/// use `PLIANT_DEBUG_ASSERT`, which is on only without NDEBUG: in the dev and asan presets, so
+/// CI's sanitizer leg runs them). The handler can be replaced, e.g. by tests.
 
 namespace pliant::core
 {

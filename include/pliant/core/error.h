@@ -3,9 +3,9 @@
 #pragma once
 
 /// \file
-/// Errors for bad input at a boundary (STYLE.md §5, kind 2). One enumerator per rule, so callers
-/// and tests can tell the failures apart; the message names the function or file, the rule and the
-/// numbers.
+/// Errors for bad input at a boundary (docs/style.md §5, kind 2). One enumerator per rule, so
+/// callers and tests can tell the failures apart; the message names the function or file, the rule
+/// and the numbers.
 
 #include <cstdint>
 #include <string>

@@ -4,7 +4,8 @@
 
 /// \file
 /// `Field<T>`: one scalar per grid node, as one contiguous row-major plane with a ghost ring
-/// (STYLE.md §6). Positions are three planes (`Vec3Field`), displacement and velocity one each.
+/// (docs/style.md §6). Positions are three planes (`Vec3Field`), displacement and velocity one
+/// each.
 ///
 /// Layout: the padded plane has `stride() = nx + 2g` columns and `ny + 2g` rows; node (x, y),
 /// -g <= x < nx + g, lives at `origin()[y * stride() + x]`. Ghosts are valid only after

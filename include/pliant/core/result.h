@@ -4,8 +4,8 @@
 
 /// \file
 /// `Result<T>`: a value or an `Error`, the return type of every function that reads outside input
-/// (STYLE.md §5). A small stand-in for C++23 `std::expected`, with the same member names so the
-/// switch is mechanical once the toolchain has it.
+/// (docs/style.md §5). A small stand-in for C++23 `std::expected`, with the same member names so
+/// the switch is mechanical once the toolchain has it.
 
 #include <pliant/core/assert.h>
 #include <pliant/core/error.h>

@@ -4,7 +4,7 @@
 
 /// \file
 /// The UDP transport: ENet 1.3 behind `net::Transport`. No ENet type appears here; only
-/// src/net/enet_transport.cpp includes <enet/enet.h> (STYLE.md §8, checked by
+/// src/net/enet_transport.cpp includes <enet/enet.h> (docs/style.md §8, checked by
 /// scripts/check_includes.py).
 ///
 /// Mapping: one ENetHost per transport (it both listens and connects, so a peer's address is the

@@ -3,10 +3,10 @@
 #pragma once
 
 /// \file
-/// `Expected<T, E>`: a value or a small error enum, for the codec's hot path (STYLE.md §5, kind 3:
-/// hostile bytes are never asserted on or thrown for). `core::Result` carries a message string,
-/// which a decoder that rejects a datagram per packet must not build; this type carries only the
-/// enum. Member names follow C++23 `std::expected`.
+/// `Expected<T, E>`: a value or a small error enum, for the codec's hot path (docs/style.md §5,
+/// kind 3: hostile bytes are never asserted on or thrown for). `core::Result` carries a message
+/// string, which a decoder that rejects a datagram per packet must not build; this type carries
+/// only the enum. Member names follow C++23 `std::expected`.
 
 #include <pliant/core/assert.h>
 

@@ -7,8 +7,8 @@
 ///
 /// `Peer` is what one connection knows (its bound peer id, the session, its drop counters) and the
 /// policy applied to every incoming datagram: decode it, check its channel, session and sender,
-/// and drop and count it if anything is wrong (docs/protocol.md §8; STYLE.md §5, kind 3). It does
-/// no I/O, so it is tested without a network. `Messenger` owns one `Peer` per connection of a
+/// and drop and count it if anything is wrong (docs/protocol.md §8; docs/style.md §5, kind 3). It
+/// does no I/O, so it is tested without a network. `Messenger` owns one `Peer` per connection of a
 /// Transport, encodes outgoing messages into one reusable buffer, reports bad datagrams to the
 /// transport's counters and disconnects a peer past the threshold with
 /// DisconnectReason::TooManyBadDatagrams.

@@ -6,7 +6,7 @@
 /// `SimulatedNetwork`: an in-process network of endpoints (each a `Transport`) with seeded
 /// latency, jitter, loss, duplication and reordering per directed link, and a virtual clock that
 /// the caller advances (nothing sleeps), so tests are fast, bounded and repeatable. Follows
-/// netcode's `netcode_network_simulator_t` (STYLE.md §8).
+/// netcode's `netcode_network_simulator_t` (docs/style.md §8).
 ///
 /// Model:
 /// - Endpoint k opened on port p has address 10.0.0.k:p (port 0 picks 40000 + k).

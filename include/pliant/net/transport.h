@@ -8,10 +8,10 @@
 /// sees ENet) and `SimulatedTransport` (an in-process network with seeded latency, jitter, loss,
 /// duplication and reordering, for tests).
 ///
-/// Design: one virtual call per packet or event (STYLE.md §6 allows it here); no callbacks, the
-/// owner polls, so the session's loop decides when network work happens. The transport knows no
-/// messages: decoding, bad-datagram detection and disconnect policy live in `net::Messenger`, which
-/// reports bad datagrams back here so that all per-peer counters live in one `PeerStats`.
+/// Design: one virtual call per packet or event (docs/style.md §6 allows it here); no callbacks,
+/// the owner polls, so the session's loop decides when network work happens. The transport knows
+/// no messages: decoding, bad-datagram detection and disconnect policy live in `net::Messenger`,
+/// which reports bad datagrams back here so that all per-peer counters live in one `PeerStats`.
 ///
 /// Threading contract: a Transport is single-threaded. All calls on one instance must come from
 /// one thread at a time (ENet's FAQ: an ENetHost is not thread-safe; yojimbo and netcode are

@@ -4,7 +4,7 @@
 
 /// \file
 /// `ConvolutionPlan`: everything one refinement step level n -> n+1 needs, computed once
-/// (STYLE.md §6, "define once, compile, evaluate"): the coarse and fine grids (for their ghost
+/// (docs/style.md §6, "define once, compile, evaluate"): the coarse and fine grids (for their ghost
 /// and twin tables) and, for every ghost width a coarse field may have, the flat offsets of the
 /// eight butterfly taps of each edge direction. (`refine` itself takes the taps from the
 /// constexpr masks, so that its fused row loop reads shared taps once; the offsets serve
