@@ -8,6 +8,7 @@
 
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -259,6 +260,17 @@ core::Result<std::unique_ptr<net::Transport>> secure_or_plain(std::unique_ptr<ne
                 "{}: a key of {} bytes is easy to guess; a key file should hold {} "
                 "random bytes (head -c 32 /dev/urandom > {})",
                 key_file, size, k_key_file_advised_bytes, key_file);
+        // As ssh does for private keys, though only as a warning: whoever can read the file
+        // can join the session and read its traffic.
+        struct ::stat st
+        {
+        };
+        if (*key && ::stat(key_file.c_str(), &st) == 0 && (st.st_mode & 077) != 0)
+            spdlog::warn(
+                "{}: the key file can be read by {} (mode {:04o}): whoever can read it "
+                "can join the session and read its traffic; chmod 600 {}",
+                key_file, (st.st_mode & 007) != 0 ? "every user" : "its group", st.st_mode & 07777,
+                key_file);
     }
     else if (env != nullptr && *env == '\0')
         return core::fail(core::ErrorCode::InvalidArgument,

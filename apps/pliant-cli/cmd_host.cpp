@@ -202,7 +202,7 @@ int run_host(const HostOptions& opt)
         static_cast<unsigned long long>(summary->stats.bytes_sent),
         static_cast<unsigned long long>(summary->stats.bytes_received),
         static_cast<unsigned long long>(summary->auth_refused));
-    return end_status(**s, "host");
+    return end_status(**s, "host", summary->stats_error);
 }
 
 void add_host_command(CLI::App& app, const GlobalOptions& global)

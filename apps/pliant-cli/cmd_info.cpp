@@ -72,7 +72,8 @@ void print_json(const InfoOptions& opt, const mesh::ImportReport* report, const 
         j["bbox_diagonal"] = s->bbox_diagonal;
         j["surface_area"] = s->surface_area;
     }
-    std::cout << j.dump(2) << '\n';
+    // A message may quote a file's bytes that are not UTF-8: shown as U+FFFD, not thrown.
+    std::cout << j.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) << '\n';
 }
 
 void print_text(const InfoOptions& opt, const mesh::ImportReport& r, const mesh::MeshStats& s,

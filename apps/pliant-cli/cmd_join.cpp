@@ -144,8 +144,16 @@ int run_join(const JoinOptions& opt)
     {
         if (const auto failure = (*s)->join_failure())
             spdlog::error("{}", join_failure_message(opt.master, *failure, run.secure != nullptr));
+        else if (summary->stats.bytes_received == 0)  // --duration ended before any answer
+            spdlog::error(
+                "join: {} never answered within --duration {:g} s: check the address and port, "
+                "that `pliant host` runs there, and that no firewall drops UDP to it",
+                opt.master, opt.duration);
         else
-            spdlog::error("join: never received the model from {}", opt.master);
+            spdlog::error(
+                "join: {} answered but the model had not all arrived when --duration "
+                "{:g} s ended",
+                opt.master, opt.duration);
         return k_exit_failure;
     }
     if (!opt.save.empty())
@@ -159,7 +167,7 @@ int run_join(const JoinOptions& opt)
         static_cast<unsigned long long>(summary->stats.bytes_sent),
         static_cast<unsigned long long>(summary->stats.bytes_received),
         static_cast<unsigned long long>(summary->auth_refused));
-    return end_status(**s, "join");
+    return end_status(**s, "join", summary->stats_error);
 }
 
 void add_join_command(CLI::App& app, const GlobalOptions& global)

@@ -34,15 +34,22 @@ struct ReplayOptions
 
 int run_replay(const ReplayOptions& opt, const GlobalOptions& global)
 {
-    std::string ext = opt.out.extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(),
-                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    const std::string ext = lower_extension(opt.out);
     if (!opt.out.empty() && ext != ".pgrid" && ext != ".obj" && ext != ".ply" && ext != ".gltf" &&
         ext != ".glb")
         return report({core::ErrorCode::UnsupportedFormat,
                        "replay: output " + opt.out.string() +
                            " must end in .pgrid (u, v and deformed positions), .obj, .ply, .gltf "
                            "or .glb"});
+    // Before the replay, not after it (nothing is created).
+    if (!opt.out.empty())
+        if (auto ok = check_writable(opt.out, "replay: -o"); !ok)
+            return report(ok.error());
+    if (ext == ".gltf")
+        if (auto ok = check_writable(std::filesystem::path(opt.out).replace_extension(".bin"),
+                                     "replay: -o (the .gltf's buffer)");
+            !ok)
+            return report(ok.error());
     auto recording = session::load_recording(opt.recording);
     if (!recording)
         return report(recording.error());
@@ -82,7 +89,17 @@ int run_replay(const ReplayOptions& opt, const GlobalOptions& global)
             "covers (the master's own)\n",
             static_cast<unsigned long long>(hash), covered, grid.unique_count());
     int rc = 0;
-    if (opt.until != 0 && opt.until != recording->final_tick)
+    if (result->diverged)
+    {
+        spdlog::error(
+            "replay: the step from tick {} gave non-finite values: the replay stopped "
+            "there, {} ticks before the recording's end{} (a recording no session of "
+            "this build made)",
+            *result->diverged, recording->final_tick - *result->diverged,
+            opt.out.empty() ? "" : "; -o gets the last finite state");
+        rc = k_exit_failure;
+    }
+    else if (opt.until != 0 && opt.until != recording->final_tick)
         std::printf("stopped before the recording's end: no recorded hash to compare\n");
     else if (recording->final_hash == 0)
         std::printf("the recording holds no final hash to compare with\n");

@@ -21,11 +21,17 @@
 namespace pliant::cli
 {
 
-int end_status(const session::Session& peer, const std::string& command)
+int end_status(const session::Session& peer, const std::string& command,
+               const std::string& stats_error)
 {
     const auto tick = peer.diverged();
     if (!tick)
-        return 0;
+    {
+        if (stats_error.empty())
+            return 0;
+        spdlog::error("{}: {}", command, stats_error);
+        return k_exit_bad_input;
+    }
     spdlog::error(
         "{}: the simulation diverged at tick {}: this peer kept its last finite state (what "
         "--save writes) and left the session (the other members, if any, took its share over); "

@@ -25,10 +25,12 @@ namespace pliant::cli
 /// errors.
 core::Result<void> save_peer_state(const session::Session& peer, const std::filesystem::path& path);
 
-/// The exit status of a peer whose run is over: 0, or k_exit_failure with an error naming
+/// The exit status of a peer whose run is over: 0; k_exit_failure with an error naming
 /// `command` and the tick when the peer's state diverged (Session::diverged; what it holds and
-/// saves is the last finite state).
-[[nodiscard]] int end_status(const session::Session& peer, const std::string& command);
+/// saves is the last finite state); else k_exit_bad_input when its stats file could not be
+/// written to the end (`stats_error`, RunSummary::stats_error).
+[[nodiscard]] int end_status(const session::Session& peer, const std::string& command,
+                             const std::string& stats_error);
 
 /// Whether a grid file holds a simulated state (channels u and v): what `host`/`join --save`,
 /// `demo`'s final.pgrid, `replay -o` and `simulate`'s frames write. Their px/py/pz are the

@@ -240,6 +240,24 @@ core::Result<SecretKey> key_from_file(const std::filesystem::path& path, std::st
         if (!text.empty() && text.back() == '\r')
             text.pop_back();
     }
+    if (text.empty())
+        return core::fail(core::ErrorCode::InvalidArgument,
+                          "key file " + path.string() +
+                              " is empty (a final newline aside): it should hold 32 random bytes "
+                              "(head -c 32 /dev/urandom > " +
+                              path.string() + ")");
+    if (text.size() > k_max_passphrase)
+    {
+        sodium_memzero(text.data(), text.size());
+        std::error_code ec;
+        const auto size = std::filesystem::file_size(path, ec);
+        return core::fail(core::ErrorCode::InvalidArgument,
+                          "key file " + path.string() + " holds " +
+                              (ec ? std::string("more than ") + std::to_string(k_max_passphrase)
+                                  : std::to_string(size)) +
+                              " bytes; a key file holds at most " +
+                              std::to_string(k_max_passphrase) + " (32 random bytes are enough)");
+    }
     auto key = derive_key(text, context, limits);
     sodium_memzero(text.data(), text.size());
     if (!key)

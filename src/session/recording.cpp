@@ -250,11 +250,18 @@ core::Result<ReplayResult> replay(const Recording& recording, int threads, std::
             forces = forces_at(model, recording.forces, t);
             next = std::upper_bound(changes.begin(), changes.end(), t);
         }
-        sim::step(model, state, ws, forces);
+        const sim::StepReport r = sim::step(model, state, ws, forces);
+        if (sim::has_flag(r.status, sim::StepStatus::NonFinite))
+        {
+            // The step kept the state as it was: the replay ends on the last finite one.
+            if (progress != nullptr)
+                progress->update("replay", 1.0);
+            return ReplayResult{std::move(model), coupling, std::move(state), t};
+        }
     }
     if (progress != nullptr)
         progress->update("replay", 1.0);
-    return ReplayResult{std::move(model), coupling, std::move(state)};
+    return ReplayResult{std::move(model), coupling, std::move(state), std::nullopt};
 }
 
 namespace

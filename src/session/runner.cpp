@@ -5,10 +5,14 @@
 #include <spdlog/fmt/fmt.h>
 #include <spdlog/spdlog.h>
 
+#include <cerrno>
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
+#include <optional>
 #include <span>
 #include <sstream>
 #include <string>
@@ -26,14 +30,36 @@ core::Unexpected bad_line(std::string_view source, std::size_t line, const std::
                       std::string(source) + ":" + std::to_string(line) + ": " + why);
 }
 
-bool read_number(std::istringstream& in, double& out)
+/// A word as it may be shown in a message: at most 32 characters, control bytes as '?'.
+std::string shown(std::string_view word)
+{
+    std::string out(word.substr(0, 32));
+    for (char& c : out)
+        if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f)
+            c = '?';
+    return "'" + out + (word.size() > 32 ? "...'" : "'");
+}
+
+/// Reads the next word as a finite decimal number into `out`. \return empty when it is one,
+/// else what was found instead, for "expected X, got ...": "nothing", "'abc' (not a number)",
+/// "'inf' (not a finite number)". Hexadecimal ("0x1") is not a number here.
+std::string read_number(std::istringstream& in, double& out)
 {
     std::string word;
     if (!(in >> word))
-        return false;
-    char* end = nullptr;
-    out = std::strtod(word.c_str(), &end);
-    return end != nullptr && *end == '\0' && std::isfinite(out);
+        return "nothing";
+    const char* begin = word.data();
+    const char* end = begin + word.size();
+    if (begin != end && *begin == '+')
+        ++begin;
+    const auto [ptr, ec] = std::from_chars(begin, end, out, std::chars_format::general);
+    if (ec == std::errc::result_out_of_range)
+        return shown(word) + " (not a finite number)";
+    if (ec != std::errc() || ptr != end)
+        return shown(word) + " (not a number)";
+    if (!std::isfinite(out))
+        return shown(word) + " (not a finite number)";
+    return {};
 }
 
 }  // namespace
@@ -55,15 +81,39 @@ core::Result<std::vector<ScriptEvent>> parse_script(std::string_view text, std::
             continue;
         ScriptEvent e;
         e.line = number;
+        // "expected WHAT, got ..." for a number that is missing, not one, not finite, or
+        // breaks its rule (`ok`).
+        const auto need = [&](std::istringstream& from, double& v, const std::string& what,
+                              bool (*ok)(double)) -> std::optional<core::Unexpected>
+        {
+            std::string why = read_number(from, v);
+            if (why.empty() && !ok(v))
+            {
+                std::ostringstream value;
+                value << v;
+                why = "'" + value.str() + "'";
+            }
+            if (why.empty())
+                return std::nullopt;
+            return bad_line(source, number, "expected " + what + ", got " + why);
+        };
+        const auto any = [](double) { return true; };
+        const auto non_negative = [](double v) { return v >= 0.0; };
+        const auto positive = [](double v) { return v > 0.0; };
         {
             std::istringstream t(first);
-            if (!read_number(t, e.time) || e.time < 0.0)
-                return bad_line(source, number, "expected a time >= 0, got '" + first + "'");
+            if (auto bad = need(t, e.time, "a time in seconds >= 0", non_negative))
+                return *bad;
         }
         std::string cmd;
         in >> cmd;
         if (cmd == "leave")
+        {
             e.kind = ScriptEvent::Kind::Leave;
+            if (std::string extra; in >> extra)
+                return bad_line(source, number,
+                                "unexpected " + shown(extra) + " after 'leave' (it takes nothing)");
+        }
         else if (cmd == "grab" || cmd == "poi")
         {
             e.kind = cmd == "grab" ? ScriptEvent::Kind::Grab : ScriptEvent::Kind::Poi;
@@ -72,9 +122,12 @@ core::Result<std::vector<ScriptEvent>> parse_script(std::string_view text, std::
             if (what == "face")
             {
                 double f = 0.0;
-                if (!read_number(in, f) || f < 0.0 || f >= net::k_max_face_index ||
-                    f != std::floor(f))
-                    return bad_line(source, number, "expected a face index");
+                if (auto bad = need(in, f, "a face index (a whole number from 0)",
+                                    [](double v) {
+                                        return v >= 0.0 && v < net::k_max_face_index &&
+                                               v == std::floor(v);
+                                    }))
+                    return *bad;
                 e.force.target.kind = net::TargetKind::Face;
                 e.force.target.face = static_cast<std::uint32_t>(f);
             }
@@ -82,8 +135,8 @@ core::Result<std::vector<ScriptEvent>> parse_script(std::string_view text, std::
             {
                 e.force.target.kind = net::TargetKind::Position;
                 for (double& c : e.force.target.position)
-                    if (!read_number(in, c))
-                        return bad_line(source, number, "expected three coordinates after 'point'");
+                    if (auto bad = need(in, c, "three coordinates after 'point'", any))
+                        return *bad;
             }
             else
                 return bad_line(source, number, "expected 'face' or 'point' after '" + cmd + "'");
@@ -92,26 +145,28 @@ core::Result<std::vector<ScriptEvent>> parse_script(std::string_view text, std::
             {
                 if (key == "radius")
                 {
-                    if (!read_number(in, e.force.target.radius) || e.force.target.radius < 0.0)
-                        return bad_line(source, number, "expected a radius >= 0");
+                    if (auto bad = need(in, e.force.target.radius, "a radius >= 0 after 'radius'",
+                                        non_negative))
+                        return *bad;
                 }
                 else if (key == "force" && e.kind == ScriptEvent::Kind::Grab)
                 {
                     for (double& c : e.force.force)
-                        if (!read_number(in, c))
-                            return bad_line(source, number, "expected three force components");
+                        if (auto bad = need(in, c, "three force components after 'force'", any))
+                            return *bad;
                 }
                 else if (key == "for" && e.kind == ScriptEvent::Kind::Grab)
                 {
-                    if (!read_number(in, e.duration) || e.duration < 0.0)
-                        return bad_line(source, number, "expected a duration >= 0");
+                    if (auto bad =
+                            need(in, e.duration, "a duration in seconds > 0 after 'for'", positive))
+                        return *bad;
                 }
                 else
-                    return bad_line(source, number, "unknown key '" + key + "'");
+                    return bad_line(source, number, "unknown key " + shown(key));
             }
         }
         else
-            return bad_line(source, number, "unknown command '" + cmd + "'");
+            return bad_line(source, number, "unknown command " + shown(cmd));
         if (e.kind == ScriptEvent::Kind::Grab && !(e.duration > 0.0))
             return bad_line(source, number, "a grab needs 'for SECONDS' with a duration > 0");
         events.push_back(e);
@@ -234,6 +289,17 @@ core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
     double last_row_t = 0.0;
     double last_sim_t = session.time();
     bool pace_from_here = false;  // the next row starts a sample (the peer simulates, has a model)
+    // A stats file that cannot be written (a full disk) stops the rows, not the session; the
+    // summary carries the error so that the command's exit status tells it.
+    auto stats_failed = [&](const std::string& why)
+    {
+        if (!summary.stats_error.empty())
+            return;
+        summary.stats_error = "cannot write stats file " + options.stats_csv.string() + ": " + why +
+                              "; the rows from here on are lost";
+        spdlog::error("{}", summary.stats_error);
+        csv.close();
+    };
     auto write_row = [&](double t)
     {
         const SessionStats s = session.stats();
@@ -259,7 +325,7 @@ core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
         pace_from_here = simulating;
         last_row_t = t;
         last_sim_t = session.time();
-        if (csv)
+        if (csv.is_open())
         {
             const double step_ms = s.steps > last.steps
                                        ? 1e3 * (s.step_seconds - last.step_seconds) /
@@ -276,6 +342,8 @@ core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
                 << s.stale_frames - last.stale_frames << ',' << s.peers_connected << ','
                 << refused - last_refused << '\n';
             csv.flush();
+            if (!csv)  // a full disk: said once, the session goes on without its statistics
+                stats_failed(std::strerror(errno));
         }
         last = s;
         last_refused = refused;
@@ -363,6 +431,12 @@ core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
         return core::fail(script_error.error().code, script_error.error().message);
     summary.elapsed_s = elapsed();
     write_row(summary.elapsed_s);
+    if (csv.is_open())
+    {
+        csv.close();
+        if (!csv)
+            stats_failed(std::strerror(errno));
+    }
     summary.final_tick = session.tick();
     summary.left = session.left();
     summary.stats = session.stats();

@@ -99,6 +99,19 @@ if(TARGET pliant)
                       -q render ${out_dir}/spot3.pgrid -o ${out_dir}/q.png --size 64x64)
     pliant_cli_expect(cli_quiet_refine 0 STDOUT "^$"
                       -q refine ${out_dir}/spot3.pgrid --levels 1 -o ${out_dir}/q.obj)
+    # join: --duration ending before any answer says "never answered"; key files that are empty
+    # or readable by others are told as that (nobody listens on 127.0.0.1:9).
+    pliant_cli_expect(cli_join_never_answers_within_duration 3 STDERR
+                      "127.0.0.1:9 never answered within --duration 1 s: check the address and port"
+                      join 127.0.0.1:9 --duration 1)
+    file(WRITE ${out_dir}/empty.key "")
+    pliant_cli_expect(cli_key_file_empty 1 STDERR "key file .*empty.key is empty"
+                      join 127.0.0.1:9 --duration 1 --key-file ${out_dir}/empty.key)
+    file(WRITE ${out_dir}/open.key "0123456789abcdef0123456789abcdef")
+    file(CHMOD ${out_dir}/open.key PERMISSIONS OWNER_READ OWNER_WRITE GROUP_READ WORLD_READ)
+    pliant_cli_expect(cli_key_file_readable_by_all 3 STDERR
+                      "open.key: the key file can be read by every user \\(mode 0644\\).*chmod 600"
+                      join 127.0.0.1:9 --duration 1 --key-file ${out_dir}/open.key)
     set_tests_properties(cli_render_size_with_junk cli_render_camera_with_junk cli_render_not_png
                          cli_render_level_up_too_far cli_quiet_render cli_quiet_refine
                          cli_refine_output_checked_first PROPERTIES FIXTURES_REQUIRED cli_outputs)

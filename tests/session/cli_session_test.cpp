@@ -122,6 +122,26 @@ TEST(SessionCli, HostTakesAPointClearanceAndRefusesAnUnknownOne)
         << read(dir / "bad.log");
 }
 
+// A stats file that cannot be written to its end (a full disk: /dev/full) is said at once and
+// gives exit status 1 at the end; the session itself runs its course. Before, the rows were lost
+// without a word and the host exited 0.
+TEST(SessionCli, AStatsFileThatCannotBeWrittenEndsWithStatus1)
+{
+    const auto dir = pliant::test::scratch_dir("session_cli_stats_full");
+    const int port = test_port(1);
+    const std::string cmd = "cd '" + dir.string() + "' && '" + std::string(PLIANT_EXE) +
+                            "' host --level 2 --port " + std::to_string(port) +
+                            " --duration 1 --stats /dev/full > host.log 2>&1; echo $? > host.rc";
+    ASSERT_EQ(std::system(cmd.c_str()), 0);
+    PLIANT_SKIP_IF_UNBOUND(dir, "host", port);
+    const std::string log = read(dir / "host.log");
+    EXPECT_EQ(read(dir / "host.rc"), "1\n") << log;
+    EXPECT_NE(log.find("cannot write stats file /dev/full: No space left on device"),
+              std::string::npos)
+        << log;
+    EXPECT_NE(log.find("host: 1.0 s, tick"), std::string::npos) << log;
+}
+
 // Kill -9 a participant, then the master, mid-session (fast coupling, so that the others keep
 // running while ENet's timeout, at least 5 s, runs out): the remaining participant takes over as
 // master, owns every node and keeps stepping, and the viewer keeps receiving. Bounded by the

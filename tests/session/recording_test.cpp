@@ -9,8 +9,10 @@
 #include <gtest/gtest.h>
 
 #include "session_harness.h"
+#include "support/fp_traps.h"
 #include "support/test_paths.h"
 
+#include <cmath>
 #include <fstream>
 #include <iterator>
 
@@ -158,6 +160,41 @@ TEST(Recording, AStopAskedForEndsTheReplayWithinSixteenSteps)
     // Reports every 10,000 ticks: the third is at tick 20,000, where the stop is heard at once.
     EXPECT_EQ(replayed.error().message, "replay: cancelled during tick 20000 of 1000000");
     EXPECT_EQ(sink.reports, 3);
+}
+
+// A recording no session made (a fixed step far above the stable one): the replay stops at the
+// first step that gives non-finite values and says so, holding the last finite state; before,
+// it stepped on to the end without a word and only the hash check failed.
+TEST(Recording, AReplayThatDivergesStopsThereOnTheLastFiniteState)
+{
+    const core::TetraGrid grid = core::TetraGrid::create(k_recording_level).value();
+    sim::MembraneSettings m = material();
+    m.fixed_dt = 1.0;  // the stable step at this level is a few hundredths of a second
+    auto model = sim::MembraneModel::create(grid, scenes::sphere_grid(grid, 1.0), m).value();
+    Recording rec;
+    rec.model = encode_model(model, Coupling::Exact);
+    rec.final_tick = 2'000;
+    rec.forces.push_back(ForceRecord{0, 0, {face_pull(200, 0.5)}});
+    pliant::test::FpTrapsOff traps_off;  // the diverging trials compute inf and NaN
+    const auto replayed = replay(rec);
+    ASSERT_TRUE(replayed) << replayed.error().message;
+    ASSERT_TRUE(replayed->diverged.has_value());
+    EXPECT_LT(*replayed->diverged, rec.final_tick);
+    EXPECT_EQ(replayed->state.tick, *replayed->diverged);
+    for (const core::NodeIndex n : grid.node_of_unique())
+    {
+        ASSERT_TRUE(std::isfinite(replayed->state.u[n]));
+        ASSERT_TRUE(std::isfinite(replayed->state.v[n]));
+    }
+    // A stable recording does not set it.
+    rec.model = encode_model(
+        sim::MembraneModel::create(grid, scenes::sphere_grid(grid, 1.0), material()).value(),
+        Coupling::Exact);
+    rec.final_tick = 50;
+    const auto stable = replay(rec);
+    ASSERT_TRUE(stable);
+    EXPECT_FALSE(stable->diverged.has_value());
+    EXPECT_EQ(stable->state.tick, 50U);
 }
 
 std::vector<char> read_all(const std::filesystem::path& p)

@@ -9,6 +9,7 @@
 
 #include <optional>
 #include <string>
+#include <utility>
 
 namespace pliant::session
 {
@@ -56,6 +57,43 @@ TEST(Script, MalformedLinesAreErrorsNamingTheLine)
         EXPECT_EQ(r.error().code, core::ErrorCode::ParseError);
         EXPECT_EQ(r.error().message.rfind("grabs.txt:2: ", 0), 0U) << r.error().message;
     }
+}
+
+// Each message says what was expected and what was found: a number that is not finite is told
+// as that, not as a missing one; hexadecimal is not a time; 'leave' takes nothing after it.
+TEST(Script, MessagesSayWhatWasExpectedAndWhatWasFound)
+{
+    const std::pair<const char*, const char*> cases[] = {
+        {"0.5 grab face 1 force 0 0 1e400 for 1",
+         "expected three force components after 'force', got '1e400' (not a finite number)"},
+        {"0.5 grab face 1 force 0 nan 1 for 1",
+         "expected three force components after 'force', got 'nan' (not a finite number)"},
+        {"0.5 grab face 1 force 0 0 1 for inf",
+         "expected a duration in seconds > 0 after 'for', got 'inf' (not a finite number)"},
+        {"0.5 grab face 1 radius nan force 0 0 1 for 1",
+         "expected a radius >= 0 after 'radius', got 'nan' (not a finite number)"},
+        {"0x1 leave", "expected a time in seconds >= 0, got '0x1' (not a number)"},
+        {"-1 leave", "expected a time in seconds >= 0, got '-1'"},
+        {"0.5 leave now", "unexpected 'now' after 'leave' (it takes nothing)"},
+        {"1 grab face 1.5 force 0 0 1 for 1",
+         "expected a face index (a whole number from 0), got '1.5'"},
+        {"1 grab point 0 0", "expected three coordinates after 'point', got nothing"},
+    };
+    for (const auto& [line, message] : cases)
+    {
+        const auto r = parse_script(std::string(line) + "\n", "s.txt");
+        ASSERT_FALSE(r.has_value()) << line;
+        EXPECT_EQ(r.error().message, std::string("s.txt:1: ") + message);
+    }
+    // A word that begins with a NUL byte is not time 0.
+    const auto nul = parse_script(std::string("\0 leave\n", 8), "s.txt");
+    ASSERT_FALSE(nul.has_value());
+    EXPECT_EQ(nul.error().message,
+              "s.txt:1: expected a time in seconds >= 0, got '?' (not a number)");
+    // "+1" is a number, as in the scenario files.
+    const auto plus = parse_script("+1 leave\n", "s.txt");
+    ASSERT_TRUE(plus.has_value()) << plus.error().message;
+    EXPECT_EQ(plus->front().time, 1.0);
 }
 
 // What needs the grid is checked once it is known: a face beyond it, and a viewer's grab, are

@@ -35,6 +35,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -95,11 +96,15 @@ struct ReplayResult
 {
     sim::MembraneModel model;
     Coupling coupling = Coupling::Exact;
-    sim::MembraneState state;  ///< at recording.final_tick
+    sim::MembraneState state;  ///< at recording.final_tick (at `diverged` when it is set)
+    /// The tick whose step gave non-finite values (a recording that no session made: crafted,
+    /// or from another build); the replay stopped there and `state` is the last finite one.
+    std::optional<std::uint64_t> diverged;
 };
 
 /// Replays `recording` on one process with `threads` threads (the result does not depend on it)
 /// up to `until` ticks (0: the recording's final tick), reporting progress as phase "replay".
+/// A step that gives non-finite values ends the replay there (ReplayResult::diverged).
 /// \return decode_model's errors; InvalidArgument if the model is not fixed-step; Cancelled
 /// ("replay: cancelled during tick T of N") within 16 steps of `progress` asking to stop.
 core::Result<ReplayResult> replay(const Recording& recording, int threads = 1,

@@ -138,6 +138,9 @@ struct RunSummary
     SessionStats stats;
     /// Connections the encryption layer dropped (RunOptions::secure; 0 without one).
     std::uint64_t auth_refused = 0;
+    /// Why the stats file could not be written to its end (a full disk), or empty: the rows
+    /// stop there and the session goes on; the command reports it and exits 1 at its end.
+    std::string stats_error;
 };
 
 /// Runs `session` in real time until the duration, the session's end or the script's `leave`,
