@@ -1,5 +1,7 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: 2026 pliant contributors
+#include <nlohmann/json.hpp>
+
 #include "mesh/format_scan_internal.h"
 
 #include <algorithm>
@@ -21,6 +23,9 @@ using core::fail;
 
 /// The most vertices a face may have in Assimp 5.2's OFF reader; it skips larger ones.
 constexpr std::size_t k_off_reader_max_corners = 9;
+
+/// The UTF-8 byte-order mark.
+constexpr std::string_view k_utf8_bom = "\xEF\xBB\xBF";
 
 std::string plural(std::size_t n, const char* word)
 {
@@ -147,6 +152,13 @@ core::Result<ScanResult> scan_obj(std::string_view bytes, const std::string& nam
     if (auto text = check_text(bytes, name, "OBJ"); !text)
         return text.error();
     ScanResult r{.format = Format::Obj};
+    // A UTF-8 byte-order mark (some Windows editors write one) is not part of the first line.
+    // Assimp's OBJ reader does not skip it and so drops that line: it reads the copy without it.
+    if (bytes.starts_with(k_utf8_bom))
+    {
+        bytes.remove_prefix(k_utf8_bom.size());
+        r.rewritten = std::string(bytes);
+    }
     std::size_t lines = 0;
     // Which `v` records faces use (1-based, negative = relative), for the report.
     std::vector<bool> used;
@@ -388,6 +400,7 @@ struct PlyElement
     std::string name;
     std::size_t count = 0;
     std::vector<PlyProperty> properties;
+    std::size_t line = 0;  ///< the header line that declares it
 };
 
 /// Bytes of a PLY scalar type, 0 if unknown; `is_signed` set for signed integer types.
@@ -417,6 +430,46 @@ bool is_ply_index_list(const PlyElement& e, const PlyProperty& q)
 {
     return e.name == "face" && q.count_size != 0 &&
            (q.name == "vertex_indices" || q.name == "vertex_index");
+}
+
+/// The properties Assimp's PLY reader needs: a vertex element with scalar x, y and z (it reads a
+/// missing one as 0, which flattens the mesh onto a plane, a line or the origin, so its faces
+/// degenerate) and a face element with its vertex index list (without one it reads no face at
+/// all and says only "Mesh contains no faces"). Messages give the header line of the element.
+core::Result<void> check_ply_layout(const std::vector<PlyElement>& elements,
+                                    const std::string& name)
+{
+    const auto vertex = std::find_if(elements.begin(), elements.end(),
+                                     [](const PlyElement& e) { return e.name == "vertex"; });
+    if (vertex == elements.end())
+        return fail(ErrorCode::ParseError, name +
+                                               ": the PLY header has no 'vertex' element (a PLY "
+                                               "mesh needs one with properties x, y and z)");
+    const std::string at = name + ":" + std::to_string(vertex->line) + ": ";
+    for (const char* axis : {"x", "y", "z"})
+    {
+        const auto p = std::find_if(vertex->properties.begin(), vertex->properties.end(),
+                                    [axis](const PlyProperty& q) { return q.name == axis; });
+        if (p == vertex->properties.end())
+            return fail(ErrorCode::ParseError, at + "the vertex element has no property '" + axis +
+                                                   "' (a PLY vertex needs x, y and z)");
+        if (p->count_size != 0)
+            return fail(ErrorCode::ParseError, at + "the vertex element's property '" + axis +
+                                                   "' is a list (a PLY vertex needs x, y and z "
+                                                   "as single numbers)");
+    }
+    for (const PlyElement& e : elements)
+    {
+        if (e.name != "face" || e.count == 0)
+            continue;
+        if (std::none_of(e.properties.begin(), e.properties.end(),
+                         [&e](const PlyProperty& q) { return is_ply_index_list(e, q); }))
+            return fail(ErrorCode::ParseError,
+                        name + ":" + std::to_string(e.line) +
+                            ": the face element has no list property 'vertex_indices' (a PLY "
+                            "face lists its vertices in 'vertex_indices' or 'vertex_index')");
+    }
+    return {};
 }
 
 /// Reads an integer of `size` bytes (1, 2 or 4), little- or big-endian, signed or not.
@@ -607,10 +660,12 @@ core::Result<ScanResult> scan_ply(std::string_view bytes, const std::string& nam
     std::string encoding;
     std::vector<PlyElement> elements;
     std::optional<core::Error> error;
+    std::size_t header_line = 0;
     for_each_line(
         header,
         [&](std::string_view line)
         {
+            ++header_line;
             const std::vector<std::string_view> t = tokens(line);
             if (t.empty() || t[0] == "ply" || t[0] == "comment" || t[0] == "obj_info")
                 return true;
@@ -633,7 +688,7 @@ core::Result<ScanResult> scan_ply(std::string_view bytes, const std::string& nam
                 const auto n = t.size() == 3 ? parse_count(t[2]) : std::nullopt;
                 if (!n)
                     return bad("expected 'element NAME COUNT'");
-                elements.push_back({std::string(t[1]), *n, {}});
+                elements.push_back({std::string(t[1]), *n, {}, header_line});
                 return true;
             }
             if (t[0] == "property")
@@ -686,6 +741,8 @@ core::Result<ScanResult> scan_ply(std::string_view bytes, const std::string& nam
         return fail(ErrorCode::EmptyInput, name + ": no faces: the PLY header declares " +
                                                plural(r.vertices, "vertex") +
                                                " and no 'face' element with a non-zero count");
+    if (auto layout = check_ply_layout(elements, name); !layout)
+        return layout.error();
 
     const std::string_view body = bytes.substr(data);
     if (encoding == "ascii")
@@ -873,6 +930,78 @@ core::Result<ScanResult> scan_stl(std::string_view bytes, const std::string& nam
 
 // ---- glTF ---------------------------------------------------------------------------------
 
+/// Reads JSON without building it (nothing is kept, and the parser nests without recursion) and
+/// records where it breaks; never throws.
+class JsonBreak final : public nlohmann::json_sax<nlohmann::json>
+{
+public:
+    bool null() override { return true; }
+    bool boolean(bool /*value*/) override { return true; }
+    bool number_integer(number_integer_t /*value*/) override { return true; }
+    bool number_unsigned(number_unsigned_t /*value*/) override { return true; }
+    bool number_float(number_float_t /*value*/, const string_t& /*text*/) override { return true; }
+    bool string(string_t& /*value*/) override { return true; }
+    bool binary(binary_t& /*value*/) override { return true; }
+    bool start_object(std::size_t /*elements*/) override { return true; }
+    bool key(string_t& /*value*/) override { return true; }
+    bool end_object() override { return true; }
+    bool start_array(std::size_t /*elements*/) override { return true; }
+    bool end_array() override { return true; }
+    bool parse_error(std::size_t position, const std::string& /*last_token*/,
+                     const nlohmann::detail::exception& e) override
+    {
+        // `position` counts the characters read, the one that broke the parse (or the end of
+        // the input) included.
+        offset = position > 0 ? position - 1 : 0;
+        // "[json.exception.parse_error.101] parse error at line 1, column 5: syntax error ...":
+        // the part after the place, which the message gives itself.
+        std::string_view text = e.what();
+        const std::size_t column = text.find("column ");
+        const std::size_t colon = column == std::string::npos ? column : text.find(": ", column);
+        if (colon != std::string::npos)
+            text.remove_prefix(colon + 2);
+        // Its "last read: '...'" quotes the file's bytes: any that are not printable ASCII are
+        // written as \xNN, so that the message stays valid UTF-8 (`pliant info --json`).
+        for (const char c : text)
+        {
+            const auto u = static_cast<unsigned char>(c);
+            if (u >= 0x20 && u < 0x7f)
+            {
+                why.push_back(c);
+                continue;
+            }
+            constexpr std::string_view hex = "0123456789ABCDEF";
+            why.append("\\x").push_back(hex[u >> 4]);
+            why.push_back(hex[u & 0xF]);
+        }
+        return false;
+    }
+
+    std::size_t offset = 0;
+    std::string why;
+};
+
+/// A `.gltf` is JSON: Assimp's glTF readers do not recognise a file whose JSON does not parse
+/// and say only "No suitable reader found", so the scan parses it first and says where it breaks.
+core::Result<ScanResult> scan_gltf(std::string_view bytes, const std::string& name)
+{
+    if (auto text = check_text(bytes, name, "glTF"); !text)
+        return text.error();
+    JsonBreak check;
+    if (nlohmann::json::sax_parse(bytes.begin(), bytes.end(), &check))
+        return ScanResult{.format = Format::Gltf};
+    const std::size_t at = std::min(check.offset, bytes.size());
+    const std::size_t line_start = bytes.rfind('\n', at == 0 ? 0 : at - 1);
+    const std::size_t column =
+        line_start == std::string_view::npos || at == 0 ? at + 1 : at - line_start;
+    const std::string place = "at byte " + std::to_string(at) + " (line " +
+                              std::to_string(first_line_of(bytes, at)) + ", column " +
+                              std::to_string(column) + ")";
+    return fail(ErrorCode::ParseError, name + ": the glTF JSON does not parse " + place +
+                                           (at == bytes.size() ? ", where the file ends" : "") +
+                                           ": " + check.why);
+}
+
 core::Result<ScanResult> scan_glb(std::string_view bytes, const std::string& name)
 {
     if (bytes.size() < 12 || bytes.substr(0, 4) != "glTF")
@@ -928,11 +1057,7 @@ core::Result<ScanResult> scan_format(std::string_view bytes, std::string_view ex
     if (ext == ".glb")
         return scan_glb(bytes, name);
     if (ext == ".gltf")
-    {
-        if (auto text = check_text(bytes, name, "glTF"); !text)
-            return text.error();
-        return ScanResult{.format = Format::Gltf};
-    }
+        return scan_gltf(bytes, name);
     return fail(ErrorCode::UnsupportedFormat,
                 name + ": unsupported format '" + std::string(ext) +
                     "' (pliant reads .obj .off .ply .stl .gltf .glb)");

@@ -50,16 +50,19 @@ struct ScanResult
     bool faces_known = false;  ///< `faces` is the file's exact face record count
     /// OBJ only: `v` records no `f` line refers to (Assimp's OBJ reader drops them silently).
     std::size_t unreferenced = 0;
-    /// OFF only, when a face has more than 9 vertices (Assimp's reader skips those): the file
-    /// with such faces fan-split into triangles, for Assimp to read instead. Empty otherwise.
+    /// A copy of the file for Assimp to read instead, in the same format; empty otherwise. OFF,
+    /// when a face has more than 9 vertices (Assimp's reader skips those): such faces fan-split
+    /// into triangles. OBJ, when the file starts with a UTF-8 byte-order mark (Assimp's reader
+    /// drops the first line then): the file without it.
     std::string rewritten{};
 };
 
 /// Checks `bytes` (the whole file) against the structure of the format its lower-case extension
 /// `ext` (".obj", ".stl", ...) names. `name` prefixes every message.
 /// \return EmptyInput (no bytes, or a header that declares no faces), ParseError (binary bytes in
-/// a text format, a bad header, fewer records or bytes than the header declares),
-/// UnsupportedFormat (unknown extension, a PLY encoding pliant does not read).
+/// a text format, a bad header, a PLY vertex without x, y or z or a face element without its
+/// index list, fewer records or bytes than the header declares, a `.gltf` whose JSON does not
+/// parse), UnsupportedFormat (unknown extension, a PLY encoding pliant does not read).
 [[nodiscard]] core::Result<ScanResult> scan_format(std::string_view bytes, std::string_view ext,
                                                    const std::string& name);
 

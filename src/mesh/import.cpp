@@ -275,10 +275,12 @@ core::Result<TriMesh> import_mesh(const std::filesystem::path& path, ImportRepor
     const aiScene* scene = nullptr;
     try
     {
-        scene = scan->rewritten.empty()
-                    ? importer.ReadFile(name, aiProcess_ValidateDataStructure)
-                    : importer.ReadFileFromMemory(scan->rewritten.data(), scan->rewritten.size(),
-                                                  aiProcess_ValidateDataStructure, "off");
+        // The scan's copy of the file, when it made one, has the same format as the file.
+        scene = scan->rewritten.empty() ? importer.ReadFile(name, aiProcess_ValidateDataStructure)
+                                        : importer.ReadFileFromMemory(
+                                              scan->rewritten.data(), scan->rewritten.size(),
+                                              aiProcess_ValidateDataStructure,
+                                              scan->format == detail::Format::Obj ? "obj" : "off");
     }
     catch (const std::exception& e)
     {

@@ -297,6 +297,39 @@ TEST_F(Formats, GltfNodeTransformIsApplied)
     EXPECT_EQ(s.bbox_max.x, 11.0);
 }
 
+// A UTF-8 byte-order mark before the first line: Assimp 5.2's OBJ reader takes it as part of
+// that line's keyword and drops the line (a tetrahedron then refers to a fourth vertex it does
+// not have); the scan skipped it as no `v` line either.
+TEST_F(Formats, ObjWithAUtf8ByteOrderMarkImportsLikeWithout)
+{
+    const std::string tet =
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
+        "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+    const std::string bom = "\xEF\xBB\xBF";
+    ImportReport plain;
+    ImportReport marked;
+    const TriMesh without = load("tet.obj", tet, &plain);
+    const TriMesh with = load("tet_bom.obj", bom + tet, &marked);
+    ASSERT_EQ(without.vertex_count(), 4U);
+    expect_same(with, without);
+    EXPECT_EQ(marked.file_vertices, 4U);
+    EXPECT_EQ(marked.unreferenced_dropped, plain.unreferenced_dropped);
+    EXPECT_EQ(marked.welded, plain.welded);
+    EXPECT_TRUE(validate(with, "tet_bom.obj"));
+    // The first vertex is read even when dropping it would leave every index in range.
+    const TriMesh triangle = load("tri_bom.obj", bom + "v 5 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    ASSERT_EQ(triangle.vertex_count(), 3U);
+    EXPECT_EQ(triangle.positions[0], (core::Vec3{5, 0, 0}));
+    // Line numbers still count the marked line as line 1.
+    test::write_bytes(dir_ / "idx_bom.obj", bom + "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n");
+    const auto bad = import_mesh(dir_ / "idx_bom.obj");
+    ASSERT_FALSE(bad);
+    EXPECT_EQ(bad.error().code, ErrorCode::BadIndex);
+    EXPECT_NE(bad.error().message.find("idx_bom.obj:4: face refers to vertex 9 but the file has 3"),
+              std::string::npos)
+        << bad.error().message;
+}
+
 // ---- hostile files: one error code each, no crash ------------------------------------------
 
 class BadFiles : public ::testing::Test
@@ -554,6 +587,124 @@ TEST_F(BadFiles, PlyIndicesAndValuesNameTheirLineOrByte)
     EXPECT_NE(two.message.find("face 3 (byte 256): vertex count 2 is less than 3"),
               std::string::npos)
         << two.message;
+}
+
+// Assimp's PLY reader takes a missing x, y or z as 0 (the faces then degenerate, which was the
+// message) and a face element without its index list as no face at all ("Mesh  contains no
+// faces"); the scan refuses both with the header line of the element.
+TEST_F(BadFiles, PlyVertexNeedsXYZ)
+{
+    const auto ply =
+        [](const std::string& format, const std::string& vertex_properties, const std::string& body)
+    {
+        return "ply\nformat " + format + " 1.0\nelement vertex 4\n" + vertex_properties +
+               "element face 4\nproperty list uchar int vertex_indices\nend_header\n" + body;
+    };
+    const std::string ascii = "0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n";
+    const struct
+    {
+        const char* name;
+        std::string bytes;
+        const char* says;
+    } cases[] = {
+        {"abc.ply", ply("ascii", "property float a\nproperty float b\nproperty float c\n", ascii),
+         ":3: the vertex element has no property 'x' (a PLY vertex needs x, y and z)"},
+        {"xy.ply", ply("ascii", "property float x\nproperty float y\nproperty float w\n", ascii),
+         ":3: the vertex element has no property 'z' (a PLY vertex needs x, y and z)"},
+        {"list.ply",
+         ply("ascii", "property list uchar float x\nproperty float y\nproperty float z\n", ascii),
+         ":3: the vertex element's property 'x' is a list"},
+        // Binary: the header alone decides (these bytes would be 4 vertices of 3 floats).
+        {"xy_binary.ply",
+         ply("binary_little_endian", "property float x\nproperty float y\nproperty float q\n",
+             std::string(4 * 12, '\0') + std::string(4 * 13, '\0')),
+         ":3: the vertex element has no property 'z'"},
+        {"novertex.ply",
+         "ply\nformat ascii 1.0\nelement face 1\nproperty list uchar int vertex_indices\n"
+         "end_header\n3 0 1 2\n",
+         ": the PLY header has no 'vertex' element"},
+    };
+    for (const auto& c : cases)
+    {
+        const core::Error e = error_of(c.name, c.bytes);
+        EXPECT_EQ(e.code, ErrorCode::ParseError) << c.name << ": " << e.message;
+        EXPECT_NE(e.message.find(std::string(c.name) + c.says), std::string::npos) << e.message;
+    }
+    // Any order, other properties among them: fine.
+    test::write_bytes(dir_ / "zyx.ply",
+                      ply("ascii",
+                          "property float nx\nproperty float z\nproperty float y\n"
+                          "property float x\n",
+                          "9 0 0 0\n9 0 0 1\n9 0 1 0\n9 1 0 0\n3 0 2 1\n3 0 1 3\n3 0 3 2\n"
+                          "3 1 2 3\n"));
+    EXPECT_TRUE(import_mesh(dir_ / "zyx.ply"));
+}
+
+TEST_F(BadFiles, PlyFaceNeedsAVertexIndexList)
+{
+    const auto ply = [](const std::string& face_property)
+    {
+        return "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+               "property float z\nelement face 4\n" +
+               face_property +
+               "\nend_header\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n"
+               "3 1 2 3\n";
+    };
+    for (const char* property :
+         {"property list uchar int corners", "property list uchar int vertex_indexes"})
+    {
+        const core::Error e = error_of("corners.ply", ply(property));
+        EXPECT_EQ(e.code, ErrorCode::ParseError) << property << ": " << e.message;
+        EXPECT_NE(e.message.find("corners.ply:7: the face element has no list property "
+                                 "'vertex_indices'"),
+                  std::string::npos)
+            << e.message;
+    }
+    // A scalar of that name is not a list: the face lines then hold 3 values too many.
+    const core::Error scalar = error_of("scalar.ply", ply("property int vertex_indices"));
+    EXPECT_EQ(scalar.code, ErrorCode::ParseError) << scalar.message;
+    EXPECT_NE(scalar.message.find("scalar.ply:7: the face element has no list property"),
+              std::string::npos)
+        << scalar.message;
+    // Assimp accepts 'vertex_index' as well (its PlyParser's ParseSemantic): the same mesh.
+    test::write_bytes(dir_ / "indices.ply", ply("property list uchar int vertex_indices"));
+    test::write_bytes(dir_ / "index.ply", ply("property list uchar int vertex_index"));
+    const auto indices = import_mesh(dir_ / "indices.ply");
+    const auto index = import_mesh(dir_ / "index.ply");
+    ASSERT_TRUE(indices) << indices.error().message;
+    ASSERT_TRUE(index) << index.error().message;
+    EXPECT_EQ(index->faces, indices->faces);
+    EXPECT_EQ(index->positions, indices->positions);
+}
+
+// Assimp 5.2 does not recognise a .gltf whose JSON does not parse ("No suitable reader found
+// for the file format"); the scan parses it first and says where it breaks or ends.
+TEST_F(BadFiles, GltfJsonThatDoesNotParseSaysWhere)
+{
+    const std::string full = test::to_gltf(scenes::octahedron());
+    const std::size_t keep = full.find("\"meshes\"") + 10;  // `"meshes":[` and no more
+    const core::Error cut = error_of("cut.gltf", full.substr(0, keep));
+    EXPECT_EQ(cut.code, ErrorCode::ParseError) << cut.message;
+    EXPECT_NE(cut.message.find("cut.gltf: the glTF JSON does not parse at byte " +
+                               std::to_string(keep) + " (line 1, column " +
+                               std::to_string(keep + 1) + "), where the file ends: "),
+              std::string::npos)
+        << cut.message;
+    EXPECT_NE(cut.message.find("unexpected end of input"), std::string::npos) << cut.message;
+    // Broken inside: the place of the bad token, on its line.
+    const core::Error comma =
+        error_of("comma.gltf", "{\"asset\": {\"version\": \"2.0\"},\n \"meshes\": [1,, 2]}");
+    EXPECT_EQ(comma.code, ErrorCode::ParseError) << comma.message;
+    EXPECT_NE(comma.message.find("comma.gltf: the glTF JSON does not parse at byte 44 (line 2, "
+                                 "column 15): "),
+              std::string::npos)
+        << comma.message;
+    EXPECT_EQ(comma.message.find("where the file ends"), std::string::npos) << comma.message;
+    // A byte that is not UTF-8 is quoted as \xNN: the message stays UTF-8 (for --json).
+    const core::Error utf = error_of("utf.gltf", "{\"asset\": \"\xFF\"}");
+    EXPECT_NE(utf.message.find("at byte 11 (line 1, column 12)"), std::string::npos) << utf.message;
+    EXPECT_NE(utf.message.find("\\xFF"), std::string::npos) << utf.message;
+    EXPECT_EQ(utf.message.find('\xFF'), std::string::npos) << utf.message;
 }
 
 TEST_F(BadFiles, NonFiniteCoordinatesAreReportedWithTheirFace)
