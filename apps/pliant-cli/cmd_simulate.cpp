@@ -5,6 +5,7 @@
 // frame rate and timed forces; the run writes one .pgrid (or a .ply/.obj/.gltf/.glb surface) per
 // frame, energy.csv, and run.json (the inputs, every setting in effect, and how the run ended).
 // The scenario reader is scenario.cpp (TOML): the sim library knows no file formats.
+#include <pliant/core/file_io.h>
 #include <pliant/core/grid_io.h>
 #include <pliant/core/tetra_grid.h>
 #include <pliant/mesh/io.h>
@@ -21,10 +22,12 @@
 
 #include <algorithm>
 #include <array>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -35,6 +38,8 @@
 #include <set>
 #include <span>
 #include <string>
+#include <string_view>
+#include <utility>
 #include <vector>
 
 namespace pliant::cli
@@ -152,6 +157,40 @@ void warn_unreachable_points(const Scenario& sc, const core::TetraGrid& grid,
     }
 }
 
+// Whether `name` is a frame's file as a run names them: frame_ and at least five digits, then
+// .pgrid, .ply, .obj, .gltf (with its buffer .bin) or .glb.
+bool is_frame_file(const std::string& name)
+{
+    constexpr std::string_view prefix = "frame_";
+    if (name.rfind(prefix, 0) != 0)
+        return false;
+    std::size_t i = prefix.size();
+    while (i < name.size() && name[i] >= '0' && name[i] <= '9')
+        ++i;
+    if (i - prefix.size() < 5 || i == name.size() || name[i] != '.')
+        return false;
+    const std::string ext = name.substr(i + 1);
+    return ext == "pgrid" || ext == "ply" || ext == "obj" || ext == "gltf" || ext == "glb" ||
+           ext == "bin";
+}
+
+// The frames an earlier run left in `dir`: its regular files that is_frame_file names (never a
+// folder, a link or any other file). None when `dir` does not exist.
+std::vector<std::filesystem::path> earlier_frames(const std::filesystem::path& dir)
+{
+    std::vector<std::filesystem::path> found;
+    std::error_code ec;
+    if (!std::filesystem::is_directory(dir, ec))
+        return found;
+    for (auto it = std::filesystem::directory_iterator(dir, ec);
+         !ec && it != std::filesystem::directory_iterator(); it.increment(ec))
+        if (it->is_regular_file(ec) && !it->is_symlink(ec) &&
+            is_frame_file(it->path().filename().string()))
+            found.push_back(it->path());
+    std::sort(found.begin(), found.end());
+    return found;
+}
+
 core::Result<void> write_frame(const SimulateOptions& opt, const sim::MembraneModel& model,
                                const sim::MembraneState& state, int frame)
 {
@@ -203,8 +242,9 @@ void warn_unstable_step(const Scenario& sc, const sim::MembraneModel& model,
 
 /// run.json in the output folder: what was run (the inputs and every setting in effect, the
 /// command line's and the scenario's merged) and how it ended. Written before the first step
-/// with status "running", and again when the run completes, diverges or is interrupted, each
-/// time through a temporary file renamed over it, so the file is always whole.
+/// with status "running", and again when the run completes, diverges, fails (an output that
+/// cannot be written) or is interrupted, each time whole (core::write_text_file: a new file
+/// renamed over it, none left behind when that fails).
 class RunRecord
 {
 public:
@@ -272,20 +312,7 @@ public:
 
     [[nodiscard]] core::Result<void> write() const
     {
-        const std::filesystem::path tmp = path_.string() + ".tmp";
-        {
-            std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-            f << json_.dump(2) << '\n';
-            if (!f)
-                return core::fail(core::ErrorCode::IoError,
-                                  "simulate: cannot write " + tmp.string());
-        }
-        std::error_code ec;
-        std::filesystem::rename(tmp, path_, ec);
-        if (ec)
-            return core::fail(core::ErrorCode::IoError,
-                              "simulate: cannot write " + path_.string() + ": " + ec.message());
-        return {};
+        return core::write_text_file(path_, json_.dump(2) + '\n', "simulate");
     }
 
 private:
@@ -295,6 +322,25 @@ private:
 
 int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
 {
+    // The run clears -o of an earlier run's frames (below): an input among them would go too.
+    const std::vector<std::filesystem::path> stale = earlier_frames(opt.out);
+    using Input = std::pair<const std::filesystem::path*, const char*>;
+    for (const auto& [input, what] :
+         std::array<Input, 2>{{{&opt.resume, "--resume"}, {&opt.grid, "GRID"}}})
+    {
+        std::error_code ec;
+        for (const std::filesystem::path& f : stale)
+            if (!input->empty() && std::filesystem::equivalent(*input, f, ec))
+            {
+                spdlog::error(
+                    "simulate: {} {} is a frame of an earlier run in -o's folder {}, which this "
+                    "run clears of such frames before it writes its own; copy the file out of "
+                    "{} first, or give another -o",
+                    what, input->string(), opt.out.string(), opt.out.string());
+                return k_exit_usage;
+            }
+    }
+
     auto scenario = parse_scenario(opt.scenario);
     if (!scenario)
         return report(scenario.error());
@@ -358,15 +404,62 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
     if (ec)
         return report({core::ErrorCode::IoError,
                        "simulate: cannot create " + opt.out.string() + ": " + ec.message()});
-    std::ofstream csv(opt.out / "energy.csv");
-    if (!csv)
-        return report({core::ErrorCode::IoError,
-                       "simulate: cannot write " + (opt.out / "energy.csv").string()});
-    csv << "frame,time,kinetic,strain,foundation,total,steps,rejections,flags\n";
-    csv.precision(17);
+    // The folder holds one run: an earlier run's frames go (those this run writes and those
+    // beyond its last, which were left beside its frames and counted by nobody), and nothing
+    // else does (a file or folder that does not match frame_NNNNN.EXT stays).
+    if (!stale.empty())
+    {
+        std::size_t removed = 0;
+        for (const std::filesystem::path& f : stale)
+        {
+            if (!std::filesystem::remove(f, ec) && ec)
+                return report({core::ErrorCode::IoError,
+                               "simulate: cannot remove " + f.string() +
+                                   " (a frame of an earlier run): " + ec.message()});
+            removed += f.extension() != ".bin" ? 1 : 0;  // a .gltf's buffer is part of its frame
+        }
+        spdlog::info("simulate: removed {} frame{} of an earlier run from {}", removed,
+                     removed == 1 ? "" : "s", opt.out.string());
+    }
     RunRecord record(opt, sc, grid);
     if (auto ok = record.write(); !ok)
         return report(ok.error());
+    // energy.csv grows a row per frame (an interrupted or diverged run keeps the rows of its
+    // frames), each flushed and checked: a write that fails (a full disk) stops the run.
+    const std::filesystem::path csv_path = opt.out / "energy.csv";
+    std::ofstream csv(csv_path, std::ios::binary | std::ios::trunc);
+    const auto csv_error = [&](int err)
+    {
+        return core::Error{core::ErrorCode::IoError,
+                           "simulate: " + csv_path.string() + ": write failed" +
+                               (err != 0 ? ": " + std::string(std::strerror(err)) : "")};
+    };
+    // Flushes the rows written so far: nothing, or the errno of the failure (0 when unknown).
+    const auto csv_flush = [&]() -> std::optional<int>
+    {
+        errno = 0;
+        csv.flush();
+        if (csv)
+            return std::nullopt;
+        return errno;
+    };
+    // Before the first frame: run.json says "failed" and why, with nothing written.
+    const auto failed_to_start = [&](const core::Error& error)
+    {
+        record.end("failed", 0, 0.0, 0.0, {});
+        record.set_reason(error.message);
+        if (auto ok = record.write(); !ok)
+            spdlog::warn("{}", ok.error().message);
+        return report(error);
+    };
+    if (!csv)
+        return failed_to_start(
+            {core::ErrorCode::IoError,
+             "simulate: cannot write " + csv_path.string() + ": " + std::strerror(errno)});
+    csv << "frame,time,kinetic,strain,foundation,total,steps,rejections,flags\n";
+    csv.precision(17);
+    if (const std::optional<int> err = csv_flush())
+        return failed_to_start(csv_error(*err));
 
     sim::MembraneState state = resumed ? std::move(*resumed) : sim::MembraneState::at_rest(grid);
     sim::Rkf45Workspace ws(*model, sc.settings.threads);
@@ -412,9 +505,22 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
                       opt.scenario.string(), fmt_number(t_written), last, frames, opt.out.string());
         return k_exit_interrupted;
     };
+    // An output that cannot be written (a frame, energy.csv) with frames 0 to `last` written:
+    // run.json says "failed" and why before the error is reported.
+    const auto failed = [&](const core::Error& error, int last)
+    {
+        record.end("failed", last + 1, t_written, seconds_since_start(),
+                   {total_steps, total_rejections, total_at_min});
+        record.set_reason(error.message);
+        if (auto ok = record.write(); !ok)
+            spdlog::warn("{}", ok.error().message);
+        return report(error);
+    };
     for (int frame = 0; frame <= frames; ++frame)
     {
-        const double t_frame = frame / sc.frame_rate;
+        // The last frame at the duration, after a shorter interval when the duration is not a
+        // whole number of frame intervals.
+        const double t_frame = frame_time(sc, frame);
         sim::AdvanceReport rep;
         // Advances to t_next with the forces of [state.time, t_next), adding to the frame's
         // report.
@@ -482,15 +588,20 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
                     break;  // max_steps: the remainder waits for the next frame
             }
         }
+        if (auto ok = write_frame(opt, *model, state, frame); !ok)
+            return failed(ok.error(), frame - 1);
         total_steps += rep.steps;
         total_rejections += rep.rejections;
         total_at_min += rep.at_min_steps;
-        if (auto ok = write_frame(opt, *model, state, frame); !ok)
-            return report(ok.error());
         const sim::Energy e = sim::energy(*model, state);
         csv << frame << ',' << state.time << ',' << e.kinetic << ',' << e.strain << ','
             << e.foundation << ',' << e.total() << ',' << rep.steps << ',' << rep.rejections << ','
             << static_cast<std::uint32_t>(rep.status) << '\n';
+        if (const std::optional<int> err = csv_flush())
+        {
+            t_written = state.time;
+            return failed(csv_error(*err), frame);
+        }
         if (!std::isfinite(e.total()))
             return diverged("the energy became non-finite", frame);
         bar.update("simulate", frames > 0 ? static_cast<double>(frame) / frames : 1.0);
@@ -498,6 +609,9 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
         if (*interrupted != 0 && frame < frames)
             return stopped(frame);
     }
+    csv.close();
+    if (!csv)
+        return failed(csv_error(0), frames);
     const double wall = seconds_since_start();
     record.end("complete", frames + 1, state.time, wall,
                {total_steps, total_rejections, total_at_min});
@@ -536,11 +650,14 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global)
         "The scenario (TOML) sets the material (T N/m, rho kg/m^2, beta 1/s, k_f 1/s^2), the\n"
         "integrator (adaptive: rtol, atol, dt_min, dt_max, dt_initial [s], safety, max_growth,\n"
         "min_shrink; or fixed_step = true with fixed_dt [s]; reassemble_every, threads,\n"
-        "force_hold, precision = \"double\" or \"mixed\"), duration [s], frame_rate [1/s] and\n"
-        "timed forces ([[force]]: start, end (default: the duration), face, or point + radius\n"
-        "[m] with an optional 'to' for a point sliding over the surface, vector [N]); see\n"
-        "scenes/pull.toml and docs/physics.md.\n"
-        "Errors name the key and its line. Forces are sampled at frame times and ramp linearly\n"
+        "force_hold, precision = \"double\" or \"mixed\"), duration [s] (default 1),\n"
+        "frame_rate [1/s] (default 25) and timed forces ([[force]]: start, end (default: the\n"
+        "duration), face, or point + radius [m] with an optional 'to' for a point sliding over\n"
+        "the surface, vector [N]); see scenes/pull.toml and docs/physics.md. A file that sets\n"
+        "no key is warned about. The run simulates the whole duration: when it is not a whole\n"
+        "number of frame intervals, the last frame comes after a shorter one, at the duration.\n"
+        "Errors name the key and its line; a force that starts at or after the duration is\n"
+        "warned about (it never acts). Forces are sampled at frame times and ramp linearly\n"
         "between samples (force_hold = \"linear\", the default: a force acts for\n"
         "start < t <= end, ramping up over the frame after its start and down over the frame\n"
         "after its end); force_hold = \"step\" holds each sample for the whole frame (a force\n"
@@ -551,9 +668,13 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global)
         "P + u N, u [m], v [m/s]; or surfaces with --format ply, obj, gltf or glb) and\n"
         "energy.csv (frame, time, kinetic, strain, foundation, total energy [J], steps,\n"
         "rejections, flags), and run.json: the inputs, every setting in effect (the command\n"
-        "line's and the scenario's), and the result (status running, complete, diverged or\n"
-        "interrupted, frames written, simulated and wall seconds, steps). Ctrl-C stops before\n"
-        "the next step, keeps the frames written and exits with status 130.\n\n"
+        "line's and the scenario's), and the result (status running, complete, diverged,\n"
+        "failed (an output could not be written; exit status 1, the reason in run.json) or\n"
+        "interrupted, frames written, simulated and wall seconds, steps). DIR holds one run:\n"
+        "the frames of an earlier run there (frame_NNNNN.pgrid, .ply, .obj, .gltf, .bin, .glb)\n"
+        "are removed before the first step (an info line says how many), and nothing else;\n"
+        "a --resume frame among them is refused (exit status 2). Ctrl-C stops before the\n"
+        "next step, keeps the frames written and exits with status 130.\n\n"
         "Examples:\n"
         "  pliant simulate --scenario scenes/pull.toml -o out/pull            # sphere, level 6\n"
         "  pliant simulate spot.pgrid --scenario scenes/spot.toml -o out/spot --format ply\n"
@@ -564,7 +685,9 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global)
     cmd->add_option("-s,--scenario", opt->scenario, "Scenario file (.toml)")
         ->required()
         ->check(CLI::ExistingFile);
-    cmd->add_option("-o,--output", opt->out, "Output folder (created if missing)")->required();
+    cmd->add_option("-o,--output", opt->out,
+                    "Output folder (created if missing; an earlier run's frames in it are removed)")
+        ->required();
     cmd->add_option("--format", opt->format, "Frame format: pgrid, ply, obj, gltf or glb")
         ->check(CLI::IsMember({"pgrid", "ply", "obj", "gltf", "glb"}))
         ->capture_default_str();

@@ -167,6 +167,16 @@ core::Error syntax_error(const std::filesystem::path& path, const toml::parse_er
                            std::string(e.description())};
 }
 
+// Whether `table` holds no value but (nested) empty tables: a file of comments alone, or of
+// empty sections.
+bool sets_no_key(const toml::table& table)
+{
+    for (auto&& [key, node] : table)
+        if (!node.is_table() || !sets_no_key(*node.as_table()))
+            return false;
+    return true;
+}
+
 core::Result<Scenario> read_scenario(const toml::table& root, const std::filesystem::path& path)
 {
     Scenario sc;
@@ -174,13 +184,26 @@ core::Result<Scenario> read_scenario(const toml::table& root, const std::filesys
     // linearly between them unless the file asks for the zero-order hold.
     sc.settings.force_hold = sim::ForceHold::Linear;
     const Reader top(path, root, "");
+    if (sets_no_key(root))
+        spdlog::warn(
+            "{} sets no key: using the defaults (duration = {} s, frame_rate = {} "
+            "frames/s, no force, material T = {}, rho = {}, beta = {}, k_f = {}, "
+            "adaptive steps with rtol = {}; docs/physics.md §7)",
+            path.string(), fmt_number(sc.duration), fmt_number(sc.frame_rate),
+            fmt_number(sc.settings.T), fmt_number(sc.settings.rho), fmt_number(sc.settings.beta),
+            fmt_number(sc.settings.k_f), fmt_number(sc.settings.rtol));
     PLIANT_TRY(top.unknown_keys({"duration", "frame_rate", "material", "integrator", "force"}));
     PLIANT_TRY(top.number("duration", sc.duration, 0.0, 1e6));
     PLIANT_TRY(top.number("frame_rate", sc.frame_rate, 1e-3, 1e4));
     top.record_lines(sc.lines);
     // Frame numbers are ints and every frame is a file: refuse runs that would write more than
-    // k_max_frames (1e6 s at 1e4 frames per second would be 1e10).
-    const double frame_count = std::floor(sc.duration * sc.frame_rate + 1e-9);
+    // k_max_frames (1e6 s at 1e4 frames per second would be 1e10). A duration that is not a whole
+    // number of frame intervals ends with a shorter one, its frame at the duration (frame_time):
+    // the run simulates the whole duration (it stopped at the last whole interval before).
+    const double intervals = sc.duration * sc.frame_rate;
+    double frame_count = std::floor(intervals + 1e-9);
+    if (intervals - frame_count > 1e-9 || (frame_count == 0.0 && intervals > 0.0))
+        frame_count += 1.0;
     if (frame_count > k_max_frames)
     {
         const bool rate_given = top.has("frame_rate");
@@ -345,6 +368,15 @@ core::Result<Scenario> read_scenario(const toml::table& root, const std::filesys
                                           "duration " +
                                           fmt_number(sc.duration) + " s");
             }
+            // A force that starts at or after the end never acts (on for start < t <= end with
+            // the linear hold, start <= t < end with the step hold, and t <= duration).
+            if (f.start >= sc.duration)
+                spdlog::warn(
+                    "{}:{}: '{}start' = {} s is not before 'duration' = {} s{}: the "
+                    "force never acts (the run ends first)",
+                    path.string(), table.get("start")->source().begin.line, prefix,
+                    fmt_number(f.start), fmt_number(sc.duration),
+                    top.has("duration") ? "" : " (default)");
             f.line = item.source().begin.line;
             if (face >= 0)
                 f.face_line = table.get("face")->source().begin.line;
@@ -358,6 +390,13 @@ core::Result<Scenario> read_scenario(const toml::table& root, const std::filesys
 }
 
 }  // namespace
+
+double frame_time(const Scenario& sc, int frame)
+{
+    if (frame <= 0)
+        return 0.0;
+    return frame >= sc.frames ? sc.duration : frame / sc.frame_rate;
+}
 
 std::string fmt_number(double v)
 {

@@ -37,13 +37,18 @@ struct TimedForce
 struct Scenario
 {
     sim::MembraneSettings settings;
-    double duration = 1.0;     ///< s
-    double frame_rate = 25.0;  ///< frames per second
-    int frames = 25;           ///< frames after frame 0: floor(duration * frame_rate)
+    double duration = 1.0;     ///< s (the default when the file gives none)
+    double frame_rate = 25.0;  ///< frames per second (the default when the file gives none)
+    int frames = 25;           ///< frames after frame 0: ceil(duration * frame_rate), the last
+                               ///< one at `duration` (frame_time)
     std::vector<TimedForce> forces;
     std::map<std::string, std::int64_t> lines;  ///< the line of each key the file gives
                                                 ///< ("integrator.fixed_dt")
 };
+
+/// When frame `frame` (0 .. sc.frames) is due: frame / frame_rate, and the last frame at the
+/// duration itself, after a shorter interval when the duration is not a whole number of them.
+[[nodiscard]] double frame_time(const Scenario& sc, int frame);
 
 /// `v` as printf's %g.
 [[nodiscard]] std::string fmt_number(double v);
@@ -51,7 +56,8 @@ struct Scenario
 /// Reads the scenario file `path`. \return BadScenario naming the file, line and key for a TOML
 /// syntax error, an unknown key, a wrong type, a value out of range or values that contradict
 /// each other (a force's end before its start, dt_min above dt_max, ...); warns about keys the
-/// chosen step mode ignores.
+/// chosen step mode ignores, forces that start at or after the end of the run, and a file that
+/// sets no key at all (the defaults in use).
 [[nodiscard]] core::Result<Scenario> parse_scenario(const std::filesystem::path& path);
 
 /// The same for the scenario text `text`, named `path` in messages (tests, the fuzz target).

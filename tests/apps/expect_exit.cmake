@@ -8,11 +8,24 @@
 # rather than being left behind when ctest stops this script. KEEP (a ;-list of paths,
 # optional): files written before COMMAND runs that must be there, unchanged, after it (an
 # earlier run's outputs that a refused run must not touch). ABSENT (a ;-list of paths,
-# optional): files that must not exist after it (removed before it runs).
-foreach(f IN LISTS KEEP)
+# optional): files that must not exist after it (removed before it runs). STALE (a ;-list of
+# paths, optional): files written before COMMAND runs, as KEEP's, that must not be there as they
+# were after it (removed or replaced: an earlier run's outputs that a run clears). LINKS (a
+# ;-list of LINK=TARGET, optional): symbolic links made before COMMAND runs, replacing what was
+# at LINK (an output that is /dev/full).
+foreach(f IN LISTS KEEP STALE)
     get_filename_component(d "${f}" DIRECTORY)
     file(MAKE_DIRECTORY "${d}")
     file(WRITE "${f}" "an earlier run's file\n")
+endforeach()
+foreach(l IN LISTS LINKS)
+    string(REPLACE "=" ";" l "${l}")
+    list(GET l 0 link)
+    list(GET l 1 target)
+    get_filename_component(d "${link}" DIRECTORY)
+    file(MAKE_DIRECTORY "${d}")
+    file(REMOVE "${link}")
+    file(CREATE_LINK "${target}" "${link}" SYMBOLIC)
 endforeach()
 foreach(f IN LISTS ABSENT)
     file(REMOVE "${f}")
@@ -44,6 +57,14 @@ endforeach()
 foreach(f IN LISTS ABSENT)
     if(EXISTS "${f}")
         message(FATAL_ERROR "${f} was left behind:\n${out}${err}")
+    endif()
+endforeach()
+foreach(f IN LISTS STALE)
+    if(EXISTS "${f}")
+        file(READ "${f}" kept)
+        if(kept STREQUAL "an earlier run's file\n")
+            message(FATAL_ERROR "${f} was left as it was:\n${out}${err}")
+        endif()
     endif()
 endforeach()
 message("${out}${err}")

@@ -12,7 +12,12 @@
 # grid, too many frames, a zero duration with forces and a point force without radius are refused
 # with the key and its line; the default dt_initial is clamped under a small dt_max; keys the run
 # ignores are warned about; -j 0 means OpenMP's default; --help lists every integrator key; the
-# documented spot example runs without warnings.
+# documented spot example runs without warnings. The audit of its outputs and timing: a run
+# clears -o of an earlier run's frames (and nothing else), and refuses a --resume among them; a
+# duration that is not a whole number of frame intervals is simulated to its end; a force that
+# starts at or after the end is warned about; a frame or energy.csv that cannot be written ends
+# the run with exit 1 and run.json says "failed" and why; a scenario that sets no key is warned
+# about and --help states the defaults.
 if(TARGET pliant)
     set(sim_out ${CMAKE_CURRENT_BINARY_DIR}/simulate-pull)
     add_test(NAME cli_simulate_pull
@@ -192,4 +197,113 @@ if(TARGET pliant)
         FIXTURES_REQUIRED simulate_spot
         PASS_REGULAR_EXPRESSION " frames, "
         FAIL_REGULAR_EXPRESSION "warning|error")
+    # An earlier run's frames in -o (those this run rewrites, those beyond its last, another
+    # format's, a .gltf's buffer) are removed before the run, saying how many; files and folders
+    # that do not match frame_NNNNN.EXT stay. run.json's frames are then those in the folder.
+    set(_rerun ${CMAKE_CURRENT_BINARY_DIR}/simulate-rerun)
+    set(_stale)
+    foreach(i RANGE 0 25)
+        list(APPEND _stale ${_rerun}/frame_0000${i}.pgrid)
+    endforeach()
+    string(REGEX REPLACE "frame_0000([0-9][0-9])" "frame_000\\1" _stale "${_stale}")
+    list(APPEND _stale ${_rerun}/frame_00000.ply ${_rerun}/frame_00007.gltf
+                       ${_rerun}/frame_00007.bin ${_rerun}/frame_123456.glb)
+    set(_kept ${_rerun}/frame_notes.txt ${_rerun}/frame_1.pgrid ${_rerun}/frame_00001.pgrid.bak
+              ${_rerun}/Frame_00002.pgrid ${_rerun}/frame_00099.pgrid/keep.txt)
+    add_test(NAME cli_simulate_clears_earlier_frames
+             COMMAND ${CMAKE_COMMAND}
+                     "-DCOMMAND=$<TARGET_FILE:pliant>;simulate;--scenario;${scenarios}/partial_interval.toml;-o;${_rerun};--level;3;-j;1"
+                     -DEXIT=0 "-DSTDERR_REGEX=simulate: removed 29 frames of an earlier run from .*simulate-rerun"
+                     "-DSTALE=${_stale}" "-DKEEP=${_kept}"
+                     -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+    set_tests_properties(cli_simulate_clears_earlier_frames PROPERTIES TIMEOUT 60
+                         ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0")
+    add_test(NAME cli_simulate_clears_earlier_frames_run_json
+             COMMAND ${CMAKE_COMMAND} -DDIR=${_rerun} -DSTATUS=complete -DFRAMES=4 -DLEVEL=3
+                     -DPRECISION=double -P ${CMAKE_CURRENT_SOURCE_DIR}/check_run_json.cmake)
+    set_tests_properties(cli_simulate_clears_earlier_frames_run_json PROPERTIES
+                         DEPENDS cli_simulate_clears_earlier_frames)
+    # A --resume frame among those the run would clear is refused (usage) and left as it was.
+    set(_here ${CMAKE_CURRENT_BINARY_DIR}/simulate-resume-here)
+    add_test(NAME cli_simulate_refuses_resume_from_its_folder
+             COMMAND ${CMAKE_COMMAND}
+                     "-DCOMMAND=$<TARGET_FILE:pliant>;simulate;--scenario;${scenarios}/partial_interval.toml;-o;${_here};--level;3;--resume;${_here}/frame_00002.pgrid"
+                     -DEXIT=2 "-DSTDERR_REGEX=--resume .*frame_00002.pgrid is a frame of an earlier run in -o's folder .*give another -o"
+                     "-DKEEP=${_here}/frame_00002.pgrid;${_here}/frame_00003.pgrid"
+                     -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+    set_tests_properties(cli_simulate_refuses_resume_from_its_folder PROPERTIES TIMEOUT 60
+                         ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0")
+
+    # A duration that is not a whole number of frame intervals: the last frame comes after a
+    # shorter interval, at the duration (0.25 s at 10 frames per second: frame 3 at 0.25 s; 0.5 s
+    # at one frame per second: frame 1 at 0.5 s), and forces late in the run act. A force that
+    # starts at the end is warned about, naming the file, its line and the key.
+    add_test(NAME cli_simulate_partial_last_interval
+             COMMAND pliant simulate --scenario ${scenarios}/partial_interval.toml
+                     -o ${CMAKE_CURRENT_BINARY_DIR}/simulate-partial --level 3 -j 1)
+    set_tests_properties(cli_simulate_partial_last_interval PROPERTIES
+        TIMEOUT 60
+        PASS_REGULAR_EXPRESSION "4 frames, 0.250 s simulated"
+        FAIL_REGULAR_EXPRESSION "warning|error")
+    add_test(NAME cli_simulate_partial_last_interval_run_json
+             COMMAND ${CMAKE_COMMAND} -DDIR=${CMAKE_CURRENT_BINARY_DIR}/simulate-partial
+                     -DSTATUS=complete -DFRAMES=4 -DLEVEL=3 -DPRECISION=double
+                     -P ${CMAKE_CURRENT_SOURCE_DIR}/check_run_json.cmake)
+    set_tests_properties(cli_simulate_partial_last_interval_run_json PROPERTIES
+                         DEPENDS cli_simulate_partial_last_interval)
+    add_test(NAME cli_simulate_warns_force_after_end
+             COMMAND ${CMAKE_COMMAND}
+                     "-DCOMMAND=$<TARGET_FILE:pliant>;simulate;--scenario;${scenarios}/force_after_end.toml;-o;${CMAKE_CURRENT_BINARY_DIR}/simulate-after-end;--level;3;-j;1"
+                     -DEXIT=0 "-DSTDOUT_REGEX=^2 frames, 0.500 s simulated"
+                     "-DSTDERR_REGEX=force_after_end.toml:12: 'force\\[1\\].start' = 0.5 s is not before 'duration' = 0.5 s: the force never acts"
+                     -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+    set_tests_properties(cli_simulate_warns_force_after_end PROPERTIES TIMEOUT 60
+                         ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0")
+
+    # An output that cannot be written mid-run (frame 1's path is a folder): exit 1 with the
+    # system's reason, and run.json says "failed", why, and the one frame written; no temporary
+    # file is left and the folder stays.
+    set(_fail ${CMAKE_CURRENT_BINARY_DIR}/simulate-frame-fails)
+    add_test(NAME cli_simulate_frame_write_fails
+             COMMAND ${CMAKE_COMMAND}
+                     "-DCOMMAND=$<TARGET_FILE:pliant>;simulate;--scenario;${scenarios}/partial_interval.toml;-o;${_fail};--level;3;-j;1"
+                     -DEXIT=1 "-DSTDERR_REGEX=frame_00001.pgrid: cannot open for writing: Is a directory"
+                     "-DKEEP=${_fail}/frame_00001.pgrid/keep.txt"
+                     -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+    set_tests_properties(cli_simulate_frame_write_fails PROPERTIES TIMEOUT 60
+                         ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0")
+    add_test(NAME cli_simulate_frame_write_fails_run_json
+             COMMAND ${CMAKE_COMMAND} -DDIR=${_fail} -DSTATUS=failed -DFRAMES=1 -DLEVEL=3
+                     -DPRECISION=double "-DREASON=frame_00001.pgrid: cannot open for writing: Is a directory"
+                     -P ${CMAKE_CURRENT_SOURCE_DIR}/check_run_json.cmake)
+    set_tests_properties(cli_simulate_frame_write_fails_run_json PROPERTIES
+                         DEPENDS cli_simulate_frame_write_fails)
+    # energy.csv on a full disk (a link to /dev/full): its write is checked, exit 1 with the
+    # reason, and run.json says "failed" and why.
+    if(EXISTS /dev/full)
+        set(_full ${CMAKE_CURRENT_BINARY_DIR}/simulate-energy-full)
+        add_test(NAME cli_simulate_energy_csv_write_fails
+                 COMMAND ${CMAKE_COMMAND}
+                         "-DCOMMAND=$<TARGET_FILE:pliant>;simulate;--scenario;${scenarios}/partial_interval.toml;-o;${_full};--level;3;-j;1"
+                         -DEXIT=1 "-DSTDERR_REGEX=energy.csv: write failed: No space left on device"
+                         "-DLINKS=${_full}/energy.csv=/dev/full"
+                         -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+        set_tests_properties(cli_simulate_energy_csv_write_fails PROPERTIES TIMEOUT 60
+                             ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0")
+        add_test(NAME cli_simulate_energy_csv_write_fails_run_json
+                 COMMAND ${CMAKE_COMMAND} -DDIR=${_full} -DSTATUS=failed -DFRAMES=0 -DLEVEL=3
+                         -DPRECISION=double
+                         "-DREASON=energy.csv: write failed: No space left on device"
+                         -P ${CMAKE_CURRENT_SOURCE_DIR}/check_run_json.cmake)
+        set_tests_properties(cli_simulate_energy_csv_write_fails_run_json PROPERTIES
+                             DEPENDS cli_simulate_energy_csv_write_fails)
+    endif()
+
+    # A scenario that sets no key runs on the defaults and says which; --help states them.
+    pliant_cli_expect(cli_simulate_warns_no_key 0 STDERR
+                      "no_key.toml sets no key: using the defaults \\(duration = 1 s, frame_rate = 25 frames/s, no force"
+                      simulate --scenario ${scenarios}/no_key.toml -o ${CMAKE_CURRENT_BINARY_DIR}/simulate-no-key --level 3 -j 1)
+    pliant_cli_expect(cli_simulate_help_states_defaults 0 STDOUT
+                      "duration \\[s\\] \\(default 1\\),.frame_rate \\[1/s\\] \\(default 25\\)"
+                      simulate --help)
 endif()
