@@ -31,7 +31,7 @@ if has_leg format; then
 fi
 
 if has_leg includes; then
-    banner "include rules (docs/architecture.md, module dependencies; scripts/check_includes.py)"
+    banner "include rules (docs/style.md §2, scripts/check_includes.py)"
     python3 scripts/check_includes.py
 fi
 

@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -212,6 +213,24 @@ CLI::Validator no_minus_sign()
                            : text + " is negative; give a whole number >= 0";
             },
             "", "UNSIGNED"};
+}
+
+CLI::Validator port_number(unsigned lowest)
+{
+    return {[lowest](std::string& text)
+            {
+                unsigned value = 0;
+                const char* end = text.data() + text.size();
+                const auto [ptr, ec] = std::from_chars(text.data(), end, value);
+                if (ec == std::errc() && ptr == end && value >= lowest && value <= 65535U)
+                    return std::string();
+                const std::string range = "a whole number from " + std::to_string(lowest) +
+                                          " to 65535" + (lowest == 0 ? " (0: any free port)" : "");
+                if (text.find('-') != std::string::npos)
+                    return text + " is negative; a UDP port is " + range;
+                return text + " is not a UDP port; give " + range;
+            },
+            "", "PORT"};
 }
 
 std::string lower_extension(const std::filesystem::path& p)

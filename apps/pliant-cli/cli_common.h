@@ -78,6 +78,9 @@ auto command_callback(const GlobalOptions& global, Body body)
 [[nodiscard]] CLI::Validator number_in(double lo, double hi);
 /// For unsigned integer options: CLI11 converts "-5" to 2^64 - 5 without a word.
 [[nodiscard]] CLI::Validator no_minus_sign();
+/// For --port: a whole number from `lowest` to 65535, said as such ("--port: 70000 is not a UDP
+/// port; give a whole number from 1 to 65535"; CLI11 alone said "Could not convert").
+[[nodiscard]] CLI::Validator port_number(unsigned lowest);
 
 /// Whether `path` can be written (core::check_output_path: nothing is created): checked before
 /// a long run starts, so a bad --stats or output path fails at once, with the reason.

@@ -13,6 +13,8 @@
 // with a description of the machine (CPU model, cores, memory, load average before and after,
 // GL_RENDERER from the render suite), and runs gnuplot on scripts/plots/*.gp to draw the PNGs.
 // Without gnuplot it says how to install it and still writes the data.
+#include <pliant/core/file_io.h>
+
 #include <fcntl.h>
 #include <nlohmann/json.hpp>
 #include <signal.h>
@@ -296,8 +298,10 @@ int run_bench(const BenchOptions& opt, const GlobalOptions& global)
         const auto it = std::find_if(k_suites.begin(), k_suites.end(),
                                      [&](const Suite& s) { return want == s.name; });
         if (it == k_suites.end())
-            return report({ErrorCode::InvalidArgument,
-                           "bench: unknown suite '" + want + "' (suites: " + names + ", or all)"});
+        {
+            spdlog::error("bench: unknown suite '{}' (suites: {}, or all)", want, names);
+            return k_exit_usage;
+        }
     }
     const bool all = opt.suites.empty() ||
                      std::find(opt.suites.begin(), opt.suites.end(), "all") != opt.suites.end();
@@ -319,6 +323,11 @@ int run_bench(const BenchOptions& opt, const GlobalOptions& global)
                      "--bench-dir or PLIANT_BENCH_DIR at a build's bench folder"});
     }
 
+    if (opt.out.empty())
+    {
+        spdlog::error("bench: --out is empty; give a folder (default bench-results)");
+        return k_exit_usage;
+    }
     std::error_code ec;
     fs::create_directories(opt.out, ec);
     if (ec)
@@ -351,9 +360,15 @@ int run_bench(const BenchOptions& opt, const GlobalOptions& global)
     for (std::size_t i = 0; i < chosen.size() && *interrupted == 0; ++i)
     {
         const Suite& s = *chosen[i];
-        const fs::path csv = opt.out / (std::string(s.name) + ".csv");
-        const fs::path json = opt.out / (std::string(s.name) + ".json");
-        const fs::path log = opt.out / (std::string(s.name) + ".log");
+        // The suite writes beside its final files and they replace an earlier run's only when
+        // it completes: a suite that fails or is stopped leaves the earlier results as they
+        // were (its console output goes to <suite>-failed.log).
+        const fs::path csv_done = opt.out / (std::string(s.name) + ".csv");
+        const fs::path json_done = opt.out / (std::string(s.name) + ".json");
+        const fs::path log_done = opt.out / (std::string(s.name) + ".log");
+        const fs::path csv = opt.out / ("." + std::string(s.name) + ".csv.part");
+        const fs::path json = opt.out / ("." + std::string(s.name) + ".json.part");
+        fs::path log = opt.out / ("." + std::string(s.name) + ".log.part");
         fs::remove(csv, ec);
         fs::remove(json, ec);
         std::vector<std::string> argv{programs[i].string(), "--json", json.string(), "--csv",
@@ -380,12 +395,26 @@ int run_bench(const BenchOptions& opt, const GlobalOptions& global)
         entry["seconds"] = seconds;
         entry["load_average_after"] = load_average();
         Json parsed = Json::parse(read_text(json), nullptr, false);
+        const bool done = !(*interrupted != 0 && rc != 0) && rc == 0 && !parsed.is_discarded() &&
+                          parsed.contains("rows");
+        const auto settle = [&](const fs::path& from, const fs::path& to)
+        {
+            if (done)
+                fs::rename(from, to, ec);
+            else
+                fs::remove(from, ec);
+        };
+        settle(csv, csv_done);
+        settle(json, json_done);
+        const fs::path log_failed = opt.out / (std::string(s.name) + "-failed.log");
+        fs::rename(log, done ? log_done : log_failed, ec);
+        log = done ? log_done : log_failed;
         if (*interrupted != 0 && rc != 0)
         {
             entry["interrupted"] = true;
             interrupted_in = s.name;
         }
-        else if (rc == 0 && !parsed.is_discarded() && parsed.contains("rows"))
+        else if (done)
         {
             completed.emplace_back(s.name);
             entry["meta"] = parsed.value("meta", Json::object());
@@ -394,8 +423,8 @@ int run_bench(const BenchOptions& opt, const GlobalOptions& global)
                 results["machine"]["gl_renderer"] = entry["meta"]["gl_renderer"];
             if (!global.quiet)
                 std::printf("      %zu rows in %.1f s -> %s, %s (console output: %s)\n",
-                            entry["rows"].size(), seconds, csv.string().c_str(),
-                            json.string().c_str(), log.string().c_str());
+                            entry["rows"].size(), seconds, csv_done.string().c_str(),
+                            json_done.string().c_str(), log.string().c_str());
         }
         else
         {
@@ -410,13 +439,10 @@ int run_bench(const BenchOptions& opt, const GlobalOptions& global)
     results["interrupted"] = *interrupted != 0;
     results["total_seconds"] =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    {
-        std::ofstream f(opt.out / "results.json", std::ios::binary | std::ios::trunc);
-        f << results.dump(2) << '\n';
-        if (!f.flush())
-            return report(
-                {ErrorCode::IoError, "bench: cannot write " + (opt.out / "results.json").string()});
-    }
+    if (auto written =
+            core::write_text_file(opt.out / "results.json", results.dump(2) + '\n', "bench");
+        !written)
+        return report(written.error());
     if (*interrupted != 0)
     {
         std::string done;

@@ -327,7 +327,8 @@ std::string shell_quote(const std::string& text)
 
 bool have_tool(const char* probe)
 {
-    return std::system((std::string(probe) + " >/dev/null 2>&1").c_str()) == 0;
+    // The whole pipeline's output is discarded, not only its last command's.
+    return std::system(("{ " + std::string(probe) + "; } >/dev/null 2>&1").c_str()) == 0;
 }
 
 /// An animated GIF of the frames with ImageMagick or ffmpeg, when either is installed.
@@ -365,18 +366,17 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
     }
     const auto t_start = Clock::now();
     const fs::path mesh_path = opt.mesh.empty() ? bundled_mesh() : opt.mesh;
-    std::error_code ec;
-    fs::create_directories(opt.out, ec);
-    if (ec)
-        return report({core::ErrorCode::IoError,
-                       "demo: cannot create " + opt.out.string() + ": " + ec.message()});
-
-    // 1. Import, validate, remesh.
+    // 1. Import, validate, remesh. A refused mesh leaves --out as it was (not even made).
     auto mesh = mesh::import_mesh(mesh_path);
     if (!mesh)
         return report(mesh.error());
     if (auto ok = mesh::validate(*mesh, mesh_path.filename().string()); !ok)
         return report(ok.error());
+    std::error_code ec;
+    fs::create_directories(opt.out, ec);
+    if (ec)
+        return report({core::ErrorCode::IoError,
+                       "demo: cannot create " + opt.out.string() + ": " + ec.message()});
     spdlog::info("demo: {} ({} vertices, {} faces) is a closed genus-0 surface",
                  mesh_path.filename().string(), mesh->vertex_count(), mesh->face_count());
     ProgressBar progress(global);
@@ -394,12 +394,14 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
     if (!remeshed)
         return report(remeshed.error());
     const core::TetraGrid& grid = remeshed->grid;
-    // The run starts: an earlier run's frames and animation go (a failed start above leaves
-    // them), so that the folder never mixes two runs.
+    // The run starts: every output of an earlier run goes (a failed start above leaves them),
+    // so that the folder never mixes two runs, even when this one fails part-way.
     for (const auto& entry : fs::directory_iterator(opt.out, ec))
     {
         const std::string name = entry.path().filename().string();
-        if (name.rfind("frame_", 0) == 0 || name == "demo.gif" || name == "demo.mp4")
+        if (name.rfind("frame_", 0) == 0 || name == "demo.gif" || name == "demo.mp4" ||
+            name == "summary.md" || name == "session.prec" || name == "final.pgrid" ||
+            name == "timeline.csv" || name == "grid.pgrid" || name == "remesh-report.json")
             fs::remove(entry.path(), ec);
     }
     if (auto saved = core::save_grid(opt.out / "grid.pgrid",
@@ -424,8 +426,16 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
     const auto ticks_per_frame =
         static_cast<std::uint64_t>(std::ceil(1.0 / (opt.fps * want) - 1e-9));
     const double dt = 1.0 / (opt.fps * static_cast<double>(ticks_per_frame));
+    if (opt.dt > 0.0 && dt < opt.dt * (1.0 - 1e-9))
+        spdlog::info(
+            "demo: --dt {:.3g} s rounded down to {:.3g} s, a whole number of steps per "
+            "frame of 1/{:g} s",
+            opt.dt, dt, opt.fps);
     if (dt > stable)
-        spdlog::warn("demo: --dt {:.3g} s is above the stability bound {:.3g} s", dt, stable);
+        spdlog::warn(
+            "demo: a step of {:.3g} s is above the stability bound {:.3g} s: the "
+            "membrane will blow up; leave --dt out (0.9 x the bound)",
+            dt, stable);
     material.fixed_dt = dt;
     const std::array<Grab, 2> grabs = make_grabs(*probe, opt.duration);
 
@@ -742,7 +752,7 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
         row("viewer joined at / shown from",
             fmt("%.2f s", t_viewer) + " / " +
                 (viewer_ready_at >= 0.0 ? fmt("%.2f s", viewer_ready_at) : std::string("never")));
-    row("largest |u| shown", fmt("%.4f", max_u));
+    row("largest displacement shown", fmt("%.4f m", max_u));
     if (live)
         row("replay of session.prec", "not checked with --view (pliant replay checks it)");
     else
@@ -889,8 +899,10 @@ void add_demo_command(CLI::App& app, const GlobalOptions& global)
     cmd->add_option("--mesh", opt->mesh, "Closed genus-0 mesh (default: the bundled data/spot.obj)")
         ->check(CLI::ExistingFile);
     cmd->add_option("-o,--out", opt->out, "Output folder")->capture_default_str();
-    cmd->add_option("-l,--level", opt->level, "Simulation grid level (W = 2^level)")
-        ->check(CLI::Range(3, 8))
+    cmd->add_option("-l,--level", opt->level,
+                    "Simulation grid level (W = 2^level; from 4, where the grid has leaves "
+                    "enough for the demo's three simulating peers)")
+        ->check(CLI::Range(4, 8))
         ->capture_default_str();
     cmd->add_option("--display-levels", opt->display_levels, "Butterfly levels added for display")
         ->check(CLI::Range(0, 3))
@@ -922,8 +934,15 @@ void add_demo_command(CLI::App& app, const GlobalOptions& global)
         [opt, &global]()
         {
             if ((!opt->screenshot.empty() || opt->exit_after > 0.0) && !opt->view)
-                return report({core::ErrorCode::InvalidArgument,
-                               "demo: --screenshot and --exit-after go with --view"});
+            {
+                spdlog::error("demo: --screenshot and --exit-after go with --view");
+                return k_exit_usage;
+            }
+            if (opt->out.empty())
+            {
+                spdlog::error("demo: --out is empty; give a folder (default demo-out)");
+                return k_exit_usage;
+            }
             return opt->view ? run_demo_with_viewer(*opt, global) : run_demo(*opt, global, nullptr);
         }));
 }

@@ -235,7 +235,7 @@ void add_host_command(CLI::App& app, const GlobalOptions& global)
         ->check(CLI::IsMember({"equal-area", "gnomonic"}))
         ->capture_default_str();
     cmd->add_option("-p,--port", opt->port, "UDP port to listen on")
-        ->check(no_minus_sign())
+        ->check(port_number(1))
         ->capture_default_str();
     cmd->add_option("--mode", opt->mode, "Coupling: exact or fast")
         ->check(CLI::IsMember({"exact", "fast"}))

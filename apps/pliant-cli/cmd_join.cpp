@@ -182,13 +182,17 @@ void add_join_command(CLI::App& app, const GlobalOptions& global)
         "  PLIANT_PASSPHRASE='long shared secret' pliant join 203.0.113.5:7777\n"
         "Use the master's --passphrase/--key-file (or PLIANT_PASSPHRASE): without one the\n"
         "session is unencrypted; with a different one the master refuses the connection.\n"
-        "Ctrl-C (or SIGTERM) leaves cleanly: a participant hands its leaves over first.");
+        "Ctrl-C (or SIGTERM) leaves cleanly: a participant hands its leaves over first.\n\n"
+        "Exit codes: 0 the peer ran its --duration, left or saw the session end; 1 bad input (a\n"
+        "script line, a --stats/--save path, a key file; --stats unwritable mid-run); 2 usage\n"
+        "error; 3 the master never answered (given up after about 5 s, or at --duration),\n"
+        "refused this peer, or the simulation diverged.");
     cmd->add_option("MASTER", opt->master,
                     "The master's address HOST:PORT: a.b.c.d, localhost or a host name (IPv4)")
         ->required();
     cmd->add_flag("--viewer", opt->viewer, "Only watch (simulate nothing)");
     cmd->add_option("-p,--port", opt->port, "UDP port to listen on for other peers (0: any)")
-        ->check(no_minus_sign())
+        ->check(port_number(0))
         ->capture_default_str();
     cmd->add_option("--duration", opt->duration, "Run time [s]")
         ->check(positive_number())

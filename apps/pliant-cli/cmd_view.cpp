@@ -49,10 +49,28 @@ int run_view(const ViewOptions& opt)
     int w = 0;
     int h = 0;
     char x = 0;
-    if (std::sscanf(opt.size.c_str(), "%d%c%d", &w, &x, &h) != 3 || (x != 'x' && x != 'X') ||
-        w < 64 || h < 64 || w > 8192 || h > 8192)
-        return report({core::ErrorCode::InvalidArgument,
-                       "view: --size " + opt.size + " is not WxH with 64 <= W, H <= 8192"});
+    int used = 0;  // the whole text must be read: "640x480junk" is not a size
+    if (std::sscanf(opt.size.c_str(), "%d%c%d%n", &w, &x, &h, &used) != 3 ||
+        static_cast<std::size_t>(used) != opt.size.size() || (x != 'x' && x != 'X') || w < 64 ||
+        h < 64 || w > 8192 || h > 8192)
+    {
+        spdlog::error("view: --size {} is not WxH with 64 <= W, H <= 8192", opt.size);
+        return k_exit_usage;
+    }
+    std::error_code ec;
+    if (opt.participant && !opt.input.empty() && std::filesystem::exists(opt.input, ec))
+        spdlog::warn("view: --participant is for joining HOST:PORT; {} is a file, simulated here",
+                     opt.input);
+    // The screenshot's folder is made as the viewer would, and the path checked, before any
+    // window opens: not after the whole run.
+    if (!opt.screenshot.empty())
+    {
+        const std::filesystem::path shot(opt.screenshot);
+        if (shot.has_parent_path())
+            std::filesystem::create_directories(shot.parent_path(), ec);
+        if (auto ok = check_writable(shot, "view: --screenshot"); !ok)
+            return report(ok.error());
+    }
     std::shared_ptr<const sim::MembraneState> resume_state;
     if (!opt.resume.empty())
     {
@@ -148,7 +166,7 @@ void add_view_command(CLI::App& app, const GlobalOptions& global)
                   "Join HOST:PORT as a participant (simulates, may pull)");
     cmd->add_option("--name", opt->name, "Peer name in sessions")->capture_default_str();
     cmd->add_option("-p,--port", opt->port, "UDP port for sessions (0: any)")
-        ->check(no_minus_sign())
+        ->check(port_number(0))
         ->capture_default_str();
     cmd->add_flag("--no-vsync", opt->no_vsync, "Draw as fast as possible (for measuring fps)");
     cmd->add_flag("--hide-panels", opt->hide_panels, "Start with the panels hidden (H toggles)");

@@ -42,7 +42,8 @@ core::Result<Address> parse_address(std::string_view text)
     {
         return core::fail(core::ErrorCode::InvalidArgument,
                           "parse_address: '" + std::string(text) + "' " + why +
-                              " (expected a.b.c.d:port or localhost:port)");
+                              " (expected HOST:PORT: a.b.c.d, localhost or a host name, and a "
+                              "port from 1 to 65535)");
     };
     const auto colon = text.rfind(':');
     if (colon == std::string_view::npos)

@@ -35,10 +35,11 @@ if(TARGET pliant)
         set_tests_properties(cli_bench_latency_quick_outputs PROPERTIES
             DEPENDS cli_bench_latency_quick)
         # Ctrl-C once the second suite has started (its log file is created when it is
-        # spawned): it is stopped, and results.json is written with the first, which completed.
+        # spawned): it is stopped, and results.json is written with the first, which completed;
+        # the stopped suite's earlier results (KEEP: sim.csv) stay as they were.
         set(_bench_int ${CMAKE_CURRENT_BINARY_DIR}/bench-interrupted)
-        pliant_add_interrupt_test(cli_bench_interrupted FILE ${_bench_int}/sim.log
-            FRESH_DIR ${_bench_int}
+        pliant_add_interrupt_test(cli_bench_interrupted FILE ${_bench_int}/.sim.log.part
+            FRESH_DIR ${_bench_int} KEEP ${_bench_int}/sim.csv
             STDERR_REGEX "bench: interrupted during sim. .*results.json holds the 1 suite that completed \\(net\\)"
             TIMEOUT 170 FIXTURES_SETUP bench_interrupted
             ARGS bench net sim --quick --no-plots --out ${_bench_int})

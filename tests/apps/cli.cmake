@@ -68,6 +68,13 @@ if(TARGET pliant)
     add_test(NAME cli_usage_numbers_are_finite
              COMMAND ${CMAKE_COMMAND} -DPLIANT=$<TARGET_FILE:pliant>
                      -P ${CMAKE_CURRENT_SOURCE_DIR}/number_options.cmake)
+    # A port out of range says so (CLI11 alone: "Could not convert: --port = 70000").
+    pliant_cli_expect(cli_usage_port_out_of_range 2 STDERR
+                      "--port: 70000 is not a UDP port. give a whole number from 1 to 65535"
+                      host --port 70000)
+    pliant_cli_expect(cli_usage_join_port_out_of_range 2 STDERR
+                      "--port: 65536 is not a UDP port. give a whole number from 0 to 65535 \\(0: any free port\\)"
+                      join 127.0.0.1:7777 --port 65536)
     pliant_cli_expect(cli_usage_needs 2 STDERR "--cap requires --compress" join 127.0.0.1:7777 --cap 1)
     pliant_cli_expect(cli_usage_no_command 2 STDERR "A subcommand is required")
     pliant_cli_expect(cli_usage_unknown_command 2 STDERR

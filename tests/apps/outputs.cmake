@@ -112,6 +112,15 @@ if(TARGET pliant)
     pliant_cli_expect(cli_key_file_readable_by_all 3 STDERR
                       "open.key: the key file can be read by every user \\(mode 0644\\).*chmod 600"
                       join 127.0.0.1:9 --duration 1 --key-file ${out_dir}/open.key)
+    # demo: level 3 has two quad-tree leaves, too few for its three simulating peers (it spun
+    # until --wall-limit); --screenshot without --view is a usage error. bench: an unknown suite.
+    pliant_cli_expect(cli_demo_level_3_is_refused 2 STDERR "--level: Value 3 not in range 4 to 8"
+                      demo --quick --level 3 --out ${out_dir}/demo-l3)
+    pliant_cli_expect(cli_demo_screenshot_needs_view 2 STDERR
+                      "--screenshot and --exit-after go with --view"
+                      demo --quick --screenshot ${out_dir}/d.png --out ${out_dir}/demo-s)
+    pliant_cli_expect(cli_bench_unknown_suite_is_a_usage_error 2 STDERR "unknown suite 'nosuch'"
+                      bench nosuch --out ${out_dir}/bench-nosuch)
     set_tests_properties(cli_render_size_with_junk cli_render_camera_with_junk cli_render_not_png
                          cli_render_level_up_too_far cli_quiet_render cli_quiet_refine
                          cli_refine_output_checked_first PROPERTIES FIXTURES_REQUIRED cli_outputs)

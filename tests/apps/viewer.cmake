@@ -111,6 +111,29 @@ if(TARGET pliant AND PLIANT_HAVE_VIEWER AND PLIANT_XVFB)
         TIMEOUT 120
         FIXTURES_REQUIRED view_resume_state
         ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0;LIBGL_ALWAYS_SOFTWARE=1;OMP_NUM_THREADS=1")
+    # A scripted export that fails ends the run with status 3 (it exited 0); a --screenshot
+    # that cannot be written is refused before any window opens (it ran the whole session and
+    # then said "screenshot ... covers" for a file it never wrote).
+    file(WRITE ${CMAKE_CURRENT_BINARY_DIR}/view-afile "a file, not a folder\n")
+    file(WRITE ${CMAKE_CURRENT_BINARY_DIR}/view-bad-export.txt
+         "0.2 export ${CMAKE_CURRENT_BINARY_DIR}/view-afile/x.obj\n")
+    add_test(NAME cli_view_failed_scripted_export_exits_3
+             COMMAND ${CMAKE_COMMAND}
+                     "-DCOMMAND=${_xvfb};$<TARGET_FILE:pliant>;view;${_resume_dir}-spot3.pgrid;--size;320x240;--exit-after;0.6;--script;${CMAKE_CURRENT_BINARY_DIR}/view-bad-export.txt"
+                     -DEXIT=3 "-DSTDERR_REGEX=view-afile/x.obj.*a scripted export failed"
+                     -DTIMEOUT=110 -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+    set_tests_properties(cli_view_failed_scripted_export_exits_3 PROPERTIES
+        TIMEOUT 120 FIXTURES_REQUIRED view_resume_grid
+        ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0;LIBGL_ALWAYS_SOFTWARE=1;OMP_NUM_THREADS=1")
+    add_test(NAME cli_view_screenshot_checked_first
+             COMMAND ${CMAKE_COMMAND}
+                     "-DCOMMAND=$<TARGET_FILE:pliant>;view;${_resume_dir}-spot3.pgrid;--exit-after;0.5;--screenshot;${CMAKE_CURRENT_BINARY_DIR}/view-afile/s.png"
+                     -DEXIT=1 "-DSTDERR_REGEX=--screenshot: cannot write .*view-afile is not a folder"
+                     -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+    set_tests_properties(cli_view_screenshot_checked_first PROPERTIES
+        FIXTURES_REQUIRED view_resume_grid ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0")
+    pliant_cli_expect(cli_view_size_with_junk 2 STDERR "--size 640x480junk is not WxH"
+                      view --size 640x480junk)
     set(_resume_refusals
         state_as_input "${_resume_dir}-sim/frame_00010.pgrid" "frame_00010.pgrid holds a simulated state \\(channels u and v\\).*your state to --resume \\(`pliant view REST.pgrid --resume [^`]*frame_00030.pgrid`\\)"
         mesh_as_input "${PROJECT_SOURCE_DIR}/data/spot.obj" "--resume needs INPUT to be the rest grid \\(.pgrid\\) the state was simulated on, not .*spot.obj"

@@ -328,6 +328,9 @@ int Viewer::initial_display_level(int sim_level) const
     if (options_.display_level > highest)
         spdlog::warn("view: --display-level {} is above simulation level {} + 3; showing level {}",
                      options_.display_level, sim_level, highest);
+    else if (options_.display_level < sim_level)
+        spdlog::warn("view: --display-level {} is below the simulation level {}; showing level {}",
+                     options_.display_level, sim_level, sim_level);
     return std::clamp(options_.display_level, sim_level, highest);
 }
 
@@ -771,7 +774,9 @@ bool Viewer::write_screenshot(const std::filesystem::path& path, int width, int 
 
 void Viewer::export_file(std::string_view file)
 {
-    export_surface(std::filesystem::path(file));
+    // A scripted export that fails makes the run fail (exit 3), as a failed --screenshot does.
+    if (!export_surface(std::filesystem::path(file)))
+        script_failed_ = true;
 }
 
 bool Viewer::export_surface(std::optional<std::filesystem::path> path)
@@ -825,6 +830,11 @@ int Viewer::run()
             return 1;
         }
         script_.emplace(std::move(*events));
+        if (options_.exit_after > 0.0 && script_->end_time() > options_.exit_after)
+            spdlog::warn(
+                "view: {} runs until {:g} s, after --exit-after {:g} s: what it does "
+                "after that will not run",
+                options_.script.string(), script_->end_time(), options_.exit_after);
     }
     keep_large_allocations();
     glfwSetErrorCallback(on_glfw_error);
@@ -1029,12 +1039,18 @@ int Viewer::run()
             spdlog::error("view: nothing was shown, no screenshot written");
             return interrupted ? 130 : 3;
         }
-        std::printf("view: screenshot %s (%dx%d), the object covers %.1f %% of the 3D view\n",
-                    options_.screenshot.string().c_str(), fb_w, fb_h, 100.0 * last_coverage_);
+        if (shot_ok)  // write_screenshot said why it could not
+            std::printf("view: screenshot %s (%dx%d), the object covers %.1f %% of the 3D view\n",
+                        options_.screenshot.string().c_str(), fb_w, fb_h, 100.0 * last_coverage_);
     }
     std::fflush(stdout);
     if (!shot_ok)
         return 3;
+    if (script_failed_)
+    {
+        spdlog::error("view: a scripted export failed (above)");
+        return 3;
+    }
     return interrupted ? 130 : 0;  // 130: the CLI's status for a run stopped by Ctrl-C
 }
 

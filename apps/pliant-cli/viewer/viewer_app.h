@@ -179,6 +179,7 @@ public:
     /// pliant-view-NNNN.<format> in the working folder. \return false (and an error status)
     /// when nothing is shown yet or the file cannot be written.
     bool export_surface(std::optional<std::filesystem::path> path);
+    bool script_failed_ = false;  ///< a scripted export failed: the run ends with status 3
 };
 
 }  // namespace pliant::viewer
