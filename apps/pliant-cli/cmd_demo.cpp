@@ -915,8 +915,12 @@ void add_demo_command(CLI::App& app, const GlobalOptions& global)
         ->capture_default_str();
     cmd->add_option("--dt", opt->dt, "Fixed step [s] (default: 0.9 x the stability bound)")
         ->check(positive_number());
-    cmd->add_option("--width", opt->width, "Frame width [pixels]")->check(CLI::Range(16, 4096));
-    cmd->add_option("--height", opt->height, "Frame height [pixels]")->check(CLI::Range(16, 4096));
+    cmd->add_option("--width", opt->width, "Frame width [pixels]")
+        ->check(CLI::Range(16, 4096))
+        ->capture_default_str();
+    cmd->add_option("--height", opt->height, "Frame height [pixels]")
+        ->check(CLI::Range(16, 4096))
+        ->capture_default_str();
     cmd->add_option("--wall-limit", opt->wall_limit, "Give up after this many wall seconds")
         ->check(positive_number())
         ->capture_default_str();
