@@ -120,8 +120,8 @@ core::Result<render::CameraSettings> parse_camera(const std::string& text)
 
 /// Owners from a channel "owner" (the owning peer's id per node, rounded; written by
 /// `pliant demo` into final.pgrid and by `pliant host/join --save`, docs/grid-format.md), or the
-/// quad-tree leaves at `depth` (DESIGN §5) as a stand-in partition: each canonical node belongs to
-/// exactly one leaf, twins follow it.
+/// quad-tree leaves at `depth` (docs/design.md §5) as a stand-in partition: each canonical node
+/// belongs to exactly one leaf, twins follow it.
 Owners owners_of(const core::TetraGrid& grid, const core::GridFile& file, int depth)
 {
     Owners owners{std::vector<std::uint16_t>(grid.node_count(), render::k_no_owner), {}};
@@ -236,7 +236,7 @@ core::Result<GridScene> load_grid_scene(const fs::path& path, const RenderOption
     }
     if (u && displace)
     {
-        // p = P + u N with rest normals N (DESIGN §4).
+        // p = P + u N with rest normals N (docs/design.md §4).
         const core::Vec3Field<double> n = render::grid_normals(display, p);
         for (std::size_t c = 0; c < 3; ++c)
             for (int y = 0; y < display.ny(); ++y)

@@ -12,8 +12,8 @@ namespace pliant::core
 namespace
 {
 
-// Corners a, b, c, d of DESIGN §1 (not normalised: the gnomonic formula below is the one the
-// built-in sphere always used, kept bit for bit).
+// Corners a, b, c, d of docs/design.md §1 (not normalised: the gnomonic formula below is the one
+// the built-in sphere always used, kept bit for bit).
 constexpr std::array<Vec3, 4> k_corner{Vec3{1.0, 1.0, 1.0}, Vec3{1.0, -1.0, -1.0},
                                        Vec3{-1.0, 1.0, -1.0}, Vec3{-1.0, -1.0, 1.0}};
 enum Corner : int

@@ -48,7 +48,7 @@ Result<TetraGrid> TetraGrid::create(int level)
     const int w = g.w_;
     const auto n = static_cast<std::uint32_t>(g.node_count());
 
-    // Twins from the three gluing rules of DESIGN §1, merged with a union-find.
+    // Twins from the three gluing rules of docs/design.md §1, merged with a union-find.
     std::vector<std::uint32_t> parent(n);
     std::iota(parent.begin(), parent.end(), 0U);
     for (int y = 0; y <= w; ++y)

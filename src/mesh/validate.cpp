@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: 2026 pliant contributors
 //
-// Mesh statistics and the DESIGN §2.1 input rules.
+// Mesh statistics and the docs/design.md §2.1 input rules.
 //
 // Design: one pass over the faces builds two flat record arrays, sorted once:
 //   - directed edge records (lo, hi, face, forward): grouping by (lo, hi) gives each undirected

@@ -144,8 +144,8 @@ struct Reader
 /// k <= net::k_max_leaf_coarsen, and 2^(k+1) divides the side, so a leaf maps to whole coarse
 /// nodes and holds at least two rows of them. One row is not enough: a leaf of the bottom row
 /// whose only coarse row is y = 0 right of b (W, 0) would hold only twins of the left half
-/// (DESIGN §1), i.e. no canonical coarse node at all, and could not be sent. Leaves of side 8
-/// (levels >= 3) allow k <= 2.
+/// (docs/design.md §1), i.e. no canonical coarse node at all, and could not be sent. Leaves of side
+/// 8 (levels >= 3) allow k <= 2.
 int max_coarsen_for(const core::TetraGrid& g, int depth)
 {
     const int side = g.w() >> depth;

@@ -4,8 +4,8 @@
 
 // The seven-point stiffness stencil, written once so that the integrator, `apply_stiffness` and
 // `energy` evaluate K u with the same operations in the same order. Opposite edges are paired
-// and each pair is added first: a point reflection of the grid (DESIGN §1 gluing) swaps the two
-// terms of every pair and keeps the pair order, and IEEE addition commutes, so a twin or ghost
+// and each pair is added first: a point reflection of the grid (docs/design.md §1 gluing) swaps the
+// two terms of every pair and keeps the pair order, and IEEE addition commutes, so a twin or ghost
 // node gets bit for bit the value of its canonical node.
 
 #include <cstddef>

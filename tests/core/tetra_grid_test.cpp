@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: 2026 pliant contributors
-// Topology of the tetrahedral grid at every level, checked by counting (DESIGN §1): the counts
-// come from the closed-form tetrahedron subdivision, not from the grid code.
+// Topology of the tetrahedral grid at every level, checked by counting (docs/design.md §1): the
+// counts come from the closed-form tetrahedron subdivision, not from the grid code.
 #include <pliant/core/tetra_grid.h>
 
 #include <gtest/gtest.h>

@@ -3,7 +3,7 @@
 // Export: import -> export -> import is the identity (OBJ, PLY, glTF, GLB), the written files are
 // exact (OBJ, PLY) or exact to float (glTF: checked through Assimp's importer and through a
 // small GLB reader here, independent of Assimp), and from_grid gives the closed genus-0 surface
-// of DESIGN §1.
+// of docs/design.md §1.
 
 #include <pliant/core/tetra_grid.h>
 #include <pliant/mesh/io.h>

@@ -3,8 +3,8 @@
 #pragma once
 
 // A unit-sphere grid for render tests and benchmarks: each grid node is placed on a regular
-// tetrahedron by its barycentric position in its face (DESIGN §1: the left square holds faces
-// abc and acd, the right square bad and bdc), then projected centrally onto the sphere.
+// tetrahedron by its barycentric position in its face (docs/design.md §1: the left square holds
+// faces abc and acd, the right square bad and bdc), then projected centrally onto the sphere.
 
 #include <pliant/core/field.h>
 #include <pliant/core/vec3.h>

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: 2026 pliant contributors
-// The stencil K and lumped M against a per-triangle Eigen assembly on unique vertices (DESIGN
-// §1: corner rows and masses are doubled by the ghost map), and the properties of K.
+// The stencil K and lumped M against a per-triangle Eigen assembly on unique vertices
+// (docs/design.md §1: corner rows and masses are doubled by the ghost map), and the properties of
+// K.
 
 // GCC 12 reports a false -Wmaybe-uninitialized inside Eigen's AVX-512 kernels (-march=native).
 #if defined(__GNUC__) && !defined(__clang__)

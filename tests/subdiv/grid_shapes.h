@@ -5,9 +5,9 @@
 // Test helpers: grid positions with a known shape.
 // - `tetrahedron_positions`: every node mapped onto the regular tetrahedron with integer corners
 //   A=(1,1,1), B=(1,-1,-1), C=(-1,1,-1), D=(-1,-1,1), by its barycentric position in the grid
-//   face it lies in (DESIGN §1: abc, acd lower/upper left square, abd, bcd lower/upper right
-//   square). Coordinates are multiples of 1/W, so they and every butterfly sum of them are exact
-//   in binary floating point.
+//   face it lies in (docs/design.md §1: abc, acd lower/upper left square, abd, bcd lower/upper
+//   right square). Coordinates are multiples of 1/W, so they and every butterfly sum of them are
+//   exact in binary floating point.
 // - `sphere_positions`: the same points normalised onto the unit sphere.
 // - `face_of`: which of the four faces (0 abc, 1 acd, 2 abd, 3 bcd) contains a grid position in
 //   its closed triangle, or -1 (outside the rectangle); a node on a face border reports the

@@ -13,8 +13,8 @@
 // "Across an edge" is always the opposite halfedge's face, so the rule needs no valence. At a
 // valence-3 tetrahedron corner some of these vertices coincide (a corner's three faces surround
 // it, so e.g. c1 of one wing is b1 of the other): exactly what the grid's ghost map gives, which
-// duplicates each of the corner's edges (DESIGN §1). This is NOT OpenMesh's rule at valence 3
-// (docs/subdivision.md).
+// duplicates each of the corner's edges (docs/design.md §1). This is NOT OpenMesh's rule at valence
+// 3 (docs/subdivision.md).
 //
 // The value is summed with the kernel's grouping, pairing c's by wing:
 //   (1/2 (a0 + a1) + 1/8 (b0 + b1)) - 1/16 ((c0 + c1) + (c2 + c3))

@@ -26,7 +26,7 @@ enum class ErrorCode : std::uint16_t
     EmptyInput = 5,         ///< a file with no vertices or no faces
     Cancelled = 6,          ///< long work stopped on request (core::ProgressSink)
 
-    // mesh validation (DESIGN §2.1)
+    // mesh validation (docs/design.md §2.1)
     NonFiniteCoordinate = 20,      ///< a vertex coordinate is NaN or infinite
     DegenerateFace = 21,           ///< a face with repeated vertices or zero area
     NotConnected = 22,             ///< more than one connected component

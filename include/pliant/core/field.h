@@ -133,7 +133,7 @@ void fill_ghosts(const TetraGrid& grid, Field<T>& field) noexcept
         data[g.dst] = data[g.src];
 }
 
-/// Writes every twin node from its canonical node, so twins stay equal (DESIGN §1).
+/// Writes every twin node from its canonical node, so twins stay equal (docs/design.md §1).
 template <typename T>
 void sync_twins(const TetraGrid& grid, Field<T>& field) noexcept
 {

@@ -3,8 +3,8 @@
 #pragma once
 
 /// \file
-/// The grid's domain tetrahedron on the unit sphere (DESIGN.md §2, step 3): where each grid node
-/// sits on the sphere before the remesher samples a surface there, and the rest shape of the
+/// The grid's domain tetrahedron on the unit sphere (docs/design.md §2, step 3): where each grid
+/// node sits on the sphere before the remesher samples a surface there, and the rest shape of the
 /// built-in sphere.
 ///
 /// Two maps, chosen by `SphereMap`:
@@ -26,7 +26,7 @@
 ///   map (the lines from each face centre to its corners, where the construction changes
 ///   sub-triangle) and the corner cells, which stay at 0.4–1.6 of the mean at every level. Near
 ///   a corner the unavoidable shear remains (a 60° face angle opened to 120°: √2 along the
-///   circle, 1/√2 along the radius). This is DESIGN's "relaxed toward equal areas", reached
+///   circle, 1/√2 along the radius). This is docs/design.md's "relaxed toward equal areas", reached
 ///   exactly rather than by iteration. docs/remesh.md §2 has the numbers.
 ///
 /// Both return canonical nodes computed once, twins equal to them bit for bit, and `ghost` rings

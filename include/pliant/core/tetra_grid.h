@@ -3,8 +3,8 @@
 #pragma once
 
 /// \file
-/// `TetraGrid`: the regular triangle grid over the tetrahedral domain (DESIGN.md §1), the one grid
-/// type every stage shares.
+/// `TetraGrid`: the regular triangle grid over the tetrahedral domain (docs/design.md §1), the one
+/// grid type every stage shares.
 ///
 /// Data layout and invariants
 /// - Level n has W = 2^n; nodes (x, y) with 0 <= x <= 2W, 0 <= y <= W, row-major, index y*nx + x.
@@ -137,8 +137,8 @@ public:
         return {i % nx(), i / nx()};
     }
 
-    /// The in-range node a position stands for by the gluing rules (DESIGN §1), before choosing
-    /// the canonical twin. \pre the position lies within `w()` of the rectangle.
+    /// The in-range node a position stands for by the gluing rules (docs/design.md §1), before
+    /// choosing the canonical twin. \pre the position lies within `w()` of the rectangle.
     [[nodiscard]] GridCoord fold(int x, int y) const noexcept;
     /// The canonical node a position (in range or ghost) stands for.
     [[nodiscard]] NodeIndex image(int x, int y) const noexcept;

@@ -41,7 +41,8 @@ struct ImportReport
 /// .glb), chosen by extension (case-insensitive). All meshes of the file are merged (node
 /// transforms applied), polygons are triangulated, vertices with bit-identical positions are
 /// welded (seams split only by normals or texture coordinates disappear), and positions no face
-/// uses are dropped. The result is not validated: call `validate` for the DESIGN §2.1 rules.
+/// uses are dropped. The result is not validated: call `validate` for the docs/design.md §2.1
+/// rules.
 ///
 /// \return the mesh, or an error whose message names the file:
 ///   - IoError: the file is missing or unreadable;

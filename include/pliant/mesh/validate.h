@@ -3,9 +3,9 @@
 #pragma once
 
 /// \file
-/// Topology and geometry statistics of a `TriMesh`, and the input rules of DESIGN §2.1 (closed,
-/// 2-manifold, connected, genus 0, finite, non-degenerate, consistently oriented), each with its
-/// own `core::ErrorCode`. docs/mesh.md lists the rules with example messages.
+/// Topology and geometry statistics of a `TriMesh`, and the input rules of docs/design.md §2.1
+/// (closed, 2-manifold, connected, genus 0, finite, non-degenerate, consistently oriented), each
+/// with its own `core::ErrorCode`. docs/mesh.md lists the rules with example messages.
 
 #include <pliant/core/result.h>
 #include <pliant/core/vec3.h>

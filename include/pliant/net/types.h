@@ -22,7 +22,7 @@ struct PeerId
 };
 inline constexpr PeerId k_no_peer{0xFFFF};
 
-/// What a peer does in a session (DESIGN.md §5).
+/// What a peer does in a session (docs/design.md §5).
 enum class Role : std::uint8_t
 {
     Participant = 1,  ///< simulates its leaves and applies forces

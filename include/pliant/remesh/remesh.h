@@ -3,7 +3,7 @@
 #pragma once
 
 /// \file
-/// The remesher's entry point: a closed genus-0 mesh onto the TetraGrid (DESIGN.md §2,
+/// The remesher's entry point: a closed genus-0 mesh onto the TetraGrid (docs/design.md §2,
 /// docs/remesh.md). Phases: sphere map (mesh -> sphere, fold-free), domain map (grid ->
 /// sphere), sampling (grid node -> input surface), and optionally the quality measurement.
 

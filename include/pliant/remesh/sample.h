@@ -3,13 +3,13 @@
 #pragma once
 
 /// \file
-/// Domain -> sphere (DESIGN.md §2.3) and sampling the input surface at every grid node
-/// (DESIGN.md §2.4).
+/// Domain -> sphere (docs/design.md §2.3) and sampling the input surface at every grid node
+/// (docs/design.md §2.4).
 ///
 /// The domain map (core::sphere_domain) puts every grid node on the unit sphere: equal-area
 /// (the default) or the central (gnomonic) projection of a regular tetrahedron, where each node
-/// sits on its tetrahedron face by the piecewise-linear map that the grid's gluing (DESIGN §1)
-/// implies (domain_sphere below). Both are fold-free.
+/// sits on its tetrahedron face by the piecewise-linear map that the grid's gluing (docs/design.md
+/// §1) implies (domain_sphere below). Both are fold-free.
 ///
 /// Sampling locates each node's sphere point in the spherical mesh by a walk from the previous
 /// node's triangle (adjacent nodes are close, so a walk is a few steps) or from a given start

@@ -4,7 +4,7 @@
 
 /// \file
 /// Mesh -> unit sphere: a bijective spherical parameterization of a closed genus-0 mesh
-/// (DESIGN.md §2.2, docs/remesh.md).
+/// (docs/design.md §2.2, docs/remesh.md).
 ///
 /// Two routes, both ending in the same fold check:
 /// - the reference paper's spring embedder: central (gnomonic) projection from the area

@@ -78,7 +78,7 @@ public:
                 const core::Field<double>* values = nullptr);
 
     /// Uploads deformed positions p = P + u N (rest positions P, rest unit normals N, normal
-    /// displacement u, DESIGN §4) with u as the colouring scalar.
+    /// displacement u, docs/design.md §4) with u as the colouring scalar.
     void upload_displaced(const core::TetraGrid& grid, const core::Vec3Field<double>& rest,
                           const core::Vec3Field<double>& rest_normals,
                           const core::Field<double>& u);

@@ -3,7 +3,7 @@
 #pragma once
 
 /// \file
-/// Partitioning the quad-tree leaves among participants (DESIGN.md §5, issue 6 item 4).
+/// Partitioning the quad-tree leaves among participants (docs/design.md §5, issue 6 item 4).
 ///
 /// Design
 /// - Leaf size: the smallest quad-tree depth at which every leaf's canonical nodes fit one

@@ -3,7 +3,7 @@
 #pragma once
 
 /// \file
-/// `Session`: one peer of a collaborative session (DESIGN.md §5, docs/session.md): the master
+/// `Session`: one peer of a collaborative session (docs/design.md §5, docs/session.md): the master
 /// (first peer, partitions), a participant (simulates its leaves, applies forces) or a viewer
 /// (only watches), all driving a `net::Messenger` over any `net::Transport`.
 ///

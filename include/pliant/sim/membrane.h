@@ -3,7 +3,7 @@
 #pragma once
 
 /// \file
-/// The membrane model of DESIGN.md §4: settings, the assembled model (rest geometry, cotangent
+/// The membrane model of docs/design.md §4: settings, the assembled model (rest geometry, cotangent
 /// stiffness as a three-weight stencil, lumped mass) and the integrated state (u, v).
 ///
 /// Design
@@ -16,7 +16,8 @@
 ///   every formula is symmetric under the gluing isometries (pairs of opposite terms are added
 ///   first, and IEEE addition commutes), so a ghost or twin node computes bit for bit what its
 ///   canonical node computes.
-/// - Corners (DESIGN §1): a corner's six grid triangles are its three real triangles, each seen
+/// - Corners (docs/design.md §1): a corner's six grid triangles are its three real triangles, each
+/// seen
 ///   twice through the ghost map. The stencil therefore gives at a corner twice the real stiffness
 ///   row and twice the real lumped mass; `M⁻¹K` is exact. `multiplicity()` is 2 there, 1
 ///   elsewhere; `unique_mass()` and `energy()` divide it out.

@@ -3,7 +3,7 @@
 #pragma once
 
 /// \file
-/// Runge-Kutta-Fehlberg 4(5) for the membrane (DESIGN.md §4), forces, and the step API.
+/// Runge-Kutta-Fehlberg 4(5) for the membrane (docs/design.md §4), forces, and the step API.
 ///
 /// Design
 /// - The ODE is u' = v, v' = a(u, v) = -beta v - k_f u - M^-1 K u + M^-1 f. Only the six velocity

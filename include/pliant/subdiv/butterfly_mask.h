@@ -5,7 +5,7 @@
 /// \file
 /// The modified butterfly mask (Zorin, Schröder & Sweldens 1996, "Interpolating subdivision for
 /// meshes with arbitrary topology", regular case: both edge ends of valence 6) as `constexpr`
-/// taps on the TetraGrid, one mask per edge direction (DESIGN.md §3, docs/subdivision.md).
+/// taps on the TetraGrid, one mask per edge direction (docs/design.md §3, docs/subdivision.md).
 ///
 /// The new (odd) vertex on the edge a0-a1 is
 ///

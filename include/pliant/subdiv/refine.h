@@ -4,7 +4,7 @@
 
 /// \file
 /// Modified butterfly refinement level n -> n+1 as three convolutions of the ghost-padded
-/// coarse grid (DESIGN.md §3), and its exact inverse on the coarse nodes, `restrict`.
+/// coarse grid (docs/design.md §3), and its exact inverse on the coarse nodes, `restrict`.
 ///
 /// Contract of `refine(plan, in, out)` (docs/subdivision.md):
 /// - `in` is a level-n field with a ghost ring of at least `k_refine_ghost` (1) whose ghosts the
@@ -24,7 +24,7 @@
 ///   `threads`.
 ///
 /// The corners need no special rule: seen through the ghost map every node has six neighbours
-/// (the corners' three edges appear twice each, DESIGN §1), so the regular mask applies
+/// (the corners' three edges appear twice each, docs/design.md §1), so the regular mask applies
 /// everywhere. docs/subdivision.md explains what that means at the corners and how it differs
 /// from OpenMesh's ModifiedButterflyT there.
 
