@@ -20,6 +20,7 @@
 // it joins the master over 127.0.0.1 in place of the scripted late viewer; closing the window
 // ends the session. No offscreen frames are rendered then, and the replay is left to
 // `pliant replay` (the recording is still written).
+#include <pliant/core/file_io.h>
 #include <pliant/core/grid_io.h>
 #include <pliant/mesh/io.h>
 #include <pliant/mesh/validate.h>
@@ -408,7 +409,10 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
                                      core::make_geometry_file(grid, remeshed->positions));
         !saved)
         return report(saved.error());
-    std::ofstream(opt.out / "remesh-report.json") << remesh::to_json(remeshed->report) << "\n";
+    if (auto written = core::write_text_file(opt.out / "remesh-report.json",
+                                             remesh::to_json(remeshed->report) + "\n", "demo");
+        !written)
+        return report(written.error());
 
     // 2. The material and a common fixed step the explicit integrator is stable at.
     sim::MembraneSettings material;
@@ -790,15 +794,18 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
     table += "\nBandwidth is per second of session time (states stream at " +
              fmt("%.0f Hz", settings.stream_rate_hz) +
              "); RTT is ENet's smoothed round trip over 127.0.0.1.\n";
-    std::printf("%s", table.c_str());
-    std::ofstream(opt.out / "summary.md") << table;
-    std::printf(
-        "\nwrote %s (grid.pgrid, final.pgrid, %s, session.prec, timeline.csv, "
-        "remesh-report.json, summary.md)\n",
-        opt.out.string().c_str(),
-        painted == 0              ? "no frames"
-        : animation == "demo.gif" ? "frame_*.png, demo.gif"
-                                  : "frame_*.png, no GIF");
+    if (!global.quiet)  // -q: only errors; summary.md holds the table
+        std::printf("%s", table.c_str());
+    if (auto written = core::write_text_file(opt.out / "summary.md", table, "demo"); !written)
+        return report(written.error());
+    if (!global.quiet)
+        std::printf(
+            "\nwrote %s (grid.pgrid, final.pgrid, %s, session.prec, timeline.csv, "
+            "remesh-report.json, summary.md)\n",
+            opt.out.string().c_str(),
+            painted == 0              ? "no frames"
+            : animation == "demo.gif" ? "frame_*.png, demo.gif"
+                                      : "frame_*.png, no GIF");
     if (!identical)
         return report({core::ErrorCode::NotConverged,
                        "demo: replaying the recording did not reproduce the session's state"});

@@ -36,6 +36,7 @@ struct ViewOptions
     std::string screenshot;
     double exit_after = 0.0;
     bool participant = false;
+    bool level_given = false;  ///< --level on the command line (it applies to a mesh only)
     std::string name = "viewer";
     std::uint16_t port = 0;
     bool no_vsync = false;
@@ -58,6 +59,9 @@ int run_view(const ViewOptions& opt)
         return k_exit_usage;
     }
     std::error_code ec;
+    if (opt.level_given && lower_extension(opt.input) == ".pgrid")
+        spdlog::warn("view: --level is the remeshing level of a mesh; {} keeps its own level",
+                     opt.input);
     if (opt.participant && !opt.input.empty() && std::filesystem::exists(opt.input, ec))
         spdlog::warn("view: --participant is for joining HOST:PORT; {} is a file, simulated here",
                      opt.input);
@@ -145,9 +149,9 @@ void add_view_command(CLI::App& app, const GlobalOptions& global)
         "  xvfb-run -a pliant view grid.pgrid --script drag.txt --screenshot v.png "
         "--exit-after 3");
     cmd->add_option("INPUT", opt->input, "GRID (.pgrid), MESH, or HOST:PORT");
-    cmd->add_option("-l,--level", opt->level, "Remeshing level for a mesh")
-        ->check(CLI::Range(1, 10))
-        ->capture_default_str();
+    CLI::Option* level = cmd->add_option("-l,--level", opt->level, "Remeshing level for a mesh")
+                             ->check(CLI::Range(1, 10))
+                             ->capture_default_str();
     cmd->add_option("--display-level", opt->display_level,
                     "Display level (butterfly refinement of the simulated surface), from the "
                     "simulation level to simulation level + 3 (at most 10), as the Display "
@@ -175,7 +179,12 @@ void add_view_command(CLI::App& app, const GlobalOptions& global)
                     "(a --save of `host`/`join`, a `simulate` frame, demo's final.pgrid, "
                     "`replay -o`) instead of at rest")
         ->check(CLI::ExistingFile);
-    cmd->callback(command_callback(global, [opt]() -> int { return run_view(*opt); }));
+    cmd->callback(command_callback(global,
+                                   [opt, level]() -> int
+                                   {
+                                       opt->level_given = level->count() > 0;
+                                       return run_view(*opt);
+                                   }));
 }
 
 const CommandRegistrar k_register_view{{"view", 65, &add_view_command}};
