@@ -51,7 +51,18 @@ int report(const core::Error& error)
 
 core::Result<void> check_writable(const std::filesystem::path& path, std::string_view what)
 {
-    return core::check_output_path(path, what);
+    if (auto ok = core::check_output_path(path, what); !ok)
+        return ok;
+    // A .gltf's buffer goes to <stem>.bin beside it (mesh::export_mesh).
+    if (lower_extension(path) == ".gltf")
+        return core::check_output_path(gltf_buffer_of(path),
+                                       std::string(what) + " (the .gltf's buffer)");
+    return {};
+}
+
+std::filesystem::path gltf_buffer_of(const std::filesystem::path& gltf)
+{
+    return std::filesystem::path(gltf).replace_extension(".bin");
 }
 
 std::filesystem::path bundled_mesh()

@@ -82,10 +82,14 @@ auto command_callback(const GlobalOptions& global, Body body)
 /// port; give a whole number from 1 to 65535"; CLI11 alone said "Could not convert").
 [[nodiscard]] CLI::Validator port_number(unsigned lowest);
 
-/// Whether `path` can be written (core::check_output_path: nothing is created): checked before
-/// a long run starts, so a bad --stats or output path fails at once, with the reason.
-/// \return IoError naming `what`, the file and the system's reason.
+/// Whether `path` can be written (core::check_output_path: nothing is created), and for a
+/// `.gltf` its buffer file too (gltf_buffer_of): checked before a long run starts, so a bad
+/// --stats or output path fails at once, with the reason. \return IoError naming `what`, the
+/// file and the system's reason.
 core::Result<void> check_writable(const std::filesystem::path& path, std::string_view what);
+
+/// Where `mesh::export_mesh` writes a `.gltf`'s buffer: `<stem>.bin` beside it.
+[[nodiscard]] std::filesystem::path gltf_buffer_of(const std::filesystem::path& gltf);
 
 /// The bundled default mesh (data/spot.obj), found next to the executable's install or in the
 /// source tree.

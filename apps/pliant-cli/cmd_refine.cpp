@@ -55,11 +55,6 @@ int run_refine(const RefineOptions& opt, const GlobalOptions& global)
     // Before the work, not after it; nothing is created (the output is written whole at the end).
     if (auto ok = check_writable(opt.out, "refine: -o"); !ok)
         return report(ok.error());
-    if (ext == ".gltf")
-        if (auto ok = check_writable(std::filesystem::path(opt.out).replace_extension(".bin"),
-                                     "refine: -o (the .gltf's buffer)");
-            !ok)
-            return report(ok.error());
 
     auto file = core::load_grid(opt.grid);
     if (!file)

@@ -60,13 +60,8 @@ int run_remesh(const RemeshOptions& opt, const GlobalOptions& global)
     // (nothing is created; the outputs are written whole at the end, core::write_files)
     if (auto ok = check_writable(opt.output, "remesh: -o"); !ok)
         return report(ok.error());
-    // A .gltf's buffer goes to <stem>.bin beside it.
     const std::filesystem::path side =
-        ext == ".gltf" ? std::filesystem::path(opt.output).replace_extension(".bin")
-                       : std::filesystem::path();
-    if (!side.empty())
-        if (auto ok = check_writable(side, "remesh: -o (the .gltf's buffer)"); !ok)
-            return report(ok.error());
+        ext == ".gltf" ? gltf_buffer_of(opt.output) : std::filesystem::path();
     if (!opt.report.empty())
     {
         if (auto ok = check_writable(opt.report, "remesh: --report"); !ok)

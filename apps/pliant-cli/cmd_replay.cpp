@@ -45,11 +45,6 @@ int run_replay(const ReplayOptions& opt, const GlobalOptions& global)
     if (!opt.out.empty())
         if (auto ok = check_writable(opt.out, "replay: -o"); !ok)
             return report(ok.error());
-    if (ext == ".gltf")
-        if (auto ok = check_writable(std::filesystem::path(opt.out).replace_extension(".bin"),
-                                     "replay: -o (the .gltf's buffer)");
-            !ok)
-            return report(ok.error());
     auto recording = session::load_recording(opt.recording);
     if (!recording)
         return report(recording.error());

@@ -51,6 +51,13 @@ if(TARGET pliant)
     pliant_cli_expect(cli_refine_output_checked_first 1 STDERR
                       "refine: -o: cannot write '.*no-such-dir/x.obj': its folder .* does not exist"
                       refine ${out_dir}/spot3.pgrid --levels 1 -o ${out_dir}/no-such-dir/x.obj)
+    # A .gltf's buffer (<stem>.bin) is checked with it (check_writable, for every command).
+    file(MAKE_DIRECTORY ${out_dir}/g.bin)
+    pliant_cli_expect(cli_refine_gltf_buffer_checked_first 1 STDERR
+                      "refine: -o \\(the .gltf's buffer\\): cannot write '.*g.bin': Is a directory"
+                      refine ${out_dir}/spot3.pgrid --levels 1 -o ${out_dir}/g.gltf)
+    set_tests_properties(cli_refine_gltf_buffer_checked_first PROPERTIES
+                         FIXTURES_REQUIRED cli_outputs)
     pliant_cli_expect(cli_remesh_report_is_the_output 2 STDERR
                       "--report .*same.obj names the same file as -o"
                       remesh ${PROJECT_SOURCE_DIR}/data/spot.obj --level 3
