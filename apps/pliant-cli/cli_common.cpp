@@ -49,6 +49,26 @@ int report(const core::Error& error)
     }
 }
 
+CLI::Validator existing_input_file(std::string what)
+{
+    return CLI::Validator(
+        [what](std::string& value) -> std::string
+        {
+            if (auto ok = core::check_input_file(value, what); !ok)
+                throw InputFileError{ok.error()};
+            return {};
+        },
+        "FILE");
+}
+
+core::Error in_grid_file(const std::string& grid_path, core::Error error)
+{
+    if (!grid_path.empty() && (error.code == core::ErrorCode::DegenerateFace ||
+                               error.code == core::ErrorCode::NonFiniteCoordinate))
+        error.message = grid_path + ": " + error.message;
+    return error;
+}
+
 core::Result<void> check_writable(const std::filesystem::path& path, std::string_view what)
 {
     if (auto ok = core::check_output_path(path, what); !ok)
@@ -268,7 +288,7 @@ void add_secret_options(CLI::App* cmd, std::string& passphrase, std::string& key
                                  : std::string();
             });
     cmd->add_option("--key-file", key_file, "File whose bytes are the shared secret")
-        ->check(CLI::ExistingFile)
+        ->check(existing_input_file("--key-file"))
         ->excludes("--passphrase");
 }
 

@@ -82,6 +82,23 @@ auto command_callback(const GlobalOptions& global, Body body)
 /// port; give a whole number from 1 to 65535"; CLI11 alone said "Could not convert").
 [[nodiscard]] CLI::Validator port_number(unsigned lowest);
 
+/// For options naming a file to read (--script, --key-file, --resume, --scenario, --mesh,
+/// RECORDING): checked while the command line is parsed, before any work, by
+/// core::check_input_file. A missing, folder or unreadable file is bad input, not a usage error:
+/// the check throws InputFileError, which main() reports as the commands report their GRID and
+/// MESH arguments ("error: --script: plan.txt: no such file [io-error]", exit 1).
+struct InputFileError
+{
+    core::Error error;
+};
+[[nodiscard]] CLI::Validator existing_input_file(std::string what);
+
+/// An error of a model built on the rest geometry read from `grid_path`: DegenerateFace and
+/// NonFiniteCoordinate are about the file's positions, so the file is named first
+/// ("flat.pgrid: the rest surface has no normal at node (1, 1): ..."); any other error, or an
+/// empty path (a sphere of --level), as it is.
+[[nodiscard]] core::Error in_grid_file(const std::string& grid_path, core::Error error);
+
 /// Whether `path` can be written (core::check_output_path: nothing is created), and for a
 /// `.gltf` its buffer file too (gltf_buffer_of): checked before a long run starts, so a bad
 /// --stats or output path fails at once, with the reason. \return IoError naming `what`, the

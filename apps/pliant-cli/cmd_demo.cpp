@@ -904,7 +904,7 @@ void add_demo_command(CLI::App& app, const GlobalOptions& global)
         "  pliant demo --quick              # level 5, 2 s at 6 fps, 320x240 (the tests)\n"
         "  pliant demo --mesh my.obj --level 7 --out /tmp/run");
     cmd->add_option("--mesh", opt->mesh, "Closed genus-0 mesh (default: the bundled data/spot.obj)")
-        ->check(CLI::ExistingFile);
+        ->check(existing_input_file("--mesh"));
     cmd->add_option("-o,--out", opt->out, "Output folder")->capture_default_str();
     cmd->add_option("-l,--level", opt->level,
                     "Simulation grid level (W = 2^level; from 4, where the grid has leaves "

@@ -118,7 +118,7 @@ int run_host(const HostOptions& opt)
         // Lockstep has no error control: a step above the stability bound grows without limit.
         auto probe = sim::MembraneModel::create(grid, rest, material);
         if (!probe)
-            return report(probe.error());
+            return report(in_grid_file(opt.grid, probe.error()));
         const double stable = sim::stable_fixed_step(*probe);
         if (opt.dt == 0.0)
         {
@@ -138,7 +138,7 @@ int run_host(const HostOptions& opt)
     {
         auto probe = sim::MembraneModel::create(grid, rest, material);
         if (!probe)
-            return report(probe.error());
+            return report(in_grid_file(opt.grid, probe.error()));
         auto saved = load_saved_state(opt.resume, *probe);
         if (!saved)
             return report(saved.error());
@@ -160,7 +160,7 @@ int run_host(const HostOptions& opt)
     auto s = session::Session::host(*transport, grid, rest, material, settings,
                                     start ? &*start : nullptr);
     if (!s)
-        return report(s.error());
+        return report(in_grid_file(opt.grid, s.error()));
     const double limit = (*s)->model()->settings().max_force;
     spdlog::info("hosting level {} ({} mode, point clearance {}, force limit {}) on port {}",
                  grid.level(), opt.mode,
@@ -252,7 +252,7 @@ void add_host_command(CLI::App& app, const GlobalOptions& global)
         ->check(positive_number())
         ->capture_default_str();
     cmd->add_option("--script", opt->script, "Script of timed grabs / leave")
-        ->check(CLI::ExistingFile);
+        ->check(existing_input_file("--script"));
     cmd->add_option("--stats", opt->stats, "Per-second statistics CSV");
     cmd->add_option("--dt", opt->dt,
                     "Fixed step of exact mode [s]; default: the smaller of 1 ms and 0.9 x the "
@@ -274,7 +274,7 @@ void add_host_command(CLI::App& app, const GlobalOptions& global)
                     "Start from a saved state of GRID (u and v of a --save, demo's final.pgrid, "
                     "`replay -o` or a `simulate` frame) instead of at rest; time and tick start "
                     "at 0; not with --record")
-        ->check(CLI::ExistingFile);
+        ->check(existing_input_file("--resume"));
     cmd->add_option("--tension", opt->tension, "Membrane tension T [N/m]")
         ->check(positive_number())
         ->capture_default_str();

@@ -1,22 +1,31 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: 2026 pliant contributors
-// `pliant info MESH [--json]`: imports a mesh, prints its statistics and the verdict of the input
-// rules (docs/mesh.md). Exit 0 only for a valid closed genus-0 mesh.
+// `pliant info MESH|GRID [--json]`: imports a mesh, prints its statistics and the verdict of the
+// input rules (docs/mesh.md); or reads a .pgrid grid file and prints its level, channels, surface
+// and state (docs/grid-format.md). Exit 0 only for a valid closed genus-0 mesh, or a grid file
+// whose surface the membrane accepts.
 #include <pliant/core/error.h>
+#include <pliant/core/grid_io.h>
+#include <pliant/core/tetra_grid.h>
 #include <pliant/mesh/io.h>
 #include <pliant/mesh/validate.h>
+#include <pliant/sim/membrane.h>
 
 #include <nlohmann/json.hpp>
 
 #include "cli_common.h"
 #include "commands.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace pliant::cli
 {
@@ -102,8 +111,198 @@ void print_text(const InfoOptions& opt, const mesh::ImportReport& r, const mesh:
                          : std::string("valid: closed, connected, genus-0 2-manifold"));
 }
 
+// ---- grid files ----
+
+/// Range of one channel over the canonical nodes, and where its largest magnitude is.
+struct ChannelRange
+{
+    std::string name;
+    double min = 0.0;
+    double max = 0.0;
+    double max_abs = 0.0;
+    core::GridCoord at_max_abs{};
+};
+
+struct GridInfo
+{
+    const core::GridFile* file = nullptr;
+    std::optional<core::TetraGrid> grid;
+    std::optional<mesh::MeshStats> surface;   ///< of px, py, pz as a mesh (mesh::from_grid)
+    std::vector<ChannelRange> ranges;         ///< every channel but px, py, pz and owner
+    std::map<long long, std::size_t> owners;  ///< surface vertices per owner id
+};
+
+GridInfo describe(const core::GridFile& file)
+{
+    GridInfo info;
+    info.file = &file;
+    auto grid = core::TetraGrid::create(file.level);
+    if (!grid)
+        return info;  // decode_grid accepts levels 1..10 only
+    info.grid = std::move(*grid);
+    const core::TetraGrid& g = *info.grid;
+    if (auto positions = core::geometry_of(g, file))
+        info.surface = mesh::analyze(mesh::from_grid(g, *positions));
+    for (const core::NamedField& f : file.fields)
+    {
+        if (f.name == "px" || f.name == "py" || f.name == "pz")
+            continue;
+        if (f.name == "owner")
+        {
+            for (const core::NodeIndex n : g.node_of_unique())
+                ++info.owners[std::llround(f.values[n])];
+            continue;
+        }
+        ChannelRange r{f.name, f.values[g.node_of_unique()[0]], f.values[g.node_of_unique()[0]]};
+        for (const core::NodeIndex n : g.node_of_unique())
+        {
+            const double v = f.values[n];
+            r.min = std::min(r.min, v);
+            r.max = std::max(r.max, v);
+            if (std::abs(v) > r.max_abs)
+            {
+                r.max_abs = std::abs(v);
+                r.at_max_abs = g.coord(n);
+            }
+        }
+        info.ranges.push_back(r);
+    }
+    return info;
+}
+
+/// Whether the membrane accepts the file's surface as rest geometry (what simulate, host and
+/// view need): positions present, finite, a normal at every node, no zero-area triangle.
+std::optional<core::Error> grid_verdict(const std::string& path, const GridInfo& info)
+{
+    if (!info.surface)
+        return core::Error{core::ErrorCode::BadGrid,
+                           path + ": no surface: the channels px, py, pz are not all there"};
+    auto positions = core::geometry_of(*info.grid, *info.file);
+    auto model = sim::MembraneModel::create(*info.grid, *positions, sim::MembraneSettings{});
+    if (!model)
+        return in_grid_file(path, model.error());
+    return std::nullopt;
+}
+
+const char* k_grid_valid = "valid: a closed surface the membrane accepts as rest geometry";
+
+std::string channel_names(const core::GridFile& file)
+{
+    std::string names;
+    for (const core::NamedField& f : file.fields)
+        names += (names.empty() ? "" : " ") + f.name;
+    return names;
+}
+
+void print_grid_json(const InfoOptions& opt, const GridInfo* info,
+                     const std::optional<core::Error>& error)
+{
+    nlohmann::ordered_json j;
+    j["file"] = opt.mesh.string();
+    j["format"] = "pgrid";
+    j["valid"] = !error.has_value();
+    j["error_code"] = error ? nlohmann::ordered_json(std::string(core::to_string(error->code)))
+                            : nlohmann::ordered_json(nullptr);
+    j["error_value"] = error ? nlohmann::ordered_json(static_cast<int>(error->code))
+                             : nlohmann::ordered_json(nullptr);
+    j["message"] = error ? error->message : std::string(k_grid_valid);
+    if (info != nullptr && info->grid)
+    {
+        const core::TetraGrid& g = *info->grid;
+        j["level"] = g.level();
+        j["nx"] = g.nx();
+        j["ny"] = g.ny();
+        j["vertices"] = g.unique_count();
+        j["faces"] = g.face_count();
+        auto channels = nlohmann::ordered_json::array();
+        for (const core::NamedField& f : info->file->fields)
+            channels.push_back(f.name);
+        j["channels"] = channels;
+        if (info->surface)
+        {
+            j["bbox_min"] = vec_json(info->surface->bbox_min);
+            j["bbox_max"] = vec_json(info->surface->bbox_max);
+            j["bbox_diagonal"] = info->surface->bbox_diagonal;
+            j["surface_area"] = info->surface->surface_area;
+            j["degenerate_faces"] = info->surface->degenerate_faces;
+        }
+        for (const ChannelRange& r : info->ranges)
+            j["ranges"][r.name] = {{"min", r.min},
+                                   {"max", r.max},
+                                   {"max_abs", r.max_abs},
+                                   {"at", {r.at_max_abs.x, r.at_max_abs.y}}};
+        if (!info->owners.empty())
+        {
+            auto owners = nlohmann::ordered_json::object();
+            for (const auto& [id, count] : info->owners)
+                owners[std::to_string(id)] = count;
+            j["owners"] = owners;
+        }
+    }
+    std::cout << j.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) << '\n';
+}
+
+void print_grid_text(const InfoOptions& opt, const GridInfo& info,
+                     const std::optional<core::Error>& error)
+{
+    const auto row = [](const char* key, const std::string& value)
+    { std::printf("  %-22s %s\n", key, value.c_str()); };
+    const auto n = [](std::size_t v) { return std::to_string(v); };
+    const auto num = [](double v)
+    {
+        char text[32];
+        std::snprintf(text, sizeof text, "%.6g", v);
+        return std::string(text);
+    };
+    const core::TetraGrid& g = *info.grid;
+    std::printf("%s (pliant grid, level %d)\n", opt.mesh.string().c_str(), g.level());
+    row("nodes", std::to_string(g.nx()) + " x " + std::to_string(g.ny()) + " = " +
+                     n(static_cast<std::size_t>(g.nx()) * static_cast<std::size_t>(g.ny())) +
+                     "  (" + n(g.unique_count()) + " surface vertices, " + n(g.face_count()) +
+                     " faces)");
+    row("channels", channel_names(*info.file));
+    if (info.surface)
+    {
+        row("bbox diagonal", num(info.surface->bbox_diagonal));
+        row("surface area", num(info.surface->surface_area));
+    }
+    for (const ChannelRange& r : info.ranges)
+        row(r.name.c_str(), num(r.min) + " .. " + num(r.max) + "  (largest |" + r.name + "| " +
+                                num(r.max_abs) + " at node (" + std::to_string(r.at_max_abs.x) +
+                                ", " + std::to_string(r.at_max_abs.y) + "))");
+    if (!info.owners.empty())
+    {
+        std::string owners;
+        for (const auto& [id, count] : info.owners)
+            owners += (owners.empty() ? "" : ", ") + std::string("peer ") + std::to_string(id) +
+                      ": " + n(count);
+        row("owner (vertices)", owners);
+    }
+    row("verdict", error ? "INVALID: " + error->message : std::string(k_grid_valid));
+}
+
+int run_grid_info(const InfoOptions& opt, const GlobalOptions& global)
+{
+    auto file = core::load_grid(opt.mesh);
+    if (!file)
+    {
+        if (opt.json)
+            print_grid_json(opt, nullptr, file.error());
+        return cli::report(file.error());
+    }
+    const GridInfo info = describe(*file);
+    const std::optional<core::Error> error = grid_verdict(opt.mesh.string(), info);
+    if (opt.json)
+        print_grid_json(opt, &info, error);
+    else if (!global.quiet)
+        print_grid_text(opt, info, error);
+    return error ? cli::report(*error) : 0;
+}
+
 int run_info(const InfoOptions& opt, const GlobalOptions& global)
 {
+    if (lower_extension(opt.mesh) == ".pgrid")
+        return run_grid_info(opt, global);
     mesh::ImportReport report;
     auto m = mesh::import_mesh(opt.mesh, &report);
     if (!m)
@@ -129,20 +328,25 @@ void add_info_command(CLI::App& app, const GlobalOptions& global)
     auto opt = std::make_shared<InfoOptions>();
     CLI::App* cmd = app.add_subcommand(
         "info",
-        "Check a mesh: counts, topology and whether pliant accepts it.\n\n"
+        "Check a mesh or a grid file: counts, topology and whether pliant accepts it.\n\n"
         "Reads OBJ, OFF, PLY (ascii/binary), STL (ascii/binary) or glTF 2 (.gltf/.glb); merges\n"
         "all meshes, triangulates polygons, welds exactly coincident vertices and drops unused\n"
         "ones. Then checks, in this order: vertex indices, finite coordinates, no degenerate\n"
         "faces, every edge on at most two faces, closed (no boundary edges), no pinched vertices,\n"
         "consistent orientation, one connected component, genus 0 (Euler characteristic 2).\n"
         "The first rule that fails is the verdict (docs/mesh.md lists them all).\n\n"
-        "Exit codes: 0 valid closed genus-0 mesh; 1 unreadable file or a failed rule (the\n"
-        "message says which, with numbers and a location); 2 usage error. With -q only an\n"
-        "error is printed (--json still prints its object).\n\n"
+        "A .pgrid grid file (remesh, refine, simulate frames, replay, demo's final.pgrid,\n"
+        "host/join --save) is read and described instead: level, nodes, channels, the\n"
+        "surface's size, each other channel's range (u, v) and the owner counts; the verdict is\n"
+        "whether the membrane accepts its surface as rest geometry (docs/grid-format.md).\n\n"
+        "Exit codes: 0 valid closed genus-0 mesh (or usable grid); 1 unreadable file or a\n"
+        "failed rule (the message says which, with numbers and a location); 2 usage error.\n"
+        "With -q only an error is printed (--json still prints its object).\n\n"
         "Example:\n"
         "  pliant info data/spot.obj\n"
-        "  pliant info scan.ply --json | jq .genus");
-    cmd->add_option("mesh", opt->mesh, "Mesh file to check")->required();
+        "  pliant info scan.ply --json | jq .genus\n"
+        "  pliant info demo-out/final.pgrid");
+    cmd->add_option("FILE", opt->mesh, "Mesh file (or .pgrid grid file) to check")->required();
     cmd->add_flag("--json", opt->json,
                   "Print one JSON object on stdout (fields: valid, error_code, message, vertices, "
                   "faces, edges, components, boundary_edges, euler_characteristic, genus (null "

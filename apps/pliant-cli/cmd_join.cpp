@@ -198,7 +198,7 @@ void add_join_command(CLI::App& app, const GlobalOptions& global)
         ->check(positive_number())
         ->capture_default_str();
     cmd->add_option("--script", opt->script, "Script of timed grabs / leave")
-        ->check(CLI::ExistingFile);
+        ->check(existing_input_file("--script"));
     cmd->add_option("--stats", opt->stats, "Per-second statistics CSV");
     cmd->add_option("--ticks", opt->ticks,
                     "Exact sessions: stop stepping at this tick (0: never); give every peer the "

@@ -156,7 +156,7 @@ void add_replay_command(CLI::App& app, const GlobalOptions& global)
         "  pliant replay session.prec --until 500 -o tick500.pgrid");
     cmd->add_option("RECORDING", opt->recording, "Recording file (.prec)")
         ->required()
-        ->check(CLI::ExistingFile);
+        ->check(existing_input_file("RECORDING"));
     cmd->add_option("-o,--out", opt->out,
                     "Write the final surface: .pgrid, .obj, .ply, .gltf or .glb");
     cmd->add_option("--until", opt->until, "Stop at this tick (default: the recording's end)")

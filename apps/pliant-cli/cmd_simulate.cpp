@@ -364,7 +364,7 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
     const core::Vec3 centre = rest_centroid(grid, rest);
     auto model = sim::MembraneModel::create(grid, rest, sc.settings);
     if (!model)
-        return report(model.error());
+        return report(in_grid_file(opt.grid.string(), model.error()));
     // Forces against this grid, each error naming its key and line like the parser's.
     const auto faces = static_cast<std::int64_t>(grid.face_count());
     for (std::size_t k = 0; k < sc.forces.size(); ++k)
@@ -684,7 +684,7 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global)
                     "Rest geometry (.pgrid from `pliant remesh`); omitted: a sphere of --level");
     cmd->add_option("-s,--scenario", opt->scenario, "Scenario file (.toml)")
         ->required()
-        ->check(CLI::ExistingFile);
+        ->check(existing_input_file("--scenario"));
     cmd->add_option("-o,--output", opt->out,
                     "Output folder (created if missing; an earlier run's frames in it are removed)")
         ->required();
@@ -706,7 +706,7 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global)
                     "Start from a saved state of GRID (a frame of an earlier run, a --save of "
                     "`host`/`join`, demo's final.pgrid, `replay -o`) instead of at rest; the "
                     "scenario's time starts at 0")
-        ->check(CLI::ExistingFile);
+        ->check(existing_input_file("--resume"));
     cmd->add_option("-j,--threads", opt->threads,
                     "Threads (overrides the scenario's; 0: OpenMP's default; results are "
                     "identical for any count)")

@@ -91,7 +91,7 @@ int run_view(const ViewOptions& opt)
         auto model = sim::MembraneModel::create(rest->grid, rest->positions,
                                                 viewer::default_material(rest->grid.level()));
         if (!model)
-            return report(model.error());
+            return report(in_grid_file(opt.input, model.error()));
         auto saved = load_saved_state(opt.resume, *model);
         if (!saved)
             return report(saved.error());
@@ -160,7 +160,7 @@ void add_view_command(CLI::App& app, const GlobalOptions& global)
         ->check(CLI::Range(1, 10));
     cmd->add_option("--size", opt->size, "Window size WxH")->capture_default_str();
     cmd->add_option("--script", opt->script, "Timed mouse events (docs/viewer.md)")
-        ->check(CLI::ExistingFile);
+        ->check(existing_input_file("--script"));
     cmd->add_option("--screenshot", opt->screenshot, "Write a PNG of the last frame at exit");
     cmd->add_option("--exit-after", opt->exit_after,
                     "Quit this many seconds after the object first shows (0: never)")
@@ -178,7 +178,7 @@ void add_view_command(CLI::App& app, const GlobalOptions& global)
                     "Start the simulation of INPUT (its rest grid, .pgrid) from a saved state "
                     "(a --save of `host`/`join`, a `simulate` frame, demo's final.pgrid, "
                     "`replay -o`) instead of at rest")
-        ->check(CLI::ExistingFile);
+        ->check(existing_input_file("--resume"));
     cmd->callback(command_callback(global,
                                    [opt, level]() -> int
                                    {

@@ -75,6 +75,14 @@ int main(int argc, char** argv)
     {
         return e.get_exit_code();  // a subcommand's own result (command_callback)
     }
+    catch (const pliant::cli::InputFileError& e)
+    {
+        // A file option's file is missing or unreadable (existing_input_file): bad input, said
+        // as the commands say it of their GRID and MESH arguments. Logging is not set up yet.
+        std::fprintf(stderr, "error: %s [%s]\n", e.error.message.c_str(),
+                     std::string(pliant::core::to_string(e.error.code)).c_str());
+        return pliant::cli::k_exit_bad_input;
+    }
     catch (const CLI::ParseError& e)
     {
         // --help and --version exit 0; every other CLI11 error is a usage error, whatever code

@@ -212,6 +212,8 @@ Result<GridFile> load_grid(const std::filesystem::path& path)
     std::error_code ec;
     if (std::filesystem::is_directory(path, ec))
         return fail(ErrorCode::IoError, path.string() + ": is a directory, not a grid file");
+    if (auto readable = check_input_file(path); !readable)
+        return readable.error();
     std::ifstream is(path, std::ios::binary);
     if (!is)
         return fail(ErrorCode::IoError, path.string() + ": cannot open for reading");

@@ -41,7 +41,7 @@ core::Result<Address> parse_address(std::string_view text)
     const auto bad = [&text](const char* why)
     {
         return core::fail(core::ErrorCode::InvalidArgument,
-                          "parse_address: '" + std::string(text) + "' " + why +
+                          "address '" + std::string(text) + "' " + why +
                               " (expected HOST:PORT: a.b.c.d, localhost or a host name, and a "
                               "port from 1 to 65535)");
     };
@@ -97,7 +97,7 @@ core::Result<Address> resolve_address(std::string_view text)
     const int rc = ::getaddrinfo(host.c_str(), nullptr, &hints, &found);
     if (rc != 0 || found == nullptr)
         return core::fail(core::ErrorCode::InvalidArgument,
-                          "resolve_address: cannot find an IPv4 address for host '" + host + "' (" +
+                          "cannot find an IPv4 address for host '" + host + "' (" +
                               ::gai_strerror(rc) +
                               "); give HOST:PORT with a host name, a.b.c.d or localhost");
     Address a;

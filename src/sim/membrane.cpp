@@ -173,7 +173,7 @@ core::Result<MembraneModel> MembraneModel::create(const core::TetraGrid& grid,
                 const double value = rest[k].at(x, y);
                 if (!std::isfinite(value))
                     return core::fail(core::ErrorCode::NonFiniteCoordinate,
-                                      "MembraneModel::create: rest position of node (" +
+                                      "rest position of node (" +
                                           std::to_string(x) + ", " + std::to_string(y) +
                                           ") is not finite");
                 m.P_[k].at(x, y) = value;
@@ -250,8 +250,7 @@ core::Result<MembraneModel> MembraneModel::create(const core::TetraGrid& grid,
                 // Name the surface vertex (a ghost position stands for a node inside).
                 const core::GridCoord node = grid.fold(x, y);
                 return core::fail(core::ErrorCode::DegenerateFace,
-                                  "MembraneModel::create: the rest surface has no normal at "
-                                  "node (" +
+                                  "the rest surface has no normal at node (" +
                                       std::to_string(node.x) + ", " + std::to_string(node.y) +
                                       "): its neighbours' positions span no area (all equal, "
                                       "or on one line)");
@@ -317,7 +316,7 @@ core::Result<void> MembraneModel::assemble(const Vec3Field<double>& X)
         }
     if (degenerate)
         return core::fail(core::ErrorCode::DegenerateFace,
-                          "MembraneModel: a triangle has zero area or a non-finite vertex");
+                          "a triangle of the surface has zero area or a non-finite vertex");
 
     static constexpr int k_dir[6][2] = {{1, 0}, {1, 1}, {0, 1}, {-1, 0}, {-1, -1}, {0, -1}};
     const double third_rho = settings_.rho / 3.0;

@@ -57,6 +57,17 @@ if(TARGET pliant)
     pliant_cli_expect(cli_usage_bad_choice 2 STDERR "--mode: bogus not in \\{exact,fast\\}"
                       host --mode bogus)
     pliant_cli_expect(cli_usage_missing_argument 2 STDERR "MASTER is required" join)
+    # A file option's missing, folder or unreadable file is bad input (status 1), said as the
+    # GRID and MESH arguments' are, while the command line is parsed (existing_input_file).
+    pliant_cli_expect(cli_input_file_missing 1
+                      STDERR "error: --script: .*no-such/plan\\.txt: no such file \\[io-error\\]"
+                      join 127.0.0.1:7 --script ${cli_dir}/no-such/plan.txt --duration 1)
+    pliant_cli_expect(cli_input_file_is_a_folder 1 STDERR "error: --key-file: .*: is a folder, not a file"
+                      host --key-file ${CMAKE_CURRENT_SOURCE_DIR} --duration 1)
+    pliant_cli_expect(cli_input_recording_missing 1 STDERR "error: RECORDING: .*none\\.prec: no such file"
+                      replay ${cli_dir}/none.prec -o ${cli_dir}/none.pgrid)
+    pliant_cli_expect(cli_input_grid_missing 1 STDERR "error: .*none\\.pgrid: no such file"
+                      host ${cli_dir}/none.pgrid --duration 1)
     # Numbers: the rule broken in words, no bound printed as DBL_MAX; and every FLOAT option of
     # every command refuses nan and the infinities, every UINT option a minus sign.
     pliant_cli_expect(cli_usage_negative 2 STDERR "--max-force: -2 is negative; give a number >= 0\n"

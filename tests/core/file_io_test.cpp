@@ -178,5 +178,33 @@ TEST(FileIo, CheckOutputPathCreatesNothingAndSaysWhy)
     EXPECT_EQ(names_in(dir), std::vector<std::string>{"file"});
 }
 
+TEST(FileIo, CheckInputFileSaysWhyAndOpensNothing)
+{
+    const fs::path dir = test::scratch_dir("file_io_input");
+    put(dir / "plan.txt", "grab 0 0 1\n");
+    EXPECT_TRUE(check_input_file(dir / "plan.txt", "--script"));
+
+    auto missing = check_input_file(dir / "none.txt", "--script");
+    ASSERT_FALSE(missing);
+    EXPECT_EQ(missing.error().code, ErrorCode::IoError);
+    EXPECT_EQ(missing.error().message,
+              "--script: " + (dir / "none.txt").string() + ": no such file");
+
+    auto folder = check_input_file(dir);
+    ASSERT_FALSE(folder);
+    EXPECT_EQ(folder.error().message, dir.string() + ": is a folder, not a file");
+
+    put(dir / "file", "x");
+    auto under_file = check_input_file(dir / "file" / "x.txt", "--key-file");
+    ASSERT_FALSE(under_file);
+    EXPECT_NE(under_file.error().message.find("Not a directory"), std::string::npos)
+        << under_file.error().message;
+
+    // A FIFO (what a shell's process substitution gives) passes without being opened: opening
+    // it for reading here would block, since nobody writes to it.
+    ASSERT_EQ(::mkfifo((dir / "fifo").c_str(), 0600), 0);
+    EXPECT_TRUE(check_input_file(dir / "fifo", "--key-file"));
+}
+
 }  // namespace
 }  // namespace pliant::core

@@ -641,6 +641,43 @@ TEST(SessionCli, ASavedStateResumesInHostAndSimulateAndIsRefusedAsRestGeometry)
 // Ctrl-C during `pliant replay`: the replay stops within 16 steps, says at which tick, writes
 // nothing at -o and exits with status 130. The recording (a million ticks at level 5, many
 // seconds of replay) is made here; the signal goes once the replay's log shows progress.
+// A grid file whose positions are all equal has no surface to simulate: simulate and host say
+// so naming the file and the node (the model's message, without the library's function names),
+// with status 1.
+TEST(SessionCli, ADegenerateGridFileIsRefusedNamingTheFileAndTheNode)
+{
+    const auto dir = pliant::test::scratch_dir("session_cli_degenerate_grid");
+    const auto grid = pliant::core::TetraGrid::create(3).value();
+    pliant::core::Vec3Field<double> flat;
+    for (auto& plane : flat)
+        plane = pliant::core::Field<double>(grid);  // every position (0, 0, 0)
+    ASSERT_TRUE(
+        pliant::core::save_grid(dir / "flat.pgrid", pliant::core::make_geometry_file(grid, flat))
+            .has_value());
+    const int port = test_port(7);
+    const std::string run = "cd '" + dir.string() + "' && '" + std::string(PLIANT_EXE) + "' ";
+    ASSERT_EQ(std::system((run + "simulate flat.pgrid --scenario '" PLIANT_SOURCE_DIR
+                                 "/scenes/pull.toml' -o out > simulate.log 2>&1; echo $? > "
+                                 "simulate.rc")
+                              .c_str()),
+              0);
+    ASSERT_EQ(std::system((run + "host flat.pgrid --duration 1 --port " + std::to_string(port) +
+                           " > host.log 2>&1; echo $? > host.rc")
+                              .c_str()),
+              0);
+    for (const std::string name : {"simulate", "host"})
+    {
+        if (name == "host")
+            PLIANT_SKIP_IF_UNBOUND(dir, "host", port);
+        const std::string log = read(dir / (name + ".log"));
+        EXPECT_EQ(read(dir / (name + ".rc")), "1\n") << name << ": " << log;
+        EXPECT_NE(log.find("error: flat.pgrid: the rest surface has no normal at node ("),
+                  std::string::npos)
+            << name << ": " << log;
+        EXPECT_EQ(log.find("MembraneModel"), std::string::npos) << name << ": " << log;
+    }
+}
+
 TEST(SessionCli, CtrlCStopsAReplayAndWritesNothing)
 {
     const auto dir = pliant::test::scratch_dir("session_cli_replay_interrupted");

@@ -32,16 +32,6 @@ namespace pliant::viewer
 namespace
 {
 
-/// A library message without its "function: " prefix ("parse_address: 'x' has no port" ->
-/// "'x' has no port"), for a sentence that already says what was tried.
-std::string without_prefix(const std::string& message)
-{
-    const auto colon = message.find(": ");
-    const bool prefixed =
-        colon != std::string::npos && colon > 0 && message.find_first_of(" '", 0) > colon;
-    return prefixed ? message.substr(colon + 2) : message;
-}
-
 /// Keeps large blocks in the heap between frames. By default glibc serves blocks above its
 /// mmap threshold with fresh mappings and returns freed memory to the system, so the large
 /// per-frame buffers of Mesa's software rasteriser (llvmpipe bins a 262K-triangle frame into
@@ -917,7 +907,7 @@ int Viewer::run()
         set_status(options_.input +
                        " is neither an existing file nor a HOST:PORT to join (a.b.c.d:port, "
                        "localhost:port or hostname:port): " +
-                       without_prefix(address.error().message),
+                       address.error().message,
                    true);
         if (headless)
             return 1;

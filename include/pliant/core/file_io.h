@@ -45,6 +45,13 @@ struct FileContent
 [[nodiscard]] Result<void> write_text_file(const std::filesystem::path& path, std::string_view text,
                                            std::string_view who);
 
+/// Checks that an input file named by a user can be read, without opening it (a FIFO or
+/// /dev/fd/N from a shell's process substitution passes and is not consumed). \return IoError
+/// "`what`: PATH: no such file" (or "is a folder, not a file", or the system's reason, e.g.
+/// "Permission denied"); with `what` empty the message starts with PATH.
+[[nodiscard]] Result<void> check_input_file(const std::filesystem::path& path,
+                                            std::string_view what = {});
+
 /// Checks, before the work that produces it, that an output can be written at `path`, and
 /// creates nothing: `path` is not a folder, its folder exists, is a folder and is writable, and
 /// an existing `path` is writable. The message reads "`what`: cannot write 'PATH': REASON".

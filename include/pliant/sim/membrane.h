@@ -136,8 +136,10 @@ class MembraneModel
 public:
     /// Builds the model from rest positions (any ghost width; twins are taken from their
     /// canonical node). \return InvalidArgument for a setting out of range or positions of
-    /// another level; NonFiniteCoordinate for a NaN/inf position; DegenerateFace for a
-    /// zero-area triangle (the cotangent weights would be infinite).
+    /// another level; NonFiniteCoordinate for a NaN/inf position; DegenerateFace for a node
+    /// without a normal or a zero-area triangle (the cotangent weights would be infinite). The
+    /// two geometry errors' messages name the node and not where the positions came from:
+    /// callers that read them from a file put its name first.
     static core::Result<MembraneModel> create(const core::TetraGrid& grid,
                                               const core::Vec3Field<double>& rest_positions,
                                               const MembraneSettings& settings);
