@@ -181,9 +181,8 @@ Result<void> check_input_file(const fs::path& path, std::string_view what)
 {
     const auto refuse = [&](const std::string& why)
     {
-        return fail(ErrorCode::IoError,
-                    (what.empty() ? std::string() : std::string(what) + ": ") + path.string() +
-                        ": " + why);
+        return fail(ErrorCode::IoError, (what.empty() ? std::string() : std::string(what) + ": ") +
+                                            path.string() + ": " + why);
     };
     if (path.empty())
         return refuse("the path is empty");
@@ -191,7 +190,7 @@ Result<void> check_input_file(const fs::path& path, std::string_view what)
     const fs::file_status st = fs::status(path, ec);
     if (!fs::exists(st))
         return refuse(ec && ec != std::errc::no_such_file_or_directory ? ec.message()
-                                                                        : "no such file");
+                                                                       : "no such file");
     if (fs::is_directory(st))
         return refuse("is a folder, not a file");
     if (::access(path.c_str(), R_OK) != 0)

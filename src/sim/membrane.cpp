@@ -173,9 +173,8 @@ core::Result<MembraneModel> MembraneModel::create(const core::TetraGrid& grid,
                 const double value = rest[k].at(x, y);
                 if (!std::isfinite(value))
                     return core::fail(core::ErrorCode::NonFiniteCoordinate,
-                                      "rest position of node (" +
-                                          std::to_string(x) + ", " + std::to_string(y) +
-                                          ") is not finite");
+                                      "rest position of node (" + std::to_string(x) + ", " +
+                                          std::to_string(y) + ") is not finite");
                 m.P_[k].at(x, y) = value;
             }
         core::sync_twins(grid, m.P_[k]);
