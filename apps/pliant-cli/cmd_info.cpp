@@ -1,14 +1,17 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: 2026 pliant contributors
-// `pliant info MESH|GRID [--json]`: imports a mesh, prints its statistics and the verdict of the
-// input rules (docs/mesh.md); or reads a .pgrid grid file and prints its level, channels, surface
-// and state (docs/grid-format.md). Exit 0 only for a valid closed genus-0 mesh, or a grid file
-// whose surface the membrane accepts.
+// `pliant info MESH|GRID|RECORDING [--json]`: imports a mesh, prints its statistics and the
+// verdict of the input rules (docs/mesh.md); or reads a .pgrid grid file and prints its level,
+// channels, surface and state (docs/grid-format.md); or reads a .prec recording and prints its
+// model, length and force lists (docs/session.md §9). Exit 0 only for a valid closed genus-0
+// mesh, a grid file whose surface the membrane accepts, or a recording `replay` can replay.
 #include <pliant/core/error.h>
 #include <pliant/core/grid_io.h>
 #include <pliant/core/tetra_grid.h>
 #include <pliant/mesh/io.h>
 #include <pliant/mesh/validate.h>
+#include <pliant/session/recording.h>
+#include <pliant/session/session.h>
 #include <pliant/sim/membrane.h>
 
 #include <nlohmann/json.hpp>
@@ -299,10 +302,177 @@ int run_grid_info(const InfoOptions& opt, const GlobalOptions& global)
     return error ? cli::report(*error) : 0;
 }
 
+// ---- recordings ----
+
+struct RecordingInfo
+{
+    const session::Recording* recording = nullptr;
+    std::optional<session::DecodedModel> model;
+    std::map<unsigned, std::size_t> lists_per_sender;
+    double largest_force = 0.0;  ///< N, over every force of every list
+    std::size_t hash_nodes = 0;
+};
+
+RecordingInfo describe(const session::Recording& recording, std::optional<core::Error>& error,
+                       const std::string& path)
+{
+    RecordingInfo info;
+    info.recording = &recording;
+    for (const session::ForceRecord& r : recording.forces)
+    {
+        ++info.lists_per_sender[r.sender];
+        for (const net::UserForce& f : r.forces)
+            info.largest_force = std::max(
+                info.largest_force, std::sqrt(f.force[0] * f.force[0] + f.force[1] * f.force[1] +
+                                              f.force[2] * f.force[2]));
+    }
+    auto model = session::decode_model(recording.model);
+    if (!model)
+    {
+        error = core::Error{model.error().code, path + ": its model: " + model.error().message};
+        return info;
+    }
+    info.model = std::move(*model);
+    info.hash_nodes = session::hash_mask_count(info.model->model.grid(), recording.hash_mask);
+    if (!info.model->model.settings().fixed_step)
+        error = core::Error{core::ErrorCode::InvalidArgument,
+                            path +
+                                ": the session did not step with a fixed step, so `replay` "
+                                "refuses it"};
+    return info;
+}
+
+const char* coupling_name(session::Coupling c)
+{
+    return c == session::Coupling::Exact ? "exact" : "fast";
+}
+
+std::string hex(std::uint64_t value)
+{
+    char text[20];
+    std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(value));
+    return text;
+}
+
+const char* k_recording_valid = "valid: `pliant replay` replays it";
+
+void print_recording_json(const InfoOptions& opt, const RecordingInfo* info,
+                          const std::optional<core::Error>& error)
+{
+    nlohmann::ordered_json j;
+    j["file"] = opt.mesh.string();
+    j["format"] = "prec";
+    j["valid"] = !error.has_value();
+    j["error_code"] = error ? nlohmann::ordered_json(std::string(core::to_string(error->code)))
+                            : nlohmann::ordered_json(nullptr);
+    j["error_value"] = error ? nlohmann::ordered_json(static_cast<int>(error->code))
+                             : nlohmann::ordered_json(nullptr);
+    j["message"] = error ? error->message : std::string(k_recording_valid);
+    if (info != nullptr)
+    {
+        const session::Recording& r = *info->recording;
+        if (info->model)
+        {
+            const sim::MembraneModel& m = info->model->model;
+            const sim::MembraneSettings& ms = m.settings();
+            j["level"] = m.grid().level();
+            j["vertices"] = m.grid().unique_count();
+            j["faces"] = m.grid().face_count();
+            j["coupling"] = coupling_name(info->model->coupling);
+            j["fixed_step"] = ms.fixed_step;
+            j["fixed_dt"] = ms.fixed_dt;
+            j["material"] = {{"T", ms.T},
+                             {"rho", ms.rho},
+                             {"beta", ms.beta},
+                             {"k_f", ms.k_f},
+                             {"max_force", ms.max_force}};
+            j["simulated_s"] = static_cast<double>(r.final_tick) * ms.fixed_dt;
+            j["hash_nodes"] = info->hash_nodes;
+        }
+        j["final_tick"] = r.final_tick;
+        j["final_hash"] = r.final_hash == 0 ? nlohmann::ordered_json(nullptr)
+                                            : nlohmann::ordered_json(hex(r.final_hash));
+        j["force_lists"] = r.forces.size();
+        auto senders = nlohmann::ordered_json::object();
+        for (const auto& [id, count] : info->lists_per_sender)
+            senders[std::to_string(id)] = count;
+        j["senders"] = senders;
+        j["largest_force"] = info->largest_force;
+    }
+    std::cout << j.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) << '\n';
+}
+
+void print_recording_text(const InfoOptions& opt, const RecordingInfo& info,
+                          const std::optional<core::Error>& error)
+{
+    const auto row = [](const char* key, const std::string& value)
+    { std::printf("  %-22s %s\n", key, value.c_str()); };
+    const auto num = [](double v)
+    {
+        char text[32];
+        std::snprintf(text, sizeof text, "%.6g", v);
+        return std::string(text);
+    };
+    const session::Recording& r = *info.recording;
+    std::printf("%s (pliant recording)\n", opt.mesh.string().c_str());
+    if (info.model)
+    {
+        const sim::MembraneModel& m = info.model->model;
+        const sim::MembraneSettings& ms = m.settings();
+        row("model", "level " + std::to_string(m.grid().level()) + ", " +
+                         std::to_string(m.grid().unique_count()) + " vertices; " +
+                         coupling_name(info.model->coupling) + " coupling" +
+                         (ms.fixed_step ? ", fixed step " + num(ms.fixed_dt) + " s" : ""));
+        row("material", "T " + num(ms.T) + " N/m, rho " + num(ms.rho) + " kg/m^2, beta " +
+                            num(ms.beta) + " 1/s, k_f " + num(ms.k_f) + " 1/s^2, force limit " +
+                            (ms.max_force > 0.0 ? num(ms.max_force) + " N" : "none"));
+        row("length", std::to_string(r.final_tick) + " ticks = " +
+                          num(static_cast<double>(r.final_tick) * ms.fixed_dt) + " s simulated");
+    }
+    else
+        row("length", std::to_string(r.final_tick) + " ticks");
+    std::string senders;
+    for (const auto& [id, count] : info.lists_per_sender)
+        senders += (senders.empty() ? "" : ", ") + std::string("peer ") + std::to_string(id) +
+                   ": " + std::to_string(count);
+    row("force lists", std::to_string(r.forces.size()) +
+                           (senders.empty() ? "" : "  (" + senders + ")") + "; largest force " +
+                           num(info.largest_force) + " N");
+    if (r.final_hash == 0)
+        row("final state hash", "none (a replay has nothing to compare with)");
+    else if (info.model)
+        row("final state hash",
+            hex(r.final_hash) + " over " + std::to_string(info.hash_nodes) + " of " +
+                std::to_string(info.model->model.grid().unique_count()) + " vertices");
+    else
+        row("final state hash", hex(r.final_hash));
+    row("verdict", error ? "INVALID: " + error->message : std::string(k_recording_valid));
+}
+
+int run_recording_info(const InfoOptions& opt, const GlobalOptions& global)
+{
+    auto recording = session::load_recording(opt.mesh);
+    if (!recording)
+    {
+        if (opt.json)
+            print_recording_json(opt, nullptr, recording.error());
+        return cli::report(recording.error());
+    }
+    std::optional<core::Error> error;
+    const RecordingInfo info = describe(*recording, error, opt.mesh.string());
+    if (opt.json)
+        print_recording_json(opt, &info, error);
+    else if (!global.quiet)
+        print_recording_text(opt, info, error);
+    return error ? cli::report(*error) : 0;
+}
+
 int run_info(const InfoOptions& opt, const GlobalOptions& global)
 {
     if (lower_extension(opt.mesh) == ".pgrid")
         return run_grid_info(opt, global);
+    if (lower_extension(opt.mesh) == ".prec")
+        return run_recording_info(opt, global);
     mesh::ImportReport report;
     auto m = mesh::import_mesh(opt.mesh, &report);
     if (!m)
@@ -338,15 +508,20 @@ void add_info_command(CLI::App& app, const GlobalOptions& global)
         "A .pgrid grid file (remesh, refine, simulate frames, replay, demo's final.pgrid,\n"
         "host/join --save) is read and described instead: level, nodes, channels, the\n"
         "surface's size, each other channel's range (u, v) and the owner counts; the verdict is\n"
-        "whether the membrane accepts its surface as rest geometry (docs/grid-format.md).\n\n"
-        "Exit codes: 0 valid closed genus-0 mesh (or usable grid); 1 unreadable file or a\n"
-        "failed rule (the message says which, with numbers and a location); 2 usage error.\n"
-        "With -q only an error is printed (--json still prints its object).\n\n"
+        "whether the membrane accepts its surface as rest geometry (docs/grid-format.md).\n"
+        "A .prec recording (host --record, demo's session.prec) is described too: level,\n"
+        "coupling, material, length, force lists per peer, the final hash; the verdict is\n"
+        "whether `pliant replay` can replay it (docs/session.md §9).\n\n"
+        "Exit codes: 0 valid closed genus-0 mesh (usable grid, replayable recording);\n"
+        "1 unreadable file or a failed rule (the message says which, with numbers and a\n"
+        "location); 2 usage error. With -q only an error is printed (--json still prints its\n"
+        "object).\n\n"
         "Example:\n"
         "  pliant info data/spot.obj\n"
         "  pliant info scan.ply --json | jq .genus\n"
-        "  pliant info demo-out/final.pgrid");
-    cmd->add_option("FILE", opt->mesh, "Mesh file (or .pgrid grid file) to check")->required();
+        "  pliant info demo-out/final.pgrid\n"
+        "  pliant info demo-out/session.prec");
+    cmd->add_option("FILE", opt->mesh, "Mesh, .pgrid grid or .prec recording to check")->required();
     cmd->add_flag("--json", opt->json,
                   "Print one JSON object on stdout (fields: valid, error_code, message, vertices, "
                   "faces, edges, components, boundary_edges, euler_characteristic, genus (null "

@@ -7,6 +7,7 @@
 #include <pliant/session/recording.h>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 #include <unistd.h>
 
 #include "grid_shapes.h"
@@ -710,6 +711,67 @@ TEST(SessionCli, CtrlCStopsAReplayAndWritesNothing)
     EXPECT_NE(err.find("replay: cancelled during tick "), std::string::npos) << err;
     EXPECT_NE(err.find(" of 1000000; nothing written"), std::string::npos) << err;
     EXPECT_FALSE(std::filesystem::exists(dir / "out.pgrid"));
+}
+
+// `pliant info RECORDING --json`: what a recording made here holds (its model's level and step,
+// its length, the force lists per sender, the largest force, the final hash); a recording of an
+// adaptive-step model, which replay refuses, is invalid with status 1.
+TEST(SessionCli, InfoDescribesARecording)
+{
+    using namespace pliant;
+    const auto dir = test::scratch_dir("session_cli_info_recording");
+    const auto grid = core::TetraGrid::create(3).value();
+    sim::MembraneSettings material;
+    material.fixed_step = true;
+    material.fixed_dt = 2e-3;
+    auto model = sim::MembraneModel::create(grid, scenes::sphere_grid(grid, 1.0), material).value();
+    const auto force = [](std::uint32_t face, double fx, double fy)
+    {
+        return net::UserForce{
+            net::Target{net::TargetKind::Face, face, {0, 0, 0}, 0.0}, 0, {fx, fy, 0.0}};
+    };
+    session::Recording rec;
+    rec.model = session::encode_model(model, session::Coupling::Fast);
+    rec.final_tick = 250;
+    rec.final_hash = 0x1234;
+    rec.forces.push_back(session::ForceRecord{1, 10, {force(5, 3.0, 4.0)}});
+    rec.forces.push_back(session::ForceRecord{2, 20, {force(6, 1.0, 0.0), force(7, 0.0, 2.0)}});
+    rec.forces.push_back(session::ForceRecord{2, 30, {}});
+    ASSERT_TRUE(session::save_recording(dir / "r.prec", rec));
+    const std::string run = "cd '" + dir.string() + "' && '" + std::string(PLIANT_EXE) + "' ";
+    ASSERT_EQ(std::system((run + "info --json r.prec > r.json 2> r.err; echo $? > r.rc").c_str()),
+              0);
+    EXPECT_EQ(read(dir / "r.rc"), "0\n") << read(dir / "r.err");
+    const auto j = nlohmann::json::parse(read(dir / "r.json"));
+    EXPECT_TRUE(j["valid"].get<bool>());
+    EXPECT_EQ(j["format"], "prec");
+    EXPECT_EQ(j["level"].get<int>(), 3);
+    EXPECT_EQ(j["vertices"].get<int>(), 130);
+    EXPECT_EQ(j["coupling"], "fast");
+    EXPECT_EQ(j["fixed_dt"].get<double>(), 2e-3);
+    EXPECT_EQ(j["final_tick"].get<int>(), 250);
+    EXPECT_DOUBLE_EQ(j["simulated_s"].get<double>(), 0.5);
+    EXPECT_EQ(j["final_hash"], "0000000000001234");
+    EXPECT_EQ(j["force_lists"].get<int>(), 3);
+    EXPECT_EQ(j["senders"], nlohmann::json({{"1", 1}, {"2", 2}}));
+    EXPECT_EQ(j["largest_force"].get<double>(), 5.0);
+    EXPECT_EQ(j["hash_nodes"].get<int>(), 130);
+
+    material.fixed_step = false;
+    auto adaptive =
+        sim::MembraneModel::create(grid, scenes::sphere_grid(grid, 1.0), material).value();
+    rec.model = session::encode_model(adaptive, session::Coupling::Exact);
+    ASSERT_TRUE(session::save_recording(dir / "adaptive.prec", rec));
+    ASSERT_EQ(std::system((run + "info adaptive.prec > a.out 2> a.err; echo $? > a.rc").c_str()),
+              0);
+    EXPECT_EQ(read(dir / "a.rc"), "1\n");
+    EXPECT_NE(read(dir / "a.err")
+                  .find("adaptive.prec: the session did not step with a fixed "
+                        "step, so `replay` refuses it"),
+              std::string::npos)
+        << read(dir / "a.err");
+    EXPECT_NE(read(dir / "a.out").find("level 3, 130 vertices; exact coupling"), std::string::npos)
+        << read(dir / "a.out");
 }
 
 }  // namespace
