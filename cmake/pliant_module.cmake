@@ -3,7 +3,8 @@
 # pliant_add_module(NAME SOURCES ... [PUBLIC_DEPS ...] [PRIVATE_DEPS ...])
 # One static library per module, aliased pliant::NAME; PUBLIC_DEPS lists exactly the modules
 # docs/style.md §2 allows (scripts/check_includes.py checks the includes). Installed with the
-# export set pliant-targets as pliant::NAME (docs/library.md; the package: cmake/pliantConfig.cmake.in).
+# export set pliant-NAME-targets as pliant::NAME (docs/library.md; the package:
+# cmake/pliantConfig.cmake.in loads the sets of the components asked for).
 function(pliant_add_module name)
     cmake_parse_arguments(ARG "" "" "SOURCES;PUBLIC_DEPS;PRIVATE_DEPS" ${ARGN})
     add_library(pliant_${name} STATIC ${ARG_SOURCES})
@@ -25,6 +26,6 @@ function(pliant_add_module name)
             $<INSTALL_INTERFACE:-fsanitize=${_sanitize}>)
     endif()
     set_target_properties(pliant_${name} PROPERTIES EXPORT_NAME ${name} OUTPUT_NAME pliant_${name})
-    install(TARGETS pliant_${name} EXPORT pliant-targets
+    install(TARGETS pliant_${name} EXPORT pliant-${name}-targets
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT development)
 endfunction()

@@ -9,8 +9,13 @@ install(DIRECTORY ${PROJECT_SOURCE_DIR}/include/pliant
         DESTINATION ${CMAKE_INSTALL_INCLUDEDIR} COMPONENT development)
 
 set(PLIANT_PACKAGE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/pliant)
-install(EXPORT pliant-targets NAMESPACE pliant:: FILE pliant-targets.cmake
-        DESTINATION ${PLIANT_PACKAGE_DIR} COMPONENT development)
+# One export set per module, so that a program gets the targets of the components it asked for
+# and no other (linking pliant::mesh without asking for it fails as an unknown target, not deep
+# in Assimp's).
+foreach(module IN LISTS PLIANT_MODULES)
+    install(EXPORT pliant-${module}-targets NAMESPACE pliant:: FILE pliant-${module}-targets.cmake
+            DESTINATION ${PLIANT_PACKAGE_DIR} COMPONENT development)
+endforeach()
 
 # What the modules were built with, for the config to find again.
 get_property(PLIANT_PACKAGE_ENET_TARGET GLOBAL PROPERTY PLIANT_PACKAGE_ENET_TARGET)

@@ -1,6 +1,9 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: 2026 pliant contributors
 #include <pliant/core/error.h>
+#include <pliant/core/result.h>
+
+#include <string>
 
 namespace pliant::core
 {
@@ -32,6 +35,13 @@ std::string_view to_string(ErrorCode code) noexcept
     case ErrorCode::GraphicsError: return "graphics-error";
     }
     return "unknown";
+}
+
+void value_of_error(const Error& error, const char* file, int line)
+{
+    const std::string message =
+        "Result::value() on an error: " + std::string(to_string(error.code)) + ": " + error.message;
+    assert_failed("has_value()", message.c_str(), file, line);
 }
 
 }  // namespace pliant::core

@@ -45,6 +45,7 @@ GLuint make_renderbuffer(GLenum format, int samples, int width, int height)
 core::Result<Framebuffer> Framebuffer::create(int width, int height, PixelFormat format,
                                               int samples)
 {
+    PLIANT_ASSERT(gl::is_loaded(), "Framebuffer::create: no GL context (call load_gl)");
     constexpr int k_max_size = 16384;
     if (width < 1 || height < 1 || width > k_max_size || height > k_max_size)
         return core::fail(core::ErrorCode::InvalidArgument,

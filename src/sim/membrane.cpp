@@ -421,6 +421,10 @@ void apply_stiffness(const MembraneModel& model, const Field<double>& u, Field<d
 Energy energy(const MembraneModel& model, const MembraneState& state)
 {
     const core::TetraGrid& g = model.grid();
+    // The weights are read at the state's offsets: the planes must be the model's shape.
+    PLIANT_ASSERT(state.u.level() == g.level() && state.v.level() == g.level() &&
+                      state.u.ghost() == 1 && state.v.ghost() == 1,
+                  "energy: the state's u and v are not ghost-1 planes of the model's level");
     const auto regions = model.leaf_regions();
     std::vector<Energy> parts(regions.size());
     const std::ptrdiff_t s = state.u.stride();

@@ -789,6 +789,7 @@ AdvanceReport advance_to(MembraneModel& model, MembraneState& state, Rkf45Worksp
                          const StepOptions& options, std::uint64_t max_steps,
                          const core::ProgressSink* stop)
 {
+    PLIANT_ASSERT(std::isfinite(target_time), "advance_to: the target time is not finite");
     const MembraneSettings& set = model.settings();
     const bool ramp = set.force_hold == ForceHold::Linear && target_time > state.time;
     if (ramp)

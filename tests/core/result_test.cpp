@@ -32,6 +32,16 @@ TEST(Result, CarriesAValueOrAnError)
     EXPECT_EQ(to_string(ErrorCode::OpenBoundary), "open-boundary");
 }
 
+// Reading the value of an error is a contract failure whose message keeps the error: a user who
+// forgot to test the result still learns why the call failed.
+TEST(ResultDeathTest, ValueOfAnErrorAbortsNamingTheError)
+{
+    GTEST_FLAG_SET(death_test_style, "threadsafe");
+    EXPECT_DEATH((void)half(3).value(),
+                 "assertion failed: Result::value\\(\\) on an error: invalid-argument: half: 3 is "
+                 "odd \\(has_value\\(\\)\\)");
+}
+
 TEST(Hash, DependsOnEveryByteAndIsStable)
 {
     std::vector<double> a(1000, 1.5);

@@ -7,7 +7,8 @@
 #   2. examples/pull configured, built and run against it (find_package with components
 #      mesh remesh subdiv sim): a remeshed, pulled and refined spot of the expected size;
 #   3. a program linking pliant::session alone (its modules come with it: sim, subdiv, net,
-#      whose ENet, libsodium and zstd the package finds again);
+#      whose ENet, libsodium and zstd the package finds again; mesh, remesh and render do not);
+#   3b. examples/two_peers built and run against it: a session of two peers in one process;
 #   4. refusals: a component that does not exist and a version the package does not satisfy,
 #      each with the package's message.
 set(prefix "${WORK}/prefix")
@@ -62,7 +63,8 @@ foreach(module core mesh remesh subdiv sim net session render)
         message(FATAL_ERROR "lib/libpliant_${module}.a was not installed")
     endif()
 endforeach()
-foreach(f pliantConfig.cmake pliantConfigVersion.cmake pliant-targets.cmake)
+foreach(f pliantConfig.cmake pliantConfigVersion.cmake pliant-core-targets.cmake
+          pliant-session-targets.cmake pliant-render-targets.cmake)
     if(NOT EXISTS "${prefix}/lib/cmake/pliant/${f}")
         message(FATAL_ERROR "lib/cmake/pliant/${f} was not installed")
     endif()
@@ -96,9 +98,18 @@ if(NOT run_out MATCHES "session, sim, subdiv and net linked")
     message(FATAL_ERROR "session_link printed:\n${run_out}")
 endif()
 
+# 3b. examples/two_peers (find_package with COMPONENTS session): two peers over the simulated
+# network end with equal displays, equal to the replay of the master's recording.
+consumer(two_peers "${EXAMPLE}/../two_peers" BUILD)
+run("two_peers" "${WORK}/two_peers/two_peers" 3)
+if(NOT run_out MATCHES "the peers' displays differ by 0, the replay of the master's recording by 0\n")
+    message(FATAL_ERROR "two_peers printed:\n${run_out}")
+endif()
+
 # 4. Refusals.
 consumer(bad_component "${TESTS}/bad_component" FAIL DEFS -DWANT=COMPONENTS -DWHAT=physics)
-if(NOT consumer_out MATCHES "pliant has no component 'physics'; its components are its modules")
+# (CMake wraps the package's message at about 80 columns.)
+if(NOT consumer_out MATCHES "pliant has no component 'physics'. its components are its modules:[ \n]+core[ \n]+mesh[ \n]+remesh")
     message(FATAL_ERROR "a bad component's message:\n${consumer_out}")
 endif()
 string(REGEX MATCH "^([0-9]+)\\.([0-9]+)" _ "${VERSION}")
@@ -108,4 +119,4 @@ consumer(bad_version "${TESTS}/bad_component" FAIL DEFS "-DWANT=${newer}" -DWHAT
 if(NOT consumer_out MATCHES "compatible[ \n]+with requested version \"${newer}\"")
     message(FATAL_ERROR "a newer version's message:\n${consumer_out}")
 endif()
-message(STATUS "package: installed, example built and run, session linked, refusals checked")
+message(STATUS "package: installed, examples built and run, session linked, refusals checked")

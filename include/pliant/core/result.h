@@ -29,6 +29,11 @@ struct Unexpected
     return Unexpected{Error{code, std::move(message)}};
 }
 
+/// A Result's value read while it holds `error`: a contract failure (the assert handler, then
+/// abort) whose message carries the error's code and message, so that the reason the call
+/// failed is not lost.
+[[noreturn]] void value_of_error(const Error& error, const char* file, int line);
+
 template <typename T>
 class [[nodiscard]] Result
 {
@@ -42,24 +47,48 @@ public:
 
     [[nodiscard]] T& value() &
     {
-        PLIANT_ASSERT(has_value(), "Result::value() on an error");
+#if !defined(PLIANT_DISABLE_ASSERT)
+        if (!has_value()) [[unlikely]]
+            value_of_error(std::get<1>(v_), __FILE__, __LINE__);
+#endif
         return std::get<0>(v_);
     }
     [[nodiscard]] const T& value() const&
     {
-        PLIANT_ASSERT(has_value(), "Result::value() on an error");
+#if !defined(PLIANT_DISABLE_ASSERT)
+        if (!has_value()) [[unlikely]]
+            value_of_error(std::get<1>(v_), __FILE__, __LINE__);
+#endif
         return std::get<0>(v_);
     }
     [[nodiscard]] T&& value() &&
     {
-        PLIANT_ASSERT(has_value(), "Result::value() on an error");
+#if !defined(PLIANT_DISABLE_ASSERT)
+        if (!has_value()) [[unlikely]]
+            value_of_error(std::get<1>(v_), __FILE__, __LINE__);
+#endif
         return std::get<0>(std::move(v_));
     }
-    T& operator*() & { return value(); }
-    const T& operator*() const& { return value(); }
-    T&& operator*() && { return std::move(*this).value(); }
-    T* operator->() { return &value(); }
-    const T* operator->() const { return &value(); }
+    T& operator*() &
+    {
+        return value();
+    }
+    const T& operator*() const&
+    {
+        return value();
+    }
+    T&& operator*() &&
+    {
+        return std::move(*this).value();
+    }
+    T* operator->()
+    {
+        return &value();
+    }
+    const T* operator->() const
+    {
+        return &value();
+    }
 
     [[nodiscard]] const Error& error() const
     {

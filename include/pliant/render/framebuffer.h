@@ -27,7 +27,8 @@ class Framebuffer
 public:
     /// \return InvalidArgument for a size outside 1..16384; GraphicsError when the driver
     /// refuses the attachments. `samples` > 1 asks for multisampling (clamped to GL_MAX_SAMPLES),
-    /// resolved at read-back.
+    /// resolved at read-back. \pre a current GL context whose functions `load_gl` loaded (an
+    /// OffscreenContext does both); a PLIANT_ASSERT failure otherwise, as for the renderers.
     static core::Result<Framebuffer> create(int width, int height,
                                             PixelFormat format = PixelFormat::Rgba8,
                                             int samples = 1);

@@ -14,8 +14,9 @@
 ///   recording therefore reuses the wire codec's validation of every field; nothing else is
 ///   trusted.
 /// - Replay steps one process from rest with the session's rule for combining forces (each
-///   sender's newest list whose tick has come, senders in increasing id, the whole set dropped
-///   if any force is invalid) and reproduces the session's final state bit for bit.
+///   sender's newest list whose tick has come, senders in increasing id, a force the model
+///   refuses left out and the others kept: `append_valid_forces`) and reproduces the session's
+///   final state bit for bit.
 /// - Fast coupling depends on timing (who saw which streamed state when), so its recordings
 ///   replay the same inputs on one process but the result differs; `replay` says so by
 ///   returning the coupling, and `pliant replay` warns.

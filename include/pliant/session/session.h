@@ -296,6 +296,12 @@ public:
     /// and a recording is then refused, since a replay starts at rest). \return InvalidArgument
     /// for bad settings or material, or a `start` of another level or with a non-finite value;
     /// the model's errors (DegenerateFace, ...).
+    /// In exact coupling every peer steps in lockstep with the fixed step `material.fixed_dt`
+    /// (`material.fixed_step` is set and re-assembly turned off, whatever they were); fast
+    /// coupling steps as the material says. Nothing here checks a fixed step against the grid's
+    /// stability bound: choose it at most `sim::stable_fixed_step` of the model (`pliant host`
+    /// takes min(1 ms, 0.9 x that) by default and warns above it, docs/session.md §7); a step
+    /// above it grows without limit.
     static core::Result<std::unique_ptr<Session>> host(net::Transport& transport,
                                                        const core::TetraGrid& grid,
                                                        const core::Vec3Field<double>& rest,
@@ -333,6 +339,9 @@ public:
     /// the earliest tick every peer can still honour if that is later (exact mode: the tick after
     /// the next one this peer publishes; fast mode: at once). Several calls queue in order. A
     /// viewer's are ignored: it only watches (and the others drop a viewer's Force lists).
+    /// Forces are checked where they apply, by every peer alike (`append_valid_forces`): one the
+    /// model refuses (a face beyond the grid) is left out without a word here; check them first
+    /// with sim::validate_forces (through to_sim_force) to tell the user.
     void set_forces(std::vector<net::UserForce> forces, std::uint64_t from_tick = 0);
     /// Leaves the session; `left()` becomes true when done. Participants and viewers leave as
     /// described in the file comment; the master streams its leaves once more and disconnects
@@ -343,6 +352,7 @@ public:
     /// stepped yet and started at rest (a recording replays from rest).
     core::Result<void> start_recording();
     /// The inputs recorded so far, with `final_tick` = this peer's tick (final_hash unset).
+    /// `Recording` is defined in <pliant/session/recording.h>: include it to use the result.
     [[nodiscard]] Recording recording() const;
     /// Ends the session (master): disconnects every peer. `left()` becomes true. Nothing if this
     /// peer has left already.

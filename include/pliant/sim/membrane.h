@@ -225,7 +225,9 @@ void apply_stiffness(const MembraneModel& model, const core::Field<double>& u,
                      core::Field<double>& out);
 
 /// Kinetic, strain and foundation energy of a state (u, v synced), summed per leaf in the
-/// model's fixed leaf order (independent of the thread count).
+/// model's fixed leaf order (independent of the thread count). \pre u and v are ghost-1 planes
+/// of the model's level, as MembraneState::at_rest makes them (a PLIANT_ASSERT failure
+/// otherwise).
 [[nodiscard]] Energy energy(const MembraneModel& model, const MembraneState& state);
 
 }  // namespace pliant::sim

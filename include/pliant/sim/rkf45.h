@@ -63,7 +63,8 @@ namespace pliant::sim
 /// f_i / m_i with the real lumped mass m_i.
 struct Force
 {
-    std::int64_t face = -1;  ///< face index (0 .. 4W^2-1), or -1 for point + radius
+    std::int64_t face = -1;  ///< face index (0 .. 4W^2-1), or any negative value (-1) for
+                             ///< point + radius
     core::Vec3 point{};      ///< centre on the rest surface [m] (point forces)
     double radius = 0.0;     ///< support radius [m] (point forces), >= 0
     core::Vec3 vector{};     ///< the force [N]
@@ -133,7 +134,10 @@ struct AdvanceReport
     std::uint64_t rejections = 0;
     std::uint64_t at_min_steps = 0;  ///< accepted steps flagged MinStepReached (at dt_min
                                      ///< with the error above tolerance)
-    bool reached = false;  ///< time == target (adaptive) or no full fixed step fits any more
+    /// The state is at the target: time == target (adaptive), or no full fixed step fits any
+    /// more; also true, with no step taken, for a target at or before `state.time` (time never
+    /// goes back).
+    bool reached = false;
     bool stopped = false;  ///< `stop` asked advance_to to stop (between two steps)
 };
 
@@ -302,7 +306,10 @@ StepReport step(MembraneModel& model, MembraneState& state, Rkf45Workspace& ws,
 /// the first call ramps up from zero). Real-time use: one call per frame. Stops early after
 /// `max_steps` steps, on NonFinite, or when `stop` (may be null) says stop_requested(), polled
 /// before every step (a user's Ctrl-C in `pliant simulate`; the state is then that of the last
-/// whole step; a linear hold keeps the forces it reached).
+/// whole step; a linear hold keeps the forces it reached). A target at or before `state.time`
+/// takes no step (reached, and the forces are set for the next call).
+/// \pre `target_time` is finite (a PLIANT_ASSERT failure otherwise: a NaN target would step
+/// until `max_steps`).
 AdvanceReport advance_to(MembraneModel& model, MembraneState& state, Rkf45Workspace& ws,
                          double target_time, std::span<const Force> forces,
                          const StepOptions& options = {}, std::uint64_t max_steps = 10'000'000,
