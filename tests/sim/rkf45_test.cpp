@@ -257,6 +257,26 @@ TEST(Rkf45, FixedStepAdvanceTakesWholeSteps)
     EXPECT_NEAR(s.time, 0.2, 1e-12);
 }
 
+// A target already passed takes no step and leaves the state where it is; a non-finite target is
+// a contract failure (it would step until max_steps), said as such.
+TEST(Rkf45, AdvanceToAnEarlierTargetTakesNoStepAndANonFiniteOneIsRefused)
+{
+    MembraneModel m = model_in_steps_of_10_ms();
+    MembraneState s = initial_state(m);
+    Rkf45Workspace ws(m, 1);
+    (void)advance_to(m, s, ws, 0.1, {});
+    const double time = s.time;
+    const AdvanceReport earlier = advance_to(m, s, ws, 0.05, {});
+    EXPECT_TRUE(earlier.reached);
+    EXPECT_EQ(earlier.steps, 0U);
+    EXPECT_EQ(s.time, time);
+    GTEST_FLAG_SET(death_test_style, "threadsafe");
+    EXPECT_DEATH((void)advance_to(m, s, ws, std::nan(""), {}),
+                 "advance_to: the target time is not finite");
+    EXPECT_DEATH((void)energy(m, MembraneState::at_rest(core::TetraGrid::create(2).value())),
+                 "energy: the state's u and v are not ghost-1 planes of the model's level");
+}
+
 // A stop asked for between steps (Ctrl-C in `pliant simulate`) ends advance_to before its next
 // step: the state is that of the last whole step, the same as that many steps without a stop.
 TEST(Rkf45, AdvanceStopsBeforeTheStepAfterAStopIsAsked)
