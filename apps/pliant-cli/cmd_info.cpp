@@ -116,6 +116,23 @@ void print_text(const InfoOptions& opt, const mesh::ImportReport& r, const mesh:
 
 // ---- grid files ----
 
+/// The keys every `info --json` of a pliant file begins with: the file, its format and the
+/// verdict.
+nlohmann::ordered_json verdict_json(const InfoOptions& opt, const char* format,
+                                    const std::optional<core::Error>& error, const char* valid)
+{
+    nlohmann::ordered_json j;
+    j["file"] = opt.mesh.string();
+    j["format"] = format;
+    j["valid"] = !error.has_value();
+    j["error_code"] = error ? nlohmann::ordered_json(std::string(core::to_string(error->code)))
+                            : nlohmann::ordered_json(nullptr);
+    j["error_value"] = error ? nlohmann::ordered_json(static_cast<int>(error->code))
+                             : nlohmann::ordered_json(nullptr);
+    j["message"] = error ? error->message : std::string(valid);
+    return j;
+}
+
 /// Range of one channel over the canonical nodes, and where its largest magnitude is.
 struct ChannelRange
 {
@@ -187,7 +204,8 @@ std::optional<core::Error> grid_verdict(const std::string& path, const GridInfo&
     return std::nullopt;
 }
 
-const char* k_grid_valid = "valid: a closed surface the membrane accepts as rest geometry";
+constexpr const char* k_grid_valid =
+    "valid: a closed surface the membrane accepts as rest geometry";
 
 std::string channel_names(const core::GridFile& file)
 {
@@ -200,15 +218,7 @@ std::string channel_names(const core::GridFile& file)
 void print_grid_json(const InfoOptions& opt, const GridInfo* info,
                      const std::optional<core::Error>& error)
 {
-    nlohmann::ordered_json j;
-    j["file"] = opt.mesh.string();
-    j["format"] = "pgrid";
-    j["valid"] = !error.has_value();
-    j["error_code"] = error ? nlohmann::ordered_json(std::string(core::to_string(error->code)))
-                            : nlohmann::ordered_json(nullptr);
-    j["error_value"] = error ? nlohmann::ordered_json(static_cast<int>(error->code))
-                             : nlohmann::ordered_json(nullptr);
-    j["message"] = error ? error->message : std::string(k_grid_valid);
+    nlohmann::ordered_json j = verdict_json(opt, "pgrid", error, k_grid_valid);
     if (info != nullptr && info->grid)
     {
         const core::TetraGrid& g = *info->grid;
@@ -354,20 +364,12 @@ std::string hex(std::uint64_t value)
     return text;
 }
 
-const char* k_recording_valid = "valid: `pliant replay` replays it";
+constexpr const char* k_recording_valid = "valid: `pliant replay` replays it";
 
 void print_recording_json(const InfoOptions& opt, const RecordingInfo* info,
                           const std::optional<core::Error>& error)
 {
-    nlohmann::ordered_json j;
-    j["file"] = opt.mesh.string();
-    j["format"] = "prec";
-    j["valid"] = !error.has_value();
-    j["error_code"] = error ? nlohmann::ordered_json(std::string(core::to_string(error->code)))
-                            : nlohmann::ordered_json(nullptr);
-    j["error_value"] = error ? nlohmann::ordered_json(static_cast<int>(error->code))
-                             : nlohmann::ordered_json(nullptr);
-    j["message"] = error ? error->message : std::string(k_recording_valid);
+    nlohmann::ordered_json j = verdict_json(opt, "prec", error, k_recording_valid);
     if (info != nullptr)
     {
         const session::Recording& r = *info->recording;
