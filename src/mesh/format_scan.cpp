@@ -637,7 +637,12 @@ core::Result<ScanResult> scan_ply_ascii(const std::vector<PlyElement>& elements,
 core::Result<ScanResult> scan_ply(std::string_view bytes, const std::string& name)
 {
     if (bytes.substr(0, 4) != "ply\n" && bytes.substr(0, 5) != "ply\r\n")
-        return fail(ErrorCode::ParseError, name + ": not a PLY file: it does not start with 'ply'");
+        return fail(ErrorCode::ParseError,
+                    name + ": not a PLY file: it does not start with 'ply'" +
+                        (bytes.starts_with(k_utf8_bom)
+                             ? std::string(" (it starts with a UTF-8 byte order mark, which PLY "
+                                           "does not allow: save it without one)")
+                             : std::string()));
     const std::size_t end_pos = bytes.find("end_header");
     if (end_pos == std::string_view::npos)
         return fail(ErrorCode::ParseError, name + ": bad PLY header: no 'end_header' line");
@@ -856,10 +861,19 @@ core::Result<ScanResult> scan_stl(std::string_view bytes, const std::string& nam
                 .format = Format::StlBinary, .vertices = 3 * n, .faces = n, .faces_known = true};
         }
     }
-    const std::string_view start = trim(bytes.substr(0, std::min<std::size_t>(size, 512)));
-    if (start.substr(0, 5) == "solid" && check_text(bytes, name, "STL"))
+    // An ASCII file may begin with a UTF-8 byte-order mark (some Windows editors write one):
+    // not part of `solid`, and Assimp would take the file for a binary one, so it reads a copy
+    // without it, as for OBJ.
+    std::string_view text = bytes;
+    const bool bom = text.starts_with(k_utf8_bom);
+    if (bom)
+        text.remove_prefix(k_utf8_bom.size());
+    const std::string_view start = trim(text.substr(0, std::min<std::size_t>(text.size(), 512)));
+    if (start.substr(0, 5) == "solid" && check_text(text, name, "STL"))
     {
         ScanResult r{.format = Format::StlAscii};
+        if (bom)
+            r.rewritten = std::string(text);
         // Every facet closed with exactly three vertices, and the solid closed: a file cut at a
         // facet boundary otherwise reads as a smaller, open mesh.
         std::optional<core::Error> error;
@@ -868,7 +882,7 @@ core::Result<ScanResult> scan_stl(std::string_view bytes, const std::string& nam
         bool in_facet = false;
         bool ended = false;
         for_each_line(
-            bytes,
+            text,
             [&](std::string_view line)
             {
                 ++line_number;

@@ -280,7 +280,9 @@ core::Result<TriMesh> import_mesh(const std::filesystem::path& path, ImportRepor
                                         : importer.ReadFileFromMemory(
                                               scan->rewritten.data(), scan->rewritten.size(),
                                               aiProcess_ValidateDataStructure,
-                                              scan->format == detail::Format::Obj ? "obj" : "off");
+                                              scan->format == detail::Format::Obj        ? "obj"
+                                              : scan->format == detail::Format::StlAscii ? "stl"
+                                                                                         : "off");
     }
     catch (const std::exception& e)
     {

@@ -330,6 +330,35 @@ TEST_F(Formats, ObjWithAUtf8ByteOrderMarkImportsLikeWithout)
         << bad.error().message;
 }
 
+// The same mark before an ASCII STL's `solid` (and an OFF's `OFF`): imported as without it, where
+// the STL was taken for a binary file whose header declared 1.8 billion triangles.
+TEST_F(Formats, StlAndOffWithAUtf8ByteOrderMarkImportLikeWithout)
+{
+    const std::string bom = "\xEF\xBB\xBF";
+    std::string stl = "solid tet\n";
+    const char* facets[4] = {
+        "0 0 0\nvertex 0 1 0\nvertex 1 0 0", "0 0 0\nvertex 1 0 0\nvertex 0 0 1",
+        "0 0 0\nvertex 0 0 1\nvertex 0 1 0", "1 0 0\nvertex 0 1 0\nvertex 0 0 1"};
+    for (const char* f : facets)
+        stl += std::string("facet normal 0 0 0\nouter loop\nvertex ") + f + "\nendloop\nendfacet\n";
+    stl += "endsolid tet\n";
+    const std::string off =
+        "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n"
+        "3 1 2 3\n";
+    for (const auto& [name, text] :
+         {std::pair<std::string, std::string>{"tet.stl", stl}, {"tet.off", off}})
+    {
+        ImportReport plain;
+        ImportReport marked;
+        const TriMesh without = load(name.c_str(), text, &plain);
+        const TriMesh with = load(("bom_" + name).c_str(), bom + text, &marked);
+        ASSERT_EQ(without.face_count(), 4U) << name;
+        expect_same(with, without);
+        EXPECT_EQ(marked.format, plain.format) << name;
+        EXPECT_TRUE(validate(with, name)) << name;
+    }
+}
+
 // ---- hostile files: one error code each, no crash ------------------------------------------
 
 class BadFiles : public ::testing::Test
@@ -623,6 +652,11 @@ TEST_F(BadFiles, PlyVertexNeedsXYZ)
          "ply\nformat ascii 1.0\nelement face 1\nproperty list uchar int vertex_indices\n"
          "end_header\n3 0 1 2\n",
          ": the PLY header has no 'vertex' element"},
+        // An editor's UTF-8 byte order mark: not PLY, and said so.
+        {"bom.ply",
+         "\xEF\xBB\xBF" +
+             ply("ascii", "property float x\nproperty float y\nproperty float z\n", ascii),
+         ": not a PLY file: it does not start with 'ply' (it starts with a UTF-8 byte order mark"},
     };
     for (const auto& c : cases)
     {
