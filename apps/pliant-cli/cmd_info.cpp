@@ -500,7 +500,7 @@ void add_info_command(CLI::App& app, const GlobalOptions& global)
     auto opt = std::make_shared<InfoOptions>();
     CLI::App* cmd = app.add_subcommand(
         "info",
-        "Check a mesh or a grid file: counts, topology and whether pliant accepts it.\n\n"
+        "Check a mesh, grid file or recording: what it holds and whether pliant accepts it.\n\n"
         "Reads OBJ, OFF, PLY (ascii/binary), STL (ascii/binary) or glTF 2 (.gltf/.glb); merges\n"
         "all meshes, triangulates polygons, welds exactly coincident vertices and drops unused\n"
         "ones. Then checks, in this order: vertex indices, finite coordinates, no degenerate\n"
@@ -527,7 +527,8 @@ void add_info_command(CLI::App& app, const GlobalOptions& global)
     cmd->add_flag("--json", opt->json,
                   "Print one JSON object on stdout (fields: valid, error_code, message, vertices, "
                   "faces, edges, components, boundary_edges, euler_characteristic, genus (null "
-                  "when undefined), bbox_diagonal, ...)");
+                  "when undefined), bbox_diagonal, ...; for a grid or a recording the fields "
+                  "docs/mesh.md and docs/session.md §9 list)");
     cmd->callback(
         command_callback(global, [opt, &global]() -> int { return run_info(*opt, global); }));
 }
