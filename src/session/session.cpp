@@ -561,9 +561,19 @@ struct Session::Impl
     std::vector<std::uint64_t> leaf_tick;
     std::vector<double> leaf_time;
     std::vector<std::uint16_t> leaf_sender;
-    // Per leaf: until when its shown state, of an epoch ahead of every partition held, counts
-    // without its Partition (0: settled); and those leaves (settle_provisional_states).
-    std::vector<double> leaf_provisional_until;
+    // Per leaf: the newest whole state of an epoch ahead of every partition held, set aside
+    // (neither shown nor, in fast coupling, simulated) until that epoch's Partition says whether
+    // its sender owns the leaf (settle_provisional_states); and the leaves holding one.
+    struct AsideState
+    {
+        std::uint32_t epoch = 0;
+        std::uint64_t tick = 0;
+        double time = 0.0;
+        std::uint16_t sender = 0;
+        double until = 0.0;  ///< last_now after which its epoch is taken as never coming; 0: none
+        std::vector<double> u, v;  // the leaf's nodes (LeafGraph order)
+    };
+    std::vector<AsideState> aside;
     std::vector<std::uint32_t> provisional_leaves;
     std::vector<std::uint8_t> provisional_listed;  // per leaf: in provisional_leaves
     std::vector<double> leaf_sent_time;            // our leaves: simulated time last streamed
@@ -859,7 +869,7 @@ struct Session::Impl
         leaf_tick.assign(s.graph_->size(), 0);
         leaf_time.assign(s.graph_->size(), 0.0);
         leaf_sender.assign(s.graph_->size(), 0);
-        leaf_provisional_until.assign(s.graph_->size(), 0.0);
+        aside.assign(s.graph_->size(), {});
         provisional_leaves.clear();
         provisional_listed.assign(s.graph_->size(), 0);
         leaf_sent_time.assign(s.graph_->size(), -std::numeric_limits<double>::infinity());
@@ -3095,8 +3105,11 @@ struct Session::Impl
                 return;
             }
             // Newer than any partition here: the new owner streamed before the Partition
-            // reached us (it is reliable, the states are not). Taken provisionally, and checked
-            // once the Partition comes (settle_provisional_states).
+            // reached us (it is reliable, the states are not). Kept aside, whole leaves only,
+            // and shown once the Partition comes and names its sender the owner
+            // (settle_provisional_states). Never shown before: a peer that owns nothing could
+            // otherwise hold any leaf's display, and in fast coupling its neighbours' Dirichlet
+            // values, by streaming states of an epoch that never comes.
         }
         else if (named->owners[l] != net::PeerId{from})
         {
@@ -3136,6 +3149,13 @@ struct Session::Impl
             net::dequantise(std::span(qv.data(), n), ls.quantised.v_exponent,
                             std::span(xv.data(), n));
         }
+        const double* from_u = quantised ? xu.data() : ls.u.data();
+        const double* from_v = quantised ? xv.data() : ls.v.data();
+        if (named == nullptr)
+        {
+            set_aside(l, from, m.header.tick, ls, from_u, from_v);
+            return;
+        }
         // Unsequenced: per leaf, the newest by (epoch, tick) wins; ticks are per sender in
         // fast mode, and a leaf changes sender only with the epoch.
         if (ls.epoch < leaf_epoch[l] || (ls.epoch == leaf_epoch[l] && m.header.tick < leaf_tick[l]))
@@ -3143,27 +3163,7 @@ struct Session::Impl
             ++counters.stale_states;
             return;
         }
-        leaf_epoch[l] = ls.epoch;
-        leaf_tick[l] = m.header.tick;
-        leaf_time[l] = ls.time;
-        leaf_sender[l] = from;
-        leaf_coarsen[l] = static_cast<std::uint8_t>(kc);
-        if (named == nullptr)
-        {
-            if (provisional_listed[l] == 0)
-            {
-                provisional_listed[l] = 1;
-                provisional_leaves.push_back(static_cast<std::uint32_t>(l));
-            }
-            leaf_provisional_until[l] = last_now + k_provisional_s;
-        }
-        else
-            leaf_provisional_until[l] = 0.0;  // settled: dropped from the list when next seen
-        if (updated_flag[l] == 0)
-        {
-            updated_flag[l] = 1;
-            updated.push_back(static_cast<std::uint32_t>(l));
-        }
+        mark_shown(l, ls.epoch, m.header.tick, ls.time, from, kc);
         if (kc != 0)
         {
             // The received nodes go to their places on the grid; refine_display fills the rest.
@@ -3180,18 +3180,72 @@ struct Session::Impl
             display_dirty = true;
             return;
         }
-        const std::size_t count = ls.node_count();
+        show(l, ls.node_offset, ls.node_count(), from_u, from_v);
+    }
+
+    /// Leaf l's shown state is now (epoch, tick) from `from`.
+    void mark_shown(std::size_t l, std::uint32_t epoch, std::uint64_t tick, double time,
+                    std::uint16_t from, int coarsen)
+    {
+        leaf_epoch[l] = epoch;
+        leaf_tick[l] = tick;
+        leaf_time[l] = time;
+        leaf_sender[l] = from;
+        leaf_coarsen[l] = static_cast<std::uint8_t>(coarsen);
+        if (updated_flag[l] == 0)
+        {
+            updated_flag[l] = 1;
+            updated.push_back(static_cast<std::uint32_t>(l));
+        }
+    }
+    /// Writes the values of leaf l's nodes offset .. offset + count into the display.
+    void show(std::size_t l, std::size_t offset, std::size_t count, const double* u,
+              const double* v)
+    {
         double* du = s.display_u_.padded().data();
         double* dv = s.display_v_.padded().data();
-        const double* from_u = quantised ? xu.data() : ls.u.data();
-        const double* from_v = quantised ? xv.data() : ls.v.data();
-        for_node_runs(l, ls.node_offset, ls.node_offset + count,
+        for_node_runs(l, offset, offset + count,
                       [&](std::size_t o, std::size_t i, std::size_t c)
                       {
-                          copy_run(from_u + (i - ls.node_offset), c, du + o);
-                          copy_run(from_v + (i - ls.node_offset), c, dv + o);
+                          copy_run(u + (i - offset), c, du + o);
+                          copy_run(v + (i - offset), c, dv + o);
                       });
         display_dirty = true;
+    }
+    /// Keeps a state of an epoch ahead of every partition held aside (the newest per leaf by
+    /// (epoch, tick)); a part of a leaf or a coarse one is dropped, since only whole leaves are
+    /// kept.
+    void set_aside(std::size_t l, std::uint16_t from, std::uint64_t tick, const net::LeafState& ls,
+                   const double* u, const double* v)
+    {
+        const std::size_t n = s.graph_->nodes(l).size();
+        AsideState& h = aside[l];
+        if (ls.coarsen != 0 || ls.node_offset != 0 || ls.node_count() != n)
+        {
+            ++counters.unknown_epoch_states;
+            return;
+        }
+        if (h.until != 0.0 && (ls.epoch < h.epoch || (ls.epoch == h.epoch && tick < h.tick)))
+        {
+            ++counters.stale_states;
+            return;
+        }
+        // Its epoch has k_provisional_s from the first state of it set aside: newer ticks do not
+        // extend the wait, so a forger streaming one epoch that never comes is dropped and
+        // counted every k_provisional_s rather than held for good.
+        if (h.until == 0.0 || ls.epoch != h.epoch)
+            h.until = last_now + k_provisional_s;
+        h.epoch = ls.epoch;
+        h.tick = tick;
+        h.time = ls.time;
+        h.sender = from;
+        h.u.assign(u, u + n);
+        h.v.assign(v, v + n);
+        if (provisional_listed[l] == 0)
+        {
+            provisional_listed[l] = 1;
+            provisional_leaves.push_back(static_cast<std::uint32_t>(l));
+        }
     }
 
     /// A LeafBatch: each of its leaves as the quantised LeafState it stands for.
@@ -3455,12 +3509,9 @@ struct Session::Impl
                 last_stats[h] = *st;
     }
 
-    /// The leaves shown from a state of an epoch ahead of every partition held: once that
-    /// epoch's Partition is here, a state from its leaf's owner stays and any other is undone;
-    /// one whose epoch never came (skipped, or k_provisional_s passed) is undone too. Undone:
-    /// the leaf's newest (epoch, tick) goes back to the newest partition's epoch and tick 0, so
-    /// the owner's next state replaces the values within a stream period; the forged state
-    /// cannot hold the leaf as the newest.
+    /// The states kept aside (set_aside): once their epoch's Partition is here, one from its leaf's
+    /// owner is shown (if still the newest) and any other dropped; one whose epoch never came
+    /// (skipped, or k_provisional_s passed) is dropped too, each counted.
     void settle_provisional_states()
     {
         if (provisional_leaves.empty())
@@ -3474,25 +3525,31 @@ struct Session::Impl
                           return !keep;
                       });
     }
-    /// One leaf of settle_provisional_states. \return whether it stays provisional.
+    /// One leaf of settle_provisional_states. \return whether its state stays aside.
     bool settle_leaf(std::uint32_t l, std::uint32_t last)
     {
-        if (leaf_provisional_until[l] == 0.0)
-            return false;  // a known epoch's state came since
-        const PartitionEntry* named = with_epoch(leaf_epoch[l]);
+        AsideState& h = aside[l];
+        if (h.until == 0.0)
+            return false;
+        const PartitionEntry* named = with_epoch(h.epoch);
         const bool owner_known = named != nullptr;
-        const bool from_owner = owner_known && named->owners[l] == net::PeerId{leaf_sender[l]};
-        if (from_owner)
+        if (!owner_known && h.epoch > last && last_now < h.until)
+            return true;  // its Partition is still on the way
+        h.until = 0.0;
+        if (!owner_known || named->owners[l] != net::PeerId{h.sender})
         {
-            leaf_provisional_until[l] = 0.0;
+            ++(owner_known ? counters.foreign_states : counters.unknown_epoch_states);
             return false;
         }
-        if (!owner_known && leaf_epoch[l] > last && last_now < leaf_provisional_until[l])
-            return true;  // its Partition is still on the way
-        ++(owner_known ? counters.foreign_states : counters.unknown_epoch_states);
-        leaf_epoch[l] = last;
-        leaf_tick[l] = 0;
-        leaf_provisional_until[l] = 0.0;
+        const bool mine = std::find(my_leaves.begin(), my_leaves.end(), l) != my_leaves.end() &&
+                          stream_partition() != nullptr;
+        if (mine || h.epoch < leaf_epoch[l] || (h.epoch == leaf_epoch[l] && h.tick < leaf_tick[l]))
+        {
+            ++counters.stale_states;
+            return false;
+        }
+        mark_shown(l, h.epoch, h.tick, h.time, h.sender, 0);
+        show(l, 0, h.u.size(), h.u.data(), h.v.data());
         return false;
     }
     std::uint32_t newest_epoch() const

@@ -830,10 +830,10 @@ TEST(SessionExact, AHaloCarryingNodesItsSenderDoesNotOwnIsDropped)
 
 // A leaf's state counts only from its owner under the partition it names: a participant that
 // sends a viewer a state of the master's leaf (a far newer tick) in the current epoch, or in an
-// epoch no master will issue, is dropped and counted; one of the next epoch is shown for now (its
-// Partition may be on the way) and undone when that epoch has not come 3 s later. The
-// newest-wins rule would otherwise hold the forged values on that leaf for good. The viewer ends
-// showing what one process computes.
+// epoch no master will issue, is dropped and counted; one of the next epoch is kept aside (its
+// Partition may be on the way), never shown, and dropped when that epoch has not come 3 s later.
+// The newest-wins rule would otherwise hold the forged values on that leaf for good. The viewer
+// ends showing what one process computes.
 TEST(SessionExact, ALeafStateFromAPeerThatDoesNotOwnTheLeafIsDropped)
 {
     Harness h;
@@ -886,6 +886,82 @@ TEST(SessionExact, ALeafStateFromAPeerThatDoesNotOwnTheLeafIsDropped)
     // No forces: one process stays at rest, and so does what the viewer shows.
     const core::TetraGrid& g = m.model()->grid();
     EXPECT_EQ(compare(g, v.display_u(), core::Field<double>(g), {}).max_abs, 0.0);
+}
+
+// A member that owns nothing (a viewer here) keeps streaming, to both participants, states of
+// every leaf of the other for an epoch 5 ahead of the partition (one no master issues soon):
+// they are kept aside, never shown and, in fast coupling, never taken as Dirichlet values, and
+// dropped when their epoch does not come. With no forces every display, and every peer's own
+// nodes, stay at rest all along. (Shown at once until 2026-12-06, such states took the leaves
+// over for as long as they kept coming: in fast coupling their values drove the simulation.)
+TEST(SessionForged, StatesOfAFutureEpochNeverReachTheDisplayOrTheSimulation)
+{
+    for (const Coupling coupling : {Coupling::Exact, Coupling::Fast})
+    {
+        SCOPED_TRACE(coupling == Coupling::Exact ? "exact" : "fast");
+        Harness h;
+        SessionSettings master = settings_for(coupling, "m");
+        master.session_id = 4244;
+        master.max_ticks = 0;
+        SessionSettings member = settings_for(coupling, "p");
+        member.max_ticks = 0;
+        h.host(3, master);
+        h.join(net::Role::Participant, member);
+        ASSERT_TRUE(pump_until_partitioned(h, 2));
+        h.join(net::Role::Viewer, member);
+        ASSERT_TRUE(h.pump_until([&] { return h.peers[2]->ready(); }, 20000));
+        ASSERT_TRUE(h.pump_until([&] { return h.peers[2]->peers().size() >= 2; }, 20000));
+        const Session& m = *h.peers[0];
+        const LeafGraph& graph = *m.leaf_graph();
+        net::Transport& wire = *h.transports[2];
+        const auto owners = m.owners();
+        const auto forge_all = [&]
+        {
+            for (const net::PeerHandle to : wire.peers())
+            {
+                const bool to_master = wire.remote_address(to) == h.master_address;
+                const net::PeerId victim = to_master ? m.id() : h.peers[1]->id();
+                for (std::uint32_t leaf = 0; leaf < owners.size(); ++leaf)
+                {
+                    if (owners[leaf] == victim)
+                        continue;  // the other's leaves: what the victim shows and reads
+                    net::Message forged;
+                    forged.header.session = 4244;
+                    forged.header.sender = h.peers[2]->id();
+                    forged.header.tick = 1'000'000;
+                    net::LeafState ls;
+                    ls.epoch = m.epoch() + 5;
+                    const core::LeafId id = graph.leaves()[leaf];
+                    ls.leaf = net::WireLeafId{id.square, id.depth, id.ix, id.iy};
+                    ls.time = 1000.0;
+                    ls.u.assign(graph.nodes(leaf).size(), 0.5);
+                    ls.v.assign(graph.nodes(leaf).size(), 0.25);
+                    forged.body = ls;
+                    ASSERT_TRUE(send_raw(wire, to, forged, net::Delivery::Unsequenced));
+                }
+            }
+        };
+        const core::TetraGrid& g = m.model()->grid();
+        const core::Field<double> rest(g);
+        const std::uint64_t start = m.tick();
+        for (int round = 0; round < 140; ++round)  // 3.5 s: forged every 25 ms
+        {
+            forge_all();
+            for (int k = 0; k < 50; ++k)
+                h.pump_once(0.0005);
+            for (std::size_t p = 0; p < 2; ++p)
+            {
+                const Session& peer = *h.peers[p];
+                ASSERT_EQ(compare(g, peer.display_u(), rest, {}).max_abs, 0.0)
+                    << "peer " << p << ", round " << round;
+                ASSERT_EQ(compare(g, peer.state().u, rest, owned_by(peer)).max_abs, 0.0)
+                    << "peer " << p << ", round " << round;
+            }
+        }
+        EXPECT_GT(m.tick(), start + 500);  // the session went on stepping
+        // Held 3 s for a Partition that never came, then dropped and counted.
+        EXPECT_GT(m.stats().unknown_epoch_states + h.peers[1]->stats().unknown_epoch_states, 0U);
+    }
 }
 
 // Points a quarter of the faces apart at level 5 with 4 members (pliant_bench_session's seats):
