@@ -77,6 +77,11 @@ constexpr std::size_t k_max_foreign_partitions = 8;
 constexpr std::uint32_t k_max_epoch_lead = 2 * k_successor_epoch_gap;
 /// How long a leaf state of an epoch ahead of the partitions held counts without its Partition.
 constexpr double k_provisional_s = 3.0;
+/// How long an incoming connection may stay without greeting (a Hello) before it is closed: a
+/// joiner or a dialling member greets at once, and an idle connection would otherwise hold one
+/// of the transport's peer slots for as long as its other end keeps it alive (an audit filled
+/// all 64 that way and every later joiner was turned away).
+constexpr double k_greeting_deadline_s = 10.0;
 /// A participant's new points of interest re-partition the session at most this often (s, the
 /// master's clock); a change within it waits for its end. Each change cost the master a partition
 /// computed and broadcast (and every peer a hand-over), so a peer changing its points on every
@@ -519,7 +524,10 @@ struct Session::Impl
     std::uint16_t next_peer_id = 1;
     std::map<std::uint16_t, RemotePeer> peers;
     std::map<net::PeerHandle, std::uint16_t> handle_ids;  // bound connections
-    std::map<net::PeerHandle, std::uint16_t> dialing;     // joiner -> listed peers
+    // Incoming connections not bound yet, and the caller's time they connected (close_ungreeted).
+    std::map<net::PeerHandle, double> ungreeted;
+    bool advanced = false;  // advance() has been called: last_now is the caller's clock
+    std::map<net::PeerHandle, std::uint16_t> dialing;  // joiner -> listed peers
     std::map<net::PeerHandle, net::PeerStats> last_stats;
     net::PeerStats closed_stats;
 
@@ -2430,20 +2438,50 @@ struct Session::Impl
             return;
         }
         auto it = dialing.find(h);
-        if (it != dialing.end())
+        if (it == dialing.end())
         {
-            (void)messenger.send(h, make(make_hello(), s.state_.tick));
-            const std::uint16_t id = it->second;
-            bind(h, id);
-            dialing.erase(it);
-            RemotePeer& p = peers[id];
-            if (!p.heard)
-                p.hello_repeat_until = last_now + k_greeting_repeat_s;
+            // Someone dialled us: it has k_greeting_deadline_s to say who it is, counted from
+            // the caller's next advance() if none has come yet (NaN until then).
+            ungreeted[h] = advanced ? last_now : std::numeric_limits<double>::quiet_NaN();
+            return;
+        }
+        (void)messenger.send(h, make(make_hello(), s.state_.tick));
+        const std::uint16_t id = it->second;
+        bind(h, id);
+        dialing.erase(it);
+        RemotePeer& p = peers[id];
+        if (!p.heard)
+            p.hello_repeat_until = last_now + k_greeting_repeat_s;
+    }
+
+    /// Closes the incoming connections that have not greeted within k_greeting_deadline_s of the
+    /// caller's clock (a bound connection has greeted: its entry is dropped).
+    void close_ungreeted()
+    {
+        for (auto it = ungreeted.begin(); it != ungreeted.end();)
+        {
+            if (std::isnan(it->second))
+                it->second = last_now;
+            if (handle_ids.contains(it->first))
+                it = ungreeted.erase(it);
+            else if (last_now - it->second > k_greeting_deadline_s)
+            {
+                const auto address = transport.remote_address(it->first);
+                spdlog::warn("session: the connection from {} sent no Hello within {:g} s: closed",
+                             address ? net::to_string(*address) : std::string("?"),
+                             k_greeting_deadline_s);
+                ++counters.ungreeted_closed;
+                transport.disconnect(it->first, net::DisconnectReason::TimedOut);
+                it = ungreeted.erase(it);
+            }
+            else
+                ++it;
         }
     }
 
     void on_disconnected(net::PeerHandle h, net::DisconnectReason reason)
     {
+        ungreeted.erase(h);
         auto ls = last_stats.find(h);
         if (ls != last_stats.end())
         {
@@ -3730,7 +3768,10 @@ struct Session::Impl
     void advance(double now)
     {
         last_now = now;
+        advanced = true;
         behind = false;
+        if (!ungreeted.empty())
+            close_ungreeted();
         if (!s.model_ || s.left_)
             return;
         if (!clock_set)

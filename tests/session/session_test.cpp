@@ -888,6 +888,37 @@ TEST(SessionExact, ALeafStateFromAPeerThatDoesNotOwnTheLeafIsDropped)
     EXPECT_EQ(compare(g, v.display_u(), core::Field<double>(g), {}).max_abs, 0.0);
 }
 
+// A connection that never says Hello (an idle one holds one of the transport's peer slots:
+// 64 of them turned every later joiner away) is closed 10 s after it connected, counted; a
+// joiner that greets is not touched.
+TEST(SessionForged, AConnectionThatNeverGreetsIsClosedAfterTenSeconds)
+{
+    Harness h;
+    ASSERT_TRUE(master_and_participant(h, 4245));
+    auto idle = h.net.create_endpoint();
+    ASSERT_TRUE(idle->open({}));
+    ASSERT_TRUE(idle->connect(h.master_address));
+    bool connected = false;
+    bool closed = false;
+    for (int k = 0; k < 24000 && !closed; ++k)  // 12 s
+    {
+        h.pump_once(0.0005);
+        while (auto ev = idle->poll())
+        {
+            connected = connected || ev->kind == net::TransportEvent::Kind::Connected;
+            closed = closed || ev->kind == net::TransportEvent::Kind::Disconnected;
+        }
+        if (h.now < 9.5)
+            ASSERT_FALSE(closed) << "at " << h.now << " s";
+    }
+    EXPECT_TRUE(connected);
+    EXPECT_TRUE(closed);
+    EXPECT_LT(h.now, 11.0);
+    EXPECT_EQ(h.peers[0]->stats().ungreeted_closed, 1U);
+    EXPECT_EQ(h.peers[1]->stats().ungreeted_closed, 0U);
+    EXPECT_FALSE(h.peers[1]->left());
+}
+
 // A member that owns nothing (a viewer here) keeps streaming, to both participants, states of
 // every leaf of the other for an epoch 5 ahead of the partition (one no master issues soon):
 // they are kept aside, never shown and, in fast coupling, never taken as Dirichlet values, and

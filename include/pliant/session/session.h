@@ -271,6 +271,9 @@ struct SessionStats
     /// connection for a peer id already connected or departed (refused: ids are never reused,
     /// and each peer dials each other once). docs/session.md §2.
     std::uint64_t peer_claim_rejects = 0;
+    /// Incoming connections closed for sending no Hello within 10 s of connecting (an idle
+    /// connection holds one of the transport's peer slots; docs/session.md §2).
+    std::uint64_t ungreeted_closed = 0;
     /// Blob chunks (the Welcome's model and state) from a connection other than the master's:
     /// dropped (docs/protocol.md, Blob).
     std::uint64_t foreign_blobs = 0;
