@@ -909,7 +909,9 @@ TEST(SessionForged, AConnectionThatNeverGreetsIsClosedAfterTenSeconds)
             closed = closed || ev->kind == net::TransportEvent::Kind::Disconnected;
         }
         if (h.now < 9.5)
+        {
             ASSERT_FALSE(closed) << "at " << h.now << " s";
+        }
     }
     EXPECT_TRUE(connected);
     EXPECT_TRUE(closed);
