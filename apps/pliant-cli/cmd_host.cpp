@@ -52,6 +52,7 @@ struct HostOptions
     double damping = 0.5;     ///< beta [1/s]
     double foundation = 1.0;  ///< k_f [1/s^2]
     std::optional<double> max_force;  ///< N; unset: sim::default_max_force; 0: no limit
+    double max_barrier_wait = 10.0;   ///< s; exact mode: a member holding a tick this long goes
     std::string name = "master";
     std::string passphrase;
     std::string key_file;
@@ -153,6 +154,7 @@ int run_host(const HostOptions& opt)
     else if (opt.clearance == "inside")
         settings.point_clearance = session::PointClearance::Inside;
     settings.max_force = opt.max_force;
+    settings.max_barrier_wait_s = opt.max_barrier_wait;
     settings.name = opt.name;
     settings.listen_port = bound->port;
     settings.max_ticks = opt.ticks;
@@ -294,6 +296,13 @@ void add_host_command(CLI::App& app, const GlobalOptions& global)
                     "radius R a diameter from rest, (rho pi (R/10)^2 k_f + 2 pi T) 2R; 0: no "
                     "limit")
         ->check(non_negative_number());
+    cmd->add_option("--max-barrier-wait", opt->max_barrier_wait,
+                    "Exact mode: a participant that publishes no step for this long [s] while "
+                    "the others wait for it (a hung or stopped process whose connection stays "
+                    "up) is removed, and its share continues from its last streamed state; 0: "
+                    "wait for ever")
+        ->check(non_negative_number())
+        ->capture_default_str();
     cmd->add_option("--name", opt->name, "Peer name (printable ASCII, 1..32)")
         ->capture_default_str();
     add_secret_options(cmd, opt->passphrase, opt->key_file);

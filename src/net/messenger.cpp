@@ -151,7 +151,13 @@ std::optional<MessengerEvent> Messenger::poll(int timeout_ms) noexcept
                           ev->peer.value, ev->data.size(), static_cast<int>(m.error().reason),
                           to_string(m.error().error));
             if (p.bad_datagrams() > settings_.bad_datagram_limit)
+            {
+                const auto address = transport_.remote_address(ev->peer);
+                spdlog::warn("net: disconnected {}: {} bad datagrams (the last: {}, {} bytes)",
+                             address ? to_string(*address) : std::string("a peer"),
+                             p.bad_datagrams(), to_string(m.error().error), ev->data.size());
                 transport_.disconnect(ev->peer, DisconnectReason::TooManyBadDatagrams);
+            }
             continue;
         }
         return MessengerEvent{.kind = MessengerEvent::Kind::Received,

@@ -212,6 +212,12 @@ std::optional<std::string> PaceWatch::add(const PaceSample& sample)
     quiet_for_ -= sample.wall_s;
     if (sample.wall_s <= 0.0)
         return std::nullopt;
+    if (sample.wall_s > k_gap_s)
+    {
+        // The process itself did not run (stopped, suspended): nothing to say of its pace.
+        slow_ = 0;
+        return std::nullopt;
+    }
     const double pace = sample.sim_s / sample.wall_s;
     slow_ = pace < k_slow_ratio ? slow_ + 1 : 0;
     if (slow_ < k_slow_samples || quiet_for_ > 0.0)
@@ -227,6 +233,12 @@ std::optional<std::string> PaceWatch::add(const PaceSample& sample)
             "more participants sharing the object, would keep up",
             100.0 * load,
             sample.steps > 0 ? 1e3 * sample.step_s / static_cast<double>(sample.steps) : 0.0);
+    else if (sample.coupling == Coupling::Exact && sample.barrier_wait_s >= 1.0)
+        out += fmt::format(
+            "it has waited {:.1f} s at one tick for peer {} to publish it (exact coupling steps "
+            "every member together; the master removes a member that publishes no step for 10 "
+            "s, --max-barrier-wait)",
+            sample.barrier_wait_s, sample.barrier_peer.value);
     else if (sample.coupling == Coupling::Exact)
         out += fmt::format(
             "exact coupling steps once per round of halos with the neighbours, and this peer "
@@ -265,7 +277,8 @@ core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
                               "cannot write stats file " + options.stats_csv.string());
         csv << "time_s,bytes_in,bytes_out,packets_in,packets_out,drops,steps,step_ms,"
                "owned_nodes,halo_age_s,tick,peers,border_age_s,stalled_s,view_delay_s,"
-               "stale_states,stale_frames,peers_connected,auth_refused\n";
+               "stale_states,stale_frames,peers_connected,auth_refused,rejected,"
+               "barrier_wait_s\n";
     }
     using clock = std::chrono::steady_clock;
     const auto t0 = clock::now();
@@ -318,7 +331,9 @@ core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
                 .bytes_out = static_cast<double>(s.bytes_sent - last.bytes_sent),
                 .coupling = session.coupling(),
                 .load_average = load_average(),
-                .cores = static_cast<int>(std::thread::hardware_concurrency())};
+                .cores = static_cast<int>(std::thread::hardware_concurrency()),
+                .barrier_wait_s = s.barrier_wait_s,
+                .barrier_peer = s.barrier_peer};
             if (auto warning = pace.add(sample))
                 spdlog::warn("{}", *warning);
         }
@@ -340,7 +355,8 @@ core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
                 << s.border_age_s << ',' << s.stalled_s - last.stalled_s << ',' << s.view_delay_s
                 << ',' << s.stale_states - last.stale_states << ','
                 << s.stale_frames - last.stale_frames << ',' << s.peers_connected << ','
-                << refused - last_refused << '\n';
+                << refused - last_refused << ',' << s.rejected_messages() - last.rejected_messages()
+                << ',' << s.barrier_wait_s << '\n';
             csv.flush();
             if (!csv)  // a full disk: said once, the session goes on without its statistics
                 stats_failed(std::strerror(errno));
@@ -403,7 +419,14 @@ core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
             session.set_forces(std::move(list));
         }
         session.advance(now);
-        if (now >= next_row)
+        if (now >= next_row + 1.0)
+        {
+            // The loop did not run for over a second (the process was stopped, suspended or
+            // starved): one row covers the gap, rather than a burst of rows of nothing.
+            write_row(now);
+            next_row = std::floor(now) + 1.0;
+        }
+        else if (now >= next_row)
         {
             write_row(next_row);
             next_row += 1.0;

@@ -369,13 +369,15 @@ core::Result<void> check_settings(const SessionSettings& s, const char* who)
                    num(s.bandwidth_cap_mbit_s));
     if (!(s.interest_boost >= 0.0))
         return bad("the interest boost must be >= 0, not " + num(s.interest_boost));
-    for (const double t : {s.max_halo_age_s, s.max_stall_s, s.quiescent_refresh_s})
+    for (const double t :
+         {s.max_halo_age_s, s.max_stall_s, s.quiescent_refresh_s, s.max_barrier_wait_s})
         if (!(t >= 0.0) || !std::isfinite(t))
             return bad(
-                "halo age, stall and quiescent refresh limits must be finite and >= 0 s "
-                "(max_halo_age_s " +
+                "halo age, stall, quiescent refresh and barrier wait limits must be finite and "
+                ">= 0 s (max_halo_age_s " +
                 num(s.max_halo_age_s) + ", max_stall_s " + num(s.max_stall_s) +
-                ", quiescent_refresh_s " + num(s.quiescent_refresh_s) + ")");
+                ", quiescent_refresh_s " + num(s.quiescent_refresh_s) + ", max_barrier_wait_s " +
+                num(s.max_barrier_wait_s) + ")");
     if (s.halo_rings < 3)
         return bad("exact coupling needs at least 3 halo rings, not " +
                    std::to_string(s.halo_rings));
@@ -458,6 +460,8 @@ struct RemotePeer
     std::uint64_t heartbeat = 0;  ///< newest Heartbeat tick (exact mode)
     std::vector<ForceEntry> forces;
     bool warned_force_limit = false;  ///< a force of it above the session's limit was logged
+    std::uint64_t rejected = 0;       ///< its messages dropped by the checks (PeerStatus)
+    bool warned_rejected = false;     ///< the first of them was logged
     std::vector<net::Target> points;
     /// Master: when its points last re-partitioned the session (the master's clock), and
     /// whether newer ones wait for k_points_interval_s to pass.
@@ -674,6 +678,11 @@ struct Session::Impl
     // A frame's update_view has not been written into view_u yet (materialize_view).
     bool view_due = false;
     double stall_since = -1.0;  // fast: our clock when the current hold began (-1: none)
+    // exact: the tick whose barrier this peer waits at, since when (caller's clock; -1: not
+    // waiting), and whether that wait was warned about
+    std::uint64_t barrier_tick = 0;
+    double barrier_since = -1.0;
+    bool barrier_warned = false;
     // fast: a hold ran out (max_stall_s) and the frames since have all been stale: step on
     // without a new hold until a frame is fresh again (a neighbour silent, not slow).
     bool stepping_stale = false;
@@ -1389,15 +1398,116 @@ struct Session::Impl
         published = true;
     }
 
-    bool barrier_ok(std::uint64_t t) const
+    /// The members whose Heartbeat(t) has not arrived, by increasing id (none: the barrier of
+    /// tick t is passed).
+    std::vector<std::uint16_t> barrier_missing(std::uint64_t t) const
     {
+        std::vector<std::uint16_t> out;
         for (const std::uint16_t id : barrier_set(t))
         {
             const RemotePeer& p = peers.at(id);
             if (!p.has_heartbeat || p.heartbeat < t)
-                return false;
+                out.push_back(id);
         }
-        return true;
+        return out;
+    }
+
+    bool barrier_ok(std::uint64_t t) const { return barrier_missing(t).empty(); }
+
+    std::string describe_peer(std::uint16_t id) const
+    {
+        auto it = peers.find(id);
+        std::string out = "peer " + std::to_string(id);
+        if (it != peers.end() && !it->second.info.name.empty())
+            out += " (" + it->second.info.name + ")";
+        return out;
+    }
+
+    /// A message from peer `from` failed a check no honest peer fails (`counter`, one of
+    /// SessionStats' reject counters): dropped, counted, and the first one of each peer logged
+    /// with what was wrong, so the user can tell who.
+    void reject(std::uint64_t& counter, std::uint16_t from, std::string_view what)
+    {
+        ++counter;
+        auto it = peers.find(from);
+        if (it == peers.end())
+            return;
+        ++it->second.rejected;
+        if (it->second.warned_rejected)
+            return;
+        it->second.warned_rejected = true;
+        spdlog::warn(
+            "session: {} sent {}: dropped (an honest peer never does; further drops "
+            "are counted in the --stats column 'rejected')",
+            describe_peer(from), what);
+    }
+
+    /// reject() for a connection not bound to a peer yet: logged with its address, at most once
+    /// a second.
+    void reject(std::uint64_t& counter, net::PeerHandle h, std::string_view what)
+    {
+        ++counter;
+        if (last_now < next_unbound_warning)
+            return;
+        next_unbound_warning = last_now + 1.0;
+        const auto address = transport.remote_address(h);
+        spdlog::warn(
+            "session: the connection from {} sent {}: dropped (an honest peer never "
+            "does; counted in the --stats column 'rejected')",
+            address ? net::to_string(*address) : std::string("?"), what);
+    }
+    double next_unbound_warning = 0.0;
+
+    /// Exact mode, ready to step from `t` but for the members in `missing`: counts the wait,
+    /// warns once past k_barrier_warn_s, and on the master removes the members that have held
+    /// the lockstep past max_barrier_wait_s, as lost (docs/session.md §6): a hung or hostile
+    /// participant whose connection stays up would otherwise stop everyone for good.
+    void wait_at_barrier(std::uint64_t t, const std::vector<std::uint16_t>& missing)
+    {
+        if (barrier_since < 0.0 || barrier_tick != t)
+        {
+            barrier_tick = t;
+            barrier_since = last_now;
+            barrier_warned = false;
+            return;
+        }
+        const double waited = last_now - barrier_since;
+        std::string names;
+        for (const std::uint16_t id : missing)
+            names += (names.empty() ? "" : ", ") + describe_peer(id);
+        if (waited >= k_barrier_warn_s && !barrier_warned)
+        {
+            barrier_warned = true;
+            spdlog::warn(
+                "session: waited {:.1f} s at tick {} for {} to publish it (exact coupling steps "
+                "every member together){}",
+                waited, t, names,
+                s.role_ == SessionRole::Master && settings.max_barrier_wait_s > 0.0
+                    ? fmt::format("; removed from the session after {:g} s",
+                                  settings.max_barrier_wait_s)
+                    : std::string());
+        }
+        if (s.role_ != SessionRole::Master || settings.max_barrier_wait_s <= 0.0 ||
+            waited <= settings.max_barrier_wait_s)
+            return;
+        spdlog::warn(
+            "session: removing {} from the session: not one step published for {:.1f} s "
+            "(tick {}); its leaves go on from their last streamed state",
+            names, waited, t);
+        for (const std::uint16_t id : missing)
+        {
+            RemotePeer& p = peers.at(id);
+            ++counters.stalled_removed;
+            if (p.handle)
+            {
+                const net::PeerHandle h = *p.handle;
+                transport.disconnect(h, net::DisconnectReason::Kicked);
+                lose_peer(h, net::DisconnectReason::Kicked);  // at once, not at its ack
+            }
+            else
+                p.departed = true;
+        }
+        barrier_since = -1.0;
     }
 
     void apply_halos(std::uint64_t t)
@@ -1418,7 +1528,8 @@ struct Session::Impl
                 continue;
             if (!owns_every_node(part, h))
             {
-                ++counters.halo_rejects;
+                reject(counters.halo_rejects, h.sender.value,
+                       "halo values for nodes it did not own at tick " + std::to_string(t));
                 continue;
             }
             std::size_t k = 0;
@@ -1528,8 +1639,14 @@ struct Session::Impl
                     finish_leave_soon();
                 return;
             }
-            if (!barrier_ok(t) || !may_step(t))
+            if (!may_step(t))
                 return;
+            if (const auto missing = barrier_missing(t); !missing.empty())
+            {
+                wait_at_barrier(t, missing);
+                return;
+            }
+            barrier_since = -1.0;
             if (guard > 0 && seconds_since(call_start) >= call_budget)
             {
                 behind = true;
@@ -2492,6 +2609,13 @@ struct Session::Impl
             closed_stats.bad_datagrams += ls->second.bad_datagrams;
             last_stats.erase(ls);
         }
+        lose_peer(h, reason);
+    }
+
+    /// The session's part of a disconnection (on_disconnected without the traffic counters):
+    /// the peer on `h` is gone; the master tells the others and re-partitions.
+    void lose_peer(net::PeerHandle h, net::DisconnectReason reason)
+    {
         auto it = handle_ids.find(h);
         if (it == handle_ids.end())
         {
@@ -2515,6 +2639,18 @@ struct Session::Impl
         if (net::PeerId{id} == master_id && s.role_ != SessionRole::Master &&
             reason == net::DisconnectReason::Shutdown)
             close_all(net::DisconnectReason::Shutdown);  // the master ended the session
+        else if (net::PeerId{id} == master_id && s.role_ != SessionRole::Master &&
+                 reason == net::DisconnectReason::Kicked)
+        {
+            // The master removed us (exact coupling: we held the lockstep past its
+            // max_barrier_wait_s). The others drop us too; taking over as master would split
+            // the session.
+            refusal =
+                "the master removed this peer from the session (in exact coupling, a "
+                "peer that publishes no step for its max_barrier_wait_s, 10 s by default, "
+                "is removed: was this process stopped or far too slow?)";
+            close_all(net::DisconnectReason::Quit);
+        }
         else
             follow_master();
         if (leaving && handle_ids.empty())
@@ -2694,7 +2830,9 @@ struct Session::Impl
         if (const auto known = peers.find(m.header.sender.value);
             known != peers.end() && (known->second.handle || known->second.departed))
         {
-            ++counters.peer_claim_rejects;
+            reject(counters.peer_claim_rejects, h,
+                   "a Hello claiming the id of peer " + std::to_string(m.header.sender.value) +
+                       ", already connected or departed");
             transport.disconnect(h, net::DisconnectReason::Refused);
             return;
         }
@@ -3006,7 +3144,7 @@ struct Session::Impl
     {
         if (q.du.size() != n)
         {
-            ++counters.state_rejects;
+            reject(counters.state_rejects, from, "a leaf state with a wrong node count");
             return false;
         }
         const QuantisedLeaf* base = nullptr;
@@ -3025,7 +3163,8 @@ struct Session::Impl
         }
         if (q.extrapolated && (base == nullptr || !extrapolate(*base, time, n)))
         {
-            ++counters.state_rejects;
+            reject(counters.state_rejects, from,
+                   "an extrapolated leaf state whose values cannot be extrapolated");
             return false;
         }
         const auto bu = base == nullptr  ? std::span<const std::int32_t>()
@@ -3036,7 +3175,8 @@ struct Session::Impl
         if (!net::apply_residuals(q.du, bu, q.predicted, std::span(qu.data(), n)) ||
             !net::apply_residuals(q.dv, bv, q.predicted, std::span(qv.data(), n)))
         {
-            ++counters.state_rejects;
+            reject(counters.state_rejects, from,
+                   "a compressed leaf state whose values leave the 32-bit range");
             return false;
         }
         return true;
@@ -3151,7 +3291,9 @@ struct Session::Impl
         }
         else if (named->owners[l] != net::PeerId{from})
         {
-            ++counters.foreign_states;
+            reject(counters.foreign_states, from,
+                   "a state of leaf " + std::to_string(l) + ", which it does not own in epoch " +
+                       std::to_string(ls.epoch));
             return;
         }
         const core::TetraGrid& g = s.model_->grid();
@@ -3166,7 +3308,9 @@ struct Session::Impl
             if (kc > max_coarsen || s.coupling_ == Coupling::Fast || ls.node_offset != 0 ||
                 ls.node_count() != expect)
             {
-                ++counters.state_rejects;
+                reject(counters.state_rejects, from,
+                       "a coarse leaf state this session cannot take (wrong level, node count "
+                       "or coupling)");
                 return;
             }
         }
@@ -3342,7 +3486,12 @@ struct Session::Impl
             // dials every listed peer while it downloads) could fill the blobs with its bytes.
             if (!master_handle || h != *master_handle)
             {
-                ++counters.foreign_blobs;
+                if (auto id = handle_ids.find(h); id != handle_ids.end())
+                    reject(counters.foreign_blobs, id->second,
+                           "a chunk of the model or state, which only the master sends");
+                else
+                    reject(counters.foreign_blobs, h,
+                           "a chunk of the model or state, which only the master sends");
                 return;
             }
             on_blob(std::get<net::Blob>(m.body));
@@ -3383,7 +3532,8 @@ struct Session::Impl
             // peers' states part) or add phantoms that every reliable message is queued for.
             if (net::PeerId{from} != master_id)
             {
-                ++counters.peer_claim_rejects;
+                reject(counters.peer_claim_rejects, from,
+                       "a PeerJoined, which only the master sends");
                 return;
             }
             const auto& pj = std::get<net::PeerJoined>(m.body);
@@ -3460,7 +3610,7 @@ struct Session::Impl
             // forger's, are dropped, not applied by every member and recorded.
             if (p.info.role == net::Role::Viewer)
             {
-                ++counters.viewer_forces;
+                reject(counters.viewer_forces, from, "forces, though it joined as a viewer");
                 return;
             }
             p.forces.push_back(ForceEntry{m.header.tick, std::get<net::Force>(m.body).forces});
@@ -3574,9 +3724,16 @@ struct Session::Impl
         if (!owner_known && h.epoch > last && last_now < h.until)
             return true;  // its Partition is still on the way
         h.until = 0.0;
-        if (!owner_known || named->owners[l] != net::PeerId{h.sender})
+        if (!owner_known)
         {
-            ++(owner_known ? counters.foreign_states : counters.unknown_epoch_states);
+            ++counters.unknown_epoch_states;
+            return false;
+        }
+        if (named->owners[l] != net::PeerId{h.sender})
+        {
+            reject(counters.foreign_states, h.sender,
+                   "a state of leaf " + std::to_string(l) + ", which it does not own in epoch " +
+                       std::to_string(h.epoch));
             return false;
         }
         const bool mine = std::find(my_leaves.begin(), my_leaves.end(), l) != my_leaves.end() &&
@@ -4122,7 +4279,7 @@ std::vector<PeerStatus> Session::peer_status() const
         if (!p.departed)
             out.push_back(PeerStatus{net::PeerId{id}, p.info.role, p.info.name,
                                      net::PeerId{id} == impl_->master_id, p.handle.has_value(),
-                                     p.has_model, p.streams_to_us});
+                                     p.has_model, p.streams_to_us, p.rejected});
     return out;
 }
 
@@ -4145,6 +4302,15 @@ SessionStats Session::stats() const
     st.bad_datagrams = sum.bad_datagrams;
     for (const auto& [id, p] : impl_->peers)
         st.peers_connected += p.handle && !p.departed ? 1 : 0;
+    if (impl_->barrier_since >= 0.0 && !left_)
+    {
+        const auto missing = impl_->barrier_missing(impl_->barrier_tick);
+        if (!missing.empty())
+        {
+            st.barrier_wait_s = impl_->last_now - impl_->barrier_since;
+            st.barrier_peer = net::PeerId{missing.front()};
+        }
+    }
     if (model_)
     {
         // Age of the oldest leaf shown that this peer does not compute, against its own time

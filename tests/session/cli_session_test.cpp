@@ -273,6 +273,58 @@ TEST(SessionCli, InterruptLeavesAndEndsTheSessionCleanly)
     EXPECT_GE(rows(dir / "a.csv").size(), 1U) << "the stats file got its final row";
 }
 
+// A participant stopped with SIGSTOP (its connection stays open for ENet's 5 s at least) holds
+// an exact session at one tick: every peer waits for its step. The master removes it after
+// --max-barrier-wait (1.5 s here), logs whom and why, and shows the wait in its --stats
+// column barrier_wait_s; the other participant steps on; the stopped one, continued 3.5 s after
+// the stop, learns it was removed and exits 3 rather than taking over as master. Bounded by the
+// durations (about 12 s; a watchdog kills anything left after 25 s).
+TEST(SessionCli, AStoppedParticipantIsRemovedAndTheOthersGoOn)
+{
+    const auto dir = pliant::test::scratch_dir("session_cli_stopped");
+    const int port = test_port(1);
+    const std::string exe = PLIANT_EXE;
+    const std::string d = dir.string();
+    const std::string p = std::to_string(port);
+    const std::string join = "'" + exe + "' join 127.0.0.1:" + p;
+    const std::string cmd =
+        "cd '" + d + "' && rm -f *.rc *.csv *.log; ('" + exe + "' host --level 4 --port " + p +
+        " --duration 11 --max-barrier-wait 1.5 --stats host.csv > host.log 2>&1; echo $? > "
+        "host.rc) & sleep 0.5; (" +
+        join +
+        " --name steady --duration 10 --stats a.csv > a.log "
+        "2>&1; echo $? > a.rc) & sleep 0.3; " +
+        join +
+        " --name frozen --duration 10 > b.log "
+        "2>&1 & B=$!; (sleep 25; kill -9 $B) > /dev/null 2>&1 & W=$!; sleep 3; kill -STOP $B; "
+        "sleep 3.5; kill -CONT $B; wait $B; echo $? > b.rc; kill $W 2>/dev/null; wait";
+    ASSERT_EQ(std::system(cmd.c_str()), 0);
+    PLIANT_SKIP_IF_UNBOUND(dir, "host", port);
+    const std::string host_log = read(dir / "host.log");
+    const std::string b_log = read(dir / "b.log");
+    EXPECT_EQ(read(dir / "host.rc"), "0\n") << host_log;
+    EXPECT_EQ(read(dir / "a.rc"), "0\n") << read(dir / "a.log");
+    EXPECT_EQ(read(dir / "b.rc"), "3\n") << b_log;
+    EXPECT_NE(host_log.find("removing peer 2 (frozen) from the session"), std::string::npos)
+        << host_log;
+    EXPECT_NE(b_log.find("the master removed this peer"), std::string::npos) << b_log;
+    EXPECT_EQ(b_log.find("takes over"), std::string::npos) << b_log;
+    // The wait shows in the master's rows, and the steady participant steps to the end.
+    const auto h = rows(dir / "host.csv");
+    double longest = 0.0;
+    for (const Row& r : h)
+        longest = std::max(longest, value(r, "barrier_wait_s"));
+    EXPECT_GT(longest, 0.5);
+    EXPECT_EQ(column_sum(dir / "host.csv", "rejected"), 0.0);
+    const auto a = rows(dir / "a.csv");
+    ASSERT_GE(a.size(), 8U);
+    for (std::size_t k = a.size() - 2; k < a.size(); ++k)
+    {
+        EXPECT_GT(value(a[k], "steps"), 100.0) << "row " << k;
+        EXPECT_LT(value(a[k], "barrier_wait_s"), 0.5) << "row " << k;
+    }
+}
+
 // A peer that cannot keep real time says so, and why: a lone level-9 master steps the whole
 // object, several milliseconds per 0.45 ms tick, so after three slow seconds it warns with its
 // pace and names its steps as the cause (PaceWatch, tests/session/script_test.cpp).

@@ -195,5 +195,33 @@ TEST(PaceWatch, NamesTheWaitForTheNeighboursWhenTheStepsAreNotTheCause)
     EXPECT_EQ(wc->find("busy"), std::string::npos) << *wc;
 }
 
+// A member that publishes no step at all (exact coupling, a wait of a second or more at one
+// tick) is named as the cause, not the traffic; a sample over seconds of wall time (this process
+// was stopped) restarts the count instead of warning.
+TEST(PaceWatch, NamesAMemberThatStoppedSteppingAndIgnoresAStoppedProcess)
+{
+    PaceSample stuck{.wall_s = 1.0, .sim_s = 0.0, .step_s = 0.0, .steps = 0, .bytes_out = 2e3};
+    stuck.barrier_wait_s = 2.5;
+    stuck.barrier_peer = net::PeerId{7};
+    const std::optional<std::string> w = warning_after_slow_run(stuck);
+    ASSERT_TRUE(w.has_value());
+    EXPECT_NE(w->find("it has waited 2.5 s at one tick for peer 7 to publish it"),
+              std::string::npos)
+        << *w;
+    EXPECT_NE(w->find("--max-barrier-wait"), std::string::npos) << *w;
+    EXPECT_EQ(w->find("--compress"), std::string::npos) << *w;
+
+    PaceWatch watch;
+    const PaceSample slow{
+        .wall_s = 1.0, .sim_s = 0.25, .step_s = 0.9, .steps = 250, .bytes_out = 1e6};
+    const PaceSample stopped{.wall_s = 3.5, .sim_s = 0.0, .step_s = 0.0, .steps = 0};
+    EXPECT_FALSE(watch.add(slow));
+    EXPECT_FALSE(watch.add(slow));
+    EXPECT_FALSE(watch.add(stopped));  // not a third slow second: the count starts over
+    EXPECT_FALSE(watch.add(slow));
+    EXPECT_FALSE(watch.add(slow));
+    EXPECT_TRUE(watch.add(slow).has_value());
+}
+
 }  // namespace
 }  // namespace pliant::session

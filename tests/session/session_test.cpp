@@ -818,6 +818,8 @@ TEST(SessionExact, AHaloCarryingNodesItsSenderDoesNotOwnIsDropped)
     ASSERT_TRUE(h.pump_until([&] { return all_at(h, tick + 20); }, 20000));
     EXPECT_EQ(m.stats().halo_rejects, 1U);
     EXPECT_EQ(h.peers[1]->stats().halo_rejects, 0U);
+    for (const PeerStatus& ps : m.peer_status())
+        EXPECT_EQ(ps.rejected, ps.id == h.peers[1]->id() ? 1U : 0U) << "peer " << ps.id.value;
     // No forces: one process stays at rest, and so does every owned node.
     for (const auto& p : h.peers)
     {
@@ -882,6 +884,11 @@ TEST(SessionExact, ALeafStateFromAPeerThatDoesNotOwnTheLeafIsDropped)
     EXPECT_EQ(m.epoch(), ahead - 1);
     EXPECT_EQ(v.stats().foreign_states, 1U);
     EXPECT_EQ(v.stats().unknown_epoch_states, 2U);
+    // The foreign state is laid at its sender's door (an unknown epoch may be an honest
+    // peer's, superseded long ago).
+    EXPECT_EQ(v.stats().rejected_messages(), 1U);
+    for (const PeerStatus& ps : v.peer_status())
+        EXPECT_EQ(ps.rejected, ps.id == h.peers[1]->id() ? 1U : 0U) << "peer " << ps.id.value;
     EXPECT_EQ(m.stats().foreign_states + h.peers[1]->stats().foreign_states, 0U);
     // No forces: one process stays at rest, and so does what the viewer shows.
     const core::TetraGrid& g = m.model()->grid();
@@ -995,6 +1002,78 @@ TEST(SessionForged, StatesOfAFutureEpochNeverReachTheDisplayOrTheSimulation)
         // Held 3 s for a Partition that never came, then dropped and counted.
         EXPECT_GT(m.stats().unknown_epoch_states + h.peers[1]->stats().unknown_epoch_states, 0U);
     }
+}
+
+// A participant that stops stepping while its connection stays up (a hung process that still
+// answers the network, or a hostile one: the audit's "claims points and never steps") held an
+// exact session for good: every member waits for its Heartbeat at each tick. The master now
+// removes it once it has held the lockstep max_barrier_wait_s (here 1 s); the others go on with
+// its leaves from their last streamed state, and it learns why it is out.
+TEST(SessionForged, AMemberThatStopsSteppingIsRemovedAfterTheBarrierWait)
+{
+    Harness h;
+    SessionSettings master = settings_for(Coupling::Exact, "m");
+    master.max_ticks = 0;
+    master.max_barrier_wait_s = 1.0;
+    SessionSettings member = settings_for(Coupling::Exact, "p");
+    member.max_ticks = 0;
+    Session& m = h.host(4, master);
+    m.set_forces({face_pull(40, 0.3)});
+    const auto faces = static_cast<std::uint32_t>(m.model()->grid().face_count());
+    for (std::uint32_t k = 1; k < 3; ++k)
+    {
+        member.name = k == 1 ? "steady" : "frozen";
+        Session& p = h.join(net::Role::Participant, member);
+        p.set_points_of_interest(
+            {net::Target{net::TargetKind::Face, k * faces / 3U, {0, 0, 0}, 0.0}});
+    }
+    ASSERT_TRUE(pump_until_partitioned(h, 3, 200000));
+    for (int k = 0; k < 1000; ++k)  // 0.5 s of a running session
+        h.pump_once(0.0005);
+    Session& steady = *h.peers[1];
+    Session& frozen = *h.peers[2];
+    const net::PeerId frozen_id = frozen.id();
+    // From here the frozen peer answers the network (poll) but never steps (advance).
+    const auto pump_frozen = [&]
+    {
+        for (std::size_t k = 0; k < 3; ++k)
+            h.peers[k]->poll();
+        m.advance(h.now);
+        steady.advance(h.now);
+        h.net.advance(0.0005);
+        h.now += 0.0005;
+    };
+    const double frozen_at = h.now;
+    const std::uint64_t tick_at = m.tick();
+    for (int k = 0; k < 1800; ++k)  // 0.9 s: waited, not removed yet
+        pump_frozen();
+    EXPECT_LE(m.tick(), tick_at + 2) << "the lockstep cannot step without the frozen member";
+    EXPECT_EQ(m.stats().stalled_removed, 0U);
+    EXPECT_GT(m.stats().barrier_wait_s, 0.8);
+    EXPECT_EQ(m.stats().barrier_peer, frozen_id);
+    EXPECT_EQ(steady.stats().barrier_peer, frozen_id);
+    for (int k = 0; k < 4000 && m.stats().stalled_removed == 0; ++k)
+        pump_frozen();
+    ASSERT_GT(m.stats().stalled_removed, 0U);
+    EXPECT_GT(h.now - frozen_at, 1.0);
+    EXPECT_LT(h.now - frozen_at, 1.2);
+    EXPECT_EQ(m.stats().stalled_removed, 1U);
+    const std::uint64_t tick_removed = m.tick();
+    for (int k = 0; k < 2000; ++k)  // 1 s
+        pump_frozen();
+    // The others go on, in step, without it (one exchange per tick over the simulated links'
+    // latency: ~200 ticks in 1 s; 2 at most in the 0.9 s frozen); its leaves are theirs.
+    EXPECT_GT(m.tick(), tick_removed + 100);
+    EXPECT_GT(steady.tick(), tick_removed + 100);
+    EXPECT_EQ(m.stats().barrier_wait_s, 0.0);
+    for (const net::PeerId o : m.owners())
+        EXPECT_NE(o, frozen_id);
+    EXPECT_EQ(m.owners(), steady.owners());
+    EXPECT_EQ(steady.stats().adopted_leaves + m.stats().adopted_leaves > 0, true);
+    // The removed peer is told, and leaves rather than taking over as master.
+    EXPECT_TRUE(frozen.left());
+    EXPECT_NE(frozen.refusal().find("removed this peer"), std::string::npos) << frozen.refusal();
+    EXPECT_EQ(frozen.role(), SessionRole::Participant);
 }
 
 // Points a quarter of the faces apart at level 5 with 4 members (pliant_bench_session's seats):

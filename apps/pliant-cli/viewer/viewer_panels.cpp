@@ -270,6 +270,12 @@ void Viewer::draw_panels()
                                            : !p.has_model    ? "joining"
                                            : p.streams_to_us ? "streaming"
                                                              : "connected");
+                    if (p.rejected > 0)  // messages no honest peer sends (logged, --stats)
+                    {
+                        ImGui::SameLine();
+                        ImGui::TextColored(ImVec4(1.0F, 0.4F, 0.3F, 1.0F), "%llu rejected",
+                                           static_cast<unsigned long long>(p.rejected));
+                    }
                     ImGui::TableNextColumn();
                     ImGui::Text("%zu", nodes);
                 }

@@ -79,6 +79,11 @@ struct PaceSample
     /// the cores adds to the message that other work competes for them.
     double load_average = -1.0;
     int cores = 0;
+    /// Exact coupling: how long the peer has waited at its current tick when the sample was
+    /// taken, and for whom (SessionStats::barrier_wait_s, barrier_peer). A wait of a second or
+    /// more is a member that stopped stepping, not the traffic.
+    double barrier_wait_s = 0.0;
+    net::PeerId barrier_peer = net::k_no_peer;
 };
 
 /// The machine's 1-minute load average (/proc/loadavg), or -1 where there is none.
@@ -89,7 +94,8 @@ struct PaceSample
 /// the pace, the steps per second and the likely cause: its own steps (they take most of its
 /// time: a coarser level or more participants would keep up), or, in exact coupling, the wait
 /// for its neighbours' halos every tick (with the bytes it sends and the options that cut
-/// them), or, in fast coupling, the wait for fresh neighbour states (max_halo_age_s). At most
+/// them; or a member that publishes no step at all, named), or, in fast coupling, the wait for
+/// fresh neighbour states (max_halo_age_s). At most
 /// one message per k_quiet_s of samples. The coupling comes with each sample (a joiner learns it
 /// from the welcome).
 class PaceWatch
@@ -100,6 +106,9 @@ public:
     static constexpr double k_quiet_s = 30.0;
     /// Steps taking at least this share of the wall time make the steps the cause.
     static constexpr double k_step_bound = 0.6;
+    /// A sample covering more wall time than this is a process that did not run (stopped with
+    /// SIGSTOP, suspended): it restarts the count instead of adding to it.
+    static constexpr double k_gap_s = 2.0;
 
     /// Adds one sample. \return the warning to log, if it is due.
     std::optional<std::string> add(const PaceSample& sample);

@@ -179,6 +179,12 @@ struct SessionSettings
     /// interpolated between the states received, at a playout time per sender delayed just
     /// enough to have a state on each side (docs/session.md §5.3). false: view = display.
     bool interpolate_view = true;
+    /// Exact mode, master only: a member that keeps the lockstep waiting this long at one tick
+    /// (its Heartbeat never comes, yet its connection stays up: a hung or hostile peer) is
+    /// removed from the session as if lost, and its leaves continue from their last streamed
+    /// state (docs/session.md §6), s; 0: never. Any peer warns after k_barrier_warn_s, naming
+    /// the peers it waits for (SessionStats::barrier_wait_s, barrier_peer).
+    double max_barrier_wait_s = 10.0;
     std::string name = "peer";      ///< 1..32 printable ASCII
     std::uint16_t listen_port = 0;  ///< announced in Hello; 0: the port the master sees
     std::uint32_t session_id = 0;   ///< master only; 0 picks a fixed non-zero id
@@ -277,7 +283,28 @@ struct SessionStats
     /// Blob chunks (the Welcome's model and state) from a connection other than the master's:
     /// dropped (docs/protocol.md, Blob).
     std::uint64_t foreign_blobs = 0;
+    /// The sum of the counters above that only a faulty or hostile peer makes grow
+    /// (state_rejects, halo_rejects, foreign_states, peer_claim_rejects, foreign_blobs,
+    /// viewer_forces): the --stats column `rejected`. Each peer's share is in PeerStatus, and
+    /// its first such message is logged.
+    [[nodiscard]] std::uint64_t rejected_messages() const noexcept
+    {
+        return state_rejects + halo_rejects + foreign_states + peer_claim_rejects + foreign_blobs +
+               viewer_forces;
+    }
+    /// Exact mode: how long this peer has waited at its current tick for the other members'
+    /// Heartbeats, s (0: not waiting), and the lowest id among those it waits for (k_no_peer:
+    /// none). A peer waits a round trip or so per tick; seconds mean a member stopped stepping.
+    double barrier_wait_s = 0.0;
+    net::PeerId barrier_peer = net::k_no_peer;
+    /// Master, exact mode: members removed for holding the lockstep longer than
+    /// SessionSettings::max_barrier_wait_s.
+    std::uint64_t stalled_removed = 0;
 };
+
+/// Exact mode: a peer waiting this long at one tick for a member's Heartbeat logs a warning
+/// naming it, s.
+inline constexpr double k_barrier_warn_s = 2.0;
 
 /// What a peer knows of another one (Session::peer_status), for a peer list.
 struct PeerStatus
@@ -289,6 +316,9 @@ struct PeerStatus
     bool connected = false;      ///< a greeted connection (SessionStats::peers_connected)
     bool has_model = false;      ///< it sent Ready: it holds the model, leaf states go to it
     bool streams_to_us = false;  ///< its leaf states have arrived here
+    /// Its messages dropped here for failing a check no honest peer fails (a state or halo of
+    /// nodes it does not own, forces from a viewer, ...; SessionStats::rejected_messages).
+    std::uint64_t rejected = 0;
 };
 
 class Session
@@ -422,7 +452,9 @@ public:
     [[nodiscard]] std::vector<PeerStatus> peer_status() const;
     [[nodiscard]] SessionStats stats() const;
     /// Why this peer left on its own when the session refused its settings, or it refused the
-    /// master's model or state blob (empty otherwise): a joiner learns the level and coupling
+    /// master's model or state blob, or why it had to leave: the master removed it (exact
+    /// coupling: it held the lockstep past max_barrier_wait_s) (empty otherwise): a joiner
+    /// learns the level and coupling
     /// only from the model (e.g. stream_coarsen in a fast session, docs/session.md §5.2), and
     /// decodes the blobs only once they are in (docs/protocol.md, Blob).
     [[nodiscard]] std::string refusal() const;
