@@ -243,4 +243,44 @@ core::Result<RecordedHash> save_master_recording(const session::Session& master,
     return out;
 }
 
+std::string join_failure_message(const std::string& master, const session::JoinFailure& f,
+                                 bool secured)
+{
+    const std::string why = std::string(" (reason ") + std::string(net::to_string(f.reason)) + ")";
+    const std::string head = "join: " + master + " ";
+    switch (f.reason)
+    {
+    case net::DisconnectReason::Refused:
+        return head + "refused the connection" + why +
+               (secured ? ": it has another --passphrase or --key-file (or PLIANT_PASSPHRASE)"
+                        : ": it may need a --passphrase or --key-file (or PLIANT_PASSPHRASE)") +
+               ", or it is a peer of the session but not its master (join the master's address;"
+               " after a failover, the lowest-id participant's)";
+    case net::DisconnectReason::TooManyBadDatagrams:
+        return head + "and this peer could not read each other's datagrams" + why +
+               (secured ? ": this peer has a secret and the master seemingly none; give both"
+                          " the same --passphrase or --key-file, or neither"
+                        : ": the master seemingly has a --passphrase or --key-file and this peer"
+                          " none; give this peer the same one (or PLIANT_PASSPHRASE)");
+    case net::DisconnectReason::TimedOut:
+        if (f.connected)
+            return head + "stopped answering before it welcomed this peer" + why +
+                   ": it may have crashed, or be no longer the master";
+        return head + "never answered" + why +
+               ": check the address and port, that `pliant host` runs there (after a failover,"
+               " join the new master), and that no firewall drops UDP to it" +
+               (secured ? ", and that the master has the same --passphrase or --key-file" : "");
+    case net::DisconnectReason::ProtocolMismatch:
+    case net::DisconnectReason::WrongSession:
+        return head + "speaks another protocol" + why +
+               ": run the same pliant version on every peer";
+    case net::DisconnectReason::SessionFull:
+        return head + "has no room for another peer" + why +
+               ": all its peer slots (64) are taken, or this machine's address holds 16 "
+               "connections to it already; try again when a peer has left";
+    case net::DisconnectReason::Shutdown: return head + "was ending the session" + why;
+    default: return head + "closed the connection before the model arrived" + why;
+    }
+}
+
 }  // namespace pliant::cli

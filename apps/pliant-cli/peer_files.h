@@ -85,4 +85,10 @@ struct RecordedHash
 core::Result<RecordedHash> save_master_recording(const session::Session& master,
                                                  const std::filesystem::path& path);
 
+/// What a joiner's user can do about a connection to the master that ended before the Welcome
+/// (docs/operations.md, "What failures look like"): "join: MASTER ..." with the reason and the
+/// remedy. `secured`: this peer has a secret (`pliant join`, and the viewer's join).
+[[nodiscard]] std::string join_failure_message(const std::string& master,
+                                               const session::JoinFailure& f, bool secured);
+
 }  // namespace pliant::cli

@@ -104,6 +104,7 @@ struct Connection
     bool connected = false;
     Clock::time_point started{};
     DisconnectReason local_reason = DisconnectReason::None;  // set by disconnect()
+    bool hidden = false;  // refused at its CONNECT (no room): never reported, nor its end
     PeerStats stats;
 };
 
@@ -138,7 +139,7 @@ public:
             return core::fail(core::ErrorCode::NetworkError, "EnetTransport::open: already open");
         const ENetAddress address = to_enet(bind);
         errno = 0;
-        host_ = enet_host_create(&address, settings_.max_peers, k_channel_count, 0, 0);
+        host_ = enet_host_create(&address, settings_.max_peers + 1, k_channel_count, 0, 0);
         if (host_ == nullptr)
         {
             // ENet keeps the socket's errno (bind's, most often EADDRINUSE).
@@ -167,7 +168,9 @@ public:
         if (host_ == nullptr)
             return core::fail(core::ErrorCode::NetworkError, "EnetTransport::connect: not open");
         const ENetAddress address = to_enet(remote);
-        ENetPeer* peer = enet_host_connect(host_, &address, k_channel_count, 0);
+        ENetPeer* peer = held() < settings_.max_peers
+                             ? enet_host_connect(host_, &address, k_channel_count, 0)
+                             : nullptr;
         if (peer == nullptr)
             return core::fail(core::ErrorCode::NetworkError,
                               "EnetTransport::connect: no free peer slot for " + to_string(remote));
@@ -231,7 +234,18 @@ public:
         {
             PeerHandle handle = handle_of(ev.peer);
             if (handle.value == 0)
-                handle = adopt(ev.peer);  // an incoming connection
+            {
+                // An incoming connection, unless there is no room for it.
+                const std::size_t from_source = held(ev.peer->address.host);
+                const bool full = held() >= settings_.max_peers;
+                handle = adopt(ev.peer);
+                if (full || (settings_.max_peers_per_source > 0 &&
+                             from_source >= settings_.max_peers_per_source))
+                {
+                    refuse(connections_.at(handle.value), full);
+                    return std::nullopt;
+                }
+            }
             Connection& c = connections_.at(handle.value);
             c.connected = true;
             enet_peer_timeout(ev.peer, settings_.timeout_limit, settings_.timeout_min_ms,
@@ -248,6 +262,12 @@ public:
             const PeerHandle handle = handle_of(ev.peer);
             if (handle.value == 0)
                 return std::nullopt;
+            if (connections_.at(handle.value).hidden)
+            {
+                ev.peer->data = nullptr;
+                connections_.erase(handle.value);
+                return std::nullopt;
+            }
             TransportEvent out;
             out.kind = TransportEvent::Kind::Disconnected;
             out.peer = handle;
@@ -497,6 +517,44 @@ private:
         }
     }
 
+    /// Connections held (connected or connecting, not being closed by us), all of them or those
+    /// with the remote IPv4 address `host`.
+    [[nodiscard]] std::size_t held(std::optional<enet_uint32> host = std::nullopt) const
+    {
+        std::size_t n = 0;
+        for (const auto& [h, c] : connections_)
+            if (!c.hidden && c.local_reason == DisconnectReason::None &&
+                (!host || c.peer->address.host == *host))
+                ++n;
+        return n;
+    }
+
+    /// Closes an incoming connection at its CONNECT, with reason SessionFull: the dialer learns
+    /// why at once. Neither its connection nor its end is reported.
+    void refuse(Connection& c, bool full)
+    {
+        c.hidden = true;
+        c.local_reason = DisconnectReason::SessionFull;
+        ++(full ? counters_.refused_full : counters_.refused_per_source);
+        const auto now = Clock::now();
+        if (now - last_full_warning_ > std::chrono::seconds(10))
+        {
+            last_full_warning_ = now;
+            const std::string from = to_string(from_enet(c.peer->address));
+            if (full)
+                spdlog::warn(
+                    "net: refused the connection from {}: all {} peer slots are taken "
+                    "(reason session-full)",
+                    from, settings_.max_peers);
+            else
+                spdlog::warn(
+                    "net: refused the connection from {}: that address holds {} "
+                    "connections already (reason session-full)",
+                    from, settings_.max_peers_per_source);
+        }
+        enet_peer_disconnect(c.peer, static_cast<enet_uint32>(DisconnectReason::SessionFull));
+    }
+
     PeerHandle adopt(ENetPeer* peer)
     {
         const std::uint32_t handle = next_handle_++;
@@ -563,6 +621,7 @@ private:
     std::map<const ENetPeer*, enet_uint32> answered_;  // half-open, the dialer answered: connect id
     Clock::time_point last_scan_{};
     Clock::time_point last_warning_{};
+    Clock::time_point last_full_warning_{};
     EnetCounters counters_;
 };
 

@@ -316,6 +316,78 @@ TEST(EnetTransport, APortInUseIsRefusedWithTheReason)
     EXPECT_NE(again.error().message.find("--port"), std::string::npos) << again.error().message;
 }
 
+// A host with no room answers: the dialer beyond max_peers, or beyond max_peers_per_source from
+// one address, is disconnected with reason SessionFull within a round trip or so (ENet alone
+// ignores a CONNECT when its slots are taken, and the dialer timed out after 5 s, "never
+// answered"). The host reports neither that connection nor its end, counts it, and takes a new
+// dialer once a slot is free again.
+TEST(EnetTransport, AHostWithNoRoomSaysSoInsteadOfStayingSilent)
+{
+    for (const bool per_source : {false, true})
+    {
+        SCOPED_TRACE(per_source ? "max_peers_per_source 2" : "max_peers 2");
+        EnetSettings hs;
+        hs.max_peers = per_source ? 8 : 2;
+        hs.max_peers_per_source = per_source ? 2 : 16;
+        auto host = make_enet_transport(hs);
+        auto bound = host->open(Address{{127, 0, 0, 1}, 0});
+        if (!bound)
+            GTEST_SKIP() << bound.error().message;
+        std::vector<std::unique_ptr<Transport>> dialers;
+        std::vector<std::optional<TransportEvent>> last(4);
+        std::vector<TransportEvent> at_host;
+        const auto pump_until = [&](const std::function<bool()>& done)
+        {
+            const auto end = Clock::now() + k_deadline;
+            while (Clock::now() < end && !done())
+            {
+                while (auto ev = host->poll(1))
+                    at_host.push_back(std::move(*ev));
+                for (std::size_t k = 0; k < dialers.size(); ++k)
+                    while (auto ev = dialers[k]->poll(0))
+                        last[k] = std::move(*ev);
+            }
+            return done();
+        };
+        const auto dial = [&]
+        {
+            dialers.push_back(make_enet_transport());
+            ASSERT_TRUE(dialers.back()->open(Address{{127, 0, 0, 1}, 0}));
+            ASSERT_TRUE(dialers.back()->connect(*bound));
+        };
+        const auto is = [&](std::size_t k, TransportEvent::Kind kind)
+        { return last[k] && last[k]->kind == kind; };
+        for (int k = 0; k < 2; ++k)
+            dial();
+        ASSERT_TRUE(pump_until([&] { return at_host.size() == 2; }));
+        ASSERT_TRUE(pump_until(
+            [&] {
+                return is(0, TransportEvent::Kind::Connected) &&
+                       is(1, TransportEvent::Kind::Connected);
+            }));
+        const auto t0 = Clock::now();
+        dial();
+        ASSERT_TRUE(pump_until([&] { return is(2, TransportEvent::Kind::Disconnected); }));
+        EXPECT_EQ(last[2]->reason, DisconnectReason::SessionFull);
+        EXPECT_LT(std::chrono::duration<double>(Clock::now() - t0).count(), 2.0)
+            << "answered, not timed out";
+        EXPECT_EQ(at_host.size(), 2U) << "the refused connection is not reported";
+        EXPECT_EQ(host->peers().size(), 2U);
+        const auto counters = enet_counters(*host).value();
+        EXPECT_EQ(counters.refused_full, per_source ? 0U : 1U);
+        EXPECT_EQ(counters.refused_per_source, per_source ? 1U : 0U);
+        // A slot freed: the next dialer gets in.
+        host->disconnect(at_host[0].peer, DisconnectReason::Quit);
+        ASSERT_TRUE(pump_until([&] { return is(0, TransportEvent::Kind::Disconnected); }));
+        ASSERT_TRUE(pump_until([&] { return at_host.size() == 3; }));
+        dial();
+        ASSERT_TRUE(pump_until([&] { return is(3, TransportEvent::Kind::Connected); }));
+        ASSERT_TRUE(pump_until([&] { return at_host.size() == 4; }));
+        EXPECT_EQ(at_host[3].kind, TransportEvent::Kind::Connected);
+        EXPECT_EQ(host->peers().size(), 2U);
+    }
+}
+
 TEST(EnetTransport, ConnectingToAClosedPortTimesOut)
 {
     EnetSettings s;

@@ -16,6 +16,7 @@
 #include <imgui_impl_opengl3.h>
 #include <spdlog/spdlog.h>
 
+#include "../peer_files.h"
 #include "picking.h"
 #include "viewer_app.h"
 
@@ -490,6 +491,10 @@ void Viewer::pump_session(double now_s)
                 "the session at " + session_address_ + " refused this peer: " + session_->refusal();
         else if (session_->role() == session::SessionRole::Master)
             why = "the session hosted on " + session_address_ + " ended";
+        else if (const auto failure = session_->join_failure();
+                 failure && failure->reason != net::DisconnectReason::TimedOut &&
+                 failure->reason != net::DisconnectReason::None)
+            why = cli::join_failure_message(session_address_, *failure, false);
         else if (!session_->ready())
             why = "could not reach the master at " + session_address_ +
                   ": no answer (is `pliant host` running there, on that UDP port?)";

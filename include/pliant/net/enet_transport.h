@@ -42,7 +42,14 @@ namespace pliant::net
 
 struct EnetSettings
 {
-    std::size_t max_peers = 64;            ///< connections the host accepts (ENet allows 4095)
+    /// Connections the host holds at once, incoming and outgoing (ENet allows 4095). One more
+    /// slot is kept, so that a connection beyond them is answered and closed with reason
+    /// SessionFull (the dialer learns why) instead of being ignored until its timeout.
+    std::size_t max_peers = 64;
+    /// Connections with one remote IPv4 address (any port) at once; one beyond them is closed
+    /// with reason SessionFull (0: no limit). Bounds how many of max_peers one machine can hold
+    /// (docs/protocol.md §10.5).
+    std::size_t max_peers_per_source = 16;
     std::uint32_t timeout_limit = 32;      ///< ENet's unacknowledged-packet limit
     std::uint32_t timeout_min_ms = 5000;   ///< a silent peer is dropped after at least this
     std::uint32_t timeout_max_ms = 30000;  ///< and at most this
@@ -74,6 +81,10 @@ struct EnetCounters
     /// Incoming handshakes unacknowledged past half_open_timeout_ms but kept, because the dialer
     /// answered (its acknowledgement was lost; ENet's next VERIFY_CONNECT completes them).
     std::uint64_t half_open_kept = 0;
+    /// Incoming connections closed at once with reason SessionFull: max_peers were held, or
+    /// max_peers_per_source from that address.
+    std::uint64_t refused_full = 0;
+    std::uint64_t refused_per_source = 0;
 };
 
 /// The counters of a transport made by make_enet_transport(); nothing for another transport.
