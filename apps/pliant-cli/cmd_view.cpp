@@ -13,6 +13,8 @@
 #include "viewer/viewer.h"
 #endif
 
+#include <pliant/net/transport.h>
+
 #include <spdlog/spdlog.h>
 
 #include <cstdio>
@@ -59,6 +61,15 @@ int run_view(const ViewOptions& opt)
         return k_exit_usage;
     }
     std::error_code ec;
+    // INPUT is checked before any window opens: a misspelt file is bad input, whether or not a
+    // display is at hand (it was reported as "no display" first).
+    if (!opt.input.empty() && !std::filesystem::exists(opt.input, ec))
+        if (auto address = net::resolve_address(opt.input); !address)
+            return report({core::ErrorCode::IoError,
+                           "view: " + opt.input +
+                               " is neither an existing file nor a HOST:PORT to join "
+                               "(a.b.c.d:port, localhost:port or hostname:port): " +
+                               address.error().message});
     if (opt.level_given && lower_extension(opt.input) == ".pgrid")
         spdlog::warn("view: --level is the remeshing level of a mesh; {} keeps its own level",
                      opt.input);

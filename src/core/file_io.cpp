@@ -125,8 +125,8 @@ Result<void> write_files(std::span<const FileContent> files, std::string_view wh
     const auto failure = [&](const fs::path& path, const std::string& what, int err)
     {
         discard();
-        return fail(ErrorCode::IoError,
-                    std::string(who) + ": " + path.string() + ": " + what + ": " + reason(err));
+        return fail(ErrorCode::IoError, (who.empty() ? std::string() : std::string(who) + ": ") +
+                                            path.string() + ": " + what + ": " + reason(err));
     };
     // Every new file written and closed first; nothing replaced until all of them are.
     for (const FileContent& f : files)

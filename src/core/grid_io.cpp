@@ -110,15 +110,14 @@ Result<std::vector<std::byte>> encode_grid(const GridFile& file, const std::stri
     {
         if (f.values.level() != file.level)
             return fail(ErrorCode::InvalidArgument,
-                        "save_grid: channel '" + f.name + "' is of level " +
+                        source + ": channel '" + f.name + "' is of level " +
                             std::to_string(f.values.level()) + ", the file of level " +
                             std::to_string(file.level));
-        if (auto ok = check_channel(*grid, f.name, f.values, "save_grid: " + source + ": ", false);
-            !ok)
+        if (auto ok = check_channel(*grid, f.name, f.values, source + ": ", false); !ok)
             return fail(ErrorCode::InvalidArgument, ok.error().message);
         if (file.find(f.name) != &f.values)
             return fail(ErrorCode::InvalidArgument,
-                        "save_grid: " + source + ": channel '" + f.name + "' appears twice");
+                        source + ": channel '" + f.name + "' appears twice");
         char name[k_name_bytes] = {};
         std::memcpy(name, f.name.data(), f.name.size());
         out.insert(out.end(), reinterpret_cast<const std::byte*>(name),
@@ -138,7 +137,7 @@ Result<void> save_grid(const std::filesystem::path& path, const GridFile& file)
     auto out = encode_grid(file, path.string());
     if (!out)
         return out.error();
-    return write_file(path, *out, "save_grid");
+    return write_file(path, *out, "");
 }
 
 Result<GridFile> decode_grid(std::span<const std::byte> bytes, const std::string& source)
@@ -278,7 +277,7 @@ Result<void> save_pfm(const std::filesystem::path& path, const Vec3Field<double>
                 const auto* b = reinterpret_cast<const std::byte*>(&v);
                 out.insert(out.end(), b, b + sizeof v);
             }
-    return write_file(path, out, "save_pfm");
+    return write_file(path, out, "");
 }
 
 }  // namespace pliant::core

@@ -136,7 +136,7 @@ core::Result<void> check_finite(const std::filesystem::path& path, const TriMesh
         const core::Vec3& p = mesh.positions[i];
         if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
             return fail(ErrorCode::NonFiniteCoordinate,
-                        "export_mesh: " + path.string() + ": vertex " + std::to_string(i) +
+                        path.string() + ": vertex " + std::to_string(i) +
                             " has a coordinate that is not finite; nothing written");
     }
     return {};
@@ -213,7 +213,7 @@ std::unique_ptr<aiScene> make_scene(const TriMesh& mesh)
 /// Checks what Assimp would otherwise read out of bounds or write as garbage.
 core::Result<void> check_for_gltf(const std::filesystem::path& path, const TriMesh& mesh)
 {
-    const std::string name = "export_mesh: " + path.string();
+    const std::string name = path.string();
     if (mesh.faces.empty())
         return fail(ErrorCode::EmptyInput, name + ": no faces to write");
     if (mesh.positions.size() > std::numeric_limits<std::uint32_t>::max() / 2 ||
@@ -296,7 +296,7 @@ core::Result<void> write_gltf(const std::filesystem::path& path, const TriMesh& 
 {
     if (auto ok = check_for_gltf(path, mesh); !ok)
         return ok;
-    const std::string name = "export_mesh: " + path.string();
+    const std::string name = path.string();
     // The blob name is the stem: the exporter names the .gltf's buffer "<stem>.bin" after it.
     const std::string stem = path.stem().string();
     const std::unique_ptr<aiScene> scene = make_scene(mesh);
@@ -358,7 +358,7 @@ core::Result<void> write_gltf(const std::filesystem::path& path, const TriMesh& 
     if (cleaned.empty())
         return fail(ErrorCode::IoError, name + ": Assimp's glTF exporter wrote a malformed .glb");
     files.push_back({path, bytes_of(cleaned)});
-    return core::write_files(files, "export_mesh");
+    return core::write_files(files, "");
 }
 
 }  // namespace
@@ -380,10 +380,9 @@ core::Result<void> export_mesh(const std::filesystem::path& path, const TriMesh&
         return write_gltf(path, mesh, ext == ".glb");
     else
         return fail(ErrorCode::UnsupportedFormat,
-                    "export_mesh: " + path.string() + ": unsupported format '" + ext +
+                    path.string() + ": unsupported format '" + ext +
                         "' (pliant writes .obj, .ply, .gltf and .glb)");
-    return core::write_file(path, bytes_of(std::string_view(bytes.data(), bytes.size())),
-                            "export_mesh");
+    return core::write_file(path, bytes_of(std::string_view(bytes.data(), bytes.size())), "");
 }
 
 TriMesh from_grid(const core::TetraGrid& grid, const core::Vec3Field<double>& positions)

@@ -47,17 +47,17 @@ core::Result<void> write_png(const std::filesystem::path& path, const Image& ima
     {
         const std::string message = png.message;
         png_image_free(&png);
-        return core::fail(core::ErrorCode::IoError, "write_png: " + path.string() + ": " + message);
+        return core::fail(core::ErrorCode::IoError, path.string() + ": " + message);
     }
     std::vector<std::byte> encoded(size);
     if (png_image_write_to_memory(&png, encoded.data(), &size, 0, buffer, 0, nullptr) == 0)
     {
         const std::string message = png.message;
         png_image_free(&png);
-        return core::fail(core::ErrorCode::IoError, "write_png: " + path.string() + ": " + message);
+        return core::fail(core::ErrorCode::IoError, path.string() + ": " + message);
     }
     encoded.resize(size);
-    return core::write_file(path, encoded, "write_png");
+    return core::write_file(path, encoded, "");
 }
 
 core::Result<Image> read_png(const std::filesystem::path& path)

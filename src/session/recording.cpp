@@ -115,7 +115,7 @@ core::Result<void> save_recording(const std::filesystem::path& path, const Recor
     auto out = encode_recording(recording);
     if (!out)
         return out.error();
-    return core::write_file(path, *out, "save_recording");
+    return core::write_file(path, *out, "");
 }
 
 core::Result<Recording> load_recording(const std::filesystem::path& path)

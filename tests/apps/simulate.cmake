@@ -267,7 +267,7 @@ if(TARGET pliant)
     add_test(NAME cli_simulate_frame_write_fails
              COMMAND ${CMAKE_COMMAND}
                      "-DCOMMAND=$<TARGET_FILE:pliant>;simulate;--scenario;${scenarios}/partial_interval.toml;-o;${_fail};--level;3;-j;1"
-                     -DEXIT=1 "-DSTDERR_REGEX=frame_00001.pgrid: cannot open for writing: Is a directory"
+                     -DEXIT=1 "-DSTDERR_REGEX=error: /[^ ]*/frame_00001.pgrid: cannot open for writing: Is a directory"
                      "-DKEEP=${_fail}/frame_00001.pgrid/keep.txt"
                      -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
     set_tests_properties(cli_simulate_frame_write_fails PROPERTIES TIMEOUT 60

@@ -173,15 +173,22 @@ if(TARGET pliant AND PLIANT_HAVE_VIEWER AND PLIANT_XVFB)
     set_tests_properties(cli_view_join_unreachable PROPERTIES TIMEOUT 60
         ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0;LIBGL_ALWAYS_SOFTWARE=1")
     # An input that is neither a file nor a HOST:PORT that resolves says both (RFC 6761: names
-    # under .invalid never resolve).
+    # under .invalid never resolve), before any window: with no display at all (a missing file
+    # was reported as "no display" first).
     add_test(NAME cli_view_bad_input
              COMMAND ${CMAKE_COMMAND}
-                     "-DCOMMAND=${_xvfb};$<TARGET_FILE:pliant>;view;no-such-host.invalid:7777;--exit-after;1"
+                     "-DCOMMAND=$<TARGET_FILE:pliant>;view;no-such-host.invalid:7777;--exit-after;1"
                      -DEXIT=1
                      "-DSTDERR_REGEX=no-such-host\\.invalid:7777 is neither an existing file nor a HOST:PORT to join"
                      -DTIMEOUT=50 -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
-    set_tests_properties(cli_view_bad_input PROPERTIES TIMEOUT 60
-        ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0;LIBGL_ALWAYS_SOFTWARE=1")
+    add_test(NAME cli_view_missing_file
+             COMMAND ${CMAKE_COMMAND}
+                     "-DCOMMAND=$<TARGET_FILE:pliant>;view;${CMAKE_CURRENT_BINARY_DIR}/no-such.pgrid;--exit-after;1"
+                     -DEXIT=1
+                     "-DSTDERR_REGEX=no-such\\.pgrid is neither an existing file nor a HOST:PORT to join"
+                     -DTIMEOUT=50 -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+    set_tests_properties(cli_view_bad_input cli_view_missing_file PROPERTIES TIMEOUT 60
+        ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0;DISPLAY=;WAYLAND_DISPLAY=")
     # A script pressing a key the viewer ignores is refused before the window opens, naming the
     # file and line.
     add_test(NAME cli_view_script_unknown_key

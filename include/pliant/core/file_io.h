@@ -33,8 +33,9 @@ struct FileContent
 /// system's reason ("No space left on device"). An existing file's permission bits carry over
 /// to its replacement, and a symbolic link is followed (the file it names is replaced, the
 /// link stays). A path that exists and is not a regular file (a device such as /dev/stdout, a
-/// pipe) is written in place. `who` begins the message ("save_grid"). The data is not synced to
-/// the disk (no fsync): this guards against failed writes, not against power loss.
+/// pipe) is written in place. `who` begins the message ("remesh: --report"; empty: the path does).
+/// The data is not synced to the disk (no fsync): this guards against failed writes, not against
+/// power loss.
 [[nodiscard]] Result<void> write_files(std::span<const FileContent> files, std::string_view who);
 
 /// `write_files` for one file.
