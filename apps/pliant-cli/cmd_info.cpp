@@ -18,6 +18,7 @@
 
 #include "cli_common.h"
 #include "commands.h"
+#include "peer_files.h"
 
 #include <algorithm>
 #include <cmath>
@@ -206,6 +207,16 @@ std::optional<core::Error> grid_verdict(const std::string& path, const GridInfo&
 
 constexpr const char* k_grid_valid =
     "valid: a closed surface the membrane accepts as rest geometry";
+/// A state file (u and v: a simulate frame, `--save`, `replay -o`) is valid, but as a state:
+/// the commands that take a rest GRID refuse it (its positions are the deformed surface).
+constexpr const char* k_state_valid =
+    "valid: a simulated state (u, v) on a closed surface; resume it with --resume and its rest "
+    "grid (as GRID, simulate, host and view refuse a state)";
+
+const char* grid_valid(const GridInfo& info)
+{
+    return info.file && holds_state(*info.file) ? k_state_valid : k_grid_valid;
+}
 
 std::string channel_names(const core::GridFile& file)
 {
@@ -218,7 +229,8 @@ std::string channel_names(const core::GridFile& file)
 void print_grid_json(const InfoOptions& opt, const GridInfo* info,
                      const std::optional<core::Error>& error)
 {
-    nlohmann::ordered_json j = verdict_json(opt, "pgrid", error, k_grid_valid);
+    nlohmann::ordered_json j =
+        verdict_json(opt, "pgrid", error, info != nullptr ? grid_valid(*info) : k_grid_valid);
     if (info != nullptr && info->grid)
     {
         const core::TetraGrid& g = *info->grid;
@@ -291,7 +303,7 @@ void print_grid_text(const InfoOptions& opt, const GridInfo& info,
                       ": " + n(count);
         row("owner (vertices)", owners);
     }
-    row("verdict", error ? "INVALID: " + error->message : std::string(k_grid_valid));
+    row("verdict", error ? "INVALID: " + error->message : std::string(grid_valid(info)));
 }
 
 int run_grid_info(const InfoOptions& opt, const GlobalOptions& global)

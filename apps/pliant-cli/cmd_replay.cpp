@@ -17,6 +17,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 
 namespace pliant::cli
@@ -28,7 +29,7 @@ struct ReplayOptions
 {
     std::filesystem::path recording;
     std::filesystem::path out;
-    std::uint64_t until = 0;
+    std::optional<std::uint64_t> until;  ///< unset: the recording's end
     int threads = 1;
 };
 
@@ -48,9 +49,9 @@ int run_replay(const ReplayOptions& opt, const GlobalOptions& global)
     auto recording = session::load_recording(opt.recording);
     if (!recording)
         return report(recording.error());
-    if (opt.until > recording->final_tick)
+    if (opt.until && *opt.until > recording->final_tick)
         return report(
-            {core::ErrorCode::InvalidArgument, "replay: --until " + std::to_string(opt.until) +
+            {core::ErrorCode::InvalidArgument, "replay: --until " + std::to_string(*opt.until) +
                                                    " is past the recording's "
                                                    "last tick " +
                                                    std::to_string(recording->final_tick)});
@@ -94,7 +95,7 @@ int run_replay(const ReplayOptions& opt, const GlobalOptions& global)
             opt.out.empty() ? "" : "; -o gets the last finite state");
         rc = k_exit_failure;
     }
-    else if (opt.until != 0 && opt.until != recording->final_tick)
+    else if (opt.until && *opt.until != recording->final_tick)
         std::printf("stopped before the recording's end: no recorded hash to compare\n");
     else if (recording->final_hash == 0)
         std::printf("the recording holds no final hash to compare with\n");
@@ -159,7 +160,9 @@ void add_replay_command(CLI::App& app, const GlobalOptions& global)
         ->check(existing_input_file("RECORDING"));
     cmd->add_option("-o,--out", opt->out,
                     "Write the final surface: .pgrid, .obj, .ply, .gltf or .glb");
-    cmd->add_option("--until", opt->until, "Stop at this tick (default: the recording's end)")
+    cmd->add_option("--until", opt->until,
+                    "Stop at this tick (0: the rest state the replay starts from; default: the "
+                    "recording's end)")
         ->check(no_minus_sign());
     cmd->add_option("-j,--threads", opt->threads, "Threads of the replay (same result)")
         ->check(CLI::Range(1, 256))

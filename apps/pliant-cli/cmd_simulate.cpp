@@ -226,14 +226,14 @@ void warn_unstable_step(const Scenario& sc, const sim::MembraneModel& model,
     if (s.fixed_step && s.fixed_dt > stable)
         spdlog::warn(
             "{} = {:.3g} s{} is {:.3g} times the stable step {:.3g} s of this grid and "
-            "material (sim::stable_fixed_step, docs/physics.md §5): the fastest modes "
+            "material (docs/physics.md §5): the fastest modes "
             "grow at every step and the run will likely diverge; use fixed_dt <= {:.3g}",
             key_at(sc, path, "integrator.fixed_dt"), s.fixed_dt,
             default_note(sc, "integrator.fixed_dt"), s.fixed_dt / stable, stable, stable);
     else if (!s.fixed_step && s.dt_min > stable)
         spdlog::warn(
             "{} = {:.3g} s{} is {:.3g} times the stable step {:.3g} s of this grid and "
-            "material (sim::stable_fixed_step, docs/physics.md §5): the error control "
+            "material (docs/physics.md §5): the error control "
             "cannot shrink a step below dt_min, so the run will likely diverge; use "
             "dt_min <= {:.3g}",
             key_at(sc, path, "integrator.dt_min"), s.dt_min, default_note(sc, "integrator.dt_min"),
@@ -322,6 +322,11 @@ private:
 
 int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
 {
+    if (opt.out.empty())
+    {
+        spdlog::error("simulate: -o is empty; give the folder for the frames");
+        return k_exit_usage;
+    }
     // The run clears -o of an earlier run's frames (below): an input among them would go too.
     const std::vector<std::filesystem::path> stale = earlier_frames(opt.out);
     using Input = std::pair<const std::filesystem::path*, const char*>;
@@ -501,8 +506,15 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
                    {total_steps, total_rejections, total_at_min});
         if (auto ok = record.write(); !ok)
             spdlog::warn("{}", ok.error().message);
-        spdlog::error("{}: interrupted at t = {} s; frames 0 to {} of 0 to {} are in {}",
-                      opt.scenario.string(), fmt_number(t_written), last, frames, opt.out.string());
+        if (last < 0)
+            spdlog::error(
+                "{}: interrupted at t = {} s, before frame 0 was written; {} holds no "
+                "frame of this run",
+                opt.scenario.string(), fmt_number(t_written), opt.out.string());
+        else
+            spdlog::error("{}: interrupted at t = {} s; frames 0 to {} of 0 to {} are in {}",
+                          opt.scenario.string(), fmt_number(t_written), last, frames,
+                          opt.out.string());
         return k_exit_interrupted;
     };
     // An output that cannot be written (a frame, energy.csv) with frames 0 to `last` written:
@@ -544,7 +556,9 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
             for (;;)
             {
                 const double t = state.time;
-                const double slack = 1e-12 * std::max(1.0, std::fabs(t_frame));
+                // Rounding slack: of the times, but below a step (a step of 1e-15 s with an
+                // absolute 1e-12 s took a thousand steps into frame 0, the rest state).
+                const double slack = std::min(1e-12 * std::max(1.0, std::fabs(t_frame)), 1e-3 * h);
                 double n = std::floor((t_frame - t + slack) / h);
                 if (!(n >= 1.0))
                     break;
@@ -677,9 +691,12 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global)
         "next step, keeps the frames written and exits with status 130.\n\n"
         "Examples:\n"
         "  pliant simulate --scenario scenes/pull.toml -o out/pull            # sphere, level 6\n"
-        "  pliant simulate spot.pgrid --scenario scenes/spot.toml -o out/spot --format ply\n"
+        "  pliant remesh data/spot.obj --level 6 -o spot.pgrid\n"
+        "  pliant simulate spot.pgrid --scenario scenes/spot.toml -o out/spot\n"
         "  pliant simulate spot.pgrid --scenario scenes/spot.toml -o out/more \\\n"
-        "      --resume out/spot/frame_00060.pgrid        # go on from a frame (time starts at 0)");
+        "      --resume out/spot/frame_00060.pgrid        # go on from a frame (time starts at 0)\n"
+        "  pliant simulate spot.pgrid --scenario scenes/spot.toml -o out/spot-ply --format ply\n"
+        "      # frames as meshes, for other tools (only .pgrid frames can be resumed)");
     cmd->add_option("GRID", opt->grid,
                     "Rest geometry (.pgrid from `pliant remesh`); omitted: a sphere of --level");
     cmd->add_option("-s,--scenario", opt->scenario, "Scenario file (.toml)")

@@ -118,11 +118,16 @@ core::Result<RestGeometry> load_rest_geometry(const std::string& command, const 
 core::Result<sim::MembraneState> load_saved_state(const std::filesystem::path& path,
                                                   const sim::MembraneModel& model)
 {
+    const std::string name = path.string();
+    if (lower_extension(path) != ".pgrid")
+        return core::fail(core::ErrorCode::InvalidArgument,
+                          "--resume " + name +
+                              ": a state is resumed from a .pgrid frame (u and v), not from a "
+                              "mesh; `simulate` writes them with --format pgrid, the default");
     auto file = core::load_grid(path);
     if (!file)
         return file.error();
     const core::TetraGrid& grid = model.grid();
-    const std::string name = path.string();
     const auto bad = [&](const std::string& why)
     { return core::fail(core::ErrorCode::BadGrid, "--resume " + name + ": " + why); };
     if (file->level != grid.level())

@@ -355,19 +355,13 @@ core::Result<Scenario> read_scenario(const toml::table& root, const std::filesys
             if (face >= 0 && r.has("radius"))
                 spdlog::warn("{}:{}: '{}radius' has no effect on a face force", path.string(),
                              table.get("radius")->source().begin.line, prefix);
-            if (!(f.end > f.start))
-            {
-                if (r.has("end"))
-                    return scenario_error(
-                        path, table.get("end")->source(), prefix + "end",
-                        "= " + fmt_number(f.end) +
-                            " s must be later than 'start' = " + fmt_number(f.start) + " s");
-                return scenario_error(path, table.get("start")->source(), prefix + "start",
-                                      "= " + fmt_number(f.start) +
-                                          " s is not before 'end', which defaults to the "
-                                          "duration " +
-                                          fmt_number(sc.duration) + " s");
-            }
+            // An 'end' given must follow 'start'; without one, 'end' is the duration, and a
+            // force starting there or later is warned about below, as with an 'end' given.
+            if (!(f.end > f.start) && r.has("end"))
+                return scenario_error(path, table.get("end")->source(), prefix + "end",
+                                      "= " + fmt_number(f.end) +
+                                          " s must be later than 'start' = " + fmt_number(f.start) +
+                                          " s");
             // A force that starts at or after the end never acts (on for start < t <= end with
             // the linear hold, start <= t < end with the step hold, and t <= duration).
             if (f.start >= sc.duration)

@@ -216,10 +216,10 @@ std::vector<sim::Force> forces_at(const sim::MembraneModel& model,
     return out;
 }
 
-core::Result<ReplayResult> replay(const Recording& recording, int threads, std::uint64_t until,
-                                  core::ProgressSink* progress)
+core::Result<ReplayResult> replay(const Recording& recording, int threads,
+                                  std::optional<std::uint64_t> until, core::ProgressSink* progress)
 {
-    const std::uint64_t ticks = until != 0 ? until : recording.final_tick;
+    const std::uint64_t ticks = until.value_or(recording.final_tick);
     auto decoded = decode_model(recording.model);
     if (!decoded)
         return core::fail(decoded.error().code, decoded.error().message);

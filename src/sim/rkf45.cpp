@@ -797,7 +797,11 @@ AdvanceReport advance_to(MembraneModel& model, MembraneState& state, Rkf45Worksp
     else
         set_forces(model, ws, forces);
     AdvanceReport report;
-    const double slack = 1e-12 * std::max(1.0, std::fabs(target_time));
+    // Rounding slack of the times; with a fixed step, also well below the step (an absolute
+    // 1e-12 s let a step of 1e-15 s take a thousand steps past the target).
+    double slack = 1e-12 * std::max(1.0, std::fabs(target_time));
+    if (set.fixed_step)
+        slack = std::min(slack, 1e-3 * set.fixed_dt);
     StepOptions opt = options;
     while (report.steps < max_steps)
     {

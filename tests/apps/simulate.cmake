@@ -223,6 +223,23 @@ if(TARGET pliant)
                      -DPRECISION=double -P ${CMAKE_CURRENT_SOURCE_DIR}/check_run_json.cmake)
     set_tests_properties(cli_simulate_clears_earlier_frames_run_json PROPERTIES
                          DEPENDS cli_simulate_clears_earlier_frames)
+    # An empty -o is a usage error, as for demo and bench (it was "cannot create : Invalid
+    # argument", exit 1).
+    # (through sh: a CMake list cannot carry an empty argument)
+    add_test(NAME cli_simulate_empty_output
+             COMMAND ${CMAKE_COMMAND}
+                     "-DCOMMAND=sh;-c;'$<TARGET_FILE:pliant>' simulate --scenario '${scenarios}/partial_interval.toml' -o '' --level 3"
+                     -DEXIT=2 "-DSTDERR_REGEX=simulate: -o is empty"
+                     -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+    set_tests_properties(cli_simulate_empty_output PROPERTIES TIMEOUT 60
+                         ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0")
+    # A mesh given to --resume (a frame written with --format ply) says a state comes from a
+    # .pgrid frame (it said "not a pliant grid file (bad magic)").
+    pliant_cli_expect(cli_simulate_resume_from_a_mesh 1 STDERR
+                      "--resume .*spot.obj: a state is resumed from a .pgrid frame"
+                      simulate --scenario ${scenarios}/partial_interval.toml
+                      -o ${CMAKE_CURRENT_BINARY_DIR}/simulate-resume-mesh --level 3
+                      --resume ${PROJECT_SOURCE_DIR}/data/spot.obj)
     # A --resume frame among those the run would clear is refused (usage) and left as it was.
     set(_here ${CMAKE_CURRENT_BINARY_DIR}/simulate-resume-here)
     add_test(NAME cli_simulate_refuses_resume_from_its_folder
@@ -255,7 +272,7 @@ if(TARGET pliant)
              COMMAND ${CMAKE_COMMAND}
                      "-DCOMMAND=$<TARGET_FILE:pliant>;simulate;--scenario;${scenarios}/force_after_end.toml;-o;${CMAKE_CURRENT_BINARY_DIR}/simulate-after-end;--level;3;-j;1"
                      -DEXIT=0 "-DSTDOUT_REGEX=^2 frames, 0.500 s simulated"
-                     "-DSTDERR_REGEX=force_after_end.toml:12: 'force\\[1\\].start' = 0.5 s is not before 'duration' = 0.5 s: the force never acts"
+                     "-DSTDERR_REGEX=force_after_end.toml:13: 'force\\[1\\].start' = 0.5 s is not before 'duration' = 0.5 s: the force never acts.*force_after_end.toml:19: 'force\\[2\\].start' = 0.5 s is not before 'duration' = 0.5 s: the force never acts"
                      -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
     set_tests_properties(cli_simulate_warns_force_after_end PROPERTIES TIMEOUT 60
                          ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0")

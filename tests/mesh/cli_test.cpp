@@ -150,6 +150,17 @@ TEST(CliInfo, AGridFileIsDescribedWithItsChannelsRangesAndOwners)
     EXPECT_LT(area, 4.0 * std::numbers::pi);
     EXPECT_GT(area, 0.9 * 4.0 * std::numbers::pi);
     EXPECT_LE(j["bbox_diagonal"].get<double>(), 2.0 * std::sqrt(3.0));
+    // A state (u and v) is valid as a state: GRID arguments refuse it, --resume takes it.
+    EXPECT_NE(j["message"].get<std::string>().find("valid: a simulated state (u, v)"),
+              std::string::npos)
+        << j["message"];
+    // The same surface without u and v is a rest geometry.
+    core::GridFile rest = core::make_geometry_file(grid, sphere);
+    ASSERT_TRUE(core::save_grid(dir / "rest.pgrid", rest).has_value());
+    const CliRun rr = run_info(dir / "rest.pgrid");
+    EXPECT_EQ(rr.exit_code, 0) << rr.out;
+    EXPECT_EQ(nlohmann::json::parse(rr.out)["message"],
+              "valid: a closed surface the membrane accepts as rest geometry");
 }
 
 // A grid file whose positions are all equal decodes, but the membrane has no surface to work

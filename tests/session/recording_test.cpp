@@ -130,6 +130,18 @@ TEST(Recording, ReplayRuleEqualsTheReferenceSchedule)
     EXPECT_EQ(compare(grid, replayed->state.u, ref.u, {}).max_abs, 0.0);
     EXPECT_EQ(compare(grid, replayed->state.v, ref.v, {}).max_abs, 0.0);
     EXPECT_GT(compare(grid, replayed->state.u, ref.u, {}).max_ref, 1e-5);
+    // Part of it: up to tick 60 equals the reference's 60 ticks, and up to tick 0 is the rest
+    // state (0 once meant "to the end").
+    auto part = replay(rec, 1, 60);
+    ASSERT_TRUE(part);
+    EXPECT_EQ(part->state.tick, 60U);
+    const sim::MembraneState ref60 = reference_run(k_recording_level, 60, sched);
+    EXPECT_EQ(compare(grid, part->state.u, ref60.u, {}).max_abs, 0.0);
+    EXPECT_GT(compare(grid, part->state.u, ref60.u, {}).max_ref, 1e-6);
+    auto none = replay(rec, 1, 0);
+    ASSERT_TRUE(none);
+    EXPECT_EQ(none->state.tick, 0U);
+    EXPECT_EQ(compare(grid, none->state.u, core::Field<double>(grid), {}).max_abs, 0.0);
 }
 
 // A stop asked for through the progress sink ends the replay within 16 steps, with Cancelled
@@ -154,7 +166,7 @@ TEST(Recording, AStopAskedForEndsTheReplayWithinSixteenSteps)
     rec.final_tick = 1'000'000;  // minutes of steps if the stop went unheard
     rec.forces.push_back(ForceRecord{0, 0, {face_pull(200, 0.5)}});
     StopAtThirdReport sink;
-    const auto replayed = replay(rec, 1, 0, &sink);
+    const auto replayed = replay(rec, 1, std::nullopt, &sink);
     ASSERT_FALSE(replayed);
     EXPECT_EQ(replayed.error().code, core::ErrorCode::Cancelled);
     // Reports every 10,000 ticks: the third is at tick 20,000, where the stop is heard at once.

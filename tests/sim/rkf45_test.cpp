@@ -277,6 +277,26 @@ TEST(Rkf45, AdvanceToAnEarlierTargetTakesNoStepAndANonFiniteOneIsRefused)
                  "energy: the state's u and v are not ghost-1 planes of the model's level");
 }
 
+// A fixed step far below the time rounding slack (1e-15 s against 1e-12 s): advance_to takes
+// the whole steps that fit, 3,000 to 3e-12 s and none to 0, where an absolute slack took a
+// thousand more (and `pliant simulate`'s frame 0, the rest state, came out 1e-12 s in).
+TEST(Rkf45, AFixedStepBelowTheRoundingSlackTakesOnlyTheStepsThatFit)
+{
+    MembraneSettings set = ode_settings();
+    set.fixed_step = true;
+    set.fixed_dt = 1e-15;
+    MembraneModel m = test::sphere_model(3, set);
+    MembraneState s = initial_state(m);
+    Rkf45Workspace ws(m, 1);
+    const AdvanceReport none = advance_to(m, s, ws, 0.0, {});
+    EXPECT_TRUE(none.reached);
+    EXPECT_EQ(none.steps, 0U);
+    const AdvanceReport some = advance_to(m, s, ws, 3e-12, {});
+    EXPECT_TRUE(some.reached);
+    EXPECT_EQ(some.steps, 3000U);
+    EXPECT_NEAR(s.time, 3e-12, 1e-18);
+}
+
 // A stop asked for between steps (Ctrl-C in `pliant simulate`) ends advance_to before its next
 // step: the state is that of the last whole step, the same as that many steps without a stop.
 TEST(Rkf45, AdvanceStopsBeforeTheStepAfterAStopIsAsked)

@@ -104,12 +104,14 @@ struct ReplayResult
 };
 
 /// Replays `recording` on one process with `threads` threads (the result does not depend on it)
-/// up to `until` ticks (0: the recording's final tick), reporting progress as phase "replay".
+/// up to tick `until` (unset: the recording's final tick; 0: the rest state it starts from),
+/// reporting progress as phase "replay".
 /// A step that gives non-finite values ends the replay there (ReplayResult::diverged).
 /// \return decode_model's errors; InvalidArgument if the model is not fixed-step; Cancelled
 /// ("replay: cancelled during tick T of N") within 16 steps of `progress` asking to stop.
 core::Result<ReplayResult> replay(const Recording& recording, int threads = 1,
-                                  std::uint64_t until = 0, core::ProgressSink* progress = nullptr);
+                                  std::optional<std::uint64_t> until = std::nullopt,
+                                  core::ProgressSink* progress = nullptr);
 
 /// A hash of u and v over the canonical nodes (bit-exact identity of a state); with a
 /// non-empty `mask` (Recording::hash_mask's layout), over the nodes whose bit is set.
