@@ -207,6 +207,23 @@ CLI::Validator positive_number()
             "POSITIVE", "POSITIVE"};
 }
 
+CLI::Validator whole_number_in(long long lo, long long hi)
+{
+    const std::string range = std::to_string(lo) + " to " + std::to_string(hi);
+    return {[lo, hi, range](std::string& text)
+            {
+                long long v = 0;
+                const char* end = text.data() + text.size();
+                const auto [p, ec] = std::from_chars(text.data(), end, v);
+                if (text.empty() || ec == std::errc::invalid_argument || p != end)
+                    return text + " is not a whole number; give one from " + range;
+                if (ec == std::errc::result_out_of_range || v < lo || v > hi)
+                    return text + " is not in " + range;
+                return std::string();
+            },
+            "INT in [" + std::to_string(lo) + " - " + std::to_string(hi) + "]", "WHOLE_NUMBER_IN"};
+}
+
 CLI::Validator non_negative_number()
 {
     return {[](std::string& text)

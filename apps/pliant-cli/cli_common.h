@@ -75,6 +75,9 @@ auto command_callback(const GlobalOptions& global, Body body)
 /// number >= 0"); --help shows them as FLOAT:POSITIVE, FLOAT:NONNEGATIVE, FLOAT:[LO, HI].
 [[nodiscard]] CLI::Validator positive_number();
 [[nodiscard]] CLI::Validator non_negative_number();
+/// A whole number in [lo, hi]: "abc is not a whole number", "12 is not in 1 to 10" (CLI11's
+/// Range said "Value abc not in range 1 to 10" of text that is no number at all).
+[[nodiscard]] CLI::Validator whole_number_in(long long lo, long long hi);
 [[nodiscard]] CLI::Validator number_in(double lo, double hi);
 /// For unsigned integer options: CLI11 converts "-5" to 2^64 - 5 without a word.
 [[nodiscard]] CLI::Validator no_minus_sign();

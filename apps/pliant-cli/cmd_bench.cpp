@@ -528,7 +528,9 @@ void add_bench_command(CLI::App& app, const GlobalOptions& global)
                     "Folder of the benchmark programs (default: PLIANT_BENCH_DIR or the build's "
                     "bench folder)");
     cmd->add_option("--plots-dir", opt->plots_dir, "Folder of the gnuplot scripts");
-    cmd->add_flag("!--no-plots", opt->plots, "Write the data only");
+    // A plain flag setting the field (a CLI11 negated flag showed "{false}" in --help).
+    cmd->add_flag_function(
+        "--no-plots", [opt](std::int64_t) { opt->plots = false; }, "Write the data only");
     cmd->callback(
         command_callback(global, [opt, &global]() -> int { return run_bench(*opt, global); }));
 }

@@ -909,10 +909,10 @@ void add_demo_command(CLI::App& app, const GlobalOptions& global)
     cmd->add_option("-l,--level", opt->level,
                     "Simulation grid level (W = 2^level; from 4, where the grid has leaves "
                     "enough for the demo's three simulating peers)")
-        ->check(CLI::Range(4, 8))
+        ->check(whole_number_in(4, 8))
         ->capture_default_str();
     cmd->add_option("--display-levels", opt->display_levels, "Butterfly levels added for display")
-        ->check(CLI::Range(0, 3))
+        ->check(whole_number_in(0, 3))
         ->capture_default_str();
     cmd->add_option("--duration", opt->duration, "Session time [s]")
         ->check(number_in(0.5, 120.0))
@@ -923,16 +923,19 @@ void add_demo_command(CLI::App& app, const GlobalOptions& global)
     cmd->add_option("--dt", opt->dt, "Fixed step [s] (default: 0.9 x the stability bound)")
         ->check(positive_number());
     cmd->add_option("--width", opt->width, "Frame width [pixels]")
-        ->check(CLI::Range(16, 4096))
+        ->check(whole_number_in(16, 4096))
         ->capture_default_str();
     cmd->add_option("--height", opt->height, "Frame height [pixels]")
-        ->check(CLI::Range(16, 4096))
+        ->check(whole_number_in(16, 4096))
         ->capture_default_str();
     cmd->add_option("--wall-limit", opt->wall_limit, "Give up after this many wall seconds")
         ->check(positive_number())
         ->capture_default_str();
     cmd->add_flag("--quick", opt->quick, "Level 5, 2 s, 6 fps, 320x240 (for tests)");
-    cmd->add_flag("!--no-render", opt->render, "Skip the pictures (no OpenGL needed)");
+    // A plain flag setting the field (a CLI11 negated flag showed "{false}" in --help).
+    cmd->add_flag_function(
+        "--no-render", [opt](std::int64_t) { opt->render = false; },
+        "Skip the pictures (no OpenGL needed)");
     cmd->add_flag("--view", opt->view,
                   "Open the viewer on the running session (needs a display; no frames)");
     cmd->add_option("--screenshot", opt->screenshot,

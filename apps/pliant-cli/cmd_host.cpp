@@ -229,7 +229,7 @@ void add_host_command(CLI::App& app, const GlobalOptions& global)
     cmd->add_option("GRID", opt->grid,
                     "Rest geometry (.pgrid from `pliant remesh`); omitted: a sphere of --level");
     cmd->add_option("-l,--level", opt->level, "Sphere level when GRID is omitted")
-        ->check(CLI::Range(1, 10))
+        ->check(whole_number_in(1, 10))
         ->capture_default_str();
     cmd->add_option("--sphere-map", opt->sphere_map,
                     "How the sphere's grid lies on it when GRID is omitted: equal-area (even "

@@ -183,13 +183,13 @@ void add_refine_command(CLI::App& app, const GlobalOptions& global)
     cmd->add_option("GRID", opt->grid, "Input grid file (.pgrid, from `pliant remesh`)")
         ->required();
     cmd->add_option("-l,--levels", opt->levels, "Number of levels to refine (level + K <= 10)")
-        ->check(CLI::Range(1, 9))
+        ->check(whole_number_in(1, 9))
         ->capture_default_str();
     cmd->add_option("-o,--output", opt->out, "Output file: .pgrid, .obj, .ply, .gltf or .glb")
         ->required();
     cmd->add_option("-j,--threads", opt->threads,
                     "Threads for the convolution (results are identical for any count)")
-        ->check(CLI::Range(1, 256))
+        ->check(whole_number_in(1, 256))
         ->capture_default_str();
     cmd->callback(
         command_callback(global, [opt, &global]() -> int { return run_refine(*opt, global); }));

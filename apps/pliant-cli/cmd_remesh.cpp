@@ -240,7 +240,7 @@ void add_remesh_command(CLI::App& app, const GlobalOptions& global)
         "  pliant remesh data/spot.obj --level 7 -o spot.pgrid --gpu");
     cmd->add_option("mesh", opt->mesh, "Closed genus-0 mesh (default: the bundled spot.obj)");
     cmd->add_option("-l,--level", opt->level, "Grid level n (W = 2^n, 2W^2+2 vertices)")
-        ->check(CLI::Range(1, 10))
+        ->check(whole_number_in(1, 10))
         ->capture_default_str();
     cmd->add_option("-o,--output", opt->output, "Output: .pgrid, .obj, .ply, .gltf, .glb or .pfm")
         ->required();

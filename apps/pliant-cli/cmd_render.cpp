@@ -569,7 +569,7 @@ void add_render_command(CLI::App& app, const GlobalOptions& global)
                     "distance in model units (default 30,20 and fitted)");
     cmd->add_option("--level-up", opt->level_up,
                     "Refine a grid K levels by butterfly subdivision for display")
-        ->check(CLI::Range(0, 9))
+        ->check(whole_number_in(0, 9))
         ->capture_default_str();
     cmd->add_option("--color", opt->color, "Colouring: none, displacement or owner")
         ->check(CLI::IsMember({"none", "displacement", "owner"}))
@@ -581,11 +581,11 @@ void add_render_command(CLI::App& app, const GlobalOptions& global)
     cmd->add_flag("--wireframe", opt->wireframe, "Draw the triangle edges over the surface");
     cmd->add_option("--frames", opt->frames, "Render every .pgrid in this folder (a sequence)");
     cmd->add_option("--samples", opt->samples, "Multisampling (1 = off)")
-        ->check(CLI::Range(1, 16))
+        ->check(whole_number_in(1, 16))
         ->capture_default_str();
     cmd->add_option("--owner-depth", opt->owner_depth,
                     "Quad-tree depth of the stand-in owners (no \"owner\" channel)")
-        ->check(CLI::Range(0, 10))
+        ->check(whole_number_in(0, 10))
         ->capture_default_str();
     cmd->add_option("--backend", opt->backend,
                     "OpenGL set-up: auto (EGL, then OSMesa), egl, osmesa")

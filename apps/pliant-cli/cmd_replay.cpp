@@ -165,7 +165,7 @@ void add_replay_command(CLI::App& app, const GlobalOptions& global)
                     "recording's end)")
         ->check(no_minus_sign());
     cmd->add_option("-j,--threads", opt->threads, "Threads of the replay (same result)")
-        ->check(CLI::Range(1, 256))
+        ->check(whole_number_in(1, 256))
         ->capture_default_str();
     cmd->callback(command_callback(global, [opt, &global]() { return run_replay(*opt, global); }));
 }

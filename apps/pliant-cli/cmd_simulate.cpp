@@ -709,7 +709,7 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global)
         ->check(CLI::IsMember({"pgrid", "ply", "obj", "gltf", "glb"}))
         ->capture_default_str();
     cmd->add_option("-l,--level", opt->level, "Sphere level when GRID is omitted")
-        ->check(CLI::Range(1, 10))
+        ->check(whole_number_in(1, 10))
         ->capture_default_str();
     cmd->add_option("--radius", opt->radius, "Sphere radius [m] when GRID is omitted")
         ->check(positive_number())
@@ -727,7 +727,7 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global)
     cmd->add_option("-j,--threads", opt->threads,
                     "Threads (overrides the scenario's; 0: OpenMP's default; results are "
                     "identical for any count)")
-        ->check(CLI::Range(0, 1024));
+        ->check(whole_number_in(0, 1024));
     cmd->add_option("--precision", opt->precision,
                     "Arithmetic of the steps (overrides the scenario's): double, or mixed (float "
                     "increments over the double state, ~1.6x faster on big grids; "

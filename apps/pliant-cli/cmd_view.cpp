@@ -161,14 +161,14 @@ void add_view_command(CLI::App& app, const GlobalOptions& global)
         "--exit-after 3");
     cmd->add_option("INPUT", opt->input, "GRID (.pgrid), MESH, or HOST:PORT");
     CLI::Option* level = cmd->add_option("-l,--level", opt->level, "Remeshing level for a mesh")
-                             ->check(CLI::Range(1, 10))
+                             ->check(whole_number_in(1, 10))
                              ->capture_default_str();
     cmd->add_option("--display-level", opt->display_level,
                     "Display level (butterfly refinement of the simulated surface), from the "
                     "simulation level to simulation level + 3 (at most 10), as the Display "
                     "panel's slider; a level outside is clamped with a warning. Default: "
                     "simulation level + 1, at most 8")
-        ->check(CLI::Range(1, 10));
+        ->check(whole_number_in(1, 10));
     cmd->add_option("--size", opt->size, "Window size WxH")->capture_default_str();
     cmd->add_option("--script", opt->script, "Timed mouse events (docs/viewer.md)")
         ->check(existing_input_file("--script"));

@@ -49,7 +49,7 @@ inline void add_stream_options(CLI::App* cmd, StreamOptions& opt)
                     "0: off); receivers refine them by butterfly subdivision for display. Only in\n"
                     "exact sessions (the master's --mode; refused in fast ones) and not with\n"
                     "--compress; K <= 2 at levels >= 3, K <= 1 at level 2 (docs/session.md §5.2)")
-        ->check(CLI::Range(0, 2))
+        ->check(whole_number_in(0, 2))
         ->capture_default_str();
     cmd->add_option("--max-halo-age", opt.max_halo_age_s,
                     "Fast mode: the oldest a neighbour's streamed state may be when this peer\n"
