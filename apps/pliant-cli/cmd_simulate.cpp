@@ -708,17 +708,23 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global)
     cmd->add_option("--format", opt->format, "Frame format: pgrid, ply, obj, gltf or glb")
         ->check(CLI::IsMember({"pgrid", "ply", "obj", "gltf", "glb"}))
         ->capture_default_str();
-    cmd->add_option("-l,--level", opt->level, "Sphere level when GRID is omitted")
-        ->check(whole_number_in(1, 10))
-        ->capture_default_str();
-    cmd->add_option("--radius", opt->radius, "Sphere radius [m] when GRID is omitted")
-        ->check(positive_number())
-        ->capture_default_str();
-    cmd->add_option("--sphere-map", opt->sphere_map,
-                    "How the sphere's grid lies on it when GRID is omitted: equal-area (even "
-                    "cells, twice the stable step) or gnomonic (the paper's central projection)")
-        ->check(CLI::IsMember({"equal-area", "gnomonic"}))
-        ->capture_default_str();
+    CLI::Option* level =
+        cmd->add_option("-l,--level", opt->level, "Sphere level when GRID is omitted")
+            ->check(whole_number_in(1, 10))
+            ->capture_default_str();
+    // Bounded so that the sphere's areas, masses and forces stay finite in double precision
+    // (1e308 gave "the rest surface has no normal at node (1, 1)", not naming --radius).
+    CLI::Option* radius =
+        cmd->add_option("--radius", opt->radius, "Sphere radius [m] when GRID is omitted")
+            ->check(number_in(1e-6, 1e6))
+            ->capture_default_str();
+    CLI::Option* sphere_map =
+        cmd->add_option(
+               "--sphere-map", opt->sphere_map,
+               "How the sphere's grid lies on it when GRID is omitted: equal-area (even "
+               "cells, twice the stable step) or gnomonic (the paper's central projection)")
+            ->check(CLI::IsMember({"equal-area", "gnomonic"}))
+            ->capture_default_str();
     cmd->add_option("--resume", opt->resume,
                     "Start from a saved state of GRID (a frame of an earlier run, a --save of "
                     "`host`/`join`, demo's final.pgrid, `replay -o`) instead of at rest; the "
@@ -733,8 +739,20 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global)
                     "increments over the double state, ~1.6x faster on big grids; "
                     "docs/physics.md §9)")
         ->check(CLI::IsMember({"double", "mixed"}));
-    cmd->callback(
-        command_callback(global, [opt, &global]() -> int { return run_simulate(*opt, global); }));
+    cmd->callback(command_callback(
+        global,
+        [opt, &global, level, radius, sphere_map]() -> int
+        {
+            // The sphere's options with a GRID: said, not silently ignored.
+            if (!opt->grid.empty())
+                for (const CLI::Option* o : {level, radius, sphere_map})
+                    if (o->count() > 0)
+                        spdlog::warn(
+                            "simulate: {} shapes the sphere used when GRID is omitted; "
+                            "{} keeps its own surface and level",
+                            o->get_name(), opt->grid.string());
+            return run_simulate(*opt, global);
+        }));
 }
 
 const CommandRegistrar k_register_simulate{{"simulate", 40, &add_simulate_command}};

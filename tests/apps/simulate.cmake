@@ -197,6 +197,14 @@ if(TARGET pliant)
         FIXTURES_REQUIRED simulate_spot
         PASS_REGULAR_EXPRESSION " frames, "
         FAIL_REGULAR_EXPRESSION "warning|error")
+    # The sphere's options given with a GRID are said to be ignored, not silently dropped.
+    pliant_cli_expect(cli_simulate_sphere_options_with_a_grid 0 STDERR
+                      "--level shapes the sphere used when GRID is omitted.*--radius shapes the sphere"
+                      simulate ${spot_grid} --scenario ${scenarios}/partial_interval.toml
+                      -o ${CMAKE_CURRENT_BINARY_DIR}/simulate-sphere-options --level 5 --radius 2
+                      -j 1)
+    set_tests_properties(cli_simulate_sphere_options_with_a_grid PROPERTIES
+        FIXTURES_REQUIRED simulate_spot)
     # An earlier run's frames in -o (those this run rewrites, those beyond its last, another
     # format's, a .gltf's buffer) are removed before the run, saying how many; files and folders
     # that do not match frame_NNNNN.EXT stay. run.json's frames are then those in the folder.
