@@ -198,6 +198,27 @@ Result<void> check_input_file(const fs::path& path, std::string_view what)
     return {};
 }
 
+namespace
+{
+
+/// What write_files will do first, tried: a new file beside `path` (for a regular file or a new
+/// one), created and removed at once. Permission bits and access() can say yes where the
+/// creation fails (/proc, a read-only or full file system for root, an immutable folder).
+template <typename Refuse>
+Result<void> probe_beside(const fs::path& path, const Refuse& refuse)
+{
+    Plan p = plan_for(path);
+    if (p.in_place)
+        return {};
+    if (const int err = open_temporary(p); err != 0)
+        return refuse(reason(err));
+    ::close(p.fd);
+    ::unlink(p.temporary.c_str());
+    return {};
+}
+
+}  // namespace
+
 Result<void> check_output_path(const fs::path& path, std::string_view what)
 {
     const auto refuse = [&](const std::string& why)
@@ -212,7 +233,11 @@ Result<void> check_output_path(const fs::path& path, std::string_view what)
     if (fs::is_directory(st))
         return refuse(reason(EISDIR));
     if (fs::exists(st))
-        return ::access(path.c_str(), W_OK) == 0 ? Result<void>{} : refuse(reason(errno));
+    {
+        if (::access(path.c_str(), W_OK) != 0)
+            return refuse(reason(errno));
+        return probe_beside(path, refuse);
+    }
     const fs::path folder = path.parent_path().empty() ? fs::path(".") : path.parent_path();
     const fs::file_status fst = fs::status(folder, ec);
     if (!fs::exists(fst))
@@ -221,7 +246,7 @@ Result<void> check_output_path(const fs::path& path, std::string_view what)
         return refuse(folder.string() + " is not a folder");
     if (::access(folder.c_str(), W_OK) != 0)
         return refuse("its folder " + folder.string() + ": " + reason(errno));
-    return {};
+    return probe_beside(path, refuse);
 }
 
 }  // namespace pliant::core

@@ -50,7 +50,7 @@ if(TARGET pliant)
                       -o ${cli_dir}/spot4.obj --report ${cli_dir}/spot4.json)
 
     # Usage errors: status 2 from every command, with CLI11's message.
-    pliant_cli_expect(cli_usage_levels_out_of_range 2 STDERR "--levels: Value 0 not in range"
+    pliant_cli_expect(cli_usage_levels_out_of_range 2 STDERR "--levels: 0 is not in 1 to 9"
                       refine x.pgrid --levels 0 -o x.obj)
     pliant_cli_expect(cli_usage_unknown_option 2 STDERR "The following argument was not expected: --bogus"
                       host --bogus)

@@ -161,6 +161,16 @@ TEST(FileIo, CheckOutputPathCreatesNothingAndSaysWhy)
     const fs::path dir = test::scratch_dir("file_io_check");
     EXPECT_TRUE(check_output_path(dir / "new.pgrid", "-o"));
     EXPECT_FALSE(fs::exists(dir / "new.pgrid"));
+    EXPECT_TRUE(fs::is_empty(dir)) << "the probe beside it was removed";
+    // A folder whose permissions allow writing (to root) where no file can be created: the
+    // probe finds out before the work, not write_files after it.
+    if (fs::is_directory("/proc"))
+    {
+        auto proc = check_output_path("/proc/x.pgrid", "-o");
+        ASSERT_FALSE(proc);
+        EXPECT_NE(proc.error().message.find("-o: cannot write '/proc/x.pgrid'"), std::string::npos)
+            << proc.error().message;
+    }
     auto folder = check_output_path(dir, "-o");
     ASSERT_FALSE(folder);
     EXPECT_NE(folder.error().message.find("Is a directory"), std::string::npos)

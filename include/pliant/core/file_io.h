@@ -54,8 +54,10 @@ struct FileContent
                                             std::string_view what = {});
 
 /// Checks, before the work that produces it, that an output can be written at `path`, and
-/// creates nothing: `path` is not a folder, its folder exists, is a folder and is writable, and
-/// an existing `path` is writable. The message reads "`what`: cannot write 'PATH': REASON".
+/// leaves nothing behind: `path` is not a folder, its folder exists, is a folder and is
+/// writable, an existing `path` is writable, and the new file that write_files writes first can
+/// be created beside it (tried, and removed at once: /proc or a read-only file system pass the
+/// permission checks). The message reads "`what`: cannot write 'PATH': REASON".
 [[nodiscard]] Result<void> check_output_path(const std::filesystem::path& path,
                                              std::string_view what);
 
