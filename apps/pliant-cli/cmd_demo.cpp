@@ -732,9 +732,12 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
                       std::to_string(q.inverted_mesh + q.inverted_domain));
     row("coupling / fixed step", "exact lockstep / " + fmt("%.3f ms", 1e3 * dt) +
                                      " (stability bound " + fmt("%.3f ms)", 1e3 * stable));
-    row("simulated time / ticks / frames", fmt("%.2f s", reached) + " / " +
-                                               std::to_string(peers[0].session->tick()) + " / " +
-                                               std::to_string(frames_run));
+    row("simulated time / ticks / frames",
+        fmt("%.2f s", reached) + " / " + std::to_string(peers[0].session->tick()) + " / " +
+            std::to_string(frames_run) +
+            (!live && interrupted() && frames_run < frames
+                 ? " of " + std::to_string(frames) + " (interrupted: Ctrl-C)"
+                 : std::string()));
     row("session wall time", fmt("%.1f s", t_run) + " (" +
                                  fmt("%.2f", reached / std::max(t_run, 1e-9)) +
                                  " x real time, all peers in one thread)");
