@@ -256,9 +256,15 @@ CLI::Validator no_minus_sign()
 {
     return {[](std::string& text)
             {
-                return text.find('-') == std::string::npos
-                           ? std::string()
-                           : text + " is negative; give a whole number >= 0";
+                if (text.find('-') != std::string::npos)
+                    return text + " is negative; give a whole number >= 0";
+                // CLI11 saturates a number past 2^64 - 1 without a word.
+                std::uint64_t v = 0;
+                const char* end = text.data() + text.size();
+                if (const auto [p, ec] = std::from_chars(text.data(), end, v);
+                    ec == std::errc::result_out_of_range)
+                    return text + " is too large; give a whole number below 2^64";
+                return std::string();
             },
             "", "UNSIGNED"};
 }

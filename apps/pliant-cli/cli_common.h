@@ -79,7 +79,8 @@ auto command_callback(const GlobalOptions& global, Body body)
 /// Range said "Value abc not in range 1 to 10" of text that is no number at all).
 [[nodiscard]] CLI::Validator whole_number_in(long long lo, long long hi);
 [[nodiscard]] CLI::Validator number_in(double lo, double hi);
-/// For unsigned integer options: CLI11 converts "-5" to 2^64 - 5 without a word.
+/// For unsigned integer options: CLI11 converts "-5" to 2^64 - 5, and saturates a number past
+/// 2^64 - 1, without a word.
 [[nodiscard]] CLI::Validator no_minus_sign();
 /// For --port: a whole number from `lowest` to 65535, said as such ("--port: 70000 is not a UDP
 /// port; give a whole number from 1 to 65535"; CLI11 alone said "Could not convert").

@@ -76,6 +76,9 @@ if(TARGET pliant)
                       render --color-range 0)
     pliant_cli_expect(cli_usage_outside 2 STDERR "--fps: 200 is outside \\[1, 60\\]; give a number in it"
                       demo --fps 200)
+    pliant_cli_expect(cli_usage_unsigned_too_large 2 STDERR
+                      "--ticks: 99999999999999999999 is too large. give a whole number below 2.64"
+                      host --ticks 99999999999999999999)
     add_test(NAME cli_usage_numbers_are_finite
              COMMAND ${CMAKE_COMMAND} -DPLIANT=$<TARGET_FILE:pliant>
                      -P ${CMAKE_CURRENT_SOURCE_DIR}/number_options.cmake)
