@@ -236,8 +236,8 @@ std::optional<std::string> PaceWatch::add(const PaceSample& sample)
     else if (sample.coupling == Coupling::Exact && sample.barrier_wait_s >= 1.0)
         out += fmt::format(
             "it has waited {:.1f} s at one tick for peer {} to publish it (exact coupling steps "
-            "every member together; the master removes a member that publishes no step for 10 "
-            "s, --max-barrier-wait)",
+            "every member together; the master removes a member that publishes no step for "
+            "its --max-barrier-wait, 10 s by default)",
             sample.barrier_wait_s, sample.barrier_peer.value);
     else if (sample.coupling == Coupling::Exact)
         out += fmt::format(
