@@ -367,6 +367,21 @@ public:
         return s;
     }
 
+    // ENet's queue of commands not yet sent (reliable and unreliable, each fragment's bytes)
+    // and its reliable bytes in flight, not yet acknowledged.
+    std::size_t queued_bytes(PeerHandle peer) const noexcept override
+    {
+        auto it = connections_.find(peer.value);
+        if (it == connections_.end())
+            return 0;
+        ENetPeer* p = it->second.peer;
+        std::size_t n = p->reliableDataInTransit;
+        for (ENetListIterator c = enet_list_begin(&p->outgoingCommands);
+             c != enet_list_end(&p->outgoingCommands); c = enet_list_next(c))
+            n += reinterpret_cast<const ENetOutgoingCommand*>(c)->fragmentLength;
+        return n;
+    }
+
     std::optional<Address> remote_address(PeerHandle peer) const noexcept override
     {
         auto it = connections_.find(peer.value);

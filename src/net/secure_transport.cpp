@@ -670,6 +670,11 @@ std::optional<Address> SecureTransport::remote_address(PeerHandle peer) const no
     return impl_->inner->remote_address(peer);
 }
 
+std::size_t SecureTransport::queued_bytes(PeerHandle peer) const noexcept
+{
+    return impl_->inner->queued_bytes(peer);
+}
+
 void SecureTransport::report_bad_datagram(PeerHandle peer) noexcept
 {
     impl_->inner->report_bad_datagram(peer);

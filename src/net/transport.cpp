@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: 2026 pliant contributors
-// Transport's default idle wait: a sleep (transports with a socket wait on it instead).
+// Transport's defaults: the idle wait, a sleep (transports with a socket wait on it instead),
+// and queued bytes, unknown (0).
 
 #include <pliant/net/transport.h>
 
@@ -14,6 +15,11 @@ void Transport::wait(double max_s) noexcept
 {
     if (max_s > 0.0)
         std::this_thread::sleep_for(std::chrono::duration<double>(max_s));
+}
+
+std::size_t Transport::queued_bytes(PeerHandle /*peer*/) const noexcept
+{
+    return 0;
 }
 
 }  // namespace pliant::net

@@ -82,6 +82,10 @@ constexpr double k_provisional_s = 3.0;
 /// of the transport's peer slots for as long as its other end keeps it alive (an audit filled
 /// all 64 that way and every later joiner was turned away).
 constexpr double k_greeting_deadline_s = 10.0;
+/// Master: the Welcome's blob chunks go to a joiner while the transport holds less than this
+/// for it (queued or unacknowledged), so a joiner that reads slowly, or never, holds at most
+/// this much of the master's memory, not the whole model and state (docs/session.md §2).
+constexpr std::size_t k_feed_window_bytes = 256 * 1024;
 /// A participant's new points of interest re-partition the session at most this often (s, the
 /// master's clock); a change within it waits for its end. Each change cost the master a partition
 /// computed and broadcast (and every peer a hand-over), so a peer changing its points on every
@@ -456,6 +460,17 @@ struct RemotePeer
     bool info_known = false;
     std::optional<net::PeerHandle> handle;
     std::vector<std::pair<net::Message, net::SendMode>> queued;  ///< until the handle is bound
+    /// Master: the Welcome's blobs still to go to this joiner (model then state, from `next`),
+    /// fed as its connection drains (feed_blobs); the reliable messages for it meanwhile wait in
+    /// `after_feed`, in order.
+    struct BlobFeed
+    {
+        std::shared_ptr<const std::vector<std::byte>> model, state;
+        std::size_t next = 0;
+        std::uint64_t tick = 0;
+    };
+    std::optional<BlobFeed> feed;
+    std::vector<std::pair<net::Message, net::SendMode>> after_feed;
     bool has_heartbeat = false;
     std::uint64_t heartbeat = 0;  ///< newest Heartbeat tick (exact mode)
     std::vector<ForceEntry> forces;
@@ -781,10 +796,10 @@ struct Session::Impl
         if (it == peers.end() || it->second.departed)
             return;
         RemotePeer& p = it->second;
-        if (!p.handle)
+        if (!p.handle || p.feed)
         {
             if (net::sent_reliably(m.type(), mode))
-                p.queued.emplace_back(m, mode);
+                (p.handle ? p.after_feed : p.queued).emplace_back(m, mode);
             return;
         }
         auto r = messenger.send(*p.handle, m, mode);
@@ -2867,13 +2882,66 @@ struct Session::Impl
         }
     }
 
+    /// Sends the Welcome's blob chunks to the joiners being fed while their connections hold
+    /// less than k_feed_window_bytes; a finished feed lets the messages that waited behind it go.
+    void feed_blobs()
+    {
+        if (feeding == 0)
+            return;
+        for (auto& [id, p] : peers)
+        {
+            if (!p.feed)
+                continue;
+            if (!p.handle || p.departed)
+            {
+                p.feed.reset();
+                p.after_feed.clear();
+                --feeding;
+                continue;
+            }
+            RemotePeer::BlobFeed& f = *p.feed;
+            const std::size_t total = f.model->size() + f.state->size();
+            // Bounded: one chunk per pass, at most the window's worth per call.
+            for (int guard = 0; guard < 64 && f.next < total &&
+                                transport.queued_bytes(*p.handle) < k_feed_window_bytes;
+                 ++guard)
+            {
+                const bool in_model = f.next < f.model->size();
+                const std::vector<std::byte>& blob = in_model ? *f.model : *f.state;
+                const std::size_t off = in_model ? f.next : f.next - f.model->size();
+                net::Blob b;
+                b.kind = in_model ? net::BlobKind::Model : net::BlobKind::State;
+                b.total_size = static_cast<std::uint32_t>(blob.size());
+                b.offset = static_cast<std::uint32_t>(off);
+                const std::size_t len = std::min(net::k_max_blob_chunk, blob.size() - off);
+                b.data.assign(blob.begin() + static_cast<std::ptrdiff_t>(off),
+                              blob.begin() + static_cast<std::ptrdiff_t>(off + len));
+                (void)messenger.send(*p.handle, make(b, f.tick));
+                f.next += len;
+            }
+            if (f.next < total)
+                continue;
+            p.feed.reset();
+            --feeding;
+            auto waiting = std::move(p.after_feed);
+            p.after_feed.clear();
+            for (auto& [m, mode] : waiting)
+                (void)messenger.send(*p.handle, m, mode);
+        }
+    }
+
+    std::shared_ptr<const std::vector<std::byte>> model_blob_shared;
+    std::size_t feeding = 0;  // peers with a feed
+
     void send_welcome(std::uint16_t id)
     {
         const core::TetraGrid& g = s.model_->grid();
-        const auto model = encode_model(*s.model_, s.coupling_, s.clearance_);
+        if (!model_blob_shared)  // the model never changes: encoded once, shared by every feed
+            model_blob_shared = std::make_shared<const std::vector<std::byte>>(
+                encode_model(*s.model_, s.coupling_, s.clearance_));
+        const std::vector<std::byte>& model = *model_blob_shared;
         flush_display();
-        const auto state =
-            encode_state(g, s.display_u_, s.display_v_, s.state_.tick, s.state_.time);
+        auto state = encode_state(g, s.display_u_, s.display_v_, s.state_.tick, s.state_.time);
         net::Welcome w;
         w.your_id = net::PeerId{id};
         w.master_id = s.id_;
@@ -2898,19 +2966,13 @@ struct Session::Impl
             if (!op.departed && op.info_known && w.peers.size() < net::k_max_welcome_peers)
                 w.peers.push_back(op.info);
         send_to(id, make(w, s.state_.tick));
-        for (const auto& [kind, blob] :
-             {std::pair{net::BlobKind::Model, &model}, std::pair{net::BlobKind::State, &state}})
-            for (std::size_t off = 0; off < blob->size(); off += net::k_max_blob_chunk)
-            {
-                net::Blob b;
-                b.kind = kind;
-                b.total_size = static_cast<std::uint32_t>(blob->size());
-                b.offset = static_cast<std::uint32_t>(off);
-                const std::size_t len = std::min(net::k_max_blob_chunk, blob->size() - off);
-                b.data.assign(blob->begin() + static_cast<std::ptrdiff_t>(off),
-                              blob->begin() + static_cast<std::ptrdiff_t>(off + len));
-                send_to(id, make(b, s.state_.tick));
-            }
+        // The blobs follow as the connection drains (feed_blobs); what is sent to the joiner
+        // from here on waits behind them.
+        RemotePeer& joiner = peers[id];
+        joiner.feed = RemotePeer::BlobFeed{
+            model_blob_shared, std::make_shared<const std::vector<std::byte>>(std::move(state)), 0,
+            s.state_.tick};
+        ++feeding;
         // The partitions the joiner needs to follow the lockstep, then our forces.
         for (const PartitionEntry& p : partitions)
         {
@@ -2921,6 +2983,7 @@ struct Session::Impl
             send_to(id, make(msg, p.apply_tick));
         }
         greet_new_peer(id);
+        feed_blobs();
     }
 
     void on_welcome(net::PeerHandle h, const net::Message& m, const net::Welcome& w)
@@ -3692,6 +3755,7 @@ struct Session::Impl
             display_dirty = false;
         }
         record_history();
+        feed_blobs();
         for (const net::PeerHandle h : transport.peers())
             if (auto st = transport.stats(h))
                 last_stats[h] = *st;
@@ -3988,6 +4052,7 @@ struct Session::Impl
             next_view = std::max(next_view + 1.0 / settings.frame_rate_hz,
                                  now - 1.0 / settings.frame_rate_hz);
         }
+        feed_blobs();
         transport.flush();
     }
 };

@@ -4,6 +4,7 @@
 // the single-process run after 500 steps. Skipped with a reason if no loopback socket binds.
 // (Separate processes: tests/session/cli_session_test.cpp; threads: threaded_session_test.cpp.)
 #include <pliant/net/enet_transport.h>
+#include <pliant/net/messenger.h>
 
 #include <gtest/gtest.h>
 
@@ -11,6 +12,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <memory>
 #include <vector>
 
@@ -109,6 +111,86 @@ TEST(SessionEnet, TwoPeersOverLoopbackEqualSingleProcess)
 TEST(SessionEnet, ThreePeersOverLoopbackEqualSingleProcess)
 {
     run_over_loopback(2);
+}
+
+// A joiner that says Hello and then reads nothing (a stalled or hostile one): the master fed it
+// the Welcome's model and state blobs all at once (about 1.3 MB at level 7, 5.3 MB at level 8,
+// held in ENet's queue for as long as the joiner's connection lived). Now it sends chunks while
+// the connection holds less than 256 KiB, so that joiner costs at most that; once it reads again
+// the rest follows, every byte of both blobs.
+TEST(SessionEnet, AJoinerThatReadsNothingHoldsAtMostTheFeedWindow)
+{
+    auto master_wire = net::make_enet_transport();
+    auto silent_wire = net::make_enet_transport();
+    auto ma = master_wire->open(net::Address{{127, 0, 0, 1}, 0});
+    auto sa = silent_wire->open(net::Address{{127, 0, 0, 1}, 0});
+    if (!ma || !sa)
+        GTEST_SKIP() << "cannot bind a UDP socket on 127.0.0.1";
+    constexpr int level = 7;
+    const core::TetraGrid grid = core::TetraGrid::create(level).value();
+    SessionSettings set;
+    set.name = "master";
+    set.max_ticks = 1;  // the test is about the welcome, not the steps
+    auto master =
+        Session::host(*master_wire, grid, scenes::sphere_grid(grid, 1.0), material(), set).value();
+    net::Messenger silent(*silent_wire);
+    const auto t0 = std::chrono::steady_clock::now();
+    const auto elapsed = [&]
+    { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
+    const auto pump_master = [&]
+    {
+        master->poll();
+        master->advance(elapsed());
+    };
+    // Connect and say Hello, then stop reading.
+    const net::PeerHandle to_master = silent_wire->connect(*ma).value();
+    bool connected = false;
+    while (!connected && elapsed() < 10.0)
+    {
+        pump_master();
+        while (auto ev = silent.poll(1))
+            connected = connected || ev->kind == net::MessengerEvent::Kind::Connected;
+    }
+    ASSERT_TRUE(connected);
+    net::Message hello;
+    hello.header.sender = net::k_no_peer;
+    net::Hello h;
+    h.role = net::Role::Viewer;
+    h.name = "silent";
+    hello.body = h;
+    ASSERT_TRUE(silent.send(to_master, hello));
+    silent_wire->flush();
+    std::size_t most = 0;
+    const double quiet_until = elapsed() + 2.0;
+    while (elapsed() < quiet_until)
+    {
+        pump_master();
+        for (const net::PeerHandle p : master_wire->peers())
+            most = std::max(most, master_wire->queued_bytes(p));
+    }
+    const std::size_t blobs =
+        encode_model(*master->model(), Coupling::Exact).size() + 16 + grid.node_count() * 16;
+    std::printf("blobs %zu bytes; the most queued for the silent joiner %zu bytes\n", blobs, most);
+    EXPECT_GT(blobs, 1'000'000U);
+    EXPECT_GT(most, 0U) << "the Hello was admitted and something was sent";
+    EXPECT_LE(most, 256U * 1024U + 40U * 1024U) << "at most the window and one chunk";
+    // It reads again: the rest of both blobs arrives.
+    std::size_t model_bytes = 0;
+    std::size_t state_bytes = 0;
+    const double read_until = elapsed() + 20.0;
+    while (elapsed() < read_until && model_bytes + state_bytes < blobs)
+    {
+        pump_master();
+        while (auto ev = silent.poll(1))
+            if (ev->kind == net::MessengerEvent::Kind::Received &&
+                ev->message.type() == net::MessageType::Blob)
+            {
+                const auto& b = std::get<net::Blob>(ev->message.body);
+                (b.kind == net::BlobKind::Model ? model_bytes : state_bytes) += b.data.size();
+            }
+    }
+    EXPECT_EQ(model_bytes + state_bytes, blobs);
+    EXPECT_EQ(state_bytes, 16 + grid.node_count() * 16);
 }
 
 }  // namespace

@@ -142,6 +142,7 @@ public:
     /// `bad_datagrams` increased by this layer's authentication failures and malformed drops.
     [[nodiscard]] std::optional<PeerStats> stats(PeerHandle peer) const noexcept override;
     [[nodiscard]] std::optional<Address> remote_address(PeerHandle peer) const noexcept override;
+    [[nodiscard]] std::size_t queued_bytes(PeerHandle peer) const noexcept override;
     void report_bad_datagram(PeerHandle peer) noexcept override;
     /// Authenticated connections only.
     [[nodiscard]] std::vector<PeerHandle> peers() const override;

@@ -152,6 +152,11 @@ public:
 
     /// Handles of the live connections, in increasing order.
     [[nodiscard]] virtual std::vector<PeerHandle> peers() const = 0;
+
+    /// Bytes queued to `peer` and not yet sent, or sent reliably and not yet acknowledged: what
+    /// a sender that feeds a large transfer (the Welcome's blobs) keeps bounded. 0 for an
+    /// unknown handle, and from a transport that does not know (the default).
+    [[nodiscard]] virtual std::size_t queued_bytes(PeerHandle peer) const noexcept;
 };
 
 }  // namespace pliant::net
