@@ -22,6 +22,7 @@
 // `pliant replay` (the recording is still written).
 #include <pliant/core/file_io.h>
 #include <pliant/core/grid_io.h>
+#include <pliant/core/vec3.h>
 #include <pliant/mesh/io.h>
 #include <pliant/mesh/validate.h>
 #include <pliant/net/enet_transport.h>
@@ -58,6 +59,7 @@
 #include <fstream>
 #include <functional>
 #include <future>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -84,12 +86,19 @@ struct DemoOptions
     int width = 640;
     int height = 480;
     double wall_limit = 600.0;
-    bool quick = false;
+    bool quick = false;  // applied by the command: the values below for options not given
     bool render = true;
     bool view = false;                 // open the viewer on the running session
     std::filesystem::path screenshot;  // --view: PNG of the viewer's last frame
     double exit_after = 0.0;           // --view: close the viewer after this many seconds
 };
+
+/// `--quick`: a small run (the tests'), for each of these options not given on the line.
+constexpr int k_quick_level = 5;
+constexpr double k_quick_duration = 2.0;
+constexpr double k_quick_fps = 6.0;
+constexpr int k_quick_width = 320;
+constexpr int k_quick_height = 240;
 
 /// The link between the session thread and the viewer of `pliant demo --view`: the session
 /// thread announces the master's port once every participant is partitioned (0: it failed
@@ -135,10 +144,10 @@ struct Grab
 
 /// Two users grabbing opposite ends of the object along its longest axis: the first pulls its
 /// end outward, the second pushes its end inward, overlapping in time.
-std::array<Grab, 2> make_grabs(const sim::MembraneModel& model, double duration)
+/// The extent of the model's rest bounding box along x, y and z.
+core::Vec3 rest_extent(const sim::MembraneModel& model)
 {
     const auto& P = model.rest_positions();
-    const auto& N = model.normals();
     const core::TetraGrid& g = model.grid();
     core::Vec3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
     for (int y = 0; y < g.ny(); ++y)
@@ -148,7 +157,15 @@ std::array<Grab, 2> make_grabs(const sim::MembraneModel& model, double duration)
             lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
             hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
         }
-    const core::Vec3 extent = hi - lo;
+    return hi - lo;
+}
+
+std::array<Grab, 2> make_grabs(const sim::MembraneModel& model, double duration)
+{
+    const auto& P = model.rest_positions();
+    const auto& N = model.normals();
+    const core::TetraGrid& g = model.grid();
+    const core::Vec3 extent = rest_extent(model);
     const int axis =
         extent.x >= extent.y && extent.x >= extent.z ? 0 : (extent.y >= extent.z ? 1 : 2);
     auto coord = [&](core::GridCoord c) { return P[static_cast<std::size_t>(axis)].at(c.x, c.y); };
@@ -357,14 +374,6 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
     const bool live = live_link != nullptr;  // --view: paced, repeating, until the window closes
     if (live)
         opt.render = false;
-    if (opt.quick)
-    {
-        opt.level = std::min(opt.level, 5);
-        opt.duration = std::min(opt.duration, 2.0);
-        opt.fps = std::min(opt.fps, 6.0);
-        opt.width = std::min(opt.width, 320);
-        opt.height = std::min(opt.height, 240);
-    }
     const auto t_start = Clock::now();
     const fs::path mesh_path = opt.mesh.empty() ? bundled_mesh() : opt.mesh;
     // 1. Import, validate, remesh. A refused mesh leaves --out as it was (not even made).
@@ -438,8 +447,12 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
     if (dt > stable)
         spdlog::warn(
             "demo: a step of {:.3g} s is above the stability bound {:.3g} s: the "
-            "membrane will blow up; leave --dt out (0.9 x the bound)",
+            "membrane may blow up (the bound is conservative; the run stops if it does); leave "
+            "--dt out (0.9 x the bound)",
             dt, stable);
+    // The object's size, the diagonal of its rest bounding box: a displacement beyond it (or a
+    // non-finite one) is no deformation this linear membrane describes but a run that diverged.
+    const double object_size = core::norm(rest_extent(*probe));
     material.fixed_dt = dt;
     const std::array<Grab, 2> grabs = make_grabs(*probe, opt.duration);
 
@@ -548,7 +561,8 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
     // One row per frame: the master's session time and tick, each participant's owned nodes,
     // the largest |u| in the frame shown (the viewer's once it has joined, else the master's).
     energy_csv << "time,ticks,owner_nodes_master,owner_nodes_A,owner_nodes_B,max_u,shown_by\n";
-    double max_u = 0.0;  // over every frame shown (the summary's row)
+    double max_u = 0.0;         // over every frame shown (the summary's row)
+    double diverged_at = -1.0;  // session time of the first frame beyond the object's size
     int painted = 0;
     int frames_run = 0;
     double reached = 0.0;  // session time reached, s
@@ -618,15 +632,26 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
         const session::Session& shown = *peers[from_viewer ? 3 : 0].session;
         const core::Field<double>& u = shown.view_u();
         double frame_max_u = 0.0;
+        bool finite = true;
         for (int y = 0; y < grid.ny(); ++y)
             for (int x = 0; x < grid.nx(); ++x)
+            {
+                finite = finite && std::isfinite(u.at(x, y));
                 frame_max_u = std::max(frame_max_u, std::abs(u.at(x, y)));
+            }
+        if (!finite)
+            frame_max_u = std::numeric_limits<double>::infinity();
         max_u = std::max(max_u, frame_max_u);
         // The master's clock: a viewer simulates nothing, so its own time stays at its join.
         energy_csv << peers[0].session->time() << ',' << peers[0].session->tick();
         for (std::size_t k = 0; k < 3; ++k)
             energy_csv << ',' << peers[k].session->stats().owned_nodes;
         energy_csv << ',' << frame_max_u << ',' << (from_viewer ? "viewer" : "master") << '\n';
+        if (frame_max_u > object_size)  // diverged: the run stops, its outputs say so
+        {
+            diverged_at = reached;
+            break;
+        }
         if (painter)
         {
             std::array<char, 32> name{};
@@ -735,7 +760,9 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
     row("simulated time / ticks / frames",
         fmt("%.2f s", reached) + " / " + std::to_string(peers[0].session->tick()) + " / " +
             std::to_string(frames_run) +
-            (!live && interrupted() && frames_run < frames
+            (diverged_at >= 0.0
+                 ? (live ? std::string() : " of " + std::to_string(frames)) + " (diverged)"
+             : !live && interrupted() && frames_run < frames
                  ? " of " + std::to_string(frames) + " (interrupted: Ctrl-C)"
                  : std::string()));
     row("session wall time", fmt("%.1f s", t_run) + " (" +
@@ -759,7 +786,10 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
         row("viewer joined at / shown from",
             fmt("%.2f s", t_viewer) + " / " +
                 (viewer_ready_at >= 0.0 ? fmt("%.2f s", viewer_ready_at) : std::string("never")));
-    row("largest displacement shown", fmt("%.4f m", max_u));
+    row("largest displacement shown",
+        diverged_at < 0.0 ? fmt("%.4f m", max_u)
+                          : fmt("%.3g m: DIVERGED", max_u) + fmt(" at %.2f s", diverged_at) +
+                                fmt(" (the object is %.3g m across)", object_size));
     if (live)
         row("replay of session.prec", "not checked with --view (pliant replay checks it)");
     else
@@ -809,6 +839,19 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
             painted == 0              ? "no frames"
             : animation == "demo.gif" ? "frame_*.png, demo.gif"
                                       : "frame_*.png, no GIF");
+    if (diverged_at >= 0.0)
+        return report(
+            {core::ErrorCode::NotConverged,
+             fmt("demo: the membrane diverged at t = %.2f s", diverged_at) +
+                 fmt(" (a displacement of %.3g m", max_u) +
+                 fmt(", the object is %.3g m across) and the run stopped there; ", object_size) +
+                 (dt > stable ? fmt("the step %.3g s", dt) +
+                                    fmt(" is above the stability bound %.3g s: leave "
+                                        "--dt out",
+                                        stable)
+                              : std::string("please report it with --mesh and the "
+                                            "options given")) +
+                 "; " + opt.out.string() + " holds what ran"});
     if (!identical)
         return report({core::ErrorCode::NotConverged,
                        "demo: replaying the recording did not reproduce the session's state"});
@@ -934,7 +977,8 @@ void add_demo_command(CLI::App& app, const GlobalOptions& global)
     cmd->add_option("--wall-limit", opt->wall_limit, "Give up after this many wall seconds")
         ->check(positive_number())
         ->capture_default_str();
-    cmd->add_flag("--quick", opt->quick, "Level 5, 2 s, 6 fps, 320x240 (for tests)");
+    cmd->add_flag("--quick", opt->quick,
+                  "Level 5, 2 s, 6 fps, 320x240 (for tests); an option given beside it wins");
     // A plain flag setting the field (a CLI11 negated flag showed "{false}" in --help).
     cmd->add_flag_function(
         "--no-render", [opt](std::int64_t) { opt->render = false; },
@@ -948,7 +992,7 @@ void add_demo_command(CLI::App& app, const GlobalOptions& global)
         ->check(positive_number());
     cmd->callback(command_callback(
         global,
-        [opt, &global]()
+        [opt, &global, cmd]()
         {
             if ((!opt->screenshot.empty() || opt->exit_after > 0.0) && !opt->view)
             {
@@ -959,6 +1003,20 @@ void add_demo_command(CLI::App& app, const GlobalOptions& global)
             {
                 spdlog::error("demo: --out is empty; give a folder (default demo-out)");
                 return k_exit_usage;
+            }
+            // --quick sets the small run's values of the options not given; a given one wins.
+            if (opt->quick)
+            {
+                if (cmd->count("--level") == 0)
+                    opt->level = k_quick_level;
+                if (cmd->count("--duration") == 0)
+                    opt->duration = k_quick_duration;
+                if (cmd->count("--fps") == 0)
+                    opt->fps = k_quick_fps;
+                if (cmd->count("--width") == 0)
+                    opt->width = k_quick_width;
+                if (cmd->count("--height") == 0)
+                    opt->height = k_quick_height;
             }
             return opt->view ? run_demo_with_viewer(*opt, global) : run_demo(*opt, global, nullptr);
         }));
