@@ -5,9 +5,11 @@
 #include "commands.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cstdio>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace pliant::cli
 {
@@ -17,6 +19,30 @@ std::vector<CommandSpec>& command_registry()
     static std::vector<CommandSpec> registry;
     return registry;
 }
+
+namespace
+{
+
+/// After a failed parse: "pliant remesh: unknown option '--bogus'" for the first argument that
+/// looks like an option and that no option of the command (or, before it, of pliant) took;
+/// empty if there is none. A negative number ("-1", "-.5") is a value, not an option.
+std::string first_unknown_option(const CLI::App& app)
+{
+    const auto looks_like_option = [](const std::string& arg)
+    {
+        return arg.size() > 1 && arg[0] == '-' &&
+               std::isdigit(static_cast<unsigned char>(arg[1])) == 0 && arg[1] != '.';
+    };
+    std::string where = "pliant";
+    for (const CLI::App* sub : app.get_subcommands())  // the command given, if any
+        where += " " + sub->get_name();
+    for (const std::string& arg : app.remaining(true))
+        if (looks_like_option(arg))
+            return where + ": unknown option '" + arg + "'";
+    return {};
+}
+
+}  // namespace
 
 }  // namespace pliant::cli
 
@@ -85,6 +111,17 @@ int main(int argc, char** argv)
     }
     catch (const CLI::ParseError& e)
     {
+        // An unknown option is the likelier mistake behind any other complaint (CLI11 checks
+        // the required options and the subcommand first: `pliant remesh --bogus x` said
+        // "--output is required", `pliant --bogus` "A subcommand is required"): name it.
+        if (e.get_exit_code() != 0)
+            if (const std::string unknown = pliant::cli::first_unknown_option(app);
+                !unknown.empty())
+            {
+                std::fprintf(stderr, "%s\nRun with --help for more information.\n",
+                             unknown.c_str());
+                return pliant::cli::k_exit_usage;
+            }
         // --help and --version exit 0; every other CLI11 error is a usage error, whatever code
         // CLI11 gives it (105 for a bad value, 106 for a missing option...): one documented code.
         const int rc = app.exit(e);

@@ -52,7 +52,7 @@ if(TARGET pliant)
     # Usage errors: status 2 from every command, with CLI11's message.
     pliant_cli_expect(cli_usage_levels_out_of_range 2 STDERR "--levels: 0 is not in 1 to 9"
                       refine x.pgrid --levels 0 -o x.obj)
-    pliant_cli_expect(cli_usage_unknown_option 2 STDERR "The following argument was not expected: --bogus"
+    pliant_cli_expect(cli_usage_unknown_option 2 STDERR "pliant host: unknown option .--bogus."
                       host --bogus)
     pliant_cli_expect(cli_usage_bad_choice 2 STDERR "--mode: bogus not in \\{exact,fast\\}"
                       host --mode bogus)
@@ -91,6 +91,14 @@ if(TARGET pliant)
                       join 127.0.0.1:7777 --port 65536)
     pliant_cli_expect(cli_usage_needs 2 STDERR "--cap requires --compress" join 127.0.0.1:7777 --cap 1)
     pliant_cli_expect(cli_usage_no_command 2 STDERR "A subcommand is required")
+    # An unknown option is named before CLI11's other complaints ("A subcommand is required",
+    # "--output is required"), which it would otherwise hide; a negative value is no option.
+    pliant_cli_expect(cli_usage_unknown_option_alone 2 STDERR "pliant: unknown option '--bogus'"
+                      --bogus)
+    pliant_cli_expect(cli_usage_unknown_option_of_a_command 2 STDERR
+                      "pliant remesh: unknown option '--bogus'" remesh --bogus x.obj)
+    pliant_cli_expect(cli_usage_negative_value_is_no_option 2 STDERR
+                      "--radius: -1 is outside" simulate --radius -1 -o y.pgrid)
     pliant_cli_expect(cli_usage_unknown_command 2 STDERR
                       "unknown command 'nosuch'; the commands are: demo, info, remesh" nosuch)
     pliant_cli_expect(cli_usage_verbose_and_quiet 2 STDERR "--verbose excludes --quiet"
