@@ -342,20 +342,22 @@ struct SimulatedNetwork::Impl
         case PacketKind::Disconnect:
         case PacketKind::Data: break;
         }
-        auto it = e.connections.find(p.to_handle);
+        // Read before `p` is moved into a call beside it (the arguments' order is unspecified).
+        const auto to = p.to_handle;
+        auto it = e.connections.find(to);
         if (it == e.connections.end())
             return;
         Connection& c = it->second;
-        mark_connected(e, c, p.to_handle, p.from_handle);
+        mark_connected(e, c, to, p.from_handle);
         if (p.kind != PacketKind::Data)
         {
-            accept_reliable(ep, p.to_handle, std::move(p));
+            accept_reliable(ep, to, std::move(p));
             return;
         }
         ChannelState& ch = c.channels[static_cast<std::size_t>(p.channel)];
         switch (p.delivery)
         {
-        case Delivery::Reliable: accept_reliable(ep, p.to_handle, std::move(p)); return;
+        case Delivery::Reliable: accept_reliable(ep, to, std::move(p)); return;
         case Delivery::Unreliable:
             if (!c.connected || p.seq <= ch.last_unreliable_recv)
             {
@@ -363,11 +365,11 @@ struct SimulatedNetwork::Impl
                 return;
             }
             ch.last_unreliable_recv = p.seq;
-            deliver(e, c, p.to_handle, std::move(p));
+            deliver(e, c, to, std::move(p));
             return;
         case Delivery::Unsequenced:
             if (c.connected)
-                deliver(e, c, p.to_handle, std::move(p));
+                deliver(e, c, to, std::move(p));
             return;
         }
     }

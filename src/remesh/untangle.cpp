@@ -15,6 +15,7 @@
 #include <limits>
 #include <optional>
 #include <span>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -231,6 +232,18 @@ core::Result<UntangleStats> untangle_samples(const core::TetraGrid& grid, const 
                                              const UntangleSettings& settings,
                                              core::ProgressSink* progress)
 {
+    // The patch passes halve epsilon from start down to end: an end of 0 (or a start of inf)
+    // would never get there.
+    if (!std::isfinite(settings.patch_epsilon_start) ||
+        !std::isfinite(settings.patch_epsilon_end) ||
+        !(settings.patch_epsilon_end > 0.0 &&
+          settings.patch_epsilon_end <= settings.patch_epsilon_start))
+        return core::fail(core::ErrorCode::InvalidArgument,
+                          "untangle_samples: patch_epsilon_start " +
+                              std::to_string(settings.patch_epsilon_start) +
+                              " and patch_epsilon_end " +
+                              std::to_string(settings.patch_epsilon_end) +
+                              " must be finite with 0 < end <= start");
     const auto nodes = grid.node_of_unique();
     const std::size_t nu = nodes.size();
     const Locator locator(mesh.faces, sphere);

@@ -20,7 +20,9 @@
 #include "support/test_paths.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
+#include <limits>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -152,6 +154,50 @@ TEST(RemeshCancel, StoppedUntanglingLeavesItsInputsUntouched)
             ASSERT_EQ(points[k].padded()[i], domain[k].padded()[i]) << "plane " << k;
             ASSERT_EQ(positions[k].padded()[i], (*sampled)[k].padded()[i]) << "plane " << k;
         }
+}
+
+// The patch passes halve epsilon from start to end: settings it could never reach (an end of
+// 0, a start below the end or not finite) are refused at once, with the inputs untouched; an
+// end of 0 looped for ever (clang-tidy's FloatLoopCounter found it).
+TEST(RemeshCancel, UnreachablePatchEpsilonsAreRefusedNotLoopedOn)
+{
+    const mesh::TriMesh m = split_for_map(load_fox(), RemeshSettings{}.min_map_faces);
+    auto map = map_to_sphere(m);
+    ASSERT_TRUE(map) << map.error().message;
+    const auto grid = *core::TetraGrid::create(4);
+    const auto domain = core::sphere_domain(grid, core::SphereMap::EqualArea);
+    auto sampled = sample_surface(grid, domain, m, map->points);
+    ASSERT_TRUE(sampled);
+    const double inf = std::numeric_limits<double>::infinity();
+    const std::vector<std::pair<double, double>> bad{
+        {0.02, 0.0}, {0.02, -1.0}, {0.001, 0.002}, {inf, 0.0005}, {0.02, std::nan("")}};
+    for (const auto& [start, end] : bad)
+    {
+        UntangleSettings s;
+        s.patch_epsilon_start = start;
+        s.patch_epsilon_end = end;
+        s.enabled = false;  // the loop ran before this was looked at
+        core::Vec3Field<double> points = domain;
+        core::Vec3Field<double> positions = *sampled;
+        auto st = untangle_samples(grid, m, map->points, points, positions, s);
+        ASSERT_FALSE(st) << start << " .. " << end;
+        EXPECT_EQ(st.error().code, core::ErrorCode::InvalidArgument);
+        EXPECT_NE(st.error().message.find("patch_epsilon_end"), std::string::npos);
+        EXPECT_EQ(points[0].padded()[0], domain[0].padded()[0]);
+    }
+    // Through remesh(): the same refusal.
+    RemeshSettings rs;
+    rs.level = 4;
+    rs.untangle.patch_epsilon_end = 0.0;
+    auto r = remesh(m, rs);
+    ASSERT_FALSE(r);
+    EXPECT_EQ(r.error().code, core::ErrorCode::InvalidArgument);
+    // Equal start and end: one epsilon, accepted.
+    UntangleSettings one;
+    one.patch_epsilon_end = one.patch_epsilon_start;
+    core::Vec3Field<double> points = domain;
+    core::Vec3Field<double> positions = *sampled;
+    EXPECT_TRUE(untangle_samples(grid, m, map->points, points, positions, one));
 }
 
 }  // namespace

@@ -66,7 +66,8 @@ struct UntangleSettings
     /// `patch_rings` grid rings descends the barrier energy together, `patch_sweeps` sweeps per
     /// epsilon, epsilon halved from `patch_epsilon_start` down to `patch_epsilon_end`; a pass is
     /// kept only if it lowers the count (folded plus crossing pairs) without adding crossings.
-    /// 0: no patch passes.
+    /// 0: no patch passes. The epsilons must be finite with 0 < end <= start
+    /// (untangle_samples returns InvalidArgument otherwise; an end of 0 never came).
     int patch_passes = 4;
     int patch_rings = 4;
     int patch_sweeps = 3;
