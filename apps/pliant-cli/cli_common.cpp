@@ -3,6 +3,7 @@
 #include "cli_common.h"
 
 #include <pliant/core/file_io.h>
+#include <pliant/mesh/io.h>
 #include <pliant/net/secure_transport.h>
 #include <pliant/net/transport.h>
 
@@ -69,11 +70,27 @@ core::Error in_grid_file(const std::string& grid_path, core::Error error)
     return error;
 }
 
+bool same_file(const std::filesystem::path& a, const std::filesystem::path& b)
+{
+    std::error_code ec;
+    if (std::filesystem::equivalent(a, b, ec))
+        return true;
+    const auto resolved = [](const std::filesystem::path& p)
+    {
+        std::error_code e;
+        auto r = std::filesystem::weakly_canonical(p, e);
+        return e ? std::filesystem::absolute(p, e).lexically_normal() : r;
+    };
+    return resolved(a) == resolved(b);
+}
+
 core::Result<void> check_writable(const std::filesystem::path& path, std::string_view what)
 {
     if (auto ok = core::check_output_path(path, what); !ok)
         return ok;
-    // A .gltf's buffer goes to <stem>.bin beside it (mesh::export_mesh).
+    // A .gltf's buffer goes to <stem>.bin beside it, named in a URI (mesh::export_mesh).
+    if (auto ok = mesh::check_export_name(path); !ok)
+        return ok;
     if (lower_extension(path) == ".gltf")
         return core::check_output_path(gltf_buffer_of(path),
                                        std::string(what) + " (the .gltf's buffer)");

@@ -109,6 +109,10 @@ struct InputFileError
 /// file and the system's reason.
 core::Result<void> check_writable(const std::filesystem::path& path, std::string_view what);
 
+/// Whether `a` and `b` name one file: the same path once resolved (links, `..`), or two names of
+/// an existing file (a hard link). For refusing an output that would replace an input.
+[[nodiscard]] bool same_file(const std::filesystem::path& a, const std::filesystem::path& b);
+
 /// Where `mesh::export_mesh` writes a `.gltf`'s buffer: `<stem>.bin` beside it.
 [[nodiscard]] std::filesystem::path gltf_buffer_of(const std::filesystem::path& gltf);
 

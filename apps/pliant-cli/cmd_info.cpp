@@ -151,6 +151,8 @@ struct GridInfo
     std::optional<mesh::MeshStats> surface;   ///< of px, py, pz as a mesh (mesh::from_grid)
     std::vector<ChannelRange> ranges;         ///< every channel but px, py, pz and owner
     std::map<long long, std::size_t> owners;  ///< surface vertices per owner id
+    /// The first owner value that is no whole number (ids are labels; counted rounded above).
+    std::optional<std::pair<core::GridCoord, double>> fractional_owner;
 };
 
 GridInfo describe(const core::GridFile& file)
@@ -171,7 +173,12 @@ GridInfo describe(const core::GridFile& file)
         if (f.name == "owner")
         {
             for (const core::NodeIndex n : g.node_of_unique())
-                ++info.owners[std::llround(f.values[n])];
+            {
+                const double v = f.values[n];
+                ++info.owners[std::llround(v)];
+                if (!info.fractional_owner && v != std::round(v))
+                    info.fractional_owner = {g.coord(n), v};
+            }
             continue;
         }
         ChannelRange r{f.name, f.values[g.node_of_unique()[0]], f.values[g.node_of_unique()[0]]};
@@ -262,6 +269,10 @@ void print_grid_json(const InfoOptions& opt, const GridInfo* info,
             for (const auto& [id, count] : info->owners)
                 owners[std::to_string(id)] = count;
             j["owners"] = owners;
+            if (info->fractional_owner)
+                j["owner_not_whole"] = {
+                    {"value", info->fractional_owner->second},
+                    {"at", {info->fractional_owner->first.x, info->fractional_owner->first.y}}};
         }
     }
     std::cout << j.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) << '\n';
@@ -301,6 +312,12 @@ void print_grid_text(const InfoOptions& opt, const GridInfo& info,
         for (const auto& [id, count] : info.owners)
             owners += (owners.empty() ? "" : ", ") + std::string("peer ") + std::to_string(id) +
                       ": " + n(count);
+        if (info.fractional_owner)
+        {
+            const auto& [at, value] = *info.fractional_owner;
+            owners += "  (rounded: not whole ids, e.g. " + num(value) + " at node (" +
+                      std::to_string(at.x) + ", " + std::to_string(at.y) + "))";
+        }
         row("owner (vertices)", owners);
     }
     row("verdict", error ? "INVALID: " + error->message : std::string(grid_valid(info)));

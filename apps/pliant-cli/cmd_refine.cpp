@@ -55,6 +55,23 @@ int run_refine(const RefineOptions& opt, const GlobalOptions& global)
     // Before the work, not after it; nothing is created (the output is written whole at the end).
     if (auto ok = check_writable(opt.out, "refine: -o"); !ok)
         return report(ok.error());
+    if (same_file(opt.grid, opt.out))
+    {
+        spdlog::error(
+            "refine: -o {} is the input GRID: writing it would replace the input; "
+            "give another output file",
+            opt.out.string());
+        return k_exit_usage;
+    }
+    // Ctrl-C: stop between levels and channels, or while an OBJ/PLY is formatted; nothing
+    // is written.
+    ProgressBar bar(global);
+    bar.stop_on(install_interrupt_flag());
+    const auto interrupted = [&]
+    {
+        spdlog::error("refine: interrupted; {} not written", opt.out.string());
+        return k_exit_interrupted;
+    };
 
     auto file = core::load_grid(opt.grid);
     if (!file)
@@ -104,6 +121,8 @@ int run_refine(const RefineOptions& opt, const GlobalOptions& global)
         const auto t0 = std::chrono::steady_clock::now();
         for (core::Field<double>& f : channels)
         {
+            if (bar.stop_requested())
+                return interrupted();
             core::Field<double> next(plan.fine_grid(), subdiv::k_refine_ghost);
             subdiv::refine(plan, f, next, opt.threads);
             f = std::move(next);
@@ -120,6 +139,22 @@ int run_refine(const RefineOptions& opt, const GlobalOptions& global)
     const double total_ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     const core::TetraGrid& fine = plans->back().fine_grid();
+
+    // Owners are labels, not a smooth field: a fine node takes the owner of the coarse node at
+    // its rounded-down coarse position (as `render --level-up` draws them), twins their
+    // canonical node's, so no fractional id appears along the borders between peers.
+    for (std::size_t i = 0; i < channels.size(); ++i)
+        if (file->fields[i].name == "owner")
+        {
+            const core::Field<double>& coarse = file->fields[i].values;
+            core::Field<double>& f = channels[i];
+            for (int y = 0; y < fine.ny(); ++y)
+                for (int x = 0; x < fine.nx(); ++x)
+                {
+                    const core::GridCoord c = fine.coord(fine.canonical(fine.index(x, y)));
+                    f.at(x, y) = coarse.at(c.x >> opt.levels, c.y >> opt.levels);
+                }
+        }
 
     core::GridFile out;
     out.level = fine.level();
@@ -142,6 +177,8 @@ int run_refine(const RefineOptions& opt, const GlobalOptions& global)
         out.fields.push_back({file->fields[i].name, std::move(plain)});
     }
 
+    if (bar.stop_requested())
+        return interrupted();
     if (ext == ".pgrid")
     {
         if (auto saved = core::save_grid(opt.out, out); !saved)
@@ -153,8 +190,9 @@ int run_refine(const RefineOptions& opt, const GlobalOptions& global)
         if (!positions)
             return report(positions.error());
         const mesh::TriMesh surface = mesh::from_grid(fine, *positions);
-        if (auto saved = mesh::export_mesh(opt.out, surface); !saved)
-            return report(saved.error());
+        if (auto saved = mesh::export_mesh(opt.out, surface, &bar); !saved)
+            return saved.error().code == ErrorCode::Cancelled ? interrupted()
+                                                              : report(saved.error());
     }
     spdlog::debug("refine: {} levels in {:.3f} ms", opt.levels, total_ms);
     if (!global.quiet)

@@ -62,25 +62,26 @@ int run_remesh(const RemeshOptions& opt, const GlobalOptions& global)
         return report(ok.error());
     const std::filesystem::path side =
         ext == ".gltf" ? gltf_buffer_of(opt.output) : std::filesystem::path();
+    for (const std::filesystem::path& out : {opt.output, side, opt.report})
+        if (!out.empty() && same_file(input, out))
+        {
+            spdlog::error(
+                "remesh: {} would replace the input mesh {}; give another output "
+                "file",
+                out.string(), input.string());
+            return k_exit_usage;
+        }
     if (!opt.report.empty())
     {
         if (auto ok = check_writable(opt.report, "remesh: --report"); !ok)
             return report(ok.error());
-        const auto resolved = [](const std::filesystem::path& p)
-        {
-            std::error_code ec;
-            auto r = std::filesystem::weakly_canonical(p, ec);
-            return ec ? std::filesystem::absolute(p, ec).lexically_normal() : r;
-        };
-        const auto same = [&](const std::filesystem::path& a, const std::filesystem::path& b)
-        { return resolved(a) == resolved(b); };
-        if (same(opt.report, opt.output) || (!side.empty() && same(opt.report, side)))
+        if (same_file(opt.report, opt.output) || (!side.empty() && same_file(opt.report, side)))
         {
             spdlog::error(
                 "remesh: --report {} names the same file as {}; give the report "
                 "another name",
                 opt.report.string(),
-                same(opt.report, opt.output) ? "-o" : "the .gltf's buffer file");
+                same_file(opt.report, opt.output) ? "-o" : "the .gltf's buffer file");
             return k_exit_usage;
         }
     }
@@ -174,11 +175,14 @@ int run_remesh(const RemeshOptions& opt, const GlobalOptions& global)
     if (q.untangle.intersections > allowed || q.untangle.folded > 0)
         spdlog::warn(
             "remesh: the output has {} intersecting triangle pairs (the input {}) and {} folded "
-            "triangles: the remesher added self-intersections or folds that untangling could "
-            "not remove; try another --level (docs/remesh.md §3.2)",
+            "triangles: {} (docs/remesh.md §3.2)",
             q.untangle.intersections,
             q.input_checked ? std::to_string(q.input_intersections) : std::string("unchecked"),
-            q.untangle.folded);
+            q.untangle.folded,
+            opt.no_untangle ? "the sampling made self-intersections or folds, and --no-untangle "
+                              "kept them; leave it out to untangle them"
+                            : "the remesher added self-intersections or folds that untangling "
+                              "could not remove; try another --level");
 
     core::Result<void> written;
     if (ext == ".pgrid")

@@ -8,6 +8,7 @@
 // (simulation output) into a numbered PNG sequence with one still camera.
 #include <pliant/core/grid_io.h>
 #include <pliant/core/tetra_grid.h>
+#include <pliant/core/vec3.h>
 #include <pliant/mesh/io.h>
 #include <pliant/render/framebuffer.h>
 #include <pliant/render/grid_renderer.h>
@@ -54,6 +55,7 @@ struct RenderOptions
     int level_up = 0;
     int samples = 4;
     int owner_depth = 1;
+    bool owner_depth_given = false;  ///< --owner-depth on the line (it applies to --color owner)
     double color_range = 0.0;  ///< m; 0: the largest |u| (of the file, or of the whole sequence)
     bool wireframe = false;
 };
@@ -112,6 +114,10 @@ core::Result<render::CameraSettings> parse_camera(const std::string& text)
                           "render: --camera " + text +
                               " is not AZIMUTH,ELEVATION[,DISTANCE] (degrees, degrees, model "
                               "units >= 0; 0 fits the object)");
+    if (el < -90.0 || el > 90.0)
+        return core::fail(ErrorCode::InvalidArgument,
+                          "render: --camera " + text +
+                              ": the elevation must lie in -90..90 degrees (90: from above)");
     camera.azimuth_deg = az;
     camera.elevation_deg = el;
     camera.distance = dist;
@@ -175,6 +181,39 @@ core::Result<void> check_level_up(const fs::path& path, int level, int level_up)
                           " exceeds the finest level " + std::to_string(core::k_max_level) +
                           " (use --level-up " + std::to_string(core::k_max_level - level) +
                           " or fewer)");
+}
+
+/// Positions the GPU can draw and the camera can frame: finite, within float range with room
+/// for the transforms (|coordinate| <= 1e30), not all at one point. A picture of anything else
+/// came out blank, and said nothing.
+core::Result<void> check_drawable(const fs::path& path, const core::TetraGrid& grid,
+                                  const core::Vec3Field<double>& p)
+{
+    constexpr double k_limit = 1e30;
+    bool first = true;
+    core::Vec3 lo{}, hi{};
+    for (const core::NodeIndex n : grid.node_of_unique())
+    {
+        const core::GridCoord c = grid.coord(n);
+        const core::Vec3 q{p[0].at(c.x, c.y), p[1].at(c.x, c.y), p[2].at(c.x, c.y)};
+        for (const double v : {q.x, q.y, q.z})
+            if (!(std::abs(v) <= k_limit))
+                return core::fail(ErrorCode::NonFiniteCoordinate,
+                                  "render: " + path.string() +
+                                      fmt::format(": node ({}, {}) lies at ({:g}, {:g}, {:g})", c.x,
+                                                  c.y, q.x, q.y, q.z) +
+                                      ", which cannot be drawn (a coordinate beyond 1e30 or not "
+                                      "finite; `pliant info` checks the file)");
+        lo = first ? q : core::Vec3{std::min(lo.x, q.x), std::min(lo.y, q.y), std::min(lo.z, q.z)};
+        hi = first ? q : core::Vec3{std::max(hi.x, q.x), std::max(hi.y, q.y), std::max(hi.z, q.z)};
+        first = false;
+    }
+    if (!(core::norm(hi - lo) > 0.0))
+        return core::fail(ErrorCode::DegenerateFace,
+                          "render: " + path.string() +
+                              ": every node lies at one point: there is no surface to draw "
+                              "(`pliant info` checks the file)");
+    return {};
 }
 
 /// Loads a grid file; `rest` supplies positions for a frame that carries only "u".
@@ -243,6 +282,8 @@ core::Result<GridScene> load_grid_scene(const fs::path& path, const RenderOption
                 for (int x = 0; x < display.nx(); ++x)
                     p[c].at(x, y) += u->at(x, y) * n[c].at(x, y);
     }
+    if (auto ok = check_drawable(path, display, p); !ok)
+        return ok.error();
     return GridScene{std::move(display), std::move(p), std::move(u), std::move(owners),
                      std::move(owner_info.source)};
 }
@@ -343,6 +384,23 @@ int run_frames(const RenderOptions& opt, render::DrawSettings settings, Target& 
 
     const fs::path dir = opt.out.parent_path();
     const std::string stem = opt.out.stem().string();
+    // An earlier sequence's frames under the same name go first (regular files only), so that a
+    // shorter run leaves no frames of a longer one after its own.
+    std::size_t removed = 0;
+    for (const auto& entry : fs::directory_iterator(dir.empty() ? fs::path(".") : dir, ec))
+    {
+        const std::string name = entry.path().filename().string();
+        const bool frame = name.size() == stem.size() + 9 && name.starts_with(stem + "_") &&
+                           name.ends_with(".png") &&
+                           std::all_of(name.begin() + static_cast<std::ptrdiff_t>(stem.size()) + 1,
+                                       name.end() - 4, [](char c) { return c >= '0' && c <= '9'; });
+        if (frame && !entry.is_symlink(ec) && entry.is_regular_file(ec) &&
+            fs::remove(entry.path(), ec))
+            ++removed;
+    }
+    if (removed > 0)
+        spdlog::info("render: removed {} frame(s) {}_NNNN.png of an earlier run from {}", removed,
+                     stem, dir.empty() ? std::string(".") : dir.string());
     ProgressBar progress(global);
     // Ctrl-C or SIGTERM: stop after the frame being written (every PNG written stays whole).
     const volatile std::sig_atomic_t* interrupted = install_interrupt_flag();
@@ -423,8 +481,13 @@ int run_render(const RenderOptions& opt, const GlobalOptions& global)
         return usage(camera.error().message);
     if (opt.frames.empty() && opt.input.empty())
         return usage("render: give GRID or MESH, or --frames DIR");
-    if (lower_extension(opt.out) != ".png")
-        return usage("render: output " + opt.out.string() + " must end in .png");
+    if (lower_extension(opt.out) != ".png")  // bad input (1), as remesh's and refine's -o
+        return report({ErrorCode::UnsupportedFormat,
+                       "render: output " + opt.out.string() + " must end in .png"});
+    // Before any drawing: an output that cannot be written fails now (nothing is created).
+    if (opt.frames.empty())
+        if (auto ok = check_writable(opt.out, "render: -o"); !ok)
+            return report(ok.error());
     if (opt.frames.empty())
     {
         std::error_code ec;
@@ -447,19 +510,27 @@ int run_render(const RenderOptions& opt, const GlobalOptions& global)
 
     if (opt.color_range > 0.0 && settings.color != render::ColorMode::Displacement)
         spdlog::warn("render: --color-range applies to --color displacement only");
+    if (opt.owner_depth_given && settings.color != render::ColorMode::Owner)
+        spdlog::warn("render: --owner-depth applies to --color owner only");
 
     const render::GlBackend backend = opt.backend == "egl"      ? render::GlBackend::Egl
                                       : opt.backend == "osmesa" ? render::GlBackend::OsMesa
                                                                 : render::GlBackend::Auto;
+    // No OpenGL is a failure of the machine, not of the input: exit 3, as `remesh --gpu`.
+    const auto no_gl = [](const core::Error& e)
+    {
+        (void)report(e);
+        return k_exit_failure;
+    };
     auto context = render::OffscreenContext::create(backend);
     if (!context)
-        return report(context.error());
+        return no_gl(context.error());
     spdlog::debug("render: {} context, {}", render::to_string(context->backend()),
                   context->description());
     auto fb = render::Framebuffer::create((*size)[0], (*size)[1], render::PixelFormat::Rgba8,
                                           opt.samples);
     if (!fb)
-        return report(fb.error());
+        return no_gl(fb.error());
     Target target{std::move(*fb), (*size)[0], (*size)[1]};
 
     if (!opt.frames.empty())
@@ -591,8 +662,12 @@ void add_render_command(CLI::App& app, const GlobalOptions& global)
                     "OpenGL set-up: auto (EGL, then OSMesa), egl, osmesa")
         ->check(CLI::IsMember({"auto", "egl", "osmesa"}))
         ->capture_default_str();
-    cmd->callback(
-        command_callback(global, [opt, &global]() -> int { return run_render(*opt, global); }));
+    cmd->callback(command_callback(global,
+                                   [opt, &global, cmd]() -> int
+                                   {
+                                       opt->owner_depth_given = cmd->count("--owner-depth") > 0;
+                                       return run_render(*opt, global);
+                                   }));
 }
 
 const CommandRegistrar k_register_render{{"render", 60, &add_render_command}};

@@ -23,6 +23,7 @@
 //   would put the absolute path into the URI).
 
 #include <pliant/core/file_io.h>
+#include <pliant/core/progress.h>
 #include <pliant/core/vec3.h>
 #include <pliant/mesh/io.h>
 
@@ -46,6 +47,7 @@
 #include <fstream>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -71,22 +73,51 @@ void put_le(std::vector<char>& out, T value)
     out.insert(out.end(), b.begin(), b.end());
 }
 
-std::vector<char> obj_bytes(const TriMesh& mesh)
+/// Reports the phase "export" to `progress` (optional) every 65,536 elements of `total`, and
+/// says whether it asked to stop.
+class ExportPace
 {
+public:
+    ExportPace(core::ProgressSink* progress, std::size_t total) : progress_(progress), total_(total)
+    {
+    }
+    /// \return false when the work should stop.
+    [[nodiscard]] bool at(std::size_t done) const
+    {
+        if (progress_ == nullptr || (done & 0xFFFFU) != 0)
+            return true;
+        progress_->update("export", static_cast<double>(done) / static_cast<double>(total_));
+        return !progress_->stop_requested();
+    }
+
+private:
+    core::ProgressSink* progress_;
+    std::size_t total_;
+};
+
+/// The OBJ text; std::nullopt when `progress` asked to stop.
+std::optional<std::vector<char>> obj_bytes(const TriMesh& mesh, core::ProgressSink* progress)
+{
+    const ExportPace pace(progress, mesh.positions.size() + mesh.faces.size());
     std::vector<char> out;
     out.reserve(mesh.positions.size() * 64 + mesh.faces.size() * 24 + 64);
     const std::string head = "# pliant: " + std::to_string(mesh.positions.size()) + " vertices, " +
                              std::to_string(mesh.faces.size()) + " faces\n";
     out.insert(out.end(), head.begin(), head.end());
     std::array<char, 128> line{};
+    std::size_t done = 0;
     for (const core::Vec3& p : mesh.positions)
     {
+        if (!pace.at(done++))
+            return std::nullopt;
         const int n =
             std::snprintf(line.data(), line.size(), "v %.17g %.17g %.17g\n", p.x, p.y, p.z);
         out.insert(out.end(), line.data(), line.data() + n);
     }
     for (const Face& f : mesh.faces)
     {
+        if (!pace.at(done++))
+            return std::nullopt;
         const int n =
             std::snprintf(line.data(), line.size(), "f %u %u %u\n", f[0] + 1, f[1] + 1, f[2] + 1);
         out.insert(out.end(), line.data(), line.data() + n);
@@ -94,8 +125,10 @@ std::vector<char> obj_bytes(const TriMesh& mesh)
     return out;
 }
 
-std::vector<char> ply_bytes(const TriMesh& mesh)
+/// The binary PLY; std::nullopt when `progress` asked to stop.
+std::optional<std::vector<char>> ply_bytes(const TriMesh& mesh, core::ProgressSink* progress)
 {
+    const ExportPace pace(progress, mesh.positions.size() + mesh.faces.size());
     const std::string head =
         "ply\nformat binary_little_endian 1.0\ncomment pliant\nelement vertex " +
         std::to_string(mesh.positions.size()) +
@@ -105,14 +138,19 @@ std::vector<char> ply_bytes(const TriMesh& mesh)
         "\nproperty list uchar uint vertex_indices\nend_header\n";
     std::vector<char> out(head.begin(), head.end());
     out.reserve(head.size() + mesh.positions.size() * 24 + mesh.faces.size() * 13);
+    std::size_t done = 0;
     for (const core::Vec3& p : mesh.positions)
     {
+        if (!pace.at(done++))
+            return std::nullopt;
         put_le(out, p.x);
         put_le(out, p.y);
         put_le(out, p.z);
     }
     for (const Face& f : mesh.faces)
     {
+        if (!pace.at(done++))
+            return std::nullopt;
         put_le(out, std::uint8_t{3});
         for (const std::uint32_t v : f)
             put_le(out, v);
@@ -294,6 +332,8 @@ std::string with_json_chunk(std::string_view glb, std::string json_text)
 
 core::Result<void> write_gltf(const std::filesystem::path& path, const TriMesh& mesh, bool binary)
 {
+    if (auto ok = check_export_name(path); !ok)
+        return ok;
     if (auto ok = check_for_gltf(path, mesh); !ok)
         return ok;
     const std::string name = path.string();
@@ -363,26 +403,56 @@ core::Result<void> write_gltf(const std::filesystem::path& path, const TriMesh& 
 
 }  // namespace
 
-core::Result<void> export_mesh(const std::filesystem::path& path, const TriMesh& mesh)
+core::Result<void> check_export_name(const std::filesystem::path& path)
 {
     std::string ext = path.extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(),
                    [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    std::vector<char> bytes;
-    if (ext == ".obj" || ext == ".ply")
-        if (auto ok = check_finite(path, mesh); !ok)
-            return ok;
-    if (ext == ".obj")
-        bytes = obj_bytes(mesh);
-    else if (ext == ".ply")
-        bytes = ply_bytes(mesh);
-    else if (ext == ".gltf" || ext == ".glb")
-        return write_gltf(path, mesh, ext == ".glb");
-    else
+    if (ext != ".gltf")
+        return {};
+    const std::string stem = path.stem().string();
+    for (const char c : stem)
+    {
+        const auto u = static_cast<unsigned char>(c);
+        if (std::isalnum(u) != 0 && u < 0x80)
+            continue;
+        if (c == '-' || c == '.' || c == '_' || c == '~')
+            continue;
+        const std::string shown = u < 0x80 && std::isprint(u) != 0
+                                      ? "'" + std::string(1, c) + "'"
+                                      : std::string("a non-ASCII character");
+        return fail(ErrorCode::InvalidArgument,
+                    path.string() + ": the .gltf names its buffer " + stem +
+                        ".bin in a URI, where " + shown +
+                        " would need a %-escape that Assimp's reader (and pliant's) does not "
+                        "decode; use letters, digits, '-', '_', '.' and '~' in the name, or "
+                        "write a self-contained .glb");
+    }
+    return {};
+}
+
+core::Result<void> export_mesh(const std::filesystem::path& path, const TriMesh& mesh,
+                               core::ProgressSink* progress)
+{
+    std::string ext = path.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    if (ext != ".obj" && ext != ".ply" && ext != ".gltf" && ext != ".glb")
         return fail(ErrorCode::UnsupportedFormat,
                     path.string() + ": unsupported format '" + ext +
                         "' (pliant writes .obj, .ply, .gltf and .glb)");
-    return core::write_file(path, bytes_of(std::string_view(bytes.data(), bytes.size())), "");
+    const auto stopped = [&] { return progress != nullptr && progress->stop_requested(); };
+    if (stopped())
+        return core::cancelled("export " + path.string(), "export");
+    if (ext == ".gltf" || ext == ".glb")
+        return write_gltf(path, mesh, ext == ".glb");  // Assimp's: not stopped part-way
+    if (auto ok = check_finite(path, mesh); !ok)
+        return ok;
+    const std::optional<std::vector<char>> bytes =
+        ext == ".obj" ? obj_bytes(mesh, progress) : ply_bytes(mesh, progress);
+    if (!bytes)
+        return core::cancelled("export " + path.string(), "export");
+    return core::write_file(path, bytes_of(std::string_view(bytes->data(), bytes->size())), "");
 }
 
 TriMesh from_grid(const core::TetraGrid& grid, const core::Vec3Field<double>& positions)

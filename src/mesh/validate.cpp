@@ -414,26 +414,28 @@ core::Result<void> validate(const TriMesh& mesh, std::string_view source_name)
                     src + ": non-finite coordinate: vertex " + str(ex.non_finite_vertex) + " " +
                         point(mesh, ex.non_finite_vertex) + " (" +
                         plural(s.non_finite_vertices, "such vertex", "such vertices") + ")");
+    // Files are read in single precision (Assimp's float): far from the origin, vertices closer
+    // than a float's step there become one, and their faces degenerate or their edges gain
+    // faces, so the topology errors below say so too.
+    const double reach =
+        std::max({std::abs(s.bbox_min.x), std::abs(s.bbox_min.y), std::abs(s.bbox_min.z),
+                  std::abs(s.bbox_max.x), std::abs(s.bbox_max.y), std::abs(s.bbox_max.z)});
+    const std::string far =
+        s.bbox_diagonal > 0.0 && reach > k_far_from_origin * s.bbox_diagonal
+            ? "; the mesh lies far from the origin (coordinates up to " + fmt_number(reach) +
+                  ", size " + fmt_number(s.bbox_diagonal) +
+                  ") and positions are read as 32-bit floats, which merge nearby vertices "
+                  "there: move it near the origin"
+            : std::string();
     if (s.degenerate_faces > 0)
     {
         const Face& f = mesh.faces[ex.degenerate_face];
-        // Files are read in single precision (Assimp's float): far from the origin, vertices
-        // closer than a float's step there become one, and their faces degenerate.
-        const double reach =
-            std::max({std::abs(s.bbox_min.x), std::abs(s.bbox_min.y), std::abs(s.bbox_min.z),
-                      std::abs(s.bbox_max.x), std::abs(s.bbox_max.y), std::abs(s.bbox_max.z)});
-        const bool far = s.bbox_diagonal > 0.0 && reach > k_far_from_origin * s.bbox_diagonal;
         return fail(
             ErrorCode::DegenerateFace,
             src + ": degenerate face " + str(ex.degenerate_face) + " (vertices " + str(f[0]) +
                 ", " + str(f[1]) + ", " + str(f[2]) + " at " + point(mesh, f[0]) +
                 "): " + (ex.degenerate_repeated ? "a repeated vertex" : "zero area") + " (" +
-                plural(s.degenerate_faces, "degenerate face", "degenerate faces") + ")" +
-                (far ? "; the mesh lies far from the origin (coordinates up to " +
-                           fmt_number(reach) + ", size " + fmt_number(s.bbox_diagonal) +
-                           ") and positions are read as 32-bit floats, which merge "
-                           "nearby vertices there: move it near the origin"
-                     : std::string()));
+                plural(s.degenerate_faces, "degenerate face", "degenerate faces") + ")" + far);
     }
     if (s.non_manifold_edges > 0)
         return fail(
@@ -442,20 +444,21 @@ core::Result<void> validate(const TriMesh& mesh, std::string_view source_name)
                 " more than two faces (first: edge " + str(ex.non_manifold_edge[0]) + "-" +
                 str(ex.non_manifold_edge[1]) + " " + point(mesh, ex.non_manifold_edge[0]) + "-" +
                 point(mesh, ex.non_manifold_edge[1]) + " with " + str(ex.non_manifold_edge_faces) +
-                " faces)");
+                " faces)" + far);
     if (s.boundary_edges > 0)
         return fail(ErrorCode::OpenBoundary,
                     src + ": not a closed surface: " +
                         plural(s.boundary_edges, "boundary edge", "boundary edges") + " in " +
                         plural(s.boundary_loops, "loop", "loops") + " (first at vertex " +
-                        str(ex.boundary_vertex) + " " + point(mesh, ex.boundary_vertex) + ")");
+                        str(ex.boundary_vertex) + " " + point(mesh, ex.boundary_vertex) + ")" +
+                        far);
     if (s.non_manifold_vertices > 0)
         return fail(
             ErrorCode::NonManifoldVertex,
             src + ": not a 2-manifold: " +
                 plural(s.non_manifold_vertices, "vertex is a pinch", "vertices are pinches") +
                 " (first: vertex " + str(ex.pinch_vertex) + " " + point(mesh, ex.pinch_vertex) +
-                ", whose faces form " + str(ex.pinch_fans) + " separate fans)");
+                ", whose faces form " + str(ex.pinch_fans) + " separate fans)" + far);
     if (s.inconsistent_edges > 0)
         return fail(ErrorCode::InconsistentOrientation,
                     src + ": inconsistent orientation: " +
@@ -465,7 +468,7 @@ core::Result<void> validate(const TriMesh& mesh, std::string_view source_name)
                         point(mesh, ex.inconsistent_edge[0]) + "-" +
                         point(mesh, ex.inconsistent_edge[1]) + " of faces " +
                         str(ex.inconsistent_faces[0]) + " and " + str(ex.inconsistent_faces[1]) +
-                        ")");
+                        ")" + far);
     if (s.components > 1)
     {
         std::string sizes;

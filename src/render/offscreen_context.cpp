@@ -217,6 +217,11 @@ core::Result<OffscreenContext> OffscreenContext::create(GlBackend backend)
             backend = GlBackend::Egl;
         else if (forced != nullptr && std::strcmp(forced, "osmesa") == 0)
             backend = GlBackend::OsMesa;
+        else if (forced != nullptr && forced[0] != '\0')
+            return core::fail(core::ErrorCode::InvalidArgument,
+                              std::string("PLIANT_GL_BACKEND=") + forced +
+                                  " is neither egl nor osmesa (unset it to try EGL, then "
+                                  "OSMesa)");
     }
     std::string reasons;
     if (backend == GlBackend::Auto || backend == GlBackend::Egl)

@@ -30,6 +30,27 @@ if(TARGET pliant)
                       -o ${cli_dir}/x.obj)
     pliant_cli_expect(cli_refine_too_fine 1 STDERR "level 3 \\+ 8 = 11 exceeds the finest level 10 \\(use --levels 7 or fewer\\)"
                       refine ${cli_dir}/spot3.pgrid --levels 8 -o ${cli_dir}/x.obj)
+    # -o naming the input is refused before anything is read (it replaced the input).
+    pliant_cli_expect(cli_refine_output_is_the_input 2 STDERR
+                      "refine: -o .*spot3.pgrid is the input GRID"
+                      refine ${cli_dir}/spot3.pgrid --levels 1 -o ${cli_dir}/../cli-refine/spot3.pgrid)
+    pliant_cli_expect(cli_remesh_output_is_the_input 2 STDERR
+                      "remesh: .*in.obj would replace the input mesh"
+                      remesh ${cli_dir}/in.obj --level 3 -o ${cli_dir}/in.obj)
+    file(COPY_FILE ${PROJECT_SOURCE_DIR}/data/spot.obj ${cli_dir}/in.obj)
+    # A .gltf whose name a URI would have to escape (its buffer is named in one) is refused
+    # before the work: Assimp's reader does not decode %-escapes.
+    pliant_cli_expect(cli_remesh_gltf_name_needing_escapes 1 STDERR
+                      "my model.gltf: the .gltf names its buffer my model.bin in a URI"
+                      remesh ${PROJECT_SOURCE_DIR}/data/spot.obj --level 3 -o "${cli_dir}/my model.gltf")
+    # Ctrl-C while the level-10 OBJ is formatted (seconds): exit 130, nothing written (it went
+    # on, wrote all 236 MB and exited 0).
+    pliant_add_interrupt_test(cli_refine_interrupted LOG "refine: level 9 -> 10"
+        STDERR_REGEX "refine: interrupted; .*big.obj not written"
+        ABSENT ${cli_dir}/big.obj TIMEOUT 300 FIXTURES_REQUIRED cli_refine
+        ARGS -v refine ${cli_dir}/spot3.pgrid --levels 7 -o ${cli_dir}/big.obj)
+    set_tests_properties(cli_refine_output_is_the_input
+                         PROPERTIES FIXTURES_REQUIRED cli_refine)
     set_tests_properties(cli_refine_obj_verbose cli_refine_obj_counts cli_refine_native
                          cli_refine_directory
                          cli_refine_bad_extension cli_refine_not_a_grid cli_refine_too_fine

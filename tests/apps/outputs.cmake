@@ -67,13 +67,17 @@ if(TARGET pliant)
                       remesh ${PROJECT_SOURCE_DIR}/data/spot.obj --level 3
                       -o ${out_dir}/same.gltf --report ${out_dir}/same.bin)
 
-    # render: usage errors exit 2; a folder is not "no such file"; --level-up past level 10
+    # render: usage errors exit 2 (an output that is not .png: 1, as remesh's); a folder is not "no such file"; --level-up past level 10
     # says so; extensions in any case.
     pliant_cli_expect(cli_render_size_with_junk 2 STDERR "--size 64x64junk is not WxH"
                       render ${out_dir}/spot3.pgrid -o ${out_dir}/x.png --size 64x64junk)
     pliant_cli_expect(cli_render_camera_with_junk 2 STDERR "--camera 10,20x is not AZIMUTH"
                       render ${out_dir}/spot3.pgrid -o ${out_dir}/x.png --camera 10,20x)
-    pliant_cli_expect(cli_render_not_png 2 STDERR "output .*x.jpg must end in .png"
+    # The elevation was clamped to ±90 without a word (100 and 1e9 drew the view from above).
+    pliant_cli_expect(cli_render_camera_above_the_pole 2 STDERR
+                      "--camera 30,100: the elevation must lie in -90..90"
+                      render ${out_dir}/spot3.pgrid -o ${out_dir}/x.png --camera 30,100)
+    pliant_cli_expect(cli_render_not_png 1 STDERR "output .*x.jpg must end in .png"
                       render ${out_dir}/spot3.pgrid -o ${out_dir}/x.jpg)
     pliant_cli_expect(cli_render_folder_input 1 STDERR "cli-outputs: not a regular file \\(a folder\\)"
                       render ${out_dir} -o ${out_dir}/x.png)
@@ -128,7 +132,7 @@ if(TARGET pliant)
                       demo --quick --screenshot ${out_dir}/d.png --out ${out_dir}/demo-s)
     pliant_cli_expect(cli_bench_unknown_suite_is_a_usage_error 2 STDERR "unknown suite 'nosuch'"
                       bench nosuch --out ${out_dir}/bench-nosuch)
-    set_tests_properties(cli_render_size_with_junk cli_render_camera_with_junk cli_render_not_png
+    set_tests_properties(cli_render_size_with_junk cli_render_camera_with_junk cli_render_camera_above_the_pole cli_render_not_png
                          cli_render_level_up_too_far cli_quiet_render cli_quiet_refine
                          cli_refine_output_checked_first PROPERTIES FIXTURES_REQUIRED cli_outputs)
 endif()

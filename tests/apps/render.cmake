@@ -83,6 +83,39 @@ if(TARGET pliant AND TARGET pliant_png_check)
         "${_r}/seq-range/f_0000.png,--saturated,0,0.01"
         "${_r}/seq-range/f_0005.png,--saturated,0.3,1")
 
+    # An earlier, longer sequence under the same name: its frames go before the new ones are
+    # written (f_0007.png of an earlier run was left beside the 6 new frames).
+    add_test(NAME cli_render_frames_clear_an_earlier_run
+             COMMAND ${CMAKE_COMMAND}
+                     "-DCOMMAND=$<TARGET_FILE:pliant>;render;--frames;${_r}/frames;-o;${_r}/seq-stale/f.png;--size;64x48"
+                     -DEXIT=0 "-DSTDERR_REGEX=removed 1 frame.s. f_NNNN.png of an earlier run"
+                     "-DSTALE=${_r}/seq-stale/f_0007.png"
+                     -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+    set_tests_properties(cli_render_frames_clear_an_earlier_run PROPERTIES TIMEOUT 120
+                         FIXTURES_REQUIRED render_frames ENVIRONMENT "${_env}")
+    # Grids the reader accepts but no picture can show (written by make_bad_grid.py from the
+    # format's rules): refused, where an all-white picture was written with exit 0.
+    find_program(PLIANT_PYTHON3 python3)
+    if(PLIANT_PYTHON3)
+        foreach(kind point far)
+            set(_bad ${CMAKE_CURRENT_BINARY_DIR}/render-inputs/${kind}.pgrid)
+            if(kind STREQUAL "point")
+                set(_why "every node lies at one point: there is no surface to draw")
+            else()
+                set(_why "node \\(8, 4\\) lies at \\(1e\\+300, 0, 0\\), which cannot be drawn")
+            endif()
+            add_test(NAME cli_render_refuses_an_undrawable_${kind}
+                     COMMAND sh -c "'${PLIANT_PYTHON3}' '${CMAKE_CURRENT_SOURCE_DIR}/make_bad_grid.py' ${kind} '${_bad}' && '${CMAKE_COMMAND}' '-DCOMMAND=$<TARGET_FILE:pliant>;render;${_bad};-o;${_r}/undrawable-${kind}.png' -DEXIT=1 '-DSTDERR_REGEX=${_why}' '-DABSENT=${_r}/undrawable-${kind}.png' -P '${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake'")
+            set_tests_properties(cli_render_refuses_an_undrawable_${kind} PROPERTIES TIMEOUT 60
+                                 ENVIRONMENT "${_env}")
+        endforeach()
+        # `info` says when owner ids are not whole numbers (it counts them rounded).
+        set(_bad ${CMAKE_CURRENT_BINARY_DIR}/render-inputs/owner.pgrid)
+        add_test(NAME cli_info_names_fractional_owners
+                 COMMAND sh -c "'${PLIANT_PYTHON3}' '${CMAKE_CURRENT_SOURCE_DIR}/make_bad_grid.py' owner '${_bad}' && '${CMAKE_COMMAND}' '-DCOMMAND=$<TARGET_FILE:pliant>;info;${_bad}' -DEXIT=1 '-DSTDOUT_REGEX=owner .vertices. +peer 0: 129, peer 1: 1  .rounded: not whole ids, e.g. 0.5 at node .8, 4..' -P '${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake'")
+        set_tests_properties(cli_info_names_fractional_owners PROPERTIES TIMEOUT 60)
+    endif()
+
     # Ctrl-C during a sequence (the 101 frames of cli_simulate_pull), once f_0003.png is
     # written: the render stops after the frame being written, says how many, exits 130.
     pliant_add_interrupt_test(cli_render_frames_interrupted FILE ${_r}/interrupted/f_0003.png

@@ -5,6 +5,7 @@
 // small GLB reader here, independent of Assimp), and from_grid gives the closed genus-0 surface
 // of docs/design.md §1.
 
+#include <pliant/core/progress.h>
 #include <pliant/core/tetra_grid.h>
 #include <pliant/mesh/io.h>
 #include <pliant/mesh/validate.h>
@@ -22,6 +23,7 @@
 #include <cstring>
 #include <filesystem>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -265,6 +267,92 @@ TEST(Export, UnsupportedExtensionAndUnwritablePath)
     const auto missing = export_mesh(dir / "no" / "such" / "x.obj", scenes::octahedron());
     ASSERT_FALSE(missing);
     EXPECT_EQ(missing.error().code, core::ErrorCode::IoError);
+}
+
+// A .gltf names its buffer in a URI: a name that would need %-escapes (which Assimp's reader
+// does not decode) is refused before anything is written; the unreserved characters pass.
+TEST(Export, GltfNamesNeedingUriEscapesAreRefused)
+{
+    const auto dir = test::scratch_dir("mesh_gltf_names");
+    for (const char* name : {"my model.gltf", "a#1.gltf", "50%.gltf", "\xc3\xbc.gltf"})
+    {
+        const auto r = export_mesh(dir / name, scenes::octahedron());
+        ASSERT_FALSE(r) << name;
+        EXPECT_EQ(r.error().code, core::ErrorCode::InvalidArgument) << name;
+        EXPECT_NE(r.error().message.find("%-escape"), std::string::npos) << r.error().message;
+        EXPECT_FALSE(std::filesystem::exists(dir / name)) << name;
+    }
+    EXPECT_TRUE(export_mesh(dir / "Ok-name_1.~x.gltf", scenes::octahedron()));
+    EXPECT_TRUE(std::filesystem::exists(dir / "Ok-name_1.~x.bin"));
+    // Other formats take any name; a .glb holds its buffer.
+    EXPECT_TRUE(export_mesh(dir / "my model.glb", scenes::octahedron()));
+    EXPECT_TRUE(export_mesh(dir / "my model.obj", scenes::octahedron()));
+}
+
+/// Stops at the first report, or never; records the phases and fractions reported.
+class StopSink final : public core::ProgressSink
+{
+public:
+    explicit StopSink(bool stop) : stop_(stop) {}
+    void update(std::string_view phase, double fraction) noexcept override
+    {
+        reports.emplace_back(std::string(phase), fraction);
+    }
+    [[nodiscard]] bool stop_requested() const noexcept override { return stop_; }
+    std::vector<std::pair<std::string, double>> reports;
+
+private:
+    bool stop_;
+};
+
+// Ctrl-C while a big OBJ or PLY is formatted (seconds for millions of faces): an export asked
+// to stop writes nothing and says Cancelled; one not asked reports its progress below 1.
+TEST(Export, AnExportAskedToStopWritesNothing)
+{
+    const auto dir = test::scratch_dir("mesh_export_stop");
+    const TriMesh m = scenes::icosphere(6);  // 40,962 vertices + 81,920 faces: 2 reports
+    for (const char* name : {"s.obj", "s.ply", "s.gltf"})
+    {
+        StopSink stop(true);
+        const auto r = export_mesh(dir / name, m, &stop);
+        ASSERT_FALSE(r) << name;
+        EXPECT_EQ(r.error().code, core::ErrorCode::Cancelled) << name;
+        EXPECT_FALSE(std::filesystem::exists(dir / name)) << name;
+    }
+    for (const char* name : {"s.obj", "s.ply"})
+    {
+        StopSink go(false);
+        ASSERT_TRUE(export_mesh(dir / name, m, &go)) << name;
+        ASSERT_EQ(go.reports.size(), 2U) << name;
+        for (const auto& [phase, fraction] : go.reports)
+        {
+            EXPECT_EQ(phase, "export");
+            EXPECT_LT(fraction, 1.0);
+        }
+        const auto back = import_mesh(dir / name);
+        ASSERT_TRUE(back) << back.error().message;
+        EXPECT_EQ(back->faces.size(), m.faces.size());
+    }
+}
+
+// A small mesh far from the origin: read as floats, its nearby vertices merge and the topology
+// breaks (spot moved by 300,000 reads as edges with more than two faces); the error says why.
+TEST(Export, AMeshFarFromTheOriginIsToldAsSuchInTopologyErrors)
+{
+    const auto dir = test::scratch_dir("mesh_far_topology");
+    auto spot = import_mesh(test::source_dir() / "data" / "spot.obj");
+    ASSERT_TRUE(spot) << spot.error().message;
+    for (core::Vec3& p : spot->positions)
+        p = p + core::Vec3{3e5, 0.0, 0.0};
+    ASSERT_TRUE(export_mesh(dir / "far.obj", *spot));
+    const auto far = import_mesh(dir / "far.obj");
+    ASSERT_TRUE(far) << far.error().message;
+    const auto verdict = validate(*far, "far.obj");
+    ASSERT_FALSE(verdict);
+    EXPECT_NE(verdict.error().code, core::ErrorCode::DegenerateFace) << verdict.error().message;
+    EXPECT_NE(verdict.error().message.find("far from the origin"), std::string::npos)
+        << verdict.error().message;
+    EXPECT_NE(verdict.error().message.find("move it near the origin"), std::string::npos);
 }
 
 TEST(Export, GltfAndGlbGiveTheFacesBackWithFloatRoundedPositions)

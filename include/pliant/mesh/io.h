@@ -8,6 +8,7 @@
 /// describes the formats, the welding and the error messages.
 
 #include <pliant/core/field.h>
+#include <pliant/core/progress.h>
 #include <pliant/core/result.h>
 #include <pliant/core/tetra_grid.h>
 #include <pliant/mesh/tri_mesh.h>
@@ -69,12 +70,23 @@ struct ImportReport
 ///     order is kept: `import_mesh` gives back the same faces with the float-rounded positions.
 /// `import_mesh` of what `import_mesh` produced gives the identical mesh back through every
 /// format (tested on the data meshes). docs/mesh.md has the details.
+/// `progress` (optional) gets phase "export" with fractions below 1 while an OBJ or PLY is
+/// formatted (seconds for millions of faces); if it asks to stop, nothing is written and the
+/// result is ErrorCode::Cancelled (glTF is looked at once, before Assimp's exporter runs).
 /// \return IoError when a file cannot be written or Assimp's exporter fails (the message names
 ///   the file and carries Assimp's); UnsupportedFormat for another extension (the message lists
-///   the four); for glTF also EmptyInput (no faces), BadIndex (a face index >= vertex count) and
-///   NonFiniteCoordinate (a coordinate that is not a finite float).
-[[nodiscard]] core::Result<void> export_mesh(const std::filesystem::path& path,
-                                             const TriMesh& mesh);
+///   the four); for glTF also InvalidArgument (a name check_export_name refuses), EmptyInput (no
+///   faces), BadIndex (a face index >= vertex count) and NonFiniteCoordinate (a coordinate that is
+///   not a finite float).
+[[nodiscard]] core::Result<void> export_mesh(const std::filesystem::path& path, const TriMesh& mesh,
+                                             core::ProgressSink* progress = nullptr);
+
+/// Whether `path` can be exported under its name: a `.gltf` names its buffer `<stem>.bin` in a
+/// URI, which must then hold only characters a URI need not escape (letters, digits, `-`, `.`,
+/// `_`, `~`), since Assimp's reader (and so pliant's) does not decode %-escapes and other
+/// readers would misread the raw name (a `#` starts a fragment, a space is no URI). Other
+/// formats take any name. \return InvalidArgument naming the file and the first such character.
+[[nodiscard]] core::Result<void> check_export_name(const std::filesystem::path& path);
 
 /// The surface of a geometry image: vertex i is the position of node `grid.node_of_unique()[i]`
 /// (2W²+2 vertices), faces are `grid.triangles()` (4W² faces).

@@ -14,7 +14,8 @@
 ///    otherwise.
 /// 2. OSMesa (Mesa's off-screen library, always software), made current on a tiny client-memory
 ///    buffer that is never drawn to.
-/// The environment variable PLIANT_GL_BACKEND=egl|osmesa forces one of them under Auto.
+/// The environment variable PLIANT_GL_BACKEND=egl|osmesa forces one of them under Auto; any
+/// other non-empty value makes create() fail with InvalidArgument (it was ignored).
 
 #include <pliant/core/result.h>
 
