@@ -167,7 +167,15 @@ int run_remesh(const RemeshOptions& opt, const GlobalOptions& global)
                           core::to_string(result.error().code));
             return k_exit_failure;
         }
-        return report(result.error());
+        core::Error e = result.error();
+        // Name the file, and for a map that folded under a method the user chose, the way out.
+        if (e.message.rfind(input.filename().string(), 0) != 0)
+            e.message = input.filename().string() + ": " + e.message;
+        if (e.code == core::ErrorCode::InvertedTriangles && opt.method == "spring")
+            e.message +=
+                "; --method auto (the default) goes on coarse-to-fine when the spring "
+                "embedder folds";
+        return report(e);
     }
 
     const remesh::QualityReport& q = result->report;

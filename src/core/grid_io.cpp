@@ -66,9 +66,12 @@ Result<void> check_channel(const TetraGrid& grid, const std::string& name,
                                             "' must have 1..15 printable ASCII characters");
     for (std::uint32_t i = 0; i < grid.node_count(); ++i)
         if (!std::isfinite(values[NodeIndex{i}]))
-            return fail(ErrorCode::BadGrid, where + "channel '" + name +
-                                                "' has a non-finite value at node " +
-                                                std::to_string(i));
+        {
+            const GridCoord c = grid.coord(NodeIndex{i});
+            return fail(ErrorCode::BadGrid,
+                        where + "channel '" + name + "' has a non-finite value at node (" +
+                            std::to_string(c.x) + "," + std::to_string(c.y) + ")");
+        }
     for (const TwinPair& t : grid.twins())
         if (bitwise ? std::bit_cast<std::uint64_t>(values[t.twin]) !=
                           std::bit_cast<std::uint64_t>(values[t.canonical])

@@ -296,10 +296,12 @@ core::Result<void> MembraneModel::assemble(const Vec3Field<double>& X)
     Field<double>& inv = spare_inv_mass_;
     const double half_t = 0.5 * settings_.T;
     bool degenerate = false;
+    core::GridCoord first_bad{0, 0};  // where the first degenerate triangle was met
     // Edge weights for every edge a stencil at an in-range node reads (x, y >= -1).
     for (int y = -1; y < g.ny(); ++y)
         for (int x = -1; x < g.nx(); ++x)
         {
+            const bool before = degenerate;
             const Vec3 p = at(X, x, y);
             const Vec3 px = at(X, x + 1, y);
             const Vec3 py = at(X, x, y + 1);
@@ -312,10 +314,15 @@ core::Result<void> MembraneModel::assemble(const Vec3Field<double>& X)
                                     cot_at(p, py, at(X, x - 1, y), degenerate));
             // +(1,1) edge: opposite vertices (x+1, y) and (x, y+1).
             wd.at(x, y) = half_t * (cot_at(p, pd, px, degenerate) + cot_at(p, pd, py, degenerate));
+            if (degenerate && !before)
+                first_bad = g.coord(g.image(x, y));
         }
     if (degenerate)
         return core::fail(core::ErrorCode::DegenerateFace,
-                          "a triangle of the surface has zero area or a non-finite vertex");
+                          "a triangle of the surface at node (" + std::to_string(first_bad.x) +
+                              ", " + std::to_string(first_bad.y) +
+                              ") has zero area or a non-finite vertex (a node far from the "
+                              "others, or nodes at one point)");
 
     static constexpr int k_dir[6][2] = {{1, 0}, {1, 1}, {0, 1}, {-1, 0}, {-1, -1}, {0, -1}};
     const double third_rho = settings_.rho / 3.0;

@@ -38,6 +38,11 @@ if(TARGET pliant)
                       "remesh: .*in.obj would replace the input mesh"
                       remesh ${cli_dir}/in.obj --level 3 -o ${cli_dir}/in.obj)
     file(COPY_FILE ${PROJECT_SOURCE_DIR}/data/spot.obj ${cli_dir}/in.obj)
+    # A map that folds under the method the user chose names the file and the way out.
+    pliant_cli_expect(cli_remesh_spring_fold_names_the_file_and_auto 1 STDERR
+                      "spot.obj: map_to_sphere: the spring embedder left [0-9]+ of [0-9]+ spherical triangles inverted. --method auto"
+                      remesh ${PROJECT_SOURCE_DIR}/data/spot.obj --method spring --level 3
+                      -o ${cli_dir}/spring.obj)
     # A .gltf whose name a URI would have to escape (its buffer is named in one) is refused
     # before the work: Assimp's reader does not decode %-escapes.
     pliant_cli_expect(cli_remesh_gltf_name_needing_escapes 1 STDERR

@@ -136,6 +136,23 @@ TEST(GridIo, RefusesTwinsThatDiffer)
     EXPECT_NE(in.error().message.find("twin"), std::string::npos) << in.error().message;
 }
 
+// A non-finite value is refused both ways, and the message names the node by its grid
+// coordinates (x,y), as the twin messages do (it gave a flat index).
+TEST(GridIo, NonFiniteValuesAreRefusedNamingTheNode)
+{
+    const auto dir = test::scratch_dir("grid_io_non_finite");
+    const TetraGrid g = TetraGrid::create(2).value();
+    auto bad = some_positions(g);
+    bad[1].at(3, 1) = std::numeric_limits<double>::quiet_NaN();
+    auto saved = save_grid(dir / "bad.pgrid", make_geometry_file(g, bad));
+    ASSERT_FALSE(saved);
+    EXPECT_EQ(saved.error().code, ErrorCode::InvalidArgument);
+    EXPECT_NE(saved.error().message.find("channel 'py' has a non-finite value at node (3,1)"),
+              std::string::npos)
+        << saved.error().message;
+    EXPECT_FALSE(std::filesystem::exists(dir / "bad.pgrid"));
+}
+
 // +0 and -0 compare equal but are different bits: the writer stores the canonical node's bits
 // on its twins, and the reader wants them bit for bit (docs/grid-format.md).
 TEST(GridIo, TwinsOfOppositeZeroSignsAreWrittenAsOneAndRefusedInAFile)

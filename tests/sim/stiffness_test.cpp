@@ -209,6 +209,15 @@ TEST(Stiffness, RejectsBadSettingsAndDegenerateGeometry)
     auto degenerate = MembraneModel::create(grid, flat, MembraneSettings{});
     ASSERT_FALSE(degenerate.has_value());
     EXPECT_EQ(degenerate.error().code, core::ErrorCode::DegenerateFace);
+
+    // One node far away (its triangles' cotangents overflow): the message says where.
+    auto far = scenes::sphere_grid(grid, 1.0);
+    far[0].at(5, 2) = 1e300;
+    auto overflow = MembraneModel::create(grid, far, MembraneSettings{});
+    ASSERT_FALSE(overflow.has_value());
+    EXPECT_EQ(overflow.error().code, core::ErrorCode::DegenerateFace);
+    EXPECT_NE(overflow.error().message.find("at node ("), std::string::npos)
+        << overflow.error().message;
 }
 
 }  // namespace
