@@ -4,11 +4,13 @@
 // 6..9 (16K .. 1M triangles): the texture path (GridRenderer: positions in a float texture,
 // normals from neighbour texels on the GPU, in its three GridNormals modes: the default normal
 // pass copied into a vertex buffer, the normal pass fetched in the vertex shader, normals
-// summed in the vertex shader) beside the plain vertex-buffer path (MeshRenderer: static
-// buffers, CPU normals) in the same run. Each iteration draws one frame and waits for it
+// summed in the vertex shader) beside the plain vertex-buffer path (MeshRenderer: CPU normals
+// in one interleaved buffer) in the same run. Each iteration draws one frame and waits for it
 // (glFinish, as a buffer swap would in a window; no read-back). The counter "fps" is frames per
-// second of wall time; the line printed first names GL_RENDERER. upload:1 also re-uploads the
-// positions every frame, as the simulation loop does.
+// second of wall time; the line printed first names GL_RENDERER. upload:1 gives new positions
+// every frame, as the simulation loop does: the texture path re-uploads its texture and runs its
+// normal pass, the vertex-buffer path computes its normals on the CPU and rewrites its vertex
+// buffer (MeshRenderer::update); upload:0 draws what was uploaded once.
 //
 // Usage: bench_render [--benchmark_repetitions=3 --benchmark_report_aggregates_only=true]
 //        bench_render [--quick] [--json FILE] [--csv FILE]    (what `pliant bench` runs)
@@ -115,9 +117,12 @@ void BM_VertexBufferPath(benchmark::State& state)
     renderer.upload(points, grid.triangles());
     auto fb = render::Framebuffer::create(k_width, k_height).value();
     render::DrawSettings s;
+    const bool upload_each_frame = state.range(1) != 0;
     fb.bind();
     for (auto _ : state)
     {
+        if (upload_each_frame)  // new positions every frame: CPU normals and the vertex buffer
+            renderer.update(points);
         renderer.draw(s, k_width, k_height);
         render::gl_finish();
     }
@@ -153,8 +158,8 @@ int main(int argc, char** argv)
         ->Unit(benchmark::kMillisecond)
         ->UseRealTime();
     benchmark::RegisterBenchmark("BM_VertexBufferPath", BM_VertexBufferPath)
-        ->DenseRange(6, static_cast<int>(max_level))
-        ->ArgName("level")
+        ->ArgsProduct({levels, {0, 1}})
+        ->ArgNames({"level", "upload"})
         ->Unit(benchmark::kMillisecond)
         ->UseRealTime();
     return bench::run_with_report(

@@ -21,8 +21,16 @@ struct MeshRenderer::Impl
     GLuint vertices = 0;  // interleaved x y z nx ny nz value
     GLuint indices = 0;
     std::size_t triangles = 0;
+    std::size_t vertex_count = 0;
     Bounds bounds{};
     float max_abs_value = 0.0F;
+    std::vector<std::array<std::uint32_t, 3>> faces;  // of the last upload, for update()
+    std::vector<core::Vec3> computed_normals;         // reused by update()
+    std::vector<float> interleaved;                   // reused by update()
+
+    // Fills `interleaved` (7 floats per vertex), the bounds and the largest |value|.
+    void interleave(std::span<const core::Vec3> positions, std::span<const core::Vec3> normals,
+                    std::span<const float> values);
 
     Impl() = default;
     Impl(const Impl&) = delete;
@@ -72,24 +80,12 @@ MeshRenderer::MeshRenderer(MeshRenderer&&) noexcept = default;
 MeshRenderer& MeshRenderer::operator=(MeshRenderer&&) noexcept = default;
 MeshRenderer::~MeshRenderer() = default;
 
-void MeshRenderer::upload(std::span<const core::Vec3> positions,
-                          std::span<const std::array<std::uint32_t, 3>> faces,
-                          std::span<const core::Vec3> normals, std::span<const float> values)
+void MeshRenderer::Impl::interleave(std::span<const core::Vec3> positions,
+                                    std::span<const core::Vec3> normals,
+                                    std::span<const float> values)
 {
-    PLIANT_ASSERT(!positions.empty(), "MeshRenderer::upload: no vertices");
-    PLIANT_ASSERT(normals.empty() || normals.size() == positions.size(),
-                  "MeshRenderer::upload: one normal per vertex");
-    PLIANT_ASSERT(values.empty() || values.size() == positions.size(),
-                  "MeshRenderer::upload: one value per vertex");
-    std::vector<core::Vec3> computed;
-    if (normals.empty())
-    {
-        computed = mesh_normals(positions, faces);
-        normals = computed;
-    }
-    Impl& s = *impl_;
-    std::vector<float> interleaved(positions.size() * 7U);
-    s.max_abs_value = 0.0F;
+    interleaved.resize(positions.size() * 7U);
+    max_abs_value = 0.0F;
     for (std::size_t i = 0; i < positions.size(); ++i)
     {
         float* v = interleaved.data() + i * 7U;
@@ -100,18 +96,67 @@ void MeshRenderer::upload(std::span<const core::Vec3> positions,
         v[4] = static_cast<float>(normals[i].y);
         v[5] = static_cast<float>(normals[i].z);
         v[6] = values.empty() ? 0.0F : values[i];
-        s.max_abs_value = std::max(s.max_abs_value, std::abs(v[6]));
+        max_abs_value = std::max(max_abs_value, std::abs(v[6]));
     }
-    s.bounds = bounds_of(positions);
+    bounds = bounds_of(positions);
+}
+
+void MeshRenderer::upload(std::span<const core::Vec3> positions,
+                          std::span<const std::array<std::uint32_t, 3>> faces,
+                          std::span<const core::Vec3> normals, std::span<const float> values)
+{
+    PLIANT_ASSERT(!positions.empty(), "MeshRenderer::upload: no vertices");
+    PLIANT_ASSERT(normals.empty() || normals.size() == positions.size(),
+                  "MeshRenderer::upload: one normal per vertex");
+    PLIANT_ASSERT(values.empty() || values.size() == positions.size(),
+                  "MeshRenderer::upload: one value per vertex");
+    Impl& s = *impl_;
+    s.faces.assign(faces.begin(), faces.end());
+    if (normals.empty())
+    {
+        s.computed_normals.resize(positions.size());
+        mesh_normals(positions, faces, s.computed_normals);
+        normals = s.computed_normals;
+    }
+    s.interleave(positions, normals, values);
     s.triangles = faces.size();
+    s.vertex_count = positions.size();
     gl::glBindVertexArray(s.vao);
     gl::glBindBuffer(GL_ARRAY_BUFFER, s.vertices);
-    gl::glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(interleaved.size() * sizeof(float)),
-                     interleaved.data(), GL_STATIC_DRAW);
+    gl::glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(s.interleaved.size() * sizeof(float)),
+                     s.interleaved.data(), GL_STATIC_DRAW);
     gl::glBufferData(GL_ELEMENT_ARRAY_BUFFER,
                      static_cast<GLsizeiptr>(faces.size() * sizeof(faces[0])), faces.data(),
                      GL_STATIC_DRAW);
     gl::glBindVertexArray(0);
+    // A mesh drawn as uploaded keeps only its faces; update() grows these again once.
+    s.interleaved = {};
+    s.computed_normals = {};
+}
+
+void MeshRenderer::update(std::span<const core::Vec3> positions,
+                          std::span<const core::Vec3> normals, std::span<const float> values)
+{
+    Impl& s = *impl_;
+    PLIANT_ASSERT(s.triangles > 0, "MeshRenderer::update: nothing uploaded");
+    PLIANT_ASSERT(positions.size() == s.vertex_count,
+                  "MeshRenderer::update: not one position per uploaded vertex");
+    PLIANT_ASSERT(normals.empty() || normals.size() == positions.size(),
+                  "MeshRenderer::update: one normal per vertex");
+    PLIANT_ASSERT(values.empty() || values.size() == positions.size(),
+                  "MeshRenderer::update: one value per vertex");
+    if (normals.empty())
+    {
+        s.computed_normals.resize(positions.size());
+        mesh_normals(positions, s.faces, s.computed_normals);
+        normals = s.computed_normals;
+    }
+    s.interleave(positions, normals, values);
+    gl::glBindBuffer(GL_ARRAY_BUFFER, s.vertices);
+    gl::glBufferSubData(GL_ARRAY_BUFFER, 0,
+                        static_cast<GLsizeiptr>(s.interleaved.size() * sizeof(float)),
+                        s.interleaved.data());
+    gl::glBindBuffer(GL_ARRAY_BUFFER, 0);
 }
 
 CameraMatrices MeshRenderer::camera(const CameraSettings& settings, int width,

@@ -2,13 +2,24 @@
 // SPDX-FileCopyrightText: 2026 pliant contributors
 #include <pliant/render/normals.h>
 
+#include <algorithm>
+
 namespace pliant::render
 {
 
 std::vector<core::Vec3> mesh_normals(std::span<const core::Vec3> positions,
                                      std::span<const std::array<std::uint32_t, 3>> faces)
 {
-    std::vector<core::Vec3> sum(positions.size());
+    std::vector<core::Vec3> normals(positions.size());
+    mesh_normals(positions, faces, normals);
+    return normals;
+}
+
+void mesh_normals(std::span<const core::Vec3> positions,
+                  std::span<const std::array<std::uint32_t, 3>> faces, std::span<core::Vec3> sum)
+{
+    PLIANT_ASSERT(sum.size() == positions.size(), "mesh_normals: one normal per vertex");
+    std::fill(sum.begin(), sum.end(), core::Vec3{});
     for (const auto& f : faces)
     {
         PLIANT_ASSERT(f[0] < positions.size() && f[1] < positions.size() && f[2] < positions.size(),
@@ -20,7 +31,6 @@ std::vector<core::Vec3> mesh_normals(std::span<const core::Vec3> positions,
     }
     for (core::Vec3& n : sum)
         n = core::normalized(n);
-    return sum;
 }
 
 core::Vec3Field<double> grid_normals(const core::TetraGrid& grid,

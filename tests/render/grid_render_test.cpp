@@ -501,5 +501,55 @@ TEST_F(GlTest, VertexBufferPathDrawsTheSameSphere)
     EXPECT_LE(worst, 3);
 }
 
+TEST_F(GlTest, VertexBufferUpdateDrawsWhatAFreshUploadDraws)
+{
+    // A vertex-buffer mesh that moves (the sphere stretched into an ellipsoid, with values):
+    // update() on the uploaded sphere must draw, pixel for pixel, what a new renderer given the
+    // ellipsoid draws, and not what the sphere drew.
+    const auto grid = core::TetraGrid::create(4).value();
+    const auto p = sphere_positions(grid);
+    std::vector<core::Vec3> sphere;
+    for (const core::NodeIndex n : grid.node_of_unique())
+        sphere.push_back(node_position(p, n));
+    std::vector<core::Vec3> ellipsoid = sphere;
+    std::vector<float> values;
+    for (core::Vec3& v : ellipsoid)
+    {
+        v.x *= 1.4;
+        values.push_back(static_cast<float>(v.z));
+    }
+    const auto faces = grid.triangles();
+    render::DrawSettings s = sphere_settings();
+    s.color = render::ColorMode::Displacement;
+    auto fb = render::Framebuffer::create(k_size, k_size);
+    ASSERT_TRUE(fb.has_value());
+    fb->bind();
+    const auto draw = [&](const render::MeshRenderer& mesh)
+    {
+        mesh.draw(s, k_size, k_size);
+        return fb->read_rgba8();
+    };
+
+    auto moved = render::MeshRenderer::create();
+    ASSERT_TRUE(moved.has_value()) << moved.error().message;
+    moved->upload(sphere, faces);
+    const render::Image before = draw(*moved);
+    moved->update(ellipsoid, {}, values);
+    const render::Image updated = draw(*moved);
+    moved->update(ellipsoid, {}, values);  // the second call reuses its buffers
+    const render::Image updated_again = draw(*moved);
+
+    auto fresh = render::MeshRenderer::create();
+    ASSERT_TRUE(fresh.has_value()) << fresh.error().message;
+    fresh->upload(ellipsoid, faces, {}, values);
+    const render::Image expected = draw(*fresh);
+
+    EXPECT_EQ(updated.rgba, expected.rgba);
+    EXPECT_EQ(updated_again.rgba, expected.rgba);
+    EXPECT_NE(updated.rgba, before.rgba);
+    EXPECT_EQ(moved->bounds().hi.x, fresh->bounds().hi.x);
+    EXPECT_GT(moved->bounds().hi.x, 1.3);
+}
+
 }  // namespace
 }  // namespace pliant::test

@@ -40,6 +40,14 @@ public:
                 std::span<const std::array<std::uint32_t, 3>> faces,
                 std::span<const core::Vec3> normals = {}, std::span<const float> values = {});
 
+    /// New vertex data for the uploaded faces, as a simulation gives every frame: positions,
+    /// normals (empty: area-weighted, computed here over the faces of the last upload) and
+    /// values (empty: zero) rewrite the vertex buffer in place; the index buffer stays. No
+    /// allocation after the first call. \pre something was uploaded; positions, and normals and
+    /// values unless empty, one per vertex of that upload.
+    void update(std::span<const core::Vec3> positions, std::span<const core::Vec3> normals = {},
+                std::span<const float> values = {});
+
     /// Draws into the bound framebuffer. \pre something was uploaded.
     void draw(const DrawSettings& settings, int width, int height) const;
 

@@ -29,4 +29,9 @@ namespace pliant::render
 [[nodiscard]] std::vector<core::Vec3> mesh_normals(
     std::span<const core::Vec3> positions, std::span<const std::array<std::uint32_t, 3>> faces);
 
+/// The same into `out`, which it overwrites (no allocation: for a mesh that moves every frame).
+/// \pre every index < positions.size(); out.size() == positions.size().
+void mesh_normals(std::span<const core::Vec3> positions,
+                  std::span<const std::array<std::uint32_t, 3>> faces, std::span<core::Vec3> out);
+
 }  // namespace pliant::render
