@@ -20,6 +20,7 @@
 // it joins the master over 127.0.0.1 in place of the scripted late viewer; closing the window
 // ends the session. No offscreen frames are rendered then, and the replay is left to
 // `pliant replay` (the recording is still written).
+#include <pliant/core/assert.h>
 #include <pliant/core/file_io.h>
 #include <pliant/core/grid_io.h>
 #include <pliant/core/vec3.h>
@@ -584,9 +585,10 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
                 const bool on = phase >= grabs[k].start && phase < grabs[k].end;
                 if (on != grabbing[k])
                 {
-                    peers[k + 1].session->set_forces(
+                    auto ok = peers[k + 1].session->set_forces(
                         on ? std::vector<net::UserForce>{grabs[k].force}
                            : std::vector<net::UserForce>{});
+                    PLIANT_ASSERT(ok.has_value(), "demo: a grab the model refuses");
                     grabbing[k] = on;
                     if (k == 0 && on && grab_set_at < 0.0)  // the first grab is timed
                         grab_set_at = previous;

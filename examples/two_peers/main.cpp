@@ -76,7 +76,13 @@ int main(int argc, char** argv)
         return 1;
     }
     auto b = session::Session::join(*tb, master, net::Role::Participant, settings).value();
-    b->set_forces({net::UserForce{{net::TargetKind::Face, 100, {}, 0.0}, 0, {0.0, 0.0, 0.5}}});
+    if (auto ok = b->set_forces(
+            {net::UserForce{{net::TargetKind::Face, 100, {}, 0.0}, 0, {0.0, 0.0, 0.5}}});
+        !ok)
+    {
+        std::fprintf(stderr, "two_peers: %s\n", ok.error().message.c_str());
+        return 1;
+    }
 
     // The caller's clock, here virtual: a quarter of a step per round, so that the lockstep's
     // exchanges (0.5 ms each way) fit.

@@ -411,12 +411,16 @@ core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
         if (forces_changed || grabs.size() != before)
         {
             std::vector<net::UserForce> list;
-            for (std::size_t k = 0; k < grabs.size(); ++k)
+            for (std::size_t k = 0; k < grabs.size() && k < net::k_max_points; ++k)
             {
                 list.push_back(grabs[k].force);
                 list.back().grab_id = static_cast<std::uint16_t>(k);
             }
-            session.set_forces(std::move(list));
+            if (grabs.size() > net::k_max_points)
+                spdlog::warn("script: {} grabs at once; the first {} act (one Force message)",
+                             grabs.size(), net::k_max_points);
+            if (auto ok = session.set_forces(std::move(list)); !ok)
+                spdlog::warn("script: {}", ok.error().message);
         }
         session.advance(now);
         if (now >= next_row + 1.0)

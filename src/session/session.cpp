@@ -4195,13 +4195,29 @@ void Session::set_points_of_interest(std::vector<net::Target> points)
     }
 }
 
-void Session::set_forces(std::vector<net::UserForce> forces, std::uint64_t from_tick)
+core::Result<void> Session::set_forces(std::vector<net::UserForce> forces, std::uint64_t from_tick)
 {
     if (role_ == SessionRole::Viewer)
-        return;  // a viewer only watches; the others would drop its forces
+        return core::fail(core::ErrorCode::InvalidArgument,
+                          "set_forces: a viewer only watches; the others drop its forces");
     if (forces.size() > net::k_max_points)
-        forces.resize(net::k_max_points);
+        return core::fail(core::ErrorCode::InvalidArgument,
+                          "set_forces: " + std::to_string(forces.size()) +
+                              " forces, at most " + std::to_string(net::k_max_points) +
+                              " fit one Force message");
+    const std::int64_t faces = model_ != nullptr
+                                   ? static_cast<std::int64_t>(model_->grid().face_count())
+                                   : std::numeric_limits<std::int64_t>::max();
+    for (std::size_t k = 0; k < forces.size(); ++k)
+    {
+        const sim::Force f = to_sim_force(forces[k]);
+        if (auto ok = sim::validate_forces(faces, std::span(&f, 1)); !ok)
+            return core::fail(core::ErrorCode::InvalidArgument,
+                              "set_forces: force " + std::to_string(k) + ": " +
+                                  ok.error().message.substr(ok.error().message.find(": ") + 2));
+    }
     impl_->pending_forces.push_back(ForceEntry{from_tick, std::move(forces)});
+    return {};
 }
 
 void Session::leave()

@@ -528,7 +528,11 @@ double stable_fixed_step(const MembraneModel& model) noexcept
 
 core::Result<void> validate_forces(const MembraneModel& model, std::span<const Force> forces)
 {
-    const auto faces = static_cast<std::int64_t>(model.grid().face_count());
+    return validate_forces(static_cast<std::int64_t>(model.grid().face_count()), forces);
+}
+
+core::Result<void> validate_forces(std::int64_t faces, std::span<const Force> forces)
+{
     for (std::size_t k = 0; k < forces.size(); ++k)
     {
         const Force& f = forces[k];

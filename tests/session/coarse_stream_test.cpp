@@ -56,8 +56,8 @@ void run_pulling(Harness& h, int k_master, int k_part,
                    std::find(owners.begin(), owners.end(), p.id()) != owners.end();
         },
         8000));
-    h.peers[0]->set_forces({point_push(0.0, 0.0, 1.0, 0.3, 0.4)}, 60);
-    p.set_forces({face_pull(700, 0.6)}, 80);
+    EXPECT_TRUE(h.peers[0]->set_forces({point_push(0.0, 0.0, 1.0, 0.3, 0.4)}, 60));
+    EXPECT_TRUE(p.set_forces({face_pull(700, 0.6)}, 80));
     ASSERT_TRUE(h.pump_until([&] { return all_at(h, k_coarse_ticks); }, 60000, 0.0005));
     for (int k = 0; k < 400; ++k)
         h.pump_once(0.0005);

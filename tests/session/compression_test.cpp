@@ -113,8 +113,8 @@ void run_pulling(Harness& h, Coupling c, net::Packing packing = net::Packing::Ri
             return p.ready() && std::find(owners.begin(), owners.end(), p.id()) != owners.end();
         },
         8000));
-    h.peers[0]->set_forces({point_push(0.0, 0.0, 1.0, 0.3, 0.4)}, 100);
-    p.set_forces({face_pull(700, 0.6)}, 150);
+    EXPECT_TRUE(h.peers[0]->set_forces({point_push(0.0, 0.0, 1.0, 0.3, 0.4)}, 100));
+    EXPECT_TRUE(p.set_forces({face_pull(700, 0.6)}, 150));
     ASSERT_TRUE(h.pump_until([&] { return all_at(h, k_compression_ticks); }, 60000, 0.0005));
 }
 
@@ -310,8 +310,8 @@ TEST(SessionCompression, BandwidthCapHoldsAndEveryLeafStillArrives)
             return p.ready() && std::find(owners.begin(), owners.end(), p.id()) != owners.end();
         },
         8000));
-    h.peers[0]->set_forces({point_push(0.0, 0.0, 1.0, 0.3, 0.4)});
-    p.set_forces({face_pull(700, 0.6)});
+    EXPECT_TRUE(h.peers[0]->set_forces({point_push(0.0, 0.0, 1.0, 0.3, 0.4)}));
+    EXPECT_TRUE(p.set_forces({face_pull(700, 0.6)}));
     for (int k = 0; k < 400; ++k)
         h.pump_once(0.0005);
     std::vector<SessionStats> before;

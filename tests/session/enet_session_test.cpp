@@ -57,7 +57,7 @@ void run_over_loopback(int participants)
     if (participants >= 2)
         sched.push_back({2, 120, {point_push(0.0, 0.0, -1.0, 0.4, 0.4)}});
     for (const Scheduled& s : sched)
-        peers[s.sender]->set_forces(s.forces, s.from);
+        EXPECT_TRUE(peers[s.sender]->set_forces(s.forces, s.from));
     // The clock stands still until every participant is partitioned, then runs in real time.
     const auto t0 = std::chrono::steady_clock::now();
     auto elapsed = [&]

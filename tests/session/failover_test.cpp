@@ -226,9 +226,9 @@ void run_failover(Coupling c, bool lossy = false, std::uint64_t seed = 1)
     // Forces that keep everything moving: the master, participant 1 and participant 3 (lost
     // first) each pull a face in their own share.
     h.peers[0]->set_points_of_interest({net::Target{net::TargetKind::Face, 3900, {0, 0, 0}, 0.0}});
-    h.peers[0]->set_forces({face_pull(3900, 0.6)}, 0);
-    h.peers[1]->set_forces({face_pull(700, 0.6)}, 0);
-    h.peers[3]->set_forces({face_pull(3210, -0.6)}, 0);
+    EXPECT_TRUE(h.peers[0]->set_forces({face_pull(3900, 0.6)}, 0));
+    EXPECT_TRUE(h.peers[1]->set_forces({face_pull(700, 0.6)}, 0));
+    EXPECT_TRUE(h.peers[3]->set_forces({face_pull(3210, -0.6)}, 0));
     ASSERT_TRUE(h.pump_until(
         [&]
         {
@@ -341,7 +341,7 @@ void run_master_leaves(Coupling c)
     }
     h.join(net::Role::Viewer, failover_settings(c, "viewer"));
     h.peers[0]->set_points_of_interest({net::Target{net::TargetKind::Face, 3900, {0, 0, 0}, 0.0}});
-    h.peers[0]->set_forces({face_pull(3900, 0.6)}, 0);
+    EXPECT_TRUE(h.peers[0]->set_forces({face_pull(3900, 0.6)}, 0));
     ASSERT_TRUE(h.pump_until(
         [&]
         {
@@ -463,9 +463,9 @@ TEST(SessionFailover, ExactLeaverHandsOverToTheSuccessorOfALostMaster)
         Session& p = h.join(net::Role::Participant, failover_settings(Coupling::Exact, "part"));
         p.set_points_of_interest({net::Target{
             net::TargetKind::Face, static_cast<std::uint32_t>(600 + 1300 * k), {0, 0, 0}, 0.0}});
-        p.set_forces({face_pull(static_cast<std::uint32_t>(610 + 1300 * k), 0.6)}, 0);
+        EXPECT_TRUE(p.set_forces({face_pull(static_cast<std::uint32_t>(610 + 1300 * k), 0.6)}, 0));
     }
-    h.peers[0]->set_forces({point_push(0.0, 0.0, 1.0, 0.3, 0.4)}, 0);
+    EXPECT_TRUE(h.peers[0]->set_forces({point_push(0.0, 0.0, 1.0, 0.3, 0.4)}, 0));
     ASSERT_TRUE(h.pump_until(
         [&]
         {

@@ -91,7 +91,7 @@ Outcome run_drags(int level, int participants, double seconds, bool quantised = 
         for (int k = 0; k < participants; ++k)
         {
             const net::UserForce u = turning_drag(k, h.now);
-            h.peers[static_cast<std::size_t>(k)]->set_forces({u});
+            EXPECT_TRUE(h.peers[static_cast<std::size_t>(k)]->set_forces({u}));
             fr.forces.push_back(to_sim_force(u));
         }
         frames.push_back(std::move(fr));

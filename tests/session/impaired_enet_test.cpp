@@ -208,7 +208,7 @@ TEST(SessionImpaired, FastSessionOverEnetThroughALossyDelayingRelay)
             for (std::size_t k = 0; k < simulating; ++k)
             {
                 const net::UserForce u = turning_drag(static_cast<int>(k), now - start);
-                peers[k]->set_forces({u});
+                EXPECT_TRUE(peers[k]->set_forces({u}));
                 fr.forces.push_back(to_sim_force(u));
             }
             frames.push_back(std::move(fr));

@@ -124,7 +124,7 @@ TEST(SessionLoss, FastSessionUnderLossAndLatencyStaysBoundedAndViewsStayWithinTh
         for (int k = 0; k < 3; ++k)
         {
             const net::UserForce u = turning_drag(k, h.now);
-            h.peers[static_cast<std::size_t>(k)]->set_forces({u});
+            EXPECT_TRUE(h.peers[static_cast<std::size_t>(k)]->set_forces({u}));
             forces.push_back(to_sim_force(u));
         }
         for (int k = 0; k < 17; ++k)
@@ -251,7 +251,7 @@ TEST(SessionLoss, AJoinerIsSentNoLeafStateUntilItHasTheModel)
                    std::find(owners.begin(), owners.end(), part.id()) != owners.end();
         },
         40000));
-    part.set_forces({face_pull(100, 0.5)});  // the state moves: the streams carry news
+    EXPECT_TRUE(part.set_forces({face_pull(100, 0.5)}));  // the state moves: the streams carry news
     for (int k = 0; k < 400; ++k)
         h.pump_once(0.0005);
     const std::uint64_t streamed = h.peers[0]->stats().leaf_states_sent;
@@ -317,7 +317,7 @@ TEST(SessionLoss, ALostReadyCostsAStreamPeriodNotARetransmission)
         set.coupling = Coupling::Fast;
         set.name = "master";
         Session& master = h.host(level, set);
-        master.set_forces({face_pull(50, 0.5)});  // the state moves: every stream carries news
+        EXPECT_TRUE(master.set_forces({face_pull(50, 0.5)}));  // the state moves: every stream carries news
         set.name = "viewer";
         Session& viewer = h.join(net::Role::Viewer, set);
         net::LinkSettings lossy = ns.link;
@@ -379,7 +379,7 @@ TEST(SessionLoss, ANeighbourStillConnectingHoldsNobodysClock)
         set.coupling = Coupling::Fast;
         set.name = "master";
         Session& master = h.host(level, set);
-        master.set_forces({face_pull(50, 0.5)});
+        EXPECT_TRUE(master.set_forces({face_pull(50, 0.5)}));
         const core::TetraGrid grid = core::TetraGrid::create(level).value();
         const auto faces = static_cast<std::uint32_t>(grid.face_count());
         std::vector<Session*> parts;
@@ -449,7 +449,7 @@ TEST(SessionLoss, ASilentNeighbourHoldsTheClockOnceThenStepsOnUntilTheTakeOver)
     set.coupling = Coupling::Fast;
     set.name = "master";
     Session& master = h.host(level, set);
-    master.set_forces({face_pull(50, 0.5)});
+    EXPECT_TRUE(master.set_forces({face_pull(50, 0.5)}));
     const core::TetraGrid grid = core::TetraGrid::create(level).value();
     const auto faces = static_cast<std::uint32_t>(grid.face_count());
     for (std::uint32_t k = 1; k < 3; ++k)
@@ -616,7 +616,7 @@ TEST(SessionLoss, ExactLockstepUnderLossAndLatencyStaysEqualToASingleProcess)
     }
     ASSERT_TRUE(partitioned());
     for (const Scheduled& s : sched)
-        h.peers[s.sender]->set_forces(s.forces, s.from);
+        EXPECT_TRUE(h.peers[s.sender]->set_forces(s.forces, s.from));
     const double start = static_cast<double>(h.net.now_us()) * 1e-6;
     double clock = 0.0;
     for (int k = 0; k < 200000 && (h.peers[0]->tick() < ticks || h.peers[1]->tick() < ticks ||

@@ -51,10 +51,10 @@ void record_session(RecordedRun& run)
         p.set_points_of_interest({net::Target{
             net::TargetKind::Face, static_cast<std::uint32_t>(100 + 400 * k), {0, 0, 0}, 0.0}});
     }
-    h.peers[0]->set_forces({point_push(0.0, 0.0, 1.0, 0.4, 0.4)}, 40);
-    h.peers[1]->set_forces({face_pull(100, 0.7)}, 60);
-    h.peers[1]->set_forces({}, 180);
-    h.peers[2]->set_forces({point_push(0.0, 0.0, -1.0, 0.3, 0.5), face_pull(500, -0.3)}, 90);
+    EXPECT_TRUE(h.peers[0]->set_forces({point_push(0.0, 0.0, 1.0, 0.4, 0.4)}, 40));
+    EXPECT_TRUE(h.peers[1]->set_forces({face_pull(100, 0.7)}, 60));
+    EXPECT_TRUE(h.peers[1]->set_forces({}, 180));
+    EXPECT_TRUE(h.peers[2]->set_forces({point_push(0.0, 0.0, -1.0, 0.3, 0.5), face_pull(500, -0.3)}, 90));
     ASSERT_TRUE(h.pump_until(
         [&]
         {

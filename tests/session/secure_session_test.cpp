@@ -47,7 +47,7 @@ TEST(SecureSession, TwoPeersThroughSecureTransportEqualSingleProcess)
     const std::vector<Scheduled> schedule = {{0, 40, {point_push(0.0, 0.0, 1.0, 0.4, 0.4)}},
                                              {1, 60, {face_pull(20, 0.6)}}};
     for (const Scheduled& s : schedule)
-        (s.sender == 0 ? *master : *peer).set_forces(s.forces, s.from);
+        EXPECT_TRUE((s.sender == 0 ? *master : *peer).set_forces(s.forces, s.from));
 
     double now = 0.0;
     const auto pump_until = [&](const std::function<bool()>& done, int max_iterations)

@@ -61,7 +61,7 @@ std::vector<Scheduled> schedule(int participants)
 void apply_schedule(Harness& h, const std::vector<Scheduled>& sched)
 {
     for (const Scheduled& s : sched)
-        h.peers[s.sender]->set_forces(s.forces, s.from);
+        EXPECT_TRUE(h.peers[s.sender]->set_forces(s.forces, s.from));
 }
 
 bool all_at(const Harness& h, std::uint64_t tick, std::size_t count)
@@ -1018,7 +1018,7 @@ TEST(SessionForged, AMemberThatStopsSteppingIsRemovedAfterTheBarrierWait)
     SessionSettings member = settings_for(Coupling::Exact, "p");
     member.max_ticks = 0;
     Session& m = h.host(4, master);
-    m.set_forces({face_pull(40, 0.3)});
+    EXPECT_TRUE(m.set_forces({face_pull(40, 0.3)}));
     const auto faces = static_cast<std::uint32_t>(m.model()->grid().face_count());
     for (std::uint32_t k = 1; k < 3; ++k)
     {
@@ -1272,6 +1272,46 @@ TEST(SessionForces, ABadForceIsLeftOutAlone)
     EXPECT_EQ(out[2].face, static_cast<std::int64_t>(faces) - 1);
 }
 
+// set_forces checks a list where it is given: a force the model refuses, too many forces, or a
+// viewer's forces are refused with a message naming the force and the rule, and nothing is
+// queued: the list given before stays in effect, alone (had a refused list been queued, it would
+// have replaced the pull before the first tick).
+TEST(SessionForces, SetForcesRefusesAtTheBoundaryAndQueuesNothing)
+{
+    Harness h;
+    Session& master = h.host(k_level, settings_for(Coupling::Fast, "m"));
+    const core::TetraGrid& g = master.model()->grid();
+    const auto faces = static_cast<std::uint32_t>(g.face_count());
+
+    ASSERT_TRUE(master.set_forces({face_pull(7, 0.5)}));
+    const auto refused = [&](std::vector<net::UserForce> list, const std::string& says)
+    {
+        const auto r = master.set_forces(std::move(list));
+        ASSERT_FALSE(r);
+        EXPECT_EQ(r.error().code, core::ErrorCode::InvalidArgument);
+        EXPECT_NE(r.error().message.find(says), std::string::npos) << r.error().message;
+    };
+    refused({face_pull(7, 0.5), face_pull(faces, 1.0)},
+            "force 1: face " + std::to_string(faces) + " is not below " + std::to_string(faces));
+    net::UserForce nan_force = face_pull(3, 1.0);
+    nan_force.force[1] = std::nan("");
+    refused({nan_force}, "force 0: vector is not finite");
+    refused({point_push(0.0, 0.0, 1.0, -0.3, 0.2)}, "force 0: point force needs");
+    refused(std::vector<net::UserForce>(net::k_max_points + 1, face_pull(7, 0.5)),
+            "17 forces, at most 16");
+    EXPECT_TRUE(master.set_forces(std::vector<net::UserForce>(net::k_max_points, face_pull(7, 0.5)),
+                                  1000000));  // a full list is taken (it applies long after)
+
+    for (int k = 0; k < 50; ++k)
+        h.pump_once(0.001);
+    const auto face = g.triangles()[7];
+    double lift = 0.0;
+    for (const std::uint32_t id : face)
+        lift += master.state().u[g.node_of_unique()[id]];
+    EXPECT_GT(std::abs(lift), 1e-6) << "the pull given before the refused lists acts";
+    EXPECT_EQ(master.stats().active_forces, 1U) << "it alone: nothing of the refused lists";
+}
+
 // The partitions the master computes and broadcasts when `flood` (true: the participant's point
 // of interest alternates between two faces every 0.5 ms for 20 ms, then settles on the second;
 // false: it moves there once) ends, and how many epochs that took. Fast coupling, level 5.
@@ -1369,7 +1409,7 @@ TEST(SessionForces, AViewersForcesAreDropped)
                    wire.peers().size() == 2 && all_at(h, 30, 2);
         },
         20000));
-    viewer.set_forces({face_pull(10, 0.5)});
+    EXPECT_FALSE(viewer.set_forces({face_pull(10, 0.5)}));
     const Session& m = *h.peers[0];
     net::Message forged;
     forged.header.session = 4343;
@@ -1451,7 +1491,7 @@ TEST(SessionPeers, OnlyTheMasterAdmitsAndNoSecondConnectionTakesAMembersId)
         2000));
     EXPECT_EQ(m.stats().peer_claim_rejects, 2U);
 
-    part.set_forces({face_pull(10, 0.5)});
+    EXPECT_TRUE(part.set_forces({face_pull(10, 0.5)}));
     ASSERT_TRUE(h.pump_until([&] { return m.stats().active_forces == 1; }, 2000));
     EXPECT_EQ(m.stats().viewer_forces, 0U);
     for (const PeerStatus& st : m.peer_status())
@@ -1524,16 +1564,20 @@ TEST_P(SessionDiverged, APeerWhoseStepDivergesLeavesAndTheOtherGoesOn)
     const std::uint64_t t0 = other.tick() + 10;
     const std::uint64_t at = coupling == Coupling::Exact ? t0 : 0;
     const net::UserForce mild = point_push(0.0, x == 0 ? -1.0 : 1.0, 0.0, 0.4, 0.3);
-    diverging.set_forces({point_push(0.0, x == 0 ? 1.0 : -1.0, 0.0, 0.4, 0.3)}, at);
-    other.set_forces({mild}, at);
+    EXPECT_TRUE(diverging.set_forces({point_push(0.0, x == 0 ? 1.0 : -1.0, 0.0, 0.4, 0.3)}, at));
+    EXPECT_TRUE(other.set_forces({mild}, at));
     pliant::test::FpTrapsOff traps_off;  // the overflowing step computes inf and NaN
     const net::UserForce huge = point_push(p[0], p[1], p[2], 0.05, 1e308);
-    other.set_forces({mild, huge}, coupling == Coupling::Exact ? t0 + 5 : 0);
+    EXPECT_TRUE(other.set_forces({mild, huge}, coupling == Coupling::Exact ? t0 + 5 : 0));
     if (coupling == Coupling::Exact)
-        other.set_forces({mild}, t0 + 6);
+    {
+        EXPECT_TRUE(other.set_forces({mild}, t0 + 6));
+    }
     ASSERT_TRUE(h.pump_until([&] { return diverging.diverged().has_value(); }, 20000));
     if (coupling == Coupling::Fast)
-        other.set_forces({mild});
+    {
+        EXPECT_TRUE(other.set_forces({mild}));
+    }
     ASSERT_TRUE(h.pump_until([&] { return diverging.left(); }, 200));
     if (coupling == Coupling::Exact)
     {
@@ -1588,7 +1632,7 @@ TEST(SessionExact, AParticipantWithoutAShareKeepsPulling)
     h.host(3, ms);
     h.join(net::Role::Participant, ps);
     ASSERT_TRUE(pump_until_partitioned(h, 2));
-    h.peers[1]->set_forces({face_pull(10, 0.5)});
+    EXPECT_TRUE(h.peers[1]->set_forces({face_pull(10, 0.5)}));
     ASSERT_TRUE(h.pump_until([&] { return h.peers[0]->stats().active_forces == 1; }, 4000));
     // A second participant whose point lies in the first one's leaf: three members for two
     // leaves, and the seeds go to points first, then to the master, so the first participant

@@ -41,7 +41,7 @@ void run_exact_threads(int participants)
     if (participants >= 2)
         sched.push_back({2, 200, {point_push(0.0, 0.0, -1.0, 0.25, 0.5)}});
     for (const Scheduled& s : sched)
-        h.peers[s.sender]->set_forces(s.forces, s.from);
+        EXPECT_TRUE(h.peers[s.sender]->set_forces(s.forces, s.from));
     const std::size_t members = h.peers.size();
     // Everyone joins and is partitioned first, on this thread (the lockstep waits for them).
     ASSERT_TRUE(pump_until_partitioned(h, members));

@@ -539,7 +539,8 @@ void Viewer::simulate(double wall_dt)
                 u.force = {f.vector.x, f.vector.y, f.vector.z};
                 list.push_back(u);
             }
-            session_->set_forces(std::move(list));
+            if (auto ok = session_->set_forces(std::move(list)); !ok)
+                set_status(ok.error().message, true);
         }
         pump_session(seconds(Clock::now().time_since_epoch()));
         if (!session_)

@@ -370,12 +370,16 @@ public:
     void set_points_of_interest(std::vector<net::Target> points);
     /// This peer's user forces (replacing its previous list) from tick `from_tick` on, or from
     /// the earliest tick every peer can still honour if that is later (exact mode: the tick after
-    /// the next one this peer publishes; fast mode: at once). Several calls queue in order. A
-    /// viewer's are ignored: it only watches (and the others drop a viewer's Force lists).
-    /// Forces are checked where they apply, by every peer alike (`append_valid_forces`): one the
-    /// model refuses (a face beyond the grid) is left out without a word here; check them first
-    /// with sim::validate_forces (through to_sim_force) to tell the user.
-    void set_forces(std::vector<net::UserForce> forces, std::uint64_t from_tick = 0);
+    /// the next one this peer publishes; fast mode: at once). Several calls queue in order.
+    /// Checked here, at the boundary: more than net::k_max_points forces, or one that
+    /// sim::validate_forces refuses (through to_sim_force: a non-finite vector or point, a
+    /// negative radius, a face beyond the grid once the model is known), or any force from a
+    /// viewer (it only watches, and the others drop a viewer's Force lists) is refused and
+    /// nothing is queued. (Before a joiner's welcome the grid is not known: a face beyond it is
+    /// then left out where the list applies, by every peer alike, `append_valid_forces`.)
+    /// \return InvalidArgument naming the force and the rule.
+    core::Result<void> set_forces(std::vector<net::UserForce> forces,
+                                  std::uint64_t from_tick = 0);
     /// Leaves the session; `left()` becomes true when done. Participants and viewers leave as
     /// described in the file comment; the master streams its leaves once more and disconnects
     /// (reason Quit), and the others promote a successor that takes its leaves over.

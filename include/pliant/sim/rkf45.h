@@ -97,6 +97,10 @@ struct Force
 
 /// Checks forces against a model. \return InvalidArgument naming the force and the rule.
 core::Result<void> validate_forces(const MembraneModel& model, std::span<const Force> forces);
+/// The same for a grid of `face_count` faces (a face force's face must be below it), for a
+/// caller that knows the grid before it has a model; with no grid known yet, pass the largest
+/// int64 and every rule but the face's range is checked.
+core::Result<void> validate_forces(std::int64_t face_count, std::span<const Force> forces);
 
 /// Bit flags of a step's outcome.
 enum class StepStatus : std::uint32_t
