@@ -4202,9 +4202,8 @@ core::Result<void> Session::set_forces(std::vector<net::UserForce> forces, std::
                           "set_forces: a viewer only watches; the others drop its forces");
     if (forces.size() > net::k_max_points)
         return core::fail(core::ErrorCode::InvalidArgument,
-                          "set_forces: " + std::to_string(forces.size()) +
-                              " forces, at most " + std::to_string(net::k_max_points) +
-                              " fit one Force message");
+                          "set_forces: " + std::to_string(forces.size()) + " forces, at most " +
+                              std::to_string(net::k_max_points) + " fit one Force message");
     const std::int64_t faces = model_ != nullptr
                                    ? static_cast<std::int64_t>(model_->grid().face_count())
                                    : std::numeric_limits<std::int64_t>::max();

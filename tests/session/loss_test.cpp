@@ -317,7 +317,8 @@ TEST(SessionLoss, ALostReadyCostsAStreamPeriodNotARetransmission)
         set.coupling = Coupling::Fast;
         set.name = "master";
         Session& master = h.host(level, set);
-        EXPECT_TRUE(master.set_forces({face_pull(50, 0.5)}));  // the state moves: every stream carries news
+        EXPECT_TRUE(
+            master.set_forces({face_pull(50, 0.5)}));  // the state moves: every stream carries news
         set.name = "viewer";
         Session& viewer = h.join(net::Role::Viewer, set);
         net::LinkSettings lossy = ns.link;

@@ -54,7 +54,8 @@ void record_session(RecordedRun& run)
     EXPECT_TRUE(h.peers[0]->set_forces({point_push(0.0, 0.0, 1.0, 0.4, 0.4)}, 40));
     EXPECT_TRUE(h.peers[1]->set_forces({face_pull(100, 0.7)}, 60));
     EXPECT_TRUE(h.peers[1]->set_forces({}, 180));
-    EXPECT_TRUE(h.peers[2]->set_forces({point_push(0.0, 0.0, -1.0, 0.3, 0.5), face_pull(500, -0.3)}, 90));
+    EXPECT_TRUE(
+        h.peers[2]->set_forces({point_push(0.0, 0.0, -1.0, 0.3, 0.5), face_pull(500, -0.3)}, 90));
     ASSERT_TRUE(h.pump_until(
         [&]
         {

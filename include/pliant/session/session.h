@@ -378,8 +378,7 @@ public:
     /// nothing is queued. (Before a joiner's welcome the grid is not known: a face beyond it is
     /// then left out where the list applies, by every peer alike, `append_valid_forces`.)
     /// \return InvalidArgument naming the force and the rule.
-    core::Result<void> set_forces(std::vector<net::UserForce> forces,
-                                  std::uint64_t from_tick = 0);
+    core::Result<void> set_forces(std::vector<net::UserForce> forces, std::uint64_t from_tick = 0);
     /// Leaves the session; `left()` becomes true when done. Participants and viewers leave as
     /// described in the file comment; the master streams its leaves once more and disconnects
     /// (reason Quit), and the others promote a successor that takes its leaves over.
