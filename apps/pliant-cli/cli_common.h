@@ -15,6 +15,7 @@
 #include <csignal>
 #include <filesystem>
 #include <memory>
+#include <new>
 #include <string>
 
 namespace pliant::net
@@ -54,15 +55,28 @@ const volatile std::sig_atomic_t* install_interrupt_flag();
 /// Logs an error and returns its exit code.
 int report(const core::Error& error);
 
+/// Says that the command ran out of memory (std::bad_alloc reached it: the memory it had is
+/// freed by then) and returns k_exit_failure.
+int report_out_of_memory();
+
 /// Wraps a subcommand body `int()` into a CLI11 callback: sets up logging, runs it, and turns a
-/// non-zero result into the process's exit code.
+/// non-zero result into the process's exit code; running out of memory is an error message
+/// and exit status 3, not an abort.
 template <typename Body>
 auto command_callback(const GlobalOptions& global, Body body)
 {
     return [&global, body]()
     {
         configure_logging(global);
-        const int rc = body();
+        int rc = 0;
+        try
+        {
+            rc = body();
+        }
+        catch (const std::bad_alloc&)
+        {
+            rc = report_out_of_memory();
+        }
         if (rc != 0)
             throw CLI::RuntimeError(rc);
     };

@@ -45,6 +45,19 @@ if(TARGET pliant)
                      -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
     set_tests_properties(cli_full_disk_leaves_no_part PROPERTIES FIXTURES_REQUIRED cli_outputs
                          ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0")
+    # Out of memory (an address space of 300 MiB; refining level 3 to 10 needs about 350 MB): an
+    # error and exit status 3, nothing written, where std::bad_alloc aborted (status 134). Not
+    # under the sanitizers, whose shadow memory needs far more address space than any limit.
+    if(NOT PLIANT_SANITIZE)
+        add_test(NAME cli_out_of_memory_is_an_error
+                 COMMAND ${CMAKE_COMMAND}
+                         "-DCOMMAND=sh;${CMAKE_CURRENT_SOURCE_DIR}/memory_limit.sh;307200;$<TARGET_FILE:pliant>;refine;${out_dir}/spot3.pgrid;--levels;7;-o;${out_dir}/oom.pgrid"
+                         -DEXIT=3 "-DSTDERR_REGEX=error: out of memory: .*\\[out-of-memory\\]"
+                         -DABSENT=${out_dir}/oom.pgrid
+                         -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+        set_tests_properties(cli_out_of_memory_is_an_error PROPERTIES
+                             FIXTURES_REQUIRED cli_outputs TIMEOUT 120)
+    endif()
 
     # Outputs checked before the work: a missing folder is refused with the reason, nothing
     # created; --report naming -o's own file is a usage error.
