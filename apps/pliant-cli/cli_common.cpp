@@ -53,9 +53,10 @@ int report(const core::Error& error)
 int report_out_of_memory()
 {
     // Logged without formatting into new strings where it can be helped: memory is short.
-    spdlog::error("out of memory: the command needed more than the system gives this process "
-                  "(free memory, `ulimit -v`, a container's limit); a lower --level or fewer "
-                  "threads need less [out-of-memory]");
+    spdlog::error(
+        "out of memory: the command needed more than the system gives this process "
+        "(free memory, `ulimit -v`, a container's limit); a lower --level or fewer "
+        "threads need less [out-of-memory]");
     return k_exit_failure;
 }
 

@@ -391,10 +391,10 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
     spdlog::info("demo: {} ({} vertices, {} faces) is a closed genus-0 surface",
                  mesh_path.filename().string(), mesh->vertex_count(), mesh->face_count());
     ProgressBar progress(global);
-    // Ctrl-C or SIGTERM: the remeshing stops and nothing is written; the session stops after
-    // the frame being shown (with --view: the viewer closes as its window does, and the
-    // session with it) and the run ends as usual with what ran (final state, recording and its
-    // replay check, summary), exit 130.
+    // Ctrl-C or SIGTERM: the remeshing stops and nothing is written; the session stops at its
+    // next step, ending at the last whole frame (with --view: the viewer closes as its window does,
+    // and the session with it) and the run ends as usual with what ran (final state, recording and
+    // its replay check, summary), exit 130.
     const volatile std::sig_atomic_t* interrupt =
         live ? live_link->interrupt : install_interrupt_flag();
     const auto interrupted = [interrupt] { return interrupt != nullptr && *interrupt != 0; };
@@ -435,6 +435,18 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
     if (!probe)
         return report(probe.error());
     const double stable = sim::stable_fixed_step(*probe);
+    // A step far below the bound gains nothing and could not keep up: a thousandth of it is
+    // already 1,000 times the steps a stable run needs (and 1e-300 overflowed the steps per
+    // frame below).
+    if (opt.dt > 0.0 && opt.dt < 1e-3 * stable)
+    {
+        spdlog::error(
+            "demo: --dt {:.3g} s is below a thousandth of the stability bound {:.3g} s "
+            "({:.3g} steps per second of session time); give at least {:.3g} s, or "
+            "leave --dt out (0.9 x the bound)",
+            opt.dt, stable, 1.0 / opt.dt, 1e-3 * stable);
+        return k_exit_usage;
+    }
     const double want = opt.dt > 0.0 ? opt.dt : 0.9 * stable;
     // A whole number of ticks per frame, so every frame shows a tick boundary.
     const auto ticks_per_frame =
@@ -542,6 +554,9 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
     const double t_joined = seconds_since(t_session);
     if (live)
         live_link->announce(peers[0].address.port);
+    else
+        spdlog::info("demo: the peers are partitioned; the session runs ({} steps per frame)",
+                     ticks_per_frame);
 
     // 4. The scripted collaboration, one stream interval of virtual time at a time.
     std::optional<FramePainter> painter;
@@ -603,8 +618,11 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
                 peers[3].session = std::move(*joined);
             }
             const auto target = static_cast<std::uint64_t>(std::floor(now / dt + 1e-9));
-            while (!members_at(target) && !out_of_time())
+            // Ctrl-C is heard between steps too: an interval can hold many of them.
+            while (!members_at(target) && !out_of_time() && !interrupted())
                 pump(now);
+            if (interrupted())
+                break;
             pump(now);  // one more pass streams the states of this interval
             if (live && out_of_time())
                 break;  // the viewer's window closed
@@ -627,8 +645,8 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
                 grab_received_at = now;
             reached = now;
         }
-        if (live && live_link->stop.load())
-            break;
+        if ((live && live_link->stop.load()) || (!live && interrupted()))
+            break;  // the frame was not reached: the outputs end at the frame before
         ++frames_run;
         const bool from_viewer = peers[3].session && peers[3].session->ready();
         const session::Session& shown = *peers[from_viewer ? 3 : 0].session;
@@ -786,8 +804,10 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
         row("viewer", "the window (pliant view), joined over 127.0.0.1");
     else
         row("viewer joined at / shown from",
-            fmt("%.2f s", t_viewer) + " / " +
-                (viewer_ready_at >= 0.0 ? fmt("%.2f s", viewer_ready_at) : std::string("never")));
+            peers[3].session ? fmt("%.2f s", t_viewer) + " / " +
+                                   (viewer_ready_at >= 0.0 ? fmt("%.2f s", viewer_ready_at)
+                                                           : std::string("never"))
+                             : fmt("never (due at %.2f s)", t_viewer));
     row("largest displacement shown",
         diverged_at < 0.0 ? fmt("%.4f m", max_u)
                           : fmt("%.3g m: DIVERGED", max_u) + fmt(" at %.2f s", diverged_at) +
@@ -943,9 +963,9 @@ void add_demo_command(CLI::App& app, const GlobalOptions& global)
         "of rendering frames: the peers run in real time on a second thread, the two users'\n"
         "grabs repeat every --duration seconds, and closing the window ends the session (the\n"
         "summary and session.prec are still written; `pliant replay` checks the recording).\n"
-        "Ctrl-C stops after the frame being shown (with --view: closes the viewer as its\n"
-        "window does) and the run ends with what ran (every output, the replay check), exit\n"
-        "status 130.\n\n"
+        "Ctrl-C stops at the next step (with --view: closes the viewer as its window does)\n"
+        "and the run ends with what ran up to the last whole frame (every output, the replay\n"
+        "check), exit status 130.\n\n"
         "Examples:\n"
         "  pliant demo                      # the bundled cow, level 6, 3 s at 12 fps\n"
         "  pliant demo --view               # watch it live in a window\n"
