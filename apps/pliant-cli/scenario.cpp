@@ -177,6 +177,42 @@ bool sets_no_key(const toml::table& table)
     return true;
 }
 
+// The steps a run takes at the least (duration over the largest step): more than
+// k_max_steps could not end (1e-300 s steps sat at t = 0 for ever, the progress bar at 0 %);
+// a fixed step longer than the duration simulates nothing (0 steps, exit 0 before); one longer
+// than the frame interval repeats frames, which is said.
+constexpr double k_max_steps = 1e12;
+
+std::optional<core::Error> check_step_count(const Scenario& sc, const std::filesystem::path& path)
+{
+    const sim::MembraneSettings& s = sc.settings;
+    if (!(sc.duration > 0.0))
+        return std::nullopt;
+    const char* key = s.fixed_step ? "fixed_dt" : "dt_max";
+    const std::string name = std::string("integrator.") + key;
+    const double largest = s.fixed_step ? s.fixed_dt : s.dt_max;
+    const std::string value =
+        key_at(sc, path, name) + " = " + fmt_number(largest) + " s" + default_note(sc, name);
+    if (sc.duration / largest > k_max_steps)
+        return core::Error{core::ErrorCode::BadScenario,
+                           value + " would take over " + fmt_number(k_max_steps) +
+                               " steps to cover 'duration' = " + fmt_number(sc.duration) +
+                               " s; use " + key + " >= " + fmt_number(sc.duration / k_max_steps) +
+                               " s"};
+    if (s.fixed_step && s.fixed_dt > sc.duration)
+        return core::Error{core::ErrorCode::BadScenario,
+                           value + " is longer than 'duration' = " + fmt_number(sc.duration) +
+                               " s: no step fits and the run would simulate nothing; use "
+                               "fixed_dt <= " +
+                               fmt_number(sc.duration) + " s"};
+    if (s.fixed_step && s.fixed_dt * sc.frame_rate > 1.0)
+        spdlog::warn(
+            "{} is longer than the frame interval {} s ('frame_rate' = {}): frames "
+            "without a step between them repeat the state before them",
+            value, fmt_number(1.0 / sc.frame_rate), fmt_number(sc.frame_rate));
+    return std::nullopt;
+}
+
 core::Result<Scenario> read_scenario(const toml::table& root, const std::filesystem::path& path)
 {
     Scenario sc;
@@ -380,6 +416,7 @@ core::Result<Scenario> read_scenario(const toml::table& root, const std::filesys
             sc.forces.push_back(f);
         }
     }
+    PLIANT_TRY(check_step_count(sc, path));
     return sc;
 }
 

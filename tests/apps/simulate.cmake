@@ -130,6 +130,21 @@ if(TARGET pliant)
                       "dt_min_too_large.toml:12: 'integrator.dt_min' = 0.05 s is [0-9.]+ times the stable step .*will likely diverge.*dt_min_too_large.toml:12: 'integrator.dt_min' = 0.05 s: 10 of 10 steps were taken at dt_min with the error above the tolerance"
                       simulate --scenario ${scenarios}/dt_min_too_large.toml -o ${CMAKE_CURRENT_BINARY_DIR}/simulate-dt-min --level 5 -j 1)
 
+    # Steps the run could never take, or that fit nowhere: refused before anything is written
+    # (a fixed step of 1e-300 s ran for ever at t = 0; one longer than the run simulated
+    # nothing and exited 0); a step longer than the frame interval is said.
+    pliant_cli_expect(cli_simulate_refuses_endless_fixed_steps 1 STDERR
+                      "tiny_fixed_step.toml:8: 'integrator.fixed_dt' = 1e-300 s would take over 1e\\+12 steps to cover 'duration' = 0.1 s. use fixed_dt >= 1e-13 s"
+                      simulate --scenario ${scenarios}/tiny_fixed_step.toml -o ${CMAKE_CURRENT_BINARY_DIR}/simulate-tiny-step --level 3)
+    pliant_cli_expect(cli_simulate_refuses_endless_adaptive_steps 1 STDERR
+                      "tiny_adaptive_steps.toml:7: 'integrator.dt_max' = 1e-299 s would take over 1e\\+12 steps"
+                      simulate --scenario ${scenarios}/tiny_adaptive_steps.toml -o ${CMAKE_CURRENT_BINARY_DIR}/simulate-tiny-adaptive --level 3)
+    pliant_cli_expect(cli_simulate_refuses_a_step_beyond_the_run 1 STDERR
+                      "step_beyond_duration.toml:7: 'integrator.fixed_dt' = 100 s is longer than 'duration' = 0.1 s: no step fits"
+                      simulate --scenario ${scenarios}/step_beyond_duration.toml -o ${CMAKE_CURRENT_BINARY_DIR}/simulate-step-beyond --level 3)
+    pliant_cli_expect(cli_simulate_warns_a_step_beyond_the_frame_interval 0 STDERR
+                      "step_beyond_frame.toml:11: 'integrator.fixed_dt' = 0.25 s is longer than the frame interval 0.1 s .'frame_rate' = 10.: frames without a step between them repeat"
+                      simulate --scenario ${scenarios}/step_beyond_frame.toml -o ${CMAKE_CURRENT_BINARY_DIR}/simulate-step-beyond-frame --level 2 -j 1)
     pliant_cli_expect(cli_simulate_stops_when_non_finite 3 STDERR
                       "diverges.toml: the state became non-finite at t = [0-9.]+ s: the run diverged and stops \\(frames 0 to 0 are in "
                       simulate --scenario ${scenarios}/diverges.toml -o ${CMAKE_CURRENT_BINARY_DIR}/simulate-diverges --level 3 -j 1)
