@@ -44,6 +44,9 @@ constexpr std::uint32_t k_none = UINT32_MAX;
 /// exactly collinear points land here even after rounding to float, while the skinniest real
 /// triangles of the test meshes stay well above it (docs/mesh.md).
 constexpr double k_degenerate_ratio = 1e-6;
+// Coordinates all below this are said to be beyond what 32-bit floats resolve (the smallest
+// normal float is 1.2e-38; a mesh of size 1e-35 keeps only a thousand steps across).
+constexpr double k_float_resolved = 1e-32;
 /// Coordinates above this many bounding-box diagonals: far enough from the origin that float
 /// rounding (one part in 1.7e7) comes within a ten-thousandth of the mesh's size.
 constexpr double k_far_from_origin = 1e3;
@@ -84,6 +87,7 @@ struct Examples
     std::uint32_t non_finite_vertex = k_none;
     std::uint32_t degenerate_face = k_none;
     bool degenerate_repeated = false;
+    double degenerate_height_ratio = 0.0;  ///< height / longest edge of a zero-area example
     std::array<std::uint32_t, 2> non_manifold_edge{k_none, k_none};
     std::size_t non_manifold_edge_faces = 0;
     std::uint32_t boundary_vertex = k_none;
@@ -153,6 +157,7 @@ MeshStats analyze_detailed(const TriMesh& mesh, Examples& ex)
         }
         const bool repeated = f[0] == f[1] || f[1] == f[2] || f[0] == f[2];
         bool zero_area = false;
+        double height_ratio = 0.0;
         const core::Vec3& p0 = mesh.positions[f[0]];
         const core::Vec3& p1 = mesh.positions[f[1]];
         const core::Vec3& p2 = mesh.positions[f[2]];
@@ -164,6 +169,7 @@ MeshStats analyze_detailed(const TriMesh& mesh, Examples& ex)
                 std::max({core::norm(p1 - p0), core::norm(p2 - p1), core::norm(p0 - p2)});
             // height / longest = area2 / longest^2
             zero_area = !(area2 > k_degenerate_ratio * longest * longest) || area2 == 0.0;
+            height_ratio = longest > 0.0 ? area2 / (longest * longest) : 0.0;
             if (std::isfinite(area2))
                 s.surface_area += 0.5 * area2;
         }
@@ -173,6 +179,7 @@ MeshStats analyze_detailed(const TriMesh& mesh, Examples& ex)
             {
                 ex.degenerate_face = face;
                 ex.degenerate_repeated = repeated;
+                ex.degenerate_height_ratio = height_ratio;
             }
         }
     }
@@ -426,6 +433,10 @@ core::Result<void> validate(const TriMesh& mesh, std::string_view source_name)
                   ", size " + fmt_number(s.bbox_diagonal) +
                   ") and positions are read as 32-bit floats, which merge nearby vertices "
                   "there: move it near the origin"
+        : reach < k_float_resolved
+            ? "; the mesh is tiny (coordinates up to " + fmt_number(reach) +
+                  ") and positions are read as 32-bit floats, which resolve nothing below about "
+                  "1e-38 and merge nearby vertices well above it: scale it up"
             : std::string();
     if (s.degenerate_faces > 0)
     {
@@ -433,9 +444,15 @@ core::Result<void> validate(const TriMesh& mesh, std::string_view source_name)
         return fail(
             ErrorCode::DegenerateFace,
             src + ": degenerate face " + str(ex.degenerate_face) + " (vertices " + str(f[0]) +
-                ", " + str(f[1]) + ", " + str(f[2]) + " at " + point(mesh, f[0]) +
-                "): " + (ex.degenerate_repeated ? "a repeated vertex" : "zero area") + " (" +
-                plural(s.degenerate_faces, "degenerate face", "degenerate faces") + ")" + far);
+                ", " + str(f[1]) + ", " + str(f[2]) + " at " + point(mesh, f[0]) + "): " +
+                (ex.degenerate_repeated ? std::string("a repeated vertex")
+                 : ex.degenerate_height_ratio > 0.0
+                     ? "almost no area: its height is " + fmt_number(ex.degenerate_height_ratio) +
+                           " of its longest edge, below the " + fmt_number(k_degenerate_ratio) +
+                           " a face needs"
+                     : std::string("zero area")) +
+                " (" + plural(s.degenerate_faces, "degenerate face", "degenerate faces") + ")" +
+                far);
     }
     if (s.non_manifold_edges > 0)
         return fail(

@@ -751,6 +751,14 @@ TEST_F(BadFiles, NonFiniteCoordinatesAreReportedWithTheirFace)
     TriMesh m = scenes::tetrahedron();
     m.positions[2].z = std::numeric_limits<double>::infinity();
     EXPECT_EQ(error_of("inf.stl", test::to_stl_binary(m)).code, ErrorCode::NonFiniteCoordinate);
+    // Finite in the file, beyond float: the message says why it became infinite.
+    const core::Error big = error_of("big.obj",
+                                     "v 0 0 0\nv 1e39 0 0\nv 0 1 0\nv 0 0 1\n"
+                                     "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+    EXPECT_EQ(big.code, ErrorCode::NonFiniteCoordinate) << big.message;
+    EXPECT_NE(big.message.find("read as 32-bit floats: a coordinate beyond +-3.4e38"),
+              std::string::npos)
+        << big.message;
 }
 
 }  // namespace

@@ -186,6 +186,26 @@ TEST(Validate, DegenerateFacesRepeatedIndexAndZeroArea)
     EXPECT_NE(message_of(flat).find("zero area"), std::string::npos) << message_of(flat);
     EXPECT_EQ(message_of(flat).find("far from the origin"), std::string::npos) << message_of(flat);
 
+    // A sliver: not collinear, but its height is 1e-7 of its longest edge. The message gives the
+    // ratio and the rule (it said "zero area").
+    TriMesh sliver = scenes::octahedron();
+    sliver.positions.push_back({0.5 + 1e-7, 0.5 + 1e-7, 0.0});
+    sliver.faces.push_back({0, 2, 6});
+    EXPECT_EQ(code_of(sliver), ErrorCode::DegenerateFace);
+    EXPECT_NE(message_of(sliver).find("almost no area: its height is 1e-07 of its longest edge, "
+                                      "below the 1e-06 a face needs"),
+              std::string::npos)
+        << message_of(sliver);
+
+    // Tiny: positions read as floats resolve nothing below 1e-38; the message says so.
+    TriMesh tiny = repeated;
+    for (core::Vec3& p : tiny.positions)
+        p = p * 1e-40;
+    EXPECT_EQ(code_of(tiny), ErrorCode::DegenerateFace);
+    EXPECT_NE(message_of(tiny).find("the mesh is tiny (coordinates up to 1e-40)"),
+              std::string::npos)
+        << message_of(tiny);
+
     // The same far from the origin: the message points at float rounding and says where.
     for (core::Vec3& p : repeated.positions)
         p = p + core::Vec3{1e5, -2e5, 3e5};
