@@ -50,6 +50,12 @@ int orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) noexcep
     // two rows of the determinant equal or one zero: exactly 0, without the slow 113 bits.
     if (a == d || b == d || c == d || a == b || b == c || a == c)
         return 0;
+    // Four points with one coordinate equal lie in a plane parallel to an axis plane: exactly 0
+    // too. A flat cap (a cylinder's end split into a fan around its centre) puts every pair of
+    // its faces here: a 2,500-sided cone spent 11 s in the 113 bits below, 5,000 sides 45 s.
+    if ((a.x == d.x && b.x == d.x && c.x == d.x) || (a.y == d.y && b.y == d.y && c.y == d.y) ||
+        (a.z == d.z && b.z == d.z && c.z == d.z))
+        return 0;
     const Wide wadx = Wide(a.x) - Wide(d.x), wady = Wide(a.y) - Wide(d.y),
                wadz = Wide(a.z) - Wide(d.z);
     const Wide wbdx = Wide(b.x) - Wide(d.x), wbdy = Wide(b.y) - Wide(d.y),

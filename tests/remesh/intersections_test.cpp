@@ -245,6 +245,39 @@ TEST(SelfIntersections, FacesSharingAVertexCountOnlyWhenTheyOverlap)
     EXPECT_EQ(count_self_intersections(m), 0U);
 }
 
+// A flat fan in each axis plane (a cylinder's cap, the case orient3d answers 0 for without its
+// 113-bit fallback): a sector that overlaps another counts, neighbours that only touch do not,
+// as the brute-force count over every pair says.
+TEST(SelfIntersections, FlatFansInAxisPlanesCountOverlappingSectorsOnly)
+{
+    for (int axis = 0; axis < 3; ++axis)
+    {
+        const auto at = [axis](double u, double v)
+        {
+            std::array<double, 3> c{0.25, 0.25, 0.25};  // the plane: coordinate `axis` = 0.25
+            c[static_cast<std::size_t>((axis + 1) % 3)] = u;
+            c[static_cast<std::size_t>((axis + 2) % 3)] = v;
+            return Vec3{c[0], c[1], c[2]};
+        };
+        mesh::TriMesh m;
+        m.positions.push_back(at(0.0, 0.0));
+        constexpr int k_sides = 24;
+        for (int k = 0; k < k_sides; ++k)
+        {
+            const double a = 2.0 * 3.14159265358979 * k / k_sides;
+            m.positions.push_back(at(std::cos(a), std::sin(a)));
+        }
+        for (std::uint32_t k = 0; k < k_sides; ++k)
+            m.faces.push_back({0, 1 + k, 1 + (k + 1) % k_sides});
+        EXPECT_EQ(count_self_intersections(m), 0U) << "axis " << axis;
+        // One sector spanning three, (0,3,6): it shares an edge with (0,2,3), (0,3,4), (0,5,6)
+        // and (0,6,7), never counted, and only the vertex 0 with (0,4,5), inside it: 1 pair.
+        m.faces.push_back({0, 3, 6});
+        EXPECT_EQ(count_self_intersections(m), 1U) << "axis " << axis;
+        EXPECT_EQ(brute_force_pairs(m), 1U) << "axis " << axis;
+    }
+}
+
 TEST(SelfIntersections, FoldCounterSeesAFlippedTriangle)
 {
     mesh::TriMesh out = scenes::icosphere(1);
