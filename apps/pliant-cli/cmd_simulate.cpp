@@ -191,12 +191,50 @@ std::vector<std::filesystem::path> earlier_frames(const std::filesystem::path& d
     return found;
 }
 
-core::Result<void> write_frame(const SimulateOptions& opt, const sim::MembraneModel& model,
-                               const sim::MembraneState& state, int frame)
+std::filesystem::path frame_path(const SimulateOptions& opt, int frame)
 {
     char name[64];
     std::snprintf(name, sizeof(name), "frame_%05d.%s", frame, opt.format.c_str());
-    const std::filesystem::path path = opt.out / name;
+    return opt.out / name;
+}
+
+// After frame 0: warns when the frames to come, at frame 0's size, need more than the free
+// space where they go (a run of a million level-10 frames, 80 TB, started without a word; it
+// stops with an error naming the frame when the disk fills, keeping the frames before).
+void warn_if_frames_outgrow_the_disk(const SimulateOptions& opt, int frames)
+{
+    std::error_code ec;
+    const auto one = std::filesystem::file_size(frame_path(opt, 0), ec);
+    if (ec)
+        return;
+    const std::filesystem::space_info space = std::filesystem::space(opt.out, ec);
+    if (ec)
+        return;
+    const double need = static_cast<double>(one) * static_cast<double>(frames);
+    if (need <= static_cast<double>(space.available))
+        return;
+    const auto gb = [](double bytes)
+    {
+        const char* units[] = {"bytes", "kB", "MB", "GB", "TB", "PB"};
+        std::size_t u = 0;
+        for (; u + 1 < std::size(units) && bytes >= 1000.0; ++u)
+            bytes /= 1000.0;
+        char text[32];
+        std::snprintf(text, sizeof(text), "%.3g %s", bytes, units[u]);
+        return std::string(text);
+    };
+    spdlog::warn(
+        "{}: the {} frames to come need about {} ({} each, as frame 0), but {} is free "
+        "there: the run will stop when the disk is full, keeping the frames written; "
+        "lower 'frame_rate' or the level, or write elsewhere",
+        opt.out.string(), frames, gb(need), gb(static_cast<double>(one)),
+        gb(static_cast<double>(space.available)));
+}
+
+core::Result<void> write_frame(const SimulateOptions& opt, const sim::MembraneModel& model,
+                               const sim::MembraneState& state, int frame)
+{
+    const std::filesystem::path path = frame_path(opt, frame);
     core::Vec3Field<double> p;
     model.positions(state.u, p);
     if (opt.format != "pgrid")
@@ -604,6 +642,8 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
         }
         if (auto ok = write_frame(opt, *model, state, frame); !ok)
             return failed(ok.error(), frame - 1);
+        if (frame == 0)
+            warn_if_frames_outgrow_the_disk(opt, frames);
         total_steps += rep.steps;
         total_rejections += rep.rejections;
         total_at_min += rep.at_min_steps;

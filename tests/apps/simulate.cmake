@@ -47,6 +47,16 @@ if(TARGET pliant)
         FIXTURES_SETUP simulate_interrupted
         ARGS simulate --scenario ${PROJECT_SOURCE_DIR}/scenes/pull.toml -o ${_int_out} --level 8
              -j 1)
+    # A run whose frames would outgrow the disk (a million level-7 frames, about 1.3 TB) is
+    # warned about after frame 0, with the sizes; Ctrl-C then ends it.
+    set(_many ${CMAKE_CURRENT_BINARY_DIR}/simulate-many-frames)
+    pliant_add_interrupt_test(cli_simulate_warns_frames_outgrowing_the_disk
+        LOG "the run will stop when the disk is full"
+        FRESH_DIR ${_many}
+        STDERR_REGEX "the 1000000 frames to come need about [0-9.]+ TB .[0-9.]+ MB each, as frame 0., but [0-9.]+ [kMGT]?B is free there"
+        TIMEOUT 120
+        ARGS simulate --scenario ${PROJECT_SOURCE_DIR}/tests/data/scenarios/many_frames.toml
+             -o ${_many} --level 7 -j 1)
     add_test(NAME cli_simulate_interrupted_run_json
              COMMAND ${CMAKE_COMMAND} -DDIR=${_int_out} -DSTATUS=interrupted -DLEVEL=8
                      -DPRECISION=double -P ${CMAKE_CURRENT_SOURCE_DIR}/check_run_json.cmake)
