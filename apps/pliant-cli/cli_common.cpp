@@ -4,6 +4,7 @@
 
 #include <pliant/core/file_io.h>
 #include <pliant/mesh/io.h>
+#include <pliant/net/enet_transport.h>
 #include <pliant/net/secure_transport.h>
 #include <pliant/net/transport.h>
 
@@ -390,6 +391,22 @@ core::Result<std::unique_ptr<net::Transport>> secure_or_plain(std::unique_ptr<ne
     spdlog::info("datagrams are authenticated and encrypted (ChaCha20-Poly1305)");
     return std::unique_ptr<net::Transport>(
         std::make_unique<net::SecureTransport>(std::move(inner), **key));
+}
+
+std::string refused_summary(net::Transport& transport, std::uint64_t auth_refused)
+{
+    net::Transport* wire = &transport;
+    if (auto* secure = dynamic_cast<net::SecureTransport*>(&transport))
+        wire = &secure->inner();
+    const std::optional<net::EnetCounters> enet = net::enet_counters(*wire);
+    const std::uint64_t full = enet ? enet->refused_full + enet->refused_per_source : 0;
+    std::string text = std::to_string(auth_refused + full) + " connections refused";
+    if (auth_refused > 0 && full > 0)
+        text += " (" + std::to_string(auth_refused) + " without the secret, " +
+                std::to_string(full) + " session full)";
+    else if (full > 0)
+        text += " (session full)";
+    return text;
 }
 
 }  // namespace pliant::cli

@@ -198,12 +198,11 @@ int run_host(const HostOptions& opt)
     if (!opt.save.empty())
         if (auto ok = save_peer_state(**s, opt.save); !ok)
             return report(ok.error());
-    std::printf(
-        "host: %.1f s, tick %llu, %llu bytes out, %llu bytes in, %llu connections refused\n",
-        summary->elapsed_s, static_cast<unsigned long long>(summary->final_tick),
-        static_cast<unsigned long long>(summary->stats.bytes_sent),
-        static_cast<unsigned long long>(summary->stats.bytes_received),
-        static_cast<unsigned long long>(summary->auth_refused));
+    std::printf("host: %.1f s, tick %llu, %llu bytes out, %llu bytes in, %s\n", summary->elapsed_s,
+                static_cast<unsigned long long>(summary->final_tick),
+                static_cast<unsigned long long>(summary->stats.bytes_sent),
+                static_cast<unsigned long long>(summary->stats.bytes_received),
+                refused_summary(*transport, summary->auth_refused).c_str());
     return end_status(**s, "host", summary->stats_error);
 }
 

@@ -121,13 +121,12 @@ int run_join(const JoinOptions& opt)
         if (auto ok = save_peer_state(**s, opt.save); !ok)
             return report(ok.error());
     std::printf(
-        "join (id %u): model in %.2f s; %.1f s, tick %llu, %llu bytes out, %llu bytes in, %llu "
-        "connections refused\n",
+        "join (id %u): model in %.2f s; %.1f s, tick %llu, %llu bytes out, %llu bytes in, %s\n",
         static_cast<unsigned>((*s)->id().value), summary->model_s, summary->elapsed_s,
         static_cast<unsigned long long>(summary->final_tick),
         static_cast<unsigned long long>(summary->stats.bytes_sent),
         static_cast<unsigned long long>(summary->stats.bytes_received),
-        static_cast<unsigned long long>(summary->auth_refused));
+        refused_summary(*transport, summary->auth_refused).c_str());
     return end_status(**s, "join", summary->stats_error);
 }
 
