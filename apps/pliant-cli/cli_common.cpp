@@ -24,6 +24,7 @@
 #include <cstring>
 #include <optional>
 #include <string>
+#include <thread>
 #include <variant>
 
 namespace pliant::cli
@@ -49,6 +50,16 @@ int report(const core::Error& error)
     case core::ErrorCode::Cancelled: return k_exit_interrupted;
     default: return k_exit_bad_input;
     }
+}
+
+void warn_if_more_threads_than_cores(int threads, const std::string& what)
+{
+    const unsigned cores = std::thread::hardware_concurrency();
+    if (cores > 0 && threads > static_cast<int>(cores))
+        spdlog::warn(
+            "{} {} is above the {} logical cores of this machine: the result is the "
+            "same, but the threads take turns and run slower; give at most {}",
+            what, threads, cores, cores);
 }
 
 int report_out_of_memory()

@@ -55,6 +55,11 @@ const volatile std::sig_atomic_t* install_interrupt_flag();
 /// Logs an error and returns its exit code.
 int report(const core::Error& error);
 
+/// Warns when `threads` (a -j or a scenario's `threads`) is above the logical cores this machine
+/// has: the results are the same, but the threads take turns and the run is slower (-j 1024 on
+/// 2 cores ran 22 times slower than -j 2).
+void warn_if_more_threads_than_cores(int threads, const std::string& what);  // what: "-j"
+
 /// Says that the command ran out of memory (std::bad_alloc reached it: the memory it had is
 /// freed by then) and returns k_exit_failure.
 int report_out_of_memory();

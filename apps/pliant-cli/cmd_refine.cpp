@@ -39,6 +39,7 @@ struct RefineOptions
 
 int run_refine(const RefineOptions& opt, const GlobalOptions& global)
 {
+    warn_if_more_threads_than_cores(opt.threads, "-j");
     using core::ErrorCode;
     const std::string ext = lower_extension(opt.out);
     if (ext != ".pgrid" && ext != ".obj" && ext != ".ply" && ext != ".gltf" && ext != ".glb")

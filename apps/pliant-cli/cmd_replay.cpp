@@ -35,6 +35,7 @@ struct ReplayOptions
 
 int run_replay(const ReplayOptions& opt, const GlobalOptions& global)
 {
+    warn_if_more_threads_than_cores(opt.threads, "-j");
     const std::string ext = lower_extension(opt.out);
     if (!opt.out.empty() && ext != ".pgrid" && ext != ".obj" && ext != ".ply" && ext != ".gltf" &&
         ext != ".glb")

@@ -390,6 +390,10 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
     Scenario& sc = *scenario;
     if (opt.threads >= 0)
         sc.settings.threads = opt.threads;  // -j 0: OpenMP's default, as threads = 0 in the file
+    warn_if_more_threads_than_cores(sc.settings.threads,
+                                    opt.threads >= 0
+                                        ? std::string("-j")
+                                        : key_at(sc, opt.scenario, "integrator.threads") + " =");
     if (!opt.precision.empty())
         sc.settings.precision = opt.precision == sim::to_string(sim::Precision::Mixed)
                                     ? sim::Precision::Mixed

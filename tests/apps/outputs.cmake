@@ -59,6 +59,13 @@ if(TARGET pliant)
                              FIXTURES_REQUIRED cli_outputs TIMEOUT 120)
     endif()
 
+    # More threads than cores: the same result, said to be slower (-j 1024 on 2 cores was 22x
+    # slower than -j 2, without a word). 256, the most -j takes, is above this machine's cores.
+    pliant_cli_expect(cli_threads_above_the_cores_are_warned_about 0 STDERR
+                      "warning: -j 256 is above the [0-9]+ logical cores of this machine: the result is the same"
+                      refine ${out_dir}/spot3.pgrid --levels 1 -j 256 -o ${out_dir}/threads.pgrid)
+    set_tests_properties(cli_threads_above_the_cores_are_warned_about PROPERTIES
+                         FIXTURES_REQUIRED cli_outputs)
     # Outputs checked before the work: a missing folder is refused with the reason, nothing
     # created; --report naming -o's own file is a usage error.
     pliant_cli_expect(cli_refine_output_checked_first 1 STDERR
