@@ -297,6 +297,7 @@ core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
     { return options.secure != nullptr ? options.secure->totals().refused : std::uint64_t{0}; };
     std::uint64_t last_refused = 0;
     double next_row = 1.0;
+    double next_wait_note = 5.0;  // a joiner's note while its model is still arriving
     RunSummary summary;
     PaceWatch pace;
     double last_row_t = 0.0;
@@ -378,6 +379,13 @@ core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
             break;
         }
         session.poll();
+        if (summary.model_s < 0.0 && !session.ready() && now >= next_wait_note)
+        {
+            // A large model (level 10: ~100 MB with its state) takes a while: say it is coming.
+            spdlog::info("waiting for the model and state: {:.1f} MB received in {:.0f} s",
+                         static_cast<double>(session.stats().bytes_received) / 1e6, now);
+            next_wait_note += 5.0;
+        }
         if (summary.model_s < 0.0 && session.ready())
         {
             summary.model_s = now;
