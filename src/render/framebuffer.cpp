@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cstdio>
 #include <string>
 #include <utility>
 
@@ -71,9 +72,21 @@ core::Result<Framebuffer> Framebuffer::create(int width, int height, PixelFormat
     }
     gl::glBindFramebuffer(GL_FRAMEBUFFER, 0);
     if (!complete)
-        return core::fail(core::ErrorCode::GraphicsError,
-                          "Framebuffer: " + std::to_string(width) + "x" + std::to_string(height) +
-                              " with " + std::to_string(fb.samples_) + " samples is incomplete");
+    {
+        // The usual reason on a software renderer is memory: say how much it asked for. Colour
+        // (up to 16 bytes a pixel for RGBA32F) and depth (4) per sample, and the resolve target.
+        const double bytes = static_cast<double>(width) * static_cast<double>(height) *
+                             ((format == PixelFormat::Rgba8 ? 4.0 : 16.0) *
+                                  (fb.samples_ + (fb.samples_ > 1 ? 1 : 0)) +
+                              4.0 * fb.samples_);
+        char need[32];
+        std::snprintf(need, sizeof(need), "%.2g GB", bytes / 1e9);
+        return core::fail(
+            core::ErrorCode::GraphicsError,
+            "Framebuffer: " + std::to_string(width) + "x" + std::to_string(height) + " with " +
+                std::to_string(fb.samples_) + " samples is incomplete (it needs about " + need +
+                " of memory: out of memory? a smaller size or fewer samples may fit)");
+    }
     return fb;
 }
 

@@ -561,6 +561,7 @@ struct Session::Impl
     std::vector<PartitionEntry> partitions;
     std::vector<ForceEntry> my_forces;
     std::vector<ForceEntry> pending_forces;  // apply_tick = the earliest tick asked for
+    std::size_t warned_idle_members = 0;     // members count last warned of leaves too few
     bool recording = false;
     std::vector<ForceRecord> force_log;  // every force list seen, when recording
     std::vector<net::Target> my_points;
@@ -1127,6 +1128,26 @@ struct Session::Impl
         msg.epoch = epoch;
         msg.leaf_depth = static_cast<std::uint8_t>(s.graph_->depth());
         msg.owners = std::move(owners);
+        // Members the partition leaves without a leaf simulate nothing: a grid with fewer leaves
+        // than members (level 1 has 2: with 3 participants two of the four members owned
+        // nothing, without a word). Said once per member count, not per epoch.
+        std::size_t seated = 1;  // the master
+        for (const auto& [id, p] : peers)
+            if (p.ready && !p.leaving && !p.departed && p.info.role == net::Role::Participant)
+                ++seated;
+        std::vector<net::PeerId> holders(msg.owners.begin(), msg.owners.end());
+        std::sort(holders.begin(), holders.end());
+        const auto holding =
+            static_cast<std::size_t>(std::unique(holders.begin(), holders.end()) - holders.begin());
+        if (holding < seated && seated != warned_idle_members)
+        {
+            warned_idle_members = seated;
+            spdlog::warn(
+                "session: the grid's {} leaves (level {}) are shared by {} of the {} "
+                "members; the others simulate nothing (a finer level gives every member "
+                "a share)",
+                msg.owners.size(), s.model_->grid().level(), holding, seated);
+        }
         send_all(make(msg, apply));
         spdlog::debug("session: master partition epoch {} from tick {}", epoch, apply);
     }
