@@ -166,8 +166,9 @@ void ProgressBar::update(std::string_view phase, double fraction) noexcept
     const double elapsed = std::chrono::duration<double>(now - phase_start_).count();
     if (tty_)
     {
-        // redraw at most 20 times a second, and always at the end
-        if (percent == last_step_ ||
+        // redraw at most 20 times a second, always at the end, and at least every second so
+        // that the elapsed time moves while the percentage does not
+        if ((percent == last_step_ && now - last_draw_ < std::chrono::seconds(1)) ||
             (percent < 100 && now - last_draw_ < std::chrono::milliseconds(50)))
             return;
         constexpr int k_width = 30;

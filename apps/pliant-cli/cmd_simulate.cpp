@@ -231,6 +231,44 @@ void warn_if_frames_outgrow_the_disk(const SimulateOptions& opt, int frames)
         gb(static_cast<double>(space.available)));
 }
 
+// The bar while a frame is computed: advance_to polls stop_requested() before every step,
+// which here also moves the bar by the simulated time within the frame (at most 10 times a
+// second), so that a frame of many steps (a small step at a high level) shows progress.
+class InFrameProgress final : public core::ProgressSink
+{
+public:
+    InFrameProgress(ProgressBar& bar, const sim::MembraneState& state, double t_start, double t_end,
+                    int frame, int frames)
+        : bar_(bar), state_(state), t_start_(t_start), t_end_(t_end), frame_(frame), frames_(frames)
+    {
+    }
+    void update(std::string_view phase, double fraction) noexcept override
+    {
+        bar_.update(phase, fraction);
+    }
+    [[nodiscard]] bool stop_requested() const noexcept override
+    {
+        const auto now = std::chrono::steady_clock::now();
+        if (frames_ > 0 && t_end_ > t_start_ && now - last_ >= std::chrono::milliseconds(100))
+        {
+            last_ = now;
+            const double within =
+                std::clamp((state_.time - t_start_) / (t_end_ - t_start_), 0.0, 1.0);
+            bar_.update("simulate", (frame_ - 1 + within) / frames_);
+        }
+        return bar_.stop_requested();
+    }
+
+private:
+    ProgressBar& bar_;
+    const sim::MembraneState& state_;
+    double t_start_;
+    double t_end_;
+    int frame_;
+    int frames_;
+    mutable std::chrono::steady_clock::time_point last_{};
+};
+
 core::Result<void> write_frame(const SimulateOptions& opt, const sim::MembraneModel& model,
                                const sim::MembraneState& state, int frame)
 {
@@ -578,11 +616,12 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
         sim::AdvanceReport rep;
         // Advances to t_next with the forces of [state.time, t_next), adding to the frame's
         // report.
+        const InFrameProgress in_frame(bar, state, state.time, t_frame, frame, frames);
         const auto advance = [&](double t_next)
         {
             active_forces(sc, state.time, t_next, centre, forces);
             const sim::AdvanceReport r =
-                sim::advance_to(*model, state, ws, t_next, forces, {}, 10'000'000, &bar);
+                sim::advance_to(*model, state, ws, t_next, forces, {}, 10'000'000, &in_frame);
             rep.status = rep.status | r.status;
             rep.steps += r.steps;
             rep.rejections += r.rejections;

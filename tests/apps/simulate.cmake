@@ -47,6 +47,15 @@ if(TARGET pliant)
         FIXTURES_SETUP simulate_interrupted
         ARGS simulate --scenario ${PROJECT_SOURCE_DIR}/scenes/pull.toml -o ${_int_out} --level 8
              -j 1)
+    # Progress within a frame: a log line of 10 % comes before the only frame is written.
+    set(_long ${CMAKE_CURRENT_BINARY_DIR}/simulate-one-long-frame)
+    pliant_add_interrupt_test(cli_simulate_progress_within_a_frame
+        LOG "simulate: [1-9]0% "
+        FRESH_DIR ${_long}
+        STDERR_REGEX "simulate: [1-9]0% .*one_long_frame.toml: interrupted at t = [0-9.]+ s. frames 0 to 0 of 0 to 1 are in"
+        TIMEOUT 200
+        ARGS simulate --scenario ${PROJECT_SOURCE_DIR}/tests/data/scenarios/one_long_frame.toml
+             -o ${_long} --level 6 -j 1)
     # A run whose frames would outgrow the disk (a million level-7 frames, about 1.3 TB) is
     # warned about after frame 0, with the sizes; Ctrl-C then ends it.
     set(_many ${CMAKE_CURRENT_BINARY_DIR}/simulate-many-frames)
