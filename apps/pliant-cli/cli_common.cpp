@@ -46,7 +46,8 @@ int report(const core::Error& error)
     switch (error.code)
     {
     case core::ErrorCode::NotConverged:
-    case core::ErrorCode::NetworkError: return k_exit_failure;
+    case core::ErrorCode::NetworkError:
+    case core::ErrorCode::GraphicsError: return k_exit_failure;  // the machine, not the input
     case core::ErrorCode::Cancelled: return k_exit_interrupted;
     default: return k_exit_bad_input;
     }
