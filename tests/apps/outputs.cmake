@@ -51,7 +51,7 @@ if(TARGET pliant)
     if(NOT PLIANT_SANITIZE)
         add_test(NAME cli_out_of_memory_is_an_error
                  COMMAND ${CMAKE_COMMAND}
-                         "-DCOMMAND=sh;${CMAKE_CURRENT_SOURCE_DIR}/memory_limit.sh;307200;$<TARGET_FILE:pliant>;refine;${out_dir}/spot3.pgrid;--levels;7;-o;${out_dir}/oom.pgrid"
+                         "-DCOMMAND=sh;${CMAKE_CURRENT_SOURCE_DIR}/memory_limit.sh;307200;$<TARGET_FILE:pliant>;refine;${out_dir}/spot3.pgrid;--levels;7;-j;1;-o;${out_dir}/oom.pgrid"
                          -DEXIT=3 "-DSTDERR_REGEX=error: out of memory: .*\\[out-of-memory\\]"
                          -DABSENT=${out_dir}/oom.pgrid
                          -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
