@@ -68,7 +68,7 @@ int report_out_of_memory()
     // Logged without formatting into new strings where it can be helped: memory is short.
     spdlog::error(
         "out of memory: the command needed more than the system gives this process "
-        "(free memory, `ulimit -v`, a container's limit); a lower --level or fewer "
+        "(free memory, `ulimit -v`, a container's limit); a lower level or fewer "
         "threads need less [out-of-memory]");
     return k_exit_failure;
 }
@@ -169,7 +169,8 @@ void ProgressBar::update(std::string_view phase, double fraction) noexcept
     {
         // redraw at most 20 times a second, always at the end, and at least every second so
         // that the elapsed time moves while the percentage does not
-        if ((percent == last_step_ && now - last_draw_ < std::chrono::seconds(1)) ||
+        if ((percent == last_step_ &&
+             (percent >= 100 || now - last_draw_ < std::chrono::seconds(1))) ||
             (percent < 100 && now - last_draw_ < std::chrono::milliseconds(50)))
             return;
         constexpr int k_width = 30;
@@ -412,14 +413,19 @@ std::string refused_summary(net::Transport& transport, std::uint64_t auth_refuse
     if (auto* secure = dynamic_cast<net::SecureTransport*>(&transport))
         wire = &secure->inner();
     const std::optional<net::EnetCounters> enet = net::enet_counters(*wire);
-    const std::uint64_t full = enet ? enet->refused_full + enet->refused_per_source : 0;
-    std::string text = std::to_string(auth_refused + full) + " connections refused";
-    if (auth_refused > 0 && full > 0)
-        text += " (" + std::to_string(auth_refused) + " without the secret, " +
-                std::to_string(full) + " session full)";
-    else if (full > 0)
-        text += " (session full)";
-    return text;
+    const std::uint64_t full = enet ? enet->refused_full : 0;
+    const std::uint64_t per_source = enet ? enet->refused_per_source : 0;
+    std::string kinds;
+    const auto kind = [&kinds](std::uint64_t n, const char* what)
+    {
+        if (n > 0)
+            kinds += (kinds.empty() ? "" : ", ") + std::to_string(n) + " " + what;
+    };
+    kind(auth_refused, "without the secret");
+    kind(full, "session full");
+    kind(per_source, "too many from one address");
+    return std::to_string(auth_refused + full + per_source) + " connections refused" +
+           (kinds.empty() ? std::string() : " (" + kinds + ")");
 }
 
 }  // namespace pliant::cli

@@ -157,7 +157,7 @@ core::Result<std::unique_ptr<net::Transport>> secure_or_plain(std::unique_ptr<ne
 /// "N connections refused" for the last line of `host` and `join`, N = the encryption layer's
 /// refusals (`auth_refused`) plus the connections ENet closed at once for want of room (the
 /// session full, or too many from one address), each kind named when there are any:
-/// "3 connections refused (2 without the secret, 1 session full)".
+/// "3 connections refused (2 without the secret, 1 session full)"; "0 connections refused".
 [[nodiscard]] std::string refused_summary(net::Transport& transport, std::uint64_t auth_refused);
 
 /// A progress bar on stderr: redrawn in place on a terminal, a line per 10 % otherwise, nothing

@@ -392,9 +392,9 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
                  mesh_path.filename().string(), mesh->vertex_count(), mesh->face_count());
     ProgressBar progress(global);
     // Ctrl-C or SIGTERM: the remeshing stops and nothing is written; the session stops at its
-    // next step, ending at the last whole frame (with --view: the viewer closes as its window does,
-    // and the session with it) and the run ends as usual with what ran (final state, recording and
-    // its replay check, summary), exit 130.
+    // next step (with --view: the viewer closes as its window does, and the session with it) and
+    // the run ends as usual with what ran (the frames up to the last whole one; the final state,
+    // recording and its replay check and the summary at the step reached), exit 130.
     const volatile std::sig_atomic_t* interrupt =
         live ? live_link->interrupt : install_interrupt_flag();
     const auto interrupted = [interrupt] { return interrupt != nullptr && *interrupt != 0; };
@@ -405,6 +405,29 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
     if (!remeshed)
         return report(remeshed.error());
     const core::TetraGrid& grid = remeshed->grid;
+    // 2. The material and a common fixed step the explicit integrator is stable at.
+    sim::MembraneSettings material;
+    material.T = 2.0;
+    material.rho = 1.0;
+    material.beta = 1.5;
+    material.k_f = 6.0;
+    material.fixed_step = true;
+    auto probe = sim::MembraneModel::create(grid, remeshed->positions, material);
+    if (!probe)
+        return report(probe.error());
+    const double stable = sim::stable_fixed_step(*probe);
+    // A step far below the bound gains nothing and could not keep up: a thousandth of it is
+    // already 1,000 times the steps a stable run needs (and 1e-300 overflowed the steps per
+    // frame below). Checked before an earlier run's outputs go (below), as a refused mesh is.
+    if (opt.dt > 0.0 && opt.dt < 1e-3 * stable)
+    {
+        spdlog::error(
+            "demo: --dt {:.3g} s is below a thousandth of the stability bound {:.3g} s "
+            "({:.3g} steps per second of session time); give at least {:.3g} s, or "
+            "leave --dt out (0.9 x the bound)",
+            opt.dt, stable, 1.0 / opt.dt, 1e-3 * stable);
+        return k_exit_usage;
+    }
     // The run starts: every output of an earlier run goes (a failed start above leaves them),
     // so that the folder never mixes two runs, even when this one fails part-way.
     for (const auto& entry : fs::directory_iterator(opt.out, ec))
@@ -424,29 +447,6 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
         !written)
         return report(written.error());
 
-    // 2. The material and a common fixed step the explicit integrator is stable at.
-    sim::MembraneSettings material;
-    material.T = 2.0;
-    material.rho = 1.0;
-    material.beta = 1.5;
-    material.k_f = 6.0;
-    material.fixed_step = true;
-    auto probe = sim::MembraneModel::create(grid, remeshed->positions, material);
-    if (!probe)
-        return report(probe.error());
-    const double stable = sim::stable_fixed_step(*probe);
-    // A step far below the bound gains nothing and could not keep up: a thousandth of it is
-    // already 1,000 times the steps a stable run needs (and 1e-300 overflowed the steps per
-    // frame below).
-    if (opt.dt > 0.0 && opt.dt < 1e-3 * stable)
-    {
-        spdlog::error(
-            "demo: --dt {:.3g} s is below a thousandth of the stability bound {:.3g} s "
-            "({:.3g} steps per second of session time); give at least {:.3g} s, or "
-            "leave --dt out (0.9 x the bound)",
-            opt.dt, stable, 1.0 / opt.dt, 1e-3 * stable);
-        return k_exit_usage;
-    }
     const double want = opt.dt > 0.0 ? opt.dt : 0.9 * stable;
     // A whole number of ticks per frame, so every frame shows a tick boundary.
     const auto ticks_per_frame =
@@ -585,6 +585,7 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
     const auto t_clock = Clock::now();
     for (int frame = 1; live ? !live_link->stop.load() : frame <= frames && !interrupted(); ++frame)
     {
+        bool cut_short = false;  // Ctrl-C stopped the stepping within this frame
         for (int sub = 1; sub <= substeps; ++sub)
         {
             const double now = (frame - 1 + static_cast<double>(sub) / substeps) / opt.fps;
@@ -621,8 +622,11 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
             // Ctrl-C is heard between steps too: an interval can hold many of them.
             while (!members_at(target) && !out_of_time() && !interrupted())
                 pump(now);
-            if (interrupted())
+            if (!members_at(target) && interrupted())
+            {
+                cut_short = true;  // the interval was not reached
                 break;
+            }
             pump(now);  // one more pass streams the states of this interval
             if (live && out_of_time())
                 break;  // the viewer's window closed
@@ -645,8 +649,8 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
                 grab_received_at = now;
             reached = now;
         }
-        if ((live && live_link->stop.load()) || (!live && interrupted()))
-            break;  // the frame was not reached: the outputs end at the frame before
+        if ((live && live_link->stop.load()) || cut_short)
+            break;  // the frame was not reached: the frames end at the one before
         ++frames_run;
         const bool from_viewer = peers[3].session && peers[3].session->ready();
         const session::Session& shown = *peers[from_viewer ? 3 : 0].session;
@@ -964,8 +968,8 @@ void add_demo_command(CLI::App& app, const GlobalOptions& global)
         "grabs repeat every --duration seconds, and closing the window ends the session (the\n"
         "summary and session.prec are still written; `pliant replay` checks the recording).\n"
         "Ctrl-C stops at the next step (with --view: closes the viewer as its window does)\n"
-        "and the run ends with what ran up to the last whole frame (every output, the replay\n"
-        "check), exit status 130.\n\n"
+        "and the run ends with what ran: the frames up to the last whole one, the final\n"
+        "state, the recording and its replay check at the step reached; exit status 130.\n\n"
         "Examples:\n"
         "  pliant demo                      # the bundled cow, level 6, 3 s at 12 fps\n"
         "  pliant demo --view               # watch it live in a window\n"

@@ -230,8 +230,11 @@ core::Result<TriMesh> convert(const aiScene& scene, const std::string& name, Imp
                                     name + ": non-finite coordinate " + fmt_point(p) +
                                         " at corner " + std::to_string(k) + " of face " +
                                         std::to_string(polygon) +
-                                        " (positions are read as 32-bit floats: a coordinate "
-                                        "beyond +-3.4e38 becomes infinite)");
+                                        (std::isinf(p.x) || std::isinf(p.y) || std::isinf(p.z)
+                                             ? " (positions are read as 32-bit floats: a "
+                                               "coordinate beyond +-3.4e38 in the file becomes "
+                                               "infinite)"
+                                             : ""));
                     ++referenced_reader_vertices;
                     const auto [it, inserted] = index_of.try_emplace(
                         key_of(p), static_cast<std::uint32_t>(out.positions.size()));

@@ -433,6 +433,10 @@ core::Result<void> validate(const TriMesh& mesh, std::string_view source_name)
                   ", size " + fmt_number(s.bbox_diagonal) +
                   ") and positions are read as 32-bit floats, which merge nearby vertices "
                   "there: move it near the origin"
+        : reach == 0.0
+            ? "; every vertex is at (0, 0, 0) as read: positions are read as 32-bit floats, and "
+              "coordinates below about 1e-45 in the file become 0 (a mesh that small: scale it "
+              "up)"
         : reach < k_float_resolved
             ? "; the mesh is tiny (coordinates up to " + fmt_number(reach) +
                   ") and positions are read as 32-bit floats, which resolve nothing below about "
@@ -446,7 +450,7 @@ core::Result<void> validate(const TriMesh& mesh, std::string_view source_name)
             src + ": degenerate face " + str(ex.degenerate_face) + " (vertices " + str(f[0]) +
                 ", " + str(f[1]) + ", " + str(f[2]) + " at " + point(mesh, f[0]) + "): " +
                 (ex.degenerate_repeated ? std::string("a repeated vertex")
-                 : ex.degenerate_height_ratio > 0.0
+                 : ex.degenerate_height_ratio > 1e-12  // below: flat up to rounding
                      ? "almost no area: its height is " + fmt_number(ex.degenerate_height_ratio) +
                            " of its longest edge, below the " + fmt_number(k_degenerate_ratio) +
                            " a face needs"

@@ -298,6 +298,7 @@ core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
     std::uint64_t last_refused = 0;
     double next_row = 1.0;
     double next_wait_note = 5.0;  // a joiner's note while its model is still arriving
+    bool warned_grabs = false;    // more grabs at once than one Force message holds
     RunSummary summary;
     PaceWatch pace;
     double last_row_t = 0.0;
@@ -384,7 +385,7 @@ core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
             // A large model (level 10: ~100 MB with its state) takes a while: say it is coming.
             spdlog::info("waiting for the model and state: {:.1f} MB received in {:.0f} s",
                          static_cast<double>(session.stats().bytes_received) / 1e6, now);
-            next_wait_note += 5.0;
+            next_wait_note = now + 5.0;
         }
         if (summary.model_s < 0.0 && session.ready())
         {
@@ -424,9 +425,12 @@ core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
                 list.push_back(grabs[k].force);
                 list.back().grab_id = static_cast<std::uint16_t>(k);
             }
-            if (grabs.size() > net::k_max_points)
+            if (grabs.size() > net::k_max_points && !warned_grabs)
+            {
+                warned_grabs = true;  // once: the list changes at every grab's start and end
                 spdlog::warn("script: {} grabs at once; the first {} act (one Force message)",
                              grabs.size(), net::k_max_points);
+            }
             if (auto ok = session.set_forces(std::move(list)); !ok)
                 spdlog::warn("script: {}", ok.error().message);
         }

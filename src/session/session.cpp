@@ -4228,14 +4228,13 @@ core::Result<void> Session::set_forces(std::vector<net::UserForce> forces, std::
     const std::int64_t faces = model_ != nullptr
                                    ? static_cast<std::int64_t>(model_->grid().face_count())
                                    : std::numeric_limits<std::int64_t>::max();
+    std::array<sim::Force, net::k_max_points> checked{};
     for (std::size_t k = 0; k < forces.size(); ++k)
-    {
-        const sim::Force f = to_sim_force(forces[k]);
-        if (auto ok = sim::validate_forces(faces, std::span(&f, 1)); !ok)
-            return core::fail(core::ErrorCode::InvalidArgument,
-                              "set_forces: force " + std::to_string(k) + ": " +
-                                  ok.error().message.substr(ok.error().message.find(": ") + 2));
-    }
+        checked[k] = to_sim_force(forces[k]);
+    if (auto ok = sim::validate_forces(faces, std::span(checked.data(), forces.size())); !ok)
+        return core::fail(core::ErrorCode::InvalidArgument,
+                          "set_forces: " + ok.error().message);  // "force K: the rule"
+
     impl_->pending_forces.push_back(ForceEntry{from_tick, std::move(forces)});
     return {};
 }
