@@ -4234,7 +4234,6 @@ core::Result<void> Session::set_forces(std::vector<net::UserForce> forces, std::
     if (auto ok = sim::validate_forces(faces, std::span(checked.data(), forces.size())); !ok)
         return core::fail(core::ErrorCode::InvalidArgument,
                           "set_forces: " + ok.error().message);  // "force K: the rule"
-
     impl_->pending_forces.push_back(ForceEntry{from_tick, std::move(forces)});
     return {};
 }
