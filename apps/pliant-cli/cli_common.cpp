@@ -8,6 +8,7 @@
 #include <pliant/net/secure_transport.h>
 #include <pliant/net/transport.h>
 
+#include <signal.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 #include <sys/stat.h>
@@ -199,18 +200,28 @@ namespace
 {
 volatile std::sig_atomic_t g_interrupted = 0;
 
-extern "C" void on_interrupt(int signal_number)
+extern "C" void on_interrupt(int /*signal_number*/)
 {
     g_interrupted = 1;
-    std::signal(signal_number, SIG_DFL);  // a second Ctrl-C ends the process at once
 }
 }  // namespace
 
 const volatile std::sig_atomic_t* install_interrupt_flag()
 {
     g_interrupted = 0;
-    std::signal(SIGINT, on_interrupt);
-    std::signal(SIGTERM, on_interrupt);
+    // sigaction, not std::signal: glibc's std::signal restarts an interrupted system call, so
+    // a command waiting in open() for a FIFO's reader (or in write() on a full pipe) went on
+    // waiting after the first Ctrl-C. Without SA_RESTART the wait ends with EINTR and the
+    // command stops (core::write_files says "interrupted"); ENet's and the transport's waits
+    // return early and are called again. SA_RESETHAND: a second Ctrl-C ends the process at once.
+    struct sigaction action
+    {
+    };
+    action.sa_handler = on_interrupt;
+    sigemptyset(&action.sa_mask);
+    action.sa_flags = SA_RESETHAND;
+    ::sigaction(SIGINT, &action, nullptr);
+    ::sigaction(SIGTERM, &action, nullptr);
     return &g_interrupted;
 }
 

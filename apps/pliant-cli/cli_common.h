@@ -49,7 +49,8 @@ void configure_logging(const GlobalOptions& options);
 /// Makes SIGINT (Ctrl-C) and SIGTERM set the returned flag instead of killing the process, so a
 /// long-running command can wind down cleanly: a participant hands its leaves over, the master
 /// ends the session for everyone, `simulate` keeps the frames written and says so in run.json,
-/// `remesh` stops and writes nothing. A second signal kills as usual.
+/// `remesh` stops and writes nothing. A second signal kills as usual. System calls the signal
+/// interrupts are not restarted: a wait on a FIFO's reader ends (EINTR) rather than going on.
 const volatile std::sig_atomic_t* install_interrupt_flag();
 
 /// Logs an error and returns its exit code.

@@ -910,7 +910,16 @@ int run_demo_with_viewer(const DemoOptions& opt, const GlobalOptions& global)
     std::thread session_thread(
         [&]
         {
-            demo_rc = run_demo(opt, global, &link);
+            // Out of memory here would end the process (an exception leaving a thread): it
+            // ends the session instead, and the demo says so once the window is closed.
+            try
+            {
+                demo_rc = run_demo(opt, global, &link);
+            }
+            catch (const std::bad_alloc&)
+            {
+                demo_rc = report_out_of_memory();
+            }
             link.announce(0);  // no-op when the session was announced
         });
     const std::uint16_t master = port.get();
@@ -929,7 +938,16 @@ int run_demo_with_viewer(const DemoOptions& opt, const GlobalOptions& global)
         v.name = "viewer";
         v.owner_colors = true;
         v.stop = link.interrupt;
-        view_rc = viewer::run_viewer(v);
+        // Out of memory in the viewer ends it as a failure would (the session thread is
+        // stopped and joined below; leaving here with it running would end the process).
+        try
+        {
+            view_rc = viewer::run_viewer(v);
+        }
+        catch (const std::bad_alloc&)
+        {
+            view_rc = report_out_of_memory();
+        }
         // A viewer that failed leaves no outputs; one closed by Ctrl-C ends the run as its
         // window's close does, with every output, and the demo exits 130.
         if (view_rc != 0 && view_rc != k_exit_interrupted)

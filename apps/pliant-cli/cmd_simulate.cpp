@@ -546,194 +546,221 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
     if (const std::optional<int> err = csv_flush())
         return failed_to_start(csv_error(*err));
 
-    sim::MembraneState state = resumed ? std::move(*resumed) : sim::MembraneState::at_rest(grid);
-    sim::Rkf45Workspace ws(*model, sc.settings.threads);
-    const int frames = sc.frames;
-    const bool fixed = sc.settings.fixed_step;
-    const double h = sc.settings.fixed_dt;
-    ProgressBar bar(global);
-    // Ctrl-C or SIGTERM: stop before the next step, keeping every frame written (the frame
-    // being computed is dropped; at high levels with small steps a frame can take seconds).
-    const volatile std::sig_atomic_t* interrupted = install_interrupt_flag();
-    bar.stop_on(interrupted);
-    std::vector<sim::Force> forces;
     std::uint64_t total_steps = 0;
     std::uint64_t total_rejections = 0;
     std::uint64_t total_at_min = 0;
     const auto start = std::chrono::steady_clock::now();
     const auto seconds_since_start = [&]
     { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
-    // A diverged run stops with the frames written so far (energy.csv keeps their rows).
-    const auto diverged = [&](const std::string& what, int frame)
+    // The frames written (0 to last_written) and the time of the last, for run.json when the
+    // run ends early.
+    int last_written = -1;
+    double t_written = resumed ? resumed->time : 0.0;
+    // Running out of memory (the workspace, a frame's bytes) ends the run: run.json says
+    // "failed" with the frames written, not "running", before command_callback reports it.
+    try
     {
-        record.end("diverged", frame + 1, state.time, seconds_since_start(),
-                   {total_steps, total_rejections, total_at_min});
-        record.set_reason(what);
-        if (auto ok = record.write(); !ok)
-            spdlog::warn("{}", ok.error().message);
-        spdlog::error(
-            "{}: {} at t = {} s: the run diverged and stops (frames 0 to {} are in {}); "
-            "lower {} or the forces",
-            opt.scenario.string(), what, fmt_number(state.time), frame, opt.out.string(),
-            fixed ? "fixed_dt" : "dt_min and dt_max");
-        return k_exit_failure;
-    };
-    // Stopped by Ctrl-C with frames 0 to `last` written (the last at t_written).
-    double t_written = state.time;
-    const auto stopped = [&](int last)
-    {
-        record.end("interrupted", last + 1, t_written, seconds_since_start(),
-                   {total_steps, total_rejections, total_at_min});
-        if (auto ok = record.write(); !ok)
-            spdlog::warn("{}", ok.error().message);
-        if (last < 0)
+        sim::MembraneState state =
+            resumed ? std::move(*resumed) : sim::MembraneState::at_rest(grid);
+        sim::Rkf45Workspace ws(*model, sc.settings.threads);
+        const int frames = sc.frames;
+        const bool fixed = sc.settings.fixed_step;
+        const double h = sc.settings.fixed_dt;
+        ProgressBar bar(global);
+        // Ctrl-C or SIGTERM: stop before the next step, keeping every frame written (the frame
+        // being computed is dropped; at high levels with small steps a frame can take seconds).
+        const volatile std::sig_atomic_t* interrupted = install_interrupt_flag();
+        bar.stop_on(interrupted);
+        std::vector<sim::Force> forces;
+        // A diverged run stops with the frames written so far (energy.csv keeps their rows).
+        const auto diverged = [&](const std::string& what, int frame)
+        {
+            record.end("diverged", frame + 1, state.time, seconds_since_start(),
+                       {total_steps, total_rejections, total_at_min});
+            record.set_reason(what);
+            if (auto ok = record.write(); !ok)
+                spdlog::warn("{}", ok.error().message);
             spdlog::error(
-                "{}: interrupted at t = {} s, before frame 0 was written; {} holds no "
-                "frame of this run",
-                opt.scenario.string(), fmt_number(t_written), opt.out.string());
-        else
-            spdlog::error("{}: interrupted at t = {} s; frames 0 to {} of 0 to {} are in {}",
-                          opt.scenario.string(), fmt_number(t_written), last, frames,
-                          opt.out.string());
-        return k_exit_interrupted;
-    };
-    // An output that cannot be written (a frame, energy.csv) with frames 0 to `last` written:
-    // run.json says "failed" and why before the error is reported.
-    const auto failed = [&](const core::Error& error, int last)
-    {
-        record.end("failed", last + 1, t_written, seconds_since_start(),
-                   {total_steps, total_rejections, total_at_min});
-        record.set_reason(error.message);
-        if (auto ok = record.write(); !ok)
-            spdlog::warn("{}", ok.error().message);
-        return report(error);
-    };
-    for (int frame = 0; frame <= frames; ++frame)
-    {
-        // The last frame at the duration, after a shorter interval when the duration is not a
-        // whole number of frame intervals.
-        const double t_frame = frame_time(sc, frame);
-        sim::AdvanceReport rep;
-        // Advances to t_next with the forces of [state.time, t_next), adding to the frame's
-        // report.
-        const InFrameProgress in_frame(bar, state, state.time, t_frame, frame, frames);
-        const auto advance = [&](double t_next)
-        {
-            active_forces(sc, state.time, t_next, centre, forces);
-            const sim::AdvanceReport r =
-                sim::advance_to(*model, state, ws, t_next, forces, {}, 10'000'000, &in_frame);
-            rep.status = rep.status | r.status;
-            rep.steps += r.steps;
-            rep.rejections += r.rejections;
-            rep.at_min_steps += r.at_min_steps;
-            return r;
+                "{}: {} at t = {} s: the run diverged and stops (frames 0 to {} are in {}); "
+                "lower {} or the forces",
+                opt.scenario.string(), what, fmt_number(state.time), frame, opt.out.string(),
+                fixed ? "fixed_dt" : "dt_min and dt_max");
+            return k_exit_failure;
         };
-        if (fixed)
+        // Stopped by Ctrl-C with frames 0 to `last` written (the last at t_written).
+        const auto stopped = [&](int last)
         {
-            // Whole steps only: the frame is written at the last step boundary at or before its
-            // time and the remainder waits for the next frame (docs/physics.md §7). A force's
-            // start or end inside the frame splits it at the first boundary at or after it (at
-            // it, when it lies on one).
-            for (;;)
+            record.end("interrupted", last + 1, t_written, seconds_since_start(),
+                       {total_steps, total_rejections, total_at_min});
+            if (auto ok = record.write(); !ok)
+                spdlog::warn("{}", ok.error().message);
+            if (last < 0)
+                spdlog::error(
+                    "{}: interrupted at t = {} s, before frame 0 was written; {} holds no "
+                    "frame of this run",
+                    opt.scenario.string(), fmt_number(t_written), opt.out.string());
+            else
+                spdlog::error("{}: interrupted at t = {} s; frames 0 to {} of 0 to {} are in {}",
+                              opt.scenario.string(), fmt_number(t_written), last, frames,
+                              opt.out.string());
+            return k_exit_interrupted;
+        };
+        // An output that cannot be written (a frame, energy.csv) with frames 0 to `last` written:
+        // run.json says "failed" and why before the error is reported.
+        const auto failed = [&](const core::Error& error, int last)
+        {
+            record.end("failed", last + 1, t_written, seconds_since_start(),
+                       {total_steps, total_rejections, total_at_min});
+            record.set_reason(error.message);
+            if (auto ok = record.write(); !ok)
+                spdlog::warn("{}", ok.error().message);
+            return report(error);
+        };
+        for (int frame = 0; frame <= frames; ++frame)
+        {
+            // The last frame at the duration, after a shorter interval when the duration is not a
+            // whole number of frame intervals.
+            const double t_frame = frame_time(sc, frame);
+            sim::AdvanceReport rep;
+            // Advances to t_next with the forces of [state.time, t_next), adding to the frame's
+            // report.
+            const InFrameProgress in_frame(bar, state, state.time, t_frame, frame, frames);
+            const auto advance = [&](double t_next)
             {
-                const double t = state.time;
-                // Rounding slack: of the times, but below a step (a step of 1e-15 s with an
-                // absolute 1e-12 s took a thousand steps into frame 0, the rest state).
-                const double slack = std::min(1e-12 * std::max(1.0, std::fabs(t_frame)), 1e-3 * h);
-                double n = std::floor((t_frame - t + slack) / h);
-                if (!(n >= 1.0))
-                    break;
-                double t_next = t_frame;
-                for (const TimedForce& f : sc.forces)
-                    for (const double e : {f.start, f.end})
-                        if (e > t + slack)
-                            if (const double n_e = std::max(1.0, std::ceil((e - t - slack) / h));
-                                n_e < n)
-                            {
-                                n = n_e;
+                active_forces(sc, state.time, t_next, centre, forces);
+                const sim::AdvanceReport r =
+                    sim::advance_to(*model, state, ws, t_next, forces, {}, 10'000'000, &in_frame);
+                rep.status = rep.status | r.status;
+                rep.steps += r.steps;
+                rep.rejections += r.rejections;
+                rep.at_min_steps += r.at_min_steps;
+                return r;
+            };
+            if (fixed)
+            {
+                // Whole steps only: the frame is written at the last step boundary at or before its
+                // time and the remainder waits for the next frame (docs/physics.md §7). A force's
+                // start or end inside the frame splits it at the first boundary at or after it (at
+                // it, when it lies on one).
+                for (;;)
+                {
+                    const double t = state.time;
+                    // Rounding slack: of the times, but below a step (a step of 1e-15 s with an
+                    // absolute 1e-12 s took a thousand steps into frame 0, the rest state).
+                    const double slack =
+                        std::min(1e-12 * std::max(1.0, std::fabs(t_frame)), 1e-3 * h);
+                    double n = std::floor((t_frame - t + slack) / h);
+                    if (!(n >= 1.0))
+                        break;
+                    double t_next = t_frame;
+                    for (const TimedForce& f : sc.forces)
+                        for (const double e : {f.start, f.end})
+                            if (e > t + slack)
+                                if (const double n_e =
+                                        std::max(1.0, std::ceil((e - t - slack) / h));
+                                    n_e < n)
+                                {
+                                    n = n_e;
+                                    t_next = e;
+                                }
+                    if (const double boundary = t + n * h; std::fabs(boundary - t_next) > slack)
+                        t_next = boundary;
+                    const sim::AdvanceReport r = advance(t_next);
+                    if (sim::has_flag(r.status, sim::StepStatus::NonFinite))
+                        return diverged("the state became non-finite", frame - 1);
+                    if (r.stopped)
+                        return stopped(frame - 1);
+                    if (r.steps == 0)
+                        break;  // no whole step fitted after all (rounding): the next frame takes
+                                // it
+                }
+            }
+            else
+            {
+                // Split the interval at force start/end times so each piece has one force set.
+                while (state.time < t_frame - 1e-12 * std::max(1.0, t_frame))
+                {
+                    double t_next = t_frame;
+                    for (const TimedForce& f : sc.forces)
+                        for (const double e : {f.start, f.end})
+                            if (e > state.time + 1e-12 && e < t_next)
                                 t_next = e;
-                            }
-                if (const double boundary = t + n * h; std::fabs(boundary - t_next) > slack)
-                    t_next = boundary;
-                const sim::AdvanceReport r = advance(t_next);
-                if (sim::has_flag(r.status, sim::StepStatus::NonFinite))
-                    return diverged("the state became non-finite", frame - 1);
-                if (r.stopped)
-                    return stopped(frame - 1);
-                if (r.steps == 0)
-                    break;  // no whole step fitted after all (rounding): the next frame takes it
+                    const sim::AdvanceReport r = advance(t_next);
+                    if (sim::has_flag(r.status, sim::StepStatus::NonFinite))
+                        return diverged("the state became non-finite", frame - 1);
+                    if (r.stopped)
+                        return stopped(frame - 1);
+                    if (!r.reached)
+                        break;  // max_steps: the remainder waits for the next frame
+                }
             }
-        }
-        else
-        {
-            // Split the interval at force start/end times so each piece has one force set.
-            while (state.time < t_frame - 1e-12 * std::max(1.0, t_frame))
+            if (auto ok = write_frame(opt, *model, state, frame); !ok)
+                return failed(ok.error(), frame - 1);
+            last_written = frame;
+            if (frame == 0)
+                warn_if_frames_outgrow_the_disk(opt, frames);
+            total_steps += rep.steps;
+            total_rejections += rep.rejections;
+            total_at_min += rep.at_min_steps;
+            const sim::Energy e = sim::energy(*model, state);
+            csv << frame << ',' << state.time << ',' << e.kinetic << ',' << e.strain << ','
+                << e.foundation << ',' << e.total() << ',' << rep.steps << ',' << rep.rejections
+                << ',' << static_cast<std::uint32_t>(rep.status) << '\n';
+            if (const std::optional<int> err = csv_flush())
             {
-                double t_next = t_frame;
-                for (const TimedForce& f : sc.forces)
-                    for (const double e : {f.start, f.end})
-                        if (e > state.time + 1e-12 && e < t_next)
-                            t_next = e;
-                const sim::AdvanceReport r = advance(t_next);
-                if (sim::has_flag(r.status, sim::StepStatus::NonFinite))
-                    return diverged("the state became non-finite", frame - 1);
-                if (r.stopped)
-                    return stopped(frame - 1);
-                if (!r.reached)
-                    break;  // max_steps: the remainder waits for the next frame
+                t_written = state.time;
+                return failed(csv_error(*err), frame);
             }
-        }
-        if (auto ok = write_frame(opt, *model, state, frame); !ok)
-            return failed(ok.error(), frame - 1);
-        if (frame == 0)
-            warn_if_frames_outgrow_the_disk(opt, frames);
-        total_steps += rep.steps;
-        total_rejections += rep.rejections;
-        total_at_min += rep.at_min_steps;
-        const sim::Energy e = sim::energy(*model, state);
-        csv << frame << ',' << state.time << ',' << e.kinetic << ',' << e.strain << ','
-            << e.foundation << ',' << e.total() << ',' << rep.steps << ',' << rep.rejections << ','
-            << static_cast<std::uint32_t>(rep.status) << '\n';
-        if (const std::optional<int> err = csv_flush())
-        {
+            if (!std::isfinite(e.total()))
+                return diverged("the energy became non-finite", frame);
+            bar.update("simulate", frames > 0 ? static_cast<double>(frame) / frames : 1.0);
             t_written = state.time;
-            return failed(csv_error(*err), frame);
+            if (*interrupted != 0 && frame < frames)
+                return stopped(frame);
         }
-        if (!std::isfinite(e.total()))
-            return diverged("the energy became non-finite", frame);
-        bar.update("simulate", frames > 0 ? static_cast<double>(frame) / frames : 1.0);
-        t_written = state.time;
-        if (*interrupted != 0 && frame < frames)
-            return stopped(frame);
+        csv.close();
+        if (!csv)
+            return failed(csv_error(0), frames);
+        const double wall = seconds_since_start();
+        record.end("complete", frames + 1, state.time, wall,
+                   {total_steps, total_rejections, total_at_min});
+        if (auto ok = record.write(); !ok)
+            return report(ok.error());
+        std::printf(
+            "%d frames, %.3f s simulated in %.3f s wall (%.2fx real time), level %d, %zu "
+            "vertices, %llu steps, %llu rejections, %d thread(s), %s precision -> %s\n",
+            frames + 1, state.time, wall, wall > 0.0 ? state.time / wall : 0.0, grid.level(),
+            grid.unique_count(), static_cast<unsigned long long>(total_steps),
+            static_cast<unsigned long long>(total_rejections), ws.max_threads,
+            std::string(sim::to_string(sc.settings.precision)).c_str(), opt.out.string().c_str());
+        if (total_at_min > 0)
+            spdlog::warn(
+                "{} = {:.3g} s{}: {} of {} steps were taken at dt_min with the error above "
+                "the tolerance (flag 2 in energy.csv): the results may be inaccurate, or "
+                "diverging; {}",
+                key_at(sc, opt.scenario, "integrator.dt_min"), sc.settings.dt_min,
+                default_note(sc, "integrator.dt_min"), total_at_min, total_steps,
+                sc.settings.precision == sim::Precision::Mixed
+                    ? "with precision \"mixed\" a tight rtol makes the float rounding of the "
+                      "slopes look like error (docs/physics.md §9): use precision \"double\", or "
+                      "lower dt_min (down to 1e-12 s)"
+                    : "lower dt_min");
+        return 0;
     }
-    csv.close();
-    if (!csv)
-        return failed(csv_error(0), frames);
-    const double wall = seconds_since_start();
-    record.end("complete", frames + 1, state.time, wall,
-               {total_steps, total_rejections, total_at_min});
-    if (auto ok = record.write(); !ok)
-        return report(ok.error());
-    std::printf(
-        "%d frames, %.3f s simulated in %.3f s wall (%.2fx real time), level %d, %zu "
-        "vertices, %llu steps, %llu rejections, %d thread(s), %s precision -> %s\n",
-        frames + 1, state.time, wall, wall > 0.0 ? state.time / wall : 0.0, grid.level(),
-        grid.unique_count(), static_cast<unsigned long long>(total_steps),
-        static_cast<unsigned long long>(total_rejections), ws.max_threads,
-        std::string(sim::to_string(sc.settings.precision)).c_str(), opt.out.string().c_str());
-    if (total_at_min > 0)
-        spdlog::warn(
-            "{} = {:.3g} s{}: {} of {} steps were taken at dt_min with the error above "
-            "the tolerance (flag 2 in energy.csv): the results may be inaccurate, or "
-            "diverging; {}",
-            key_at(sc, opt.scenario, "integrator.dt_min"), sc.settings.dt_min,
-            default_note(sc, "integrator.dt_min"), total_at_min, total_steps,
-            sc.settings.precision == sim::Precision::Mixed
-                ? "with precision \"mixed\" a tight rtol makes the float rounding of the "
-                  "slopes look like error (docs/physics.md §9): use precision \"double\", or "
-                  "lower dt_min (down to 1e-12 s)"
-                : "lower dt_min");
-    return 0;
+    catch (const std::bad_alloc&)
+    {
+        try
+        {
+            record.end("failed", last_written + 1, t_written, seconds_since_start(),
+                       {total_steps, total_rejections, total_at_min});
+            record.set_reason("out of memory");
+            (void)record.write();  // memory is short: it may fail too
+        }
+        catch (const std::bad_alloc&)
+        {
+        }
+        throw;  // command_callback says "out of memory", exit 3
+    }
 }
 
 void add_simulate_command(CLI::App& app, const GlobalOptions& global)

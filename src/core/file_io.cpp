@@ -25,7 +25,9 @@ std::string reason(int err)
     return std::strerror(err);
 }
 
-/// Writes all of `bytes` to `fd`; \return 0 or the errno of the failed write.
+/// Writes all of `bytes` to `fd`; \return 0 or the errno of the failed write. EINTR (a signal
+/// whose handler does not restart calls, such as the CLI's Ctrl-C, came while a pipe nobody
+/// reads held the write) ends it: retrying would block again.
 int write_all(int fd, std::span<const std::byte> bytes)
 {
     std::size_t done = 0;
@@ -33,11 +35,7 @@ int write_all(int fd, std::span<const std::byte> bytes)
     {
         const ::ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
         if (n < 0)
-        {
-            if (errno == EINTR)
-                continue;
             return errno;
-        }
         if (n == 0)
             return EIO;
         done += static_cast<std::size_t>(n);
@@ -125,8 +123,14 @@ Result<void> write_files(std::span<const FileContent> files, std::string_view wh
     const auto failure = [&](const fs::path& path, const std::string& what, int err)
     {
         discard();
-        return fail(ErrorCode::IoError, (who.empty() ? std::string() : std::string(who) + ": ") +
-                                            path.string() + ": " + what + ": " + reason(err));
+        // A signal ended a wait on a FIFO or pipe: stopped on request, not a broken disk.
+        const bool interrupted = err == EINTR;
+        return fail(interrupted ? ErrorCode::Cancelled : ErrorCode::IoError,
+                    (who.empty() ? std::string() : std::string(who) + ": ") + path.string() + ": " +
+                        what + ": " +
+                        (interrupted ? "interrupted while waiting for a reader (a FIFO or pipe "
+                                       "that nothing reads)"
+                                     : reason(err)));
     };
     // Every new file written and closed first; nothing replaced until all of them are.
     for (const FileContent& f : files)

@@ -41,6 +41,7 @@
 #include <exception>
 #include <fstream>
 #include <iterator>
+#include <new>
 #include <sstream>
 #include <string>
 #include <system_error>
@@ -289,6 +290,10 @@ core::Result<TriMesh> import_mesh(const std::filesystem::path& path, ImportRepor
                                               : scan->format == detail::Format::StlAscii ? "stl"
                                                                                          : "off");
     }
+    catch (const std::bad_alloc&)
+    {
+        throw;  // out of memory, as anywhere else: not a fault of the file
+    }
     catch (const std::exception& e)
     {
         return fail(ErrorCode::ParseError, name + ": cannot parse: " + e.what());
@@ -296,6 +301,10 @@ core::Result<TriMesh> import_mesh(const std::filesystem::path& path, ImportRepor
     if (scene == nullptr)
     {
         std::string why = importer.GetErrorString();
+        // Assimp catches what its reader throws and keeps only the text: running out of
+        // memory was reported as "cannot parse obj: std::bad_alloc", blaming the file.
+        if (why.find("bad_alloc") != std::string::npos)
+            throw std::bad_alloc();
         if (why.empty())
             why = "the reader gave no scene";
         return fail(ErrorCode::ParseError, name + ": cannot parse " + rep.format + ": " + why);

@@ -57,7 +57,47 @@ if(TARGET pliant)
                          -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
         set_tests_properties(cli_out_of_memory_is_an_error PROPERTIES
                              FIXTURES_REQUIRED cli_outputs TIMEOUT 120)
+        # simulate records in run.json that it failed, out of memory (level 9 needs about
+        # 500 MB; under 350 MiB the model is built, run.json written, and the workspace's
+        # allocation fails), where run.json said "running" after the process had ended.
+        set(oom_dir ${out_dir}/simulate-oom)
+        add_test(NAME cli_simulate_out_of_memory
+                 COMMAND ${CMAKE_COMMAND}
+                         "-DCOMMAND=sh;${CMAKE_CURRENT_SOURCE_DIR}/memory_limit.sh;358400;$<TARGET_FILE:pliant>;simulate;-s;${PROJECT_SOURCE_DIR}/scenes/pull.toml;--level;9;-j;1;-o;${oom_dir}"
+                         -DEXIT=3 "-DSTDERR_REGEX=error: out of memory: .*\\[out-of-memory\\]"
+                         -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+        set_tests_properties(cli_simulate_out_of_memory PROPERTIES TIMEOUT 120
+                             FIXTURES_SETUP cli_simulate_oom)
+        add_test(NAME cli_simulate_out_of_memory_run_json
+                 COMMAND ${CMAKE_COMMAND} -DDIR=${oom_dir} -DSTATUS=failed -DFRAMES=0 -DLEVEL=9
+                         -DPRECISION=double "-DREASON=^out of memory$"
+                         -P ${CMAKE_CURRENT_SOURCE_DIR}/check_run_json.cmake)
+        set_tests_properties(cli_simulate_out_of_memory_run_json PROPERTIES
+                             FIXTURES_REQUIRED cli_simulate_oom)
     endif()
+
+    # An output that is a FIFO nobody reads: the command waits in open() for a reader, and one
+    # Ctrl-C ends the wait and the run (exit 130, nothing written); the handler was installed
+    # with std::signal, which restarts the call, so the first Ctrl-C did nothing.
+    foreach(case "refine;obj;refine: interrupted. .*fifo.obj not written"
+                 "remesh;pgrid;fifo.pgrid: cannot open for writing: interrupted while waiting for a reader")
+        list(GET case 0 cmd)
+        list(GET case 1 ext)
+        list(GET case 2 regex)
+        if(cmd STREQUAL "refine")
+            set(args refine;${out_dir}/spot3.pgrid;--levels;1)
+        else()
+            set(args remesh;${PROJECT_SOURCE_DIR}/data/spot.obj;--level;3;--no-measure)
+        endif()
+        add_test(NAME cli_${cmd}_interrupted_waiting_for_a_fifo
+                 COMMAND ${CMAKE_COMMAND}
+                         "-DCOMMAND=sh;${CMAKE_CURRENT_SOURCE_DIR}/fifo_interrupt.sh;${out_dir}/fifo.${ext};$<TARGET_FILE:pliant>;${args};-o;${out_dir}/fifo.${ext}"
+                         -DEXIT=130 "-DSTDERR_REGEX=${regex}"
+                         -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+        set_tests_properties(cli_${cmd}_interrupted_waiting_for_a_fifo PROPERTIES
+                             FIXTURES_REQUIRED cli_outputs TIMEOUT 200
+                             ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0")
+    endforeach()
 
     # More threads than cores: the same result, said to be slower (-j 1024 on 2 cores was 22x
     # slower than -j 2, without a word). 256, the most -j takes, is above this machine's cores.

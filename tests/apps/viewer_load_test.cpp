@@ -4,17 +4,21 @@
 // can be cancelled, and ends with ErrorCode::Cancelled and no surface; destroying the job mid-way
 // cancels it rather than waiting for the remeshing (quitting the viewer during a load). Fox at
 // level 7 untangles for many seconds, so the cancel lands while the work runs; every wait is
-// bounded.
+// bounded. A load that runs out of memory ends with an error, not the process.
 #include <pliant/core/error.h>
 
 #include <gtest/gtest.h>
+#include <sys/resource.h>
+#include <unistd.h>
 
 #include "../../apps/pliant-cli/viewer/mesh_loader.h"
 #include "support/fp_traps.h"
 #include "support/test_paths.h"
 
 #include <chrono>
+#include <cstddef>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <string>
 #include <thread>
@@ -77,6 +81,50 @@ TEST(ViewerLoad, DestroyingAJobMidwayCancelsIt)
             wait_for([&] { return job.progress().first != "starting"; }, std::chrono::seconds(60));
     }  // ~LoadJob cancels and joins: with no cancel it would wait for the whole remeshing
     EXPECT_TRUE(started);
+}
+
+/// This process's address space in bytes (/proc/self/statm's first field, in pages).
+std::size_t address_space_bytes()
+{
+    std::FILE* f = std::fopen("/proc/self/statm", "r");
+    if (f == nullptr)
+        return 0;
+    unsigned long pages = 0;
+    const int n = std::fscanf(f, "%lu", &pages);
+    std::fclose(f);
+    return n == 1 ? pages * static_cast<std::size_t>(::sysconf(_SC_PAGESIZE)) : 0;
+}
+
+// A load that runs out of memory is an error of the load (shown in the viewer's window), not an
+// exception leaving the worker thread, which ended the viewer (std::terminate). In a child
+// process whose address space is limited to 96 MiB above what it holds: spot remeshed at level
+// 10 needs far more.
+TEST(ViewerLoad, RunningOutOfMemoryIsAnErrorOfTheLoad)
+{
+#if defined(__SANITIZE_ADDRESS__)
+    GTEST_SKIP() << "AddressSanitizer's shadow memory needs more address space than any limit";
+#else
+    GTEST_FLAG_SET(death_test_style, "threadsafe");
+    const auto child = []
+    {
+        const test::FpTrapsOff off;
+        const std::size_t held = address_space_bytes();
+        if (held == 0)
+            std::_Exit(2);
+        const ::rlimit limit{held + (96u << 20), held + (96u << 20)};
+        if (::setrlimit(RLIMIT_AS, &limit) != 0)
+            std::_Exit(3);
+        LoadJob job(test::source_dir() / "data" / "spot.obj", 10);
+        if (!wait_for([&] { return job.done(); }, std::chrono::seconds(120)))
+            std::_Exit(4);
+        auto result = job.take();
+        if (result)
+            std::_Exit(5);
+        std::fprintf(stderr, "%s\n", result.error().message.c_str());
+        std::_Exit(result.error().message.find("out of memory") != std::string::npos ? 0 : 6);
+    };
+    EXPECT_EXIT(child(), ::testing::ExitedWithCode(0), "spot.obj: out of memory while loading it");
+#endif
 }
 
 }  // namespace

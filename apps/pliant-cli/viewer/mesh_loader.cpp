@@ -60,6 +60,23 @@ core::Result<LoadedSurface> LoadJob::take()
 
 void LoadJob::run() noexcept
 {
+    // An exception leaving the thread would end the viewer: a mesh too large for the memory
+    // is an error of the load, shown in the window like any other.
+    try
+    {
+        load();
+    }
+    catch (const std::bad_alloc&)
+    {
+        result_.emplace(
+            core::fail(core::ErrorCode::InvalidArgument,
+                       path_.string() + ": out of memory while loading it; choose a lower level"));
+        done_.store(true, std::memory_order_release);
+    }
+}
+
+void LoadJob::load()
+{
     const auto start = std::chrono::steady_clock::now();
     auto finish = [&](core::Result<LoadedSurface> r)
     {

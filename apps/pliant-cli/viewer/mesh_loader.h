@@ -62,6 +62,7 @@ public:
 private:
     class Sink;
     void run() noexcept;
+    void load();  // run()'s work: may throw std::bad_alloc
 
     std::filesystem::path path_;
     int level_;

@@ -36,6 +36,10 @@ struct FileContent
 /// pipe) is written in place. `who` begins the message ("remesh: --report"; empty: the path does).
 /// The data is not synced to the disk (no fsync): this guards against failed writes, not against
 /// power loss.
+/// Opening a FIFO waits for a reader, and writing a full pipe for the reader to take the bytes;
+/// a signal whose handler does not restart system calls (sigaction without SA_RESTART, as the
+/// CLI's Ctrl-C handler is installed) ends that wait with ErrorCode::Cancelled, "interrupted
+/// while waiting for a reader", instead of waiting again.
 [[nodiscard]] Result<void> write_files(std::span<const FileContent> files, std::string_view who);
 
 /// `write_files` for one file.
