@@ -111,6 +111,48 @@ TEST(TrianglesIntersect, AgreesWithMollerTrumboreOnRandomPairs)
     EXPECT_LT(hits, 19'000);
 }
 
+// edge_meets_triangle rejects a segment whose bounding box misses the triangle's before any
+// orientation test: the answers must be those of the reference, whether the boxes are apart,
+// overlap, or touch at one coordinate.
+TEST(EdgeMeetsTriangle, AgreesWithMollerTrumboreOnRandomSegments)
+{
+    std::mt19937_64 rng(11);
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    const auto rnd = [&] { return Vec3{uni(rng), uni(rng), uni(rng)}; };
+    int hits = 0, apart = 0;
+    for (int i = 0; i < 20'000; ++i)
+    {
+        const Tri t{rnd(), rnd(), rnd()};
+        const Vec3 p = rnd(), q = rnd();
+        const bool ref = edge_hits(p, q, t);
+        EXPECT_EQ(edge_meets_triangle(p, q, t), ref) << i;
+        hits += ref ? 1 : 0;
+        const auto coord_apart = [&](double Vec3::*c)
+        {
+            return std::max(p.*c, q.*c) < std::min({t[0].*c, t[1].*c, t[2].*c}) ||
+                   std::min(p.*c, q.*c) > std::max({t[0].*c, t[1].*c, t[2].*c});
+        };
+        apart += coord_apart(&Vec3::x) || coord_apart(&Vec3::y) || coord_apart(&Vec3::z) ? 1 : 0;
+    }
+    EXPECT_GT(hits, 1000);
+    EXPECT_GT(apart, 1000);  // the filter's path is taken
+    EXPECT_LT(hits + apart, 19'000);
+}
+
+TEST(EdgeMeetsTriangle, BoxesTouchingAtOneCoordinateStillMeet)
+{
+    const Tri xy{Vec3{0, 0, 0}, Vec3{2, 0, 0}, Vec3{0, 2, 0}};
+    // in the plane, ending on the vertex (2,0,0): the boxes share x = 2 only
+    EXPECT_TRUE(edge_meets_triangle(Vec3{2, 0, 0}, Vec3{3, 0, 0}, xy));
+    // in the plane, starting just beyond it: boxes apart
+    EXPECT_FALSE(edge_meets_triangle(Vec3{2.0000001, 0, 0}, Vec3{3, 0, 0}, xy));
+    // across the plane, touching the triangle's box at z = 0 from above
+    EXPECT_TRUE(edge_meets_triangle(Vec3{0.5, 0.5, 0}, Vec3{0.5, 0.5, 1}, xy));
+    EXPECT_FALSE(edge_meets_triangle(Vec3{0.5, 0.5, 1e-300}, Vec3{0.5, 0.5, 1}, xy));
+    // collinear with the hypotenuse, beyond its end: boxes apart in y
+    EXPECT_FALSE(edge_meets_triangle(Vec3{-1, 3, 0}, Vec3{-2, 4, 0}, xy));
+}
+
 // ---------------------------------------------------------------------------------------------
 // the broad phase against brute force
 
