@@ -48,7 +48,8 @@ int report(const core::Error& error)
     {
     case core::ErrorCode::NotConverged:
     case core::ErrorCode::NetworkError:
-    case core::ErrorCode::GraphicsError: return k_exit_failure;  // the machine, not the input
+    case core::ErrorCode::GraphicsError:
+    case core::ErrorCode::OutOfMemory: return k_exit_failure;  // the machine, not the input
     case core::ErrorCode::Cancelled: return k_exit_interrupted;
     default: return k_exit_bad_input;
     }
@@ -212,8 +213,10 @@ const volatile std::sig_atomic_t* install_interrupt_flag()
     // sigaction, not std::signal: glibc's std::signal restarts an interrupted system call, so
     // a command waiting in open() for a FIFO's reader (or in write() on a full pipe) went on
     // waiting after the first Ctrl-C. Without SA_RESTART the wait ends with EINTR and the
-    // command stops (core::write_files says "interrupted"); ENet's and the transport's waits
-    // return early and are called again. SA_RESETHAND: a second Ctrl-C ends the process at once.
+    // command stops (core::write_files says "interrupted"). Waits that poll (ENet's, the
+    // transport's ppoll) were never restarted and loop on EINTR as before; std::this_thread::
+    // sleep_for, fstreams and condition variables retry. SA_RESETHAND: a second Ctrl-C ends the
+    // process at once.
     struct sigaction action
     {
     };

@@ -62,6 +62,7 @@
 #include <future>
 #include <limits>
 #include <memory>
+#include <new>
 #include <optional>
 #include <string>
 #include <thread>
@@ -911,7 +912,8 @@ int run_demo_with_viewer(const DemoOptions& opt, const GlobalOptions& global)
         [&]
         {
             // Out of memory here would end the process (an exception leaving a thread): it
-            // ends the session instead, and the demo says so once the window is closed.
+            // ends the session instead (said at once; the window shows the session gone), and
+            // the demo exits 3 once the window is closed.
             try
             {
                 demo_rc = run_demo(opt, global, &link);
@@ -926,22 +928,22 @@ int run_demo_with_viewer(const DemoOptions& opt, const GlobalOptions& global)
     int view_rc = 0;
     if (master != 0)
     {
-        spdlog::info(
-            "demo: the session runs; opening the viewer on 127.0.0.1:{} (close the "
-            "window to end it)",
-            master);
-        viewer::ViewerOptions v;
-        v.input = "127.0.0.1:" + std::to_string(master);
-        v.bundled_mesh = bundled_mesh();
-        v.screenshot = opt.screenshot;
-        v.exit_after = opt.exit_after;
-        v.name = "viewer";
-        v.owner_colors = true;
-        v.stop = link.interrupt;
         // Out of memory in the viewer ends it as a failure would (the session thread is
         // stopped and joined below; leaving here with it running would end the process).
         try
         {
+            spdlog::info(
+                "demo: the session runs; opening the viewer on 127.0.0.1:{} (close the "
+                "window to end it)",
+                master);
+            viewer::ViewerOptions v;
+            v.input = "127.0.0.1:" + std::to_string(master);
+            v.bundled_mesh = bundled_mesh();
+            v.screenshot = opt.screenshot;
+            v.exit_after = opt.exit_after;
+            v.name = "viewer";
+            v.owner_colors = true;
+            v.stop = link.interrupt;
             view_rc = viewer::run_viewer(v);
         }
         catch (const std::bad_alloc&)

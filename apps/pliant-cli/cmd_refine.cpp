@@ -191,9 +191,13 @@ int run_refine(const RefineOptions& opt, const GlobalOptions& global)
         if (!positions)
             return report(positions.error());
         const mesh::TriMesh surface = mesh::from_grid(fine, *positions);
+        // Cancelled: Ctrl-C while the file was formatted (nothing written), or while its
+        // writing waited on a FIFO (the message says which; exit 130 either way).
         if (auto saved = mesh::export_mesh(opt.out, surface, &bar); !saved)
-            return saved.error().code == ErrorCode::Cancelled ? interrupted()
-                                                              : report(saved.error());
+            return saved.error().code == ErrorCode::Cancelled &&
+                           saved.error().message.find(": cancelled during ") != std::string::npos
+                       ? interrupted()
+                       : report(saved.error());
     }
     spdlog::debug("refine: {} levels in {:.3f} ms", opt.levels, total_ms);
     if (!global.quiet)

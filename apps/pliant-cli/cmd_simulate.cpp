@@ -33,6 +33,7 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <new>
 #include <numbers>
 #include <optional>
 #include <set>
@@ -556,6 +557,7 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
     // run ends early.
     int last_written = -1;
     double t_written = resumed ? resumed->time : 0.0;
+    bool completed = false;  // run.json says "complete"
     // Running out of memory (the workspace, a frame's bytes) ends the run: run.json says
     // "failed" with the frames written, not "running", before command_callback reports it.
     try
@@ -697,6 +699,7 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
             if (auto ok = write_frame(opt, *model, state, frame); !ok)
                 return failed(ok.error(), frame - 1);
             last_written = frame;
+            t_written = state.time;
             if (frame == 0)
                 warn_if_frames_outgrow_the_disk(opt, frames);
             total_steps += rep.steps;
@@ -707,14 +710,10 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
                 << e.foundation << ',' << e.total() << ',' << rep.steps << ',' << rep.rejections
                 << ',' << static_cast<std::uint32_t>(rep.status) << '\n';
             if (const std::optional<int> err = csv_flush())
-            {
-                t_written = state.time;
                 return failed(csv_error(*err), frame);
-            }
             if (!std::isfinite(e.total()))
                 return diverged("the energy became non-finite", frame);
             bar.update("simulate", frames > 0 ? static_cast<double>(frame) / frames : 1.0);
-            t_written = state.time;
             if (*interrupted != 0 && frame < frames)
                 return stopped(frame);
         }
@@ -726,6 +725,7 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
                    {total_steps, total_rejections, total_at_min});
         if (auto ok = record.write(); !ok)
             return report(ok.error());
+        completed = true;
         std::printf(
             "%d frames, %.3f s simulated in %.3f s wall (%.2fx real time), level %d, %zu "
             "vertices, %llu steps, %llu rejections, %d thread(s), %s precision -> %s\n",
@@ -749,6 +749,8 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
     }
     catch (const std::bad_alloc&)
     {
+        if (completed)  // run.json already says "complete", rightly
+            throw;
         try
         {
             record.end("failed", last_written + 1, t_written, seconds_since_start(),

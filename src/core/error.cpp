@@ -18,6 +18,7 @@ std::string_view to_string(ErrorCode code) noexcept
     case ErrorCode::ParseError: return "parse-error";
     case ErrorCode::EmptyInput: return "empty-input";
     case ErrorCode::Cancelled: return "cancelled";
+    case ErrorCode::OutOfMemory: return "out-of-memory";
     case ErrorCode::NonFiniteCoordinate: return "non-finite-coordinate";
     case ErrorCode::DegenerateFace: return "degenerate-face";
     case ErrorCode::NotConnected: return "not-connected";

@@ -6,8 +6,10 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
+#include <climits>
 #include <cstring>
 #include <string>
 #include <vector>
@@ -27,13 +29,21 @@ std::string reason(int err)
 
 /// Writes all of `bytes` to `fd`; \return 0 or the errno of the failed write. EINTR (a signal
 /// whose handler does not restart calls, such as the CLI's Ctrl-C, came while a pipe nobody
-/// reads held the write) ends it: retrying would block again.
+/// reads held the write) ends it: retrying would block again. To a pipe or FIFO the bytes go in
+/// writes of at most PIPE_BUF, each all or nothing, so that such a signal finds the write with
+/// nothing sent and it fails with EINTR (a larger write returns the part sent, and the next one
+/// blocks again: the first Ctrl-C did nothing).
 int write_all(int fd, std::span<const std::byte> bytes)
 {
+    struct ::stat st
+    {
+    };
+    const std::size_t chunk =
+        ::fstat(fd, &st) == 0 && S_ISFIFO(st.st_mode) ? std::size_t{PIPE_BUF} : bytes.size();
     std::size_t done = 0;
     while (done < bytes.size())
     {
-        const ::ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+        const ::ssize_t n = ::write(fd, bytes.data() + done, std::min(chunk, bytes.size() - done));
         if (n < 0)
             return errno;
         if (n == 0)
@@ -128,8 +138,8 @@ Result<void> write_files(std::span<const FileContent> files, std::string_view wh
         return fail(interrupted ? ErrorCode::Cancelled : ErrorCode::IoError,
                     (who.empty() ? std::string() : std::string(who) + ": ") + path.string() + ": " +
                         what + ": " +
-                        (interrupted ? "interrupted while waiting for a reader (a FIFO or pipe "
-                                       "that nothing reads)"
+                        (interrupted ? "interrupted by a signal while waiting for a reader (a "
+                                       "FIFO or pipe that nothing reads)"
                                      : reason(err)));
     };
     // Every new file written and closed first; nothing replaced until all of them are.

@@ -300,11 +300,23 @@ core::Result<TriMesh> import_mesh(const std::filesystem::path& path, ImportRepor
     }
     if (scene == nullptr)
     {
+        // Assimp catches what its reader throws and keeps it: running out of memory was
+        // reported as "cannot parse obj: std::bad_alloc", blaming the file.
+        if (const std::exception_ptr& thrown = importer.GetException(); thrown)
+        {
+            try
+            {
+                std::rethrow_exception(thrown);
+            }
+            catch (const std::bad_alloc&)
+            {
+                throw;
+            }
+            catch (...)  // any other: the reader's error text below says what it was
+            {
+            }
+        }
         std::string why = importer.GetErrorString();
-        // Assimp catches what its reader throws and keeps only the text: running out of
-        // memory was reported as "cannot parse obj: std::bad_alloc", blaming the file.
-        if (why.find("bad_alloc") != std::string::npos)
-            throw std::bad_alloc();
         if (why.empty())
             why = "the reader gave no scene";
         return fail(ErrorCode::ParseError, name + ": cannot parse " + rep.format + ": " + why);

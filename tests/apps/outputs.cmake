@@ -76,26 +76,31 @@ if(TARGET pliant)
                              FIXTURES_REQUIRED cli_simulate_oom)
     endif()
 
-    # An output that is a FIFO nobody reads: the command waits in open() for a reader, and one
-    # Ctrl-C ends the wait and the run (exit 130, nothing written); the handler was installed
-    # with std::signal, which restarts the call, so the first Ctrl-C did nothing.
-    foreach(case "refine;obj;refine: interrupted. .*fifo.obj not written"
-                 "remesh;pgrid;fifo.pgrid: cannot open for writing: interrupted while waiting for a reader")
+    # An output that is a FIFO: with no reader the command waits in open(), with a reader that
+    # never reads in write() once the pipe is full (refine to level 6: a 790 KB OBJ); one
+    # Ctrl-C ends the wait and the run (exit 130). The handler was installed with std::signal,
+    # which restarts the call, so the first Ctrl-C did nothing; and a write larger than the
+    # pipe returned the part sent and blocked again.
+    foreach(case "refine;no-reader;obj;fifo-1.obj: cannot open for writing: interrupted by a signal while waiting for a reader"
+                 "remesh;no-reader;pgrid;fifo-2.pgrid: cannot open for writing: interrupted by a signal while waiting for a reader"
+                 "refine;stalled-reader;obj;fifo-3.obj: write failed: interrupted by a signal while waiting for a reader")
         list(GET case 0 cmd)
-        list(GET case 1 ext)
-        list(GET case 2 regex)
+        list(GET case 1 mode)
+        list(GET case 2 ext)
+        list(GET case 3 regex)
+        string(REGEX MATCH "fifo-[0-9]" stem "${regex}")
         if(cmd STREQUAL "refine")
-            set(args refine;${out_dir}/spot3.pgrid;--levels;1)
+            set(args refine;${out_dir}/spot3.pgrid;--levels;3)
         else()
             set(args remesh;${PROJECT_SOURCE_DIR}/data/spot.obj;--level;3;--no-measure)
         endif()
-        add_test(NAME cli_${cmd}_interrupted_waiting_for_a_fifo
+        set(name cli_${cmd}_interrupted_waiting_for_a_fifo_${mode})
+        add_test(NAME ${name}
                  COMMAND ${CMAKE_COMMAND}
-                         "-DCOMMAND=sh;${CMAKE_CURRENT_SOURCE_DIR}/fifo_interrupt.sh;${out_dir}/fifo.${ext};$<TARGET_FILE:pliant>;${args};-o;${out_dir}/fifo.${ext}"
+                         "-DCOMMAND=sh;${CMAKE_CURRENT_SOURCE_DIR}/fifo_interrupt.sh;${mode};${out_dir}/${stem}.${ext};$<TARGET_FILE:pliant>;${args};-o;${out_dir}/${stem}.${ext}"
                          -DEXIT=130 "-DSTDERR_REGEX=${regex}"
                          -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
-        set_tests_properties(cli_${cmd}_interrupted_waiting_for_a_fifo PROPERTIES
-                             FIXTURES_REQUIRED cli_outputs TIMEOUT 200
+        set_tests_properties(${name} PROPERTIES FIXTURES_REQUIRED cli_outputs TIMEOUT 200
                              ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0")
     endforeach()
 

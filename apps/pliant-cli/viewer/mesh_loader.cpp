@@ -9,6 +9,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <new>
 
 namespace pliant::viewer
 {
@@ -68,9 +69,18 @@ void LoadJob::run() noexcept
     }
     catch (const std::bad_alloc&)
     {
-        result_.emplace(
-            core::fail(core::ErrorCode::InvalidArgument,
-                       path_.string() + ": out of memory while loading it; choose a lower level"));
+        // The message needs memory too; the short one fits in the string itself (no
+        // allocation), so the load still ends with an error.
+        try
+        {
+            result_.emplace(core::fail(
+                core::ErrorCode::OutOfMemory,
+                path_.string() + ": out of memory while loading it; choose a lower level"));
+        }
+        catch (const std::bad_alloc&)
+        {
+            result_.emplace(core::Error{core::ErrorCode::OutOfMemory, "out of memory"});
+        }
         done_.store(true, std::memory_order_release);
     }
 }

@@ -26,6 +26,8 @@
 #if defined(__GLIBC__)
 #include <malloc.h>
 #endif
+#include <new>
+#include <optional>
 #include <vector>
 
 namespace pliant::viewer
@@ -295,14 +297,27 @@ void Viewer::finish_load()
 void Viewer::start_local(LoadedSurface surface)
 {
     const int level = surface.grid.level();
-    material_ = default_material(level);
-    auto sim = LocalSim::create(surface.grid, surface.positions, material_);
-    if (!sim)
+    const sim::MembraneSettings material = default_material(level);
+    // The loaded surface passed the load; its simulation may still need more memory than
+    // there is: an error in the window, and the viewer goes on with what it had.
+    std::optional<core::Result<LocalSim>> sim;
+    try
     {
-        set_status(sim.error().message, true);
+        sim.emplace(LocalSim::create(surface.grid, surface.positions, material));
+    }
+    catch (const std::bad_alloc&)
+    {
+        set_status(surface.description + ": out of memory for its simulation; choose a lower level",
+                   true);
         return;
     }
-    local_.emplace(std::move(*sim));
+    if (!*sim)
+    {
+        set_status(sim->error().message, true);
+        return;
+    }
+    material_ = material;
+    local_.emplace(std::move(**sim));
     surface_name_ = surface.description;
     set_status(surface.description, false);
     // --resume: the first surface (the rest grid the caller checked the state against) goes on

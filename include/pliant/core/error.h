@@ -25,6 +25,7 @@ enum class ErrorCode : std::uint16_t
     ParseError = 4,         ///< a file's content is malformed (truncated, bad header, bad number)
     EmptyInput = 5,         ///< a file with no vertices or no faces
     Cancelled = 6,          ///< long work stopped on request (core::ProgressSink)
+    OutOfMemory = 7,  ///< an allocation failed (std::bad_alloc caught where it must not escape)
 
     // mesh validation (docs/design.md §2.1)
     NonFiniteCoordinate = 20,      ///< a vertex coordinate is NaN or infinite

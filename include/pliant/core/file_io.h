@@ -38,8 +38,9 @@ struct FileContent
 /// power loss.
 /// Opening a FIFO waits for a reader, and writing a full pipe for the reader to take the bytes;
 /// a signal whose handler does not restart system calls (sigaction without SA_RESTART, as the
-/// CLI's Ctrl-C handler is installed) ends that wait with ErrorCode::Cancelled, "interrupted
-/// while waiting for a reader", instead of waiting again.
+/// CLI's Ctrl-C handler is installed) ends that wait with ErrorCode::Cancelled, "interrupted by
+/// a signal while waiting for a reader", instead of waiting again (to a FIFO the bytes go in
+/// writes of PIPE_BUF, each all or nothing, so that the signal finds one with nothing sent).
 [[nodiscard]] Result<void> write_files(std::span<const FileContent> files, std::string_view who);
 
 /// `write_files` for one file.

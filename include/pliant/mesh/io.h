@@ -52,7 +52,9 @@ struct ImportReport
 ///   - ParseError: malformed or truncated content (e.g. a binary STL whose size is not
 ///     84 + 50·n bytes, a binary PLY shorter than its header's counts);
 ///   - NonFiniteCoordinate: a vertex position with NaN or infinity (the message says which).
-/// Thread-safe (each call owns its Assimp importer); Assimp's own logging never reaches stdout.
+/// Running out of memory throws std::bad_alloc, as any allocation does (also where Assimp's
+/// reader caught it). Thread-safe (each call owns its Assimp importer); Assimp's own logging
+/// never reaches stdout.
 [[nodiscard]] core::Result<TriMesh> import_mesh(const std::filesystem::path& path,
                                                 ImportReport* report = nullptr);
 

@@ -39,7 +39,8 @@ namespace pliant::remesh
 [[nodiscard]] bool triangles_intersect(const std::array<core::Vec3, 3>& a,
                                        const std::array<core::Vec3, 3>& b) noexcept;
 
-/// Whether the closed segment pq and the closed triangle t have a point in common.
+/// Whether the closed segment pq and the closed triangle t have a point in common. Coordinates
+/// must be finite (as after mesh validation); NaN gives no meaningful answer.
 [[nodiscard]] bool edge_meets_triangle(const core::Vec3& p, const core::Vec3& q,
                                        const std::array<core::Vec3, 3>& t) noexcept;
 
