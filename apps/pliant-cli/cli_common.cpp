@@ -200,16 +200,31 @@ void ProgressBar::update(std::string_view phase, double fraction) noexcept
 namespace
 {
 volatile std::sig_atomic_t g_interrupted = 0;
+volatile std::sig_atomic_t g_signals = 0;  // signals heard since install_interrupt_flag
 
 extern "C" void on_interrupt(int /*signal_number*/)
 {
     g_interrupted = 1;
+    g_signals = g_signals + 1;
+}
+
+void install_handler(bool reset)
+{
+    struct sigaction action
+    {
+    };
+    action.sa_handler = on_interrupt;
+    sigemptyset(&action.sa_mask);
+    action.sa_flags = reset ? SA_RESETHAND : 0;
+    ::sigaction(SIGINT, &action, nullptr);
+    ::sigaction(SIGTERM, &action, nullptr);
 }
 }  // namespace
 
 const volatile std::sig_atomic_t* install_interrupt_flag()
 {
     g_interrupted = 0;
+    g_signals = 0;
     // sigaction, not std::signal: glibc's std::signal restarts an interrupted system call, so
     // a command waiting in open() for a FIFO's reader (or in write() on a full pipe) went on
     // waiting after the first Ctrl-C. Without SA_RESTART the wait ends with EINTR and the
@@ -217,15 +232,21 @@ const volatile std::sig_atomic_t* install_interrupt_flag()
     // transport's ppoll) were never restarted and loop on EINTR as before; std::this_thread::
     // sleep_for, fstreams and condition variables retry. SA_RESETHAND: a second Ctrl-C ends the
     // process at once.
-    struct sigaction action
-    {
-    };
-    action.sa_handler = on_interrupt;
-    sigemptyset(&action.sa_mask);
-    action.sa_flags = SA_RESETHAND;
-    ::sigaction(SIGINT, &action, nullptr);
-    ::sigaction(SIGTERM, &action, nullptr);
+    install_handler(true);
     return &g_interrupted;
+}
+
+const volatile std::sig_atomic_t* install_counted_interrupt_flag()
+{
+    g_interrupted = 0;
+    g_signals = 0;
+    install_handler(false);
+    return &g_interrupted;
+}
+
+int interrupt_signals()
+{
+    return static_cast<int>(g_signals);
 }
 
 namespace

@@ -53,6 +53,14 @@ void configure_logging(const GlobalOptions& options);
 /// interrupts are not restarted: a wait on a FIFO's reader ends (EINTR) rather than going on.
 const volatile std::sig_atomic_t* install_interrupt_flag();
 
+/// install_interrupt_flag, but every signal is caught and counted (interrupt_signals), none
+/// ends the process: for a command that must still clean up after a second Ctrl-C and ends
+/// itself on a later one (`bench`, which otherwise left its running suite program orphaned).
+const volatile std::sig_atomic_t* install_counted_interrupt_flag();
+/// The signals (SIGINT, SIGTERM) heard since install_interrupt_flag or
+/// install_counted_interrupt_flag.
+int interrupt_signals();
+
 /// Logs an error and returns its exit code.
 int report(const core::Error& error);
 

@@ -201,7 +201,8 @@ fs::path find_on_path(const std::string& name)
 
 /// Runs `argv` with stdout and stderr appended to `log`, showing a progress line with the
 /// elapsed time. Once `*stop` is set (Ctrl-C) the child is sent SIGINT too (from a terminal it
-/// already has it: it is in the same process group) and waited for. \return the exit status
+/// already has it: it is in the same process group) and waited for; a second one kills it
+/// (SIGKILL) and pliant winds down as after the first. \return the exit status
 /// (128 + signal when killed, 127 when it cannot start).
 int run_child(const std::vector<std::string>& argv, const fs::path& log, const std::string& label,
               const GlobalOptions& global, double& seconds,
@@ -232,6 +233,17 @@ int run_child(const std::vector<std::string>& argv, const fs::path& log, const s
         {
             ::kill(pid, SIGINT);
             forwarded = true;
+        }
+        // A second Ctrl-C ends the program at once (were pliant ended instead, the program
+        // would run on, orphaned); a third ends pliant too.
+        if (forwarded && interrupt_signals() >= 2)
+        {
+            ::kill(pid, SIGKILL);
+            if (interrupt_signals() >= 3)
+            {
+                (void)waitpid(pid, &status, 0);
+                std::_Exit(k_exit_interrupted);
+            }
         }
         const pid_t done = waitpid(pid, &status, WNOHANG);
         seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -353,7 +365,7 @@ int run_bench(const BenchOptions& opt, const GlobalOptions& global)
     int failures = 0;
     // Ctrl-C or SIGTERM: the running suite is stopped, no further suite starts, and results.json
     // is written with the suites that completed (their CSV and JSON files stay).
-    const volatile std::sig_atomic_t* interrupted = install_interrupt_flag();
+    const volatile std::sig_atomic_t* interrupted = install_counted_interrupt_flag();
     std::string interrupted_in;  // the suite Ctrl-C stopped ("" between suites)
     std::vector<std::string> completed;
     const auto start = std::chrono::steady_clock::now();
@@ -439,8 +451,10 @@ int run_bench(const BenchOptions& opt, const GlobalOptions& global)
     results["interrupted"] = *interrupted != 0;
     results["total_seconds"] =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (auto written =
-            core::write_text_file(opt.out / "results.json", results.dump(2) + '\n', "bench");
+    if (auto written = core::write_text_file(  // a path that is not UTF-8: U+FFFD, not an abort
+            opt.out / "results.json",
+            results.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) + '\n',
+            "bench");
         !written)
         return report(written.error());
     if (*interrupted != 0)
@@ -514,7 +528,7 @@ void add_bench_command(CLI::App& app, const GlobalOptions& global)
         "<suite>.csv, <suite>.json, <suite>.log, results.json (with the machine and its load)\n"
         "and, when gnuplot is installed, PNG plots. Timings on a shared machine vary by +-20 %.\n"
         "Ctrl-C stops the running suite, writes results.json with the suites that completed\n"
-        "and exits with status 130.\n\n"
+        "and exits with status 130; a second Ctrl-C ends the running suite's program at once.\n\n"
         "Examples:\n"
         "  pliant bench --quick                       # every suite, about 3 minutes on 2 cores\n"
         "  pliant bench sim session --out my-results  # two suites, full length");

@@ -199,6 +199,14 @@ int run_refine(const RefineOptions& opt, const GlobalOptions& global)
                        ? interrupted()
                        : report(saved.error());
     }
+    // Ctrl-C while the file was written (a file is written whole or not at all): it stays, and
+    // a script sees the interruption (it exited 0).
+    if (bar.stop_requested())
+    {
+        spdlog::error("refine: interrupted while {} was written; it was written whole",
+                      opt.out.string());
+        return k_exit_interrupted;
+    }
     spdlog::debug("refine: {} levels in {:.3f} ms", opt.levels, total_ms);
     if (!global.quiet)
         std::printf("%s: level %d -> %d, %zu vertices, %zu faces, %zu channel(s) -> %s\n",

@@ -208,6 +208,14 @@ int run_remesh(const RemeshOptions& opt, const GlobalOptions& global)
     if (!opt.report.empty())
         if (auto ok = core::write_text_file(opt.report, json, "remesh: --report"); !ok)
             return report(ok.error());
+    // Ctrl-C while the files were written (the write is not stopped midway: a file is written
+    // whole or not at all): the files stay, and a script sees the interruption.
+    if (bar.stop_requested())
+    {
+        spdlog::error("remesh: interrupted while {} was written; it was written whole",
+                      opt.output.string());
+        return k_exit_interrupted;
+    }
     if (!global.quiet)
         std::fputs(remesh::to_text(result->report).c_str(), stdout);
     spdlog::debug("remesh: wrote {}", opt.output.string());
@@ -244,8 +252,9 @@ void add_remesh_command(CLI::App& app, const GlobalOptions& global)
         "Exit codes: 0 written; 1 invalid input mesh, unwritable output or no fold-free map\n"
         "(inverted-triangles; the message says which rule, file or count); 3 the simplification\n"
         "did not converge, or --gpu found no OpenGL 3.3 context or the GPU sampling failed;\n"
-        "2 usage error; 130 stopped by Ctrl-C (within a fraction of a second in any phase;\n"
-        "nothing is written, an earlier file at -o stays as it was).\n\n"
+        "2 usage error; 130 stopped by Ctrl-C (within a fraction of a second in most phases,\n"
+        "up to a few seconds while untangling at levels 9-10; nothing is written, an earlier\n"
+        "file at -o stays as it was).\n\n"
         "Examples:\n"
         "  pliant remesh data/spot.obj --level 7 -o spot.pgrid --report spot.json\n"
         "  pliant remesh scan.ply -o scan.obj\n"

@@ -12,8 +12,11 @@
 #include <pliant/sim/membrane.h>
 #include <pliant/sim/rkf45.h>
 
+#include <fcntl.h>
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
+#include <sys/file.h>
+#include <unistd.h>
 
 #include "cli_common.h"
 #include "commands.h"
@@ -317,6 +320,36 @@ void warn_unstable_step(const Scenario& sc, const sim::MembraneModel& model,
             s.dt_min / stable, stable, stable);
 }
 
+/// An advisory lock (flock) on a folder, held while the object lives.
+class FolderLock
+{
+public:
+    explicit FolderLock(const std::filesystem::path& folder)
+        : fd_(::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC))
+    {
+        if (fd_ >= 0 && ::flock(fd_, LOCK_EX | LOCK_NB) != 0)
+        {
+            elsewhere_ = errno == EWOULDBLOCK;
+            ::close(fd_);
+            fd_ = -1;
+        }
+    }
+    FolderLock(const FolderLock&) = delete;
+    FolderLock& operator=(const FolderLock&) = delete;
+    ~FolderLock()
+    {
+        if (fd_ >= 0)
+            ::close(fd_);
+    }
+    /// Whether another process holds it (a folder that cannot be opened or locked for another
+    /// reason is not refused here: its writes say what is wrong).
+    [[nodiscard]] bool held_elsewhere() const noexcept { return elsewhere_; }
+
+private:
+    int fd_ = -1;
+    bool elsewhere_ = false;
+};
+
 /// run.json in the output folder: what was run (the inputs and every setting in effect, the
 /// command line's and the scenario's merged) and how it ended. Written before the first step
 /// with status "running", and again when the run completes, diverges, fails (an output that
@@ -389,7 +422,12 @@ public:
 
     [[nodiscard]] core::Result<void> write() const
     {
-        return core::write_text_file(path_, json_.dump(2) + '\n', "simulate");
+        // A path that is not UTF-8 (a Latin-1 name) is written with U+FFFD for its bad
+        // bytes: dump() would throw, and the process end.
+        return core::write_text_file(
+            path_,
+            json_.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) + '\n',
+            "simulate");
     }
 
 private:
@@ -490,6 +528,15 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
     if (ec)
         return report({core::ErrorCode::IoError,
                        "simulate: cannot create " + opt.out.string() + ": " + ec.message()});
+    // One run per folder: a second run into it would clear the first's frames and splice its
+    // own among them, energy.csv and run.json too, both ending "complete". An advisory lock
+    // on the folder, held until this process ends (released by the system if it is killed).
+    const FolderLock lock(opt.out);
+    if (lock.held_elsewhere())
+        return report({core::ErrorCode::IoError,
+                       "simulate: another run is writing to " + opt.out.string() +
+                           " (a pliant simulate started before this one); wait for it to end, "
+                           "or give another -o"});
     // The folder holds one run: an earlier run's frames go (those this run writes and those
     // beyond its last, which were left beside its frames and counted by nobody), and nothing
     // else does (a file or folder that does not match frame_NNNNN.EXT stays).
@@ -672,9 +719,9 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
                         return diverged("the state became non-finite", frame - 1);
                     if (r.stopped)
                         return stopped(frame - 1);
+                    // No whole step fitted after all (rounding): the next frame takes it.
                     if (r.steps == 0)
-                        break;  // no whole step fitted after all (rounding): the next frame takes
-                                // it
+                        break;
                 }
             }
             else

@@ -1,11 +1,16 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: 2026 pliant contributors
 // `pliant`: the command-line front end. Subcommands live one per file (commands.h).
+#include <fcntl.h>
+#include <unistd.h>
+
 #include "cli_common.h"
 #include "commands.h"
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
+#include <csignal>
 #include <cstdio>
 #include <string>
 #include <string_view>
@@ -22,6 +27,25 @@ std::vector<CommandSpec>& command_registry()
 
 namespace
 {
+
+/// Process set-up before anything is opened or written:
+/// - a standard stream the caller closed (`2>&-`) is opened on /dev/null, so that the next
+///   file opened does not take its number and receive what is printed to it (progress lines
+///   went into simulate's energy.csv);
+/// - SIGXFSZ is ignored, so that a write past a file-size limit (`ulimit -f`) fails with EFBIG
+///   and the command says "File too large" and removes its new file, instead of the process
+///   being killed with the new file left beside the output.
+void prepare_process()
+{
+    for (int fd = 0; fd <= 2; ++fd)
+        if (::fcntl(fd, F_GETFD) == -1 && errno == EBADF)
+        {
+            const int opened = ::open("/dev/null", fd == 0 ? O_RDONLY : O_WRONLY);
+            if (opened >= 0 && opened != fd)  // the lowest free number: fd itself
+                ::close(opened);
+        }
+    std::signal(SIGXFSZ, SIG_IGN);
+}
 
 /// After a failed parse: "pliant remesh: unknown option '--bogus'" for the first argument that
 /// looks like an option and that no option of the command (or, before it, of pliant) took;
@@ -48,6 +72,7 @@ std::string first_unknown_option(const CLI::App& app)
 
 int main(int argc, char** argv)
 {
+    pliant::cli::prepare_process();
     CLI::App app{
         "pliant " PLIANT_VERSION
         " - real-time deformable objects for collaborative virtual environments.\n"

@@ -6,9 +6,14 @@
 #include <toml++/toml.h>
 
 #include <algorithm>
+#include <array>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
+#include <fstream>
 #include <set>
+#include <string>
 #include <utility>
 
 namespace pliant::cli
@@ -438,14 +443,28 @@ std::string fmt_number(double v)
 
 core::Result<Scenario> parse_scenario(const std::filesystem::path& path)
 {
-    try
+    // Read here, not by toml::parse_file, which could not open a pipe (`-s <(...)`: "File
+    // could not be opened for reading"); at most 16 MiB, so that a device such as /dev/zero
+    // ends.
+    constexpr std::size_t k_max_bytes = std::size_t{16} << 20;
+    std::ifstream in(path, std::ios::binary);
+    if (!in)
+        return core::fail(core::ErrorCode::IoError,
+                          path.string() + ": cannot open for reading: " + std::strerror(errno));
+    std::string text;
+    std::array<char, 65536> buffer{};
+    while (in.read(buffer.data(), buffer.size()) || in.gcount() > 0)
     {
-        return read_scenario(toml::parse_file(path.string()), path);
+        text.append(buffer.data(), static_cast<std::size_t>(in.gcount()));
+        if (text.size() > k_max_bytes)
+            return core::fail(core::ErrorCode::BadScenario,
+                              path.string() +
+                                  ": more than 16 MiB: not a scenario (a TOML file of a few "
+                                  "lines; see scenes/pull.toml)");
     }
-    catch (const toml::parse_error& e)
-    {
-        return syntax_error(path, e);
-    }
+    if (in.bad())
+        return core::fail(core::ErrorCode::IoError, path.string() + ": read failed");
+    return parse_scenario_text(text, path);
 }
 
 core::Result<Scenario> parse_scenario_text(std::string_view text, const std::filesystem::path& path)

@@ -99,9 +99,13 @@ int open_temporary(Plan& p)
     const fs::path folder = p.target.parent_path();
     for (int attempt = 0; attempt < 100; ++attempt)
     {
-        const std::string name = "." + p.target.filename().string() + "." +
-                                 std::to_string(::getpid()) + "." +
-                                 std::to_string(g_counter.fetch_add(1)) + ".tmp";
+        const std::string suffix = "." + std::to_string(::getpid()) + "." +
+                                   std::to_string(g_counter.fetch_add(1)) + ".tmp";
+        std::string name = "." + p.target.filename().string() + suffix;
+        // A name the system takes (up to NAME_MAX, 255 bytes) must not fail for its temporary
+        // one; nor a path near PATH_MAX: then a short name ".pliant.PID.N.tmp".
+        if (name.size() > NAME_MAX || (folder / name).native().size() >= PATH_MAX)
+            name = ".pliant" + suffix;
         p.temporary = folder.empty() ? fs::path(name) : folder / name;
         p.fd = ::open(p.temporary.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
         if (p.fd >= 0)

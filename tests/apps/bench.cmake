@@ -48,5 +48,15 @@ if(TARGET pliant)
                          -P ${PROJECT_SOURCE_DIR}/apps/pliant-cli/bench/check_bench_outputs.cmake)
         set_tests_properties(cli_bench_interrupted_outputs PROPERTIES
             FIXTURES_REQUIRED bench_interrupted)
+        # Two SIGTERMs in quick succession (a second Ctrl-C): bench ends its running suite
+        # program (SIGKILL) and winds down with exit 130; the second signal ended pliant and
+        # left the program running, orphaned.
+        add_test(NAME cli_bench_second_signal_ends_the_suite_program
+                 COMMAND ${CMAKE_COMMAND}
+                         "-DCOMMAND=sh;${CMAKE_CURRENT_SOURCE_DIR}/double_signal.sh;$<TARGET_FILE:pliant>;bench;sim;--no-plots;--out;${CMAKE_CURRENT_BINARY_DIR}/bench-double"
+                         -DEXIT=130 "-DSTDERR_REGEX=bench: interrupted during sim"
+                         -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+        set_tests_properties(cli_bench_second_signal_ends_the_suite_program PROPERTIES
+            TIMEOUT 240)
     endif()
 endif()

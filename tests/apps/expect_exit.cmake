@@ -12,7 +12,8 @@
 # paths, optional): files written before COMMAND runs, as KEEP's, that must not be there as they
 # were after it (removed or replaced: an earlier run's outputs that a run clears). LINKS (a
 # ;-list of LINK=TARGET, optional): symbolic links made before COMMAND runs, replacing what was
-# at LINK (an output that is /dev/full).
+# at LINK (an output that is /dev/full). EMPTY_DIR (a folder, optional): emptied before
+# COMMAND runs, and must hold nothing after it, hidden files included (no temporary left).
 foreach(f IN LISTS KEEP STALE)
     get_filename_component(d "${f}" DIRECTORY)
     file(MAKE_DIRECTORY "${d}")
@@ -30,6 +31,10 @@ endforeach()
 foreach(f IN LISTS ABSENT)
     file(REMOVE "${f}")
 endforeach()
+if(DEFINED EMPTY_DIR)
+    file(REMOVE_RECURSE "${EMPTY_DIR}")
+    file(MAKE_DIRECTORY "${EMPTY_DIR}")
+endif()
 set(timeout_args)
 if(DEFINED TIMEOUT)
     set(timeout_args TIMEOUT ${TIMEOUT})
@@ -67,4 +72,10 @@ foreach(f IN LISTS STALE)
         endif()
     endif()
 endforeach()
+if(DEFINED EMPTY_DIR)
+    file(GLOB left LIST_DIRECTORIES true "${EMPTY_DIR}/*" "${EMPTY_DIR}/.*")
+    if(left)
+        message(FATAL_ERROR "${EMPTY_DIR} holds ${left}:\n${out}${err}")
+    endif()
+endif()
 message("${out}${err}")

@@ -45,6 +45,24 @@ if(TARGET pliant)
                      -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
     set_tests_properties(cli_full_disk_leaves_no_part PROPERTIES FIXTURES_REQUIRED cli_outputs
                          ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0")
+    # A file-size limit set in a shell (`ulimit -f`) leaves SIGXFSZ at its default, which
+    # killed pliant (status 153) with its new file left beside the output: pliant ignores the
+    # signal, says "File too large", exits 1 and leaves nothing (the folder is listed after).
+    file(MAKE_DIRECTORY ${out_dir}/xfsz)
+    add_test(NAME cli_file_size_limit_set_in_a_shell
+             COMMAND ${CMAKE_COMMAND}
+                     "-DCOMMAND=sh;${CMAKE_CURRENT_SOURCE_DIR}/file_size_limit.sh;--as-set;2;$<TARGET_FILE:pliant>;refine;${out_dir}/spot3.pgrid;--levels;2;-o;${out_dir}/xfsz/big.obj"
+                     -DEXIT=1 "-DSTDERR_REGEX=big.obj: write failed: File too large"
+                     -DEMPTY_DIR=${out_dir}/xfsz
+                     -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+    set_tests_properties(cli_file_size_limit_set_in_a_shell PROPERTIES
+                         FIXTURES_REQUIRED cli_outputs ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0")
+    # A closed standard stream (`2>&-`) is opened on /dev/null: the energy.csv that simulate
+    # opened next took its number and got the progress lines (`simulate: 50% (1.0s)`).
+    add_test(NAME cli_closed_stderr_takes_no_output_file
+             COMMAND sh -c "'$<TARGET_FILE:pliant>' simulate -s '${PROJECT_SOURCE_DIR}/scenes/pull.toml' --level 3 -o '${out_dir}/closed-stderr' 2>&- && ! grep -n simulate '${out_dir}/closed-stderr/energy.csv'")
+    set_tests_properties(cli_closed_stderr_takes_no_output_file PROPERTIES
+                         ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0")
     # Out of memory (an address space of 300 MiB; refining level 3 to 10 needs about 350 MB): an
     # error and exit status 3, nothing written, where std::bad_alloc aborted (status 134). Not
     # under the sanitizers, whose shadow memory needs far more address space than any limit.

@@ -365,4 +365,21 @@ if(TARGET pliant)
     pliant_cli_expect(cli_simulate_help_states_defaults 0 STDOUT
                       "duration \\[s\\] \\(default 1\\),.frame_rate \\[1/s\\] \\(default 25\\)"
                       simulate --help)
+    # A scenario from a pipe (`-s <(...)`, here /dev/stdin): toml++'s own reader could not open
+    # it ("File could not be opened for reading").
+    add_test(NAME cli_simulate_scenario_from_a_pipe
+             COMMAND sh -c "cat '${PROJECT_SOURCE_DIR}/scenes/pull.toml' | '$<TARGET_FILE:pliant>' simulate -s /dev/stdin --level 3 -j 1 -o '${CMAKE_CURRENT_BINARY_DIR}/simulate-pipe'")
+    set_tests_properties(cli_simulate_scenario_from_a_pipe PROPERTIES TIMEOUT 120
+        PASS_REGULAR_EXPRESSION "101 frames, 4.000 s simulated")
+    # A scenario whose name is not UTF-8 (Latin-1 "sz\xe9n.toml"): run.json holds it with
+    # U+FFFD; the JSON writer threw and the process aborted (status 134).
+    add_test(NAME cli_simulate_non_utf8_path
+             COMMAND sh -c "d='${CMAKE_CURRENT_BINARY_DIR}/simulate-latin1' && rm -rf \"$d\" && mkdir -p \"$d\" && f=\"$d/$(printf 'sz\\351n.toml')\" && cp '${PROJECT_SOURCE_DIR}/scenes/pull.toml' \"$f\" && '$<TARGET_FILE:pliant>' -q simulate -s \"$f\" --level 3 -j 1 -o \"$d/out\" && grep -q '\"status\": \"complete\"' \"$d/out/run.json\"")
+    set_tests_properties(cli_simulate_non_utf8_path PROPERTIES TIMEOUT 120)
+    # Two runs into one folder: the second is refused while the first runs (they spliced
+    # their frames and energy.csv, both exiting 0), and the first completes untouched.
+    add_test(NAME cli_simulate_one_run_per_folder
+             COMMAND sh -c "d='${CMAKE_CURRENT_BINARY_DIR}/simulate-locked' && rm -rf \"$d\" && P='$<TARGET_FILE:pliant>' && S='${PROJECT_SOURCE_DIR}/scenes/pull.toml' && { \"$P\" -q simulate -s \"$S\" --level 7 -j 1 -o \"$d\" & } && i=0 && while [ ! -e \"$d/run.json\" ] && [ $i -lt 600 ]; do sleep 0.1; i=$((i+1)); done && ! \"$P\" simulate -s \"$S\" --level 4 -j 1 -o \"$d\" && wait && grep -q '\"level\": 7' \"$d/run.json\" && grep -q '\"status\": \"complete\"' \"$d/run.json\"")
+    set_tests_properties(cli_simulate_one_run_per_folder PROPERTIES TIMEOUT 300
+        PASS_REGULAR_EXPRESSION "another run is writing to .*simulate-locked")
 endif()

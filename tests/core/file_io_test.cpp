@@ -11,6 +11,7 @@
 #include "support/test_paths.h"
 
 #include <algorithm>
+#include <climits>
 #include <csignal>
 #include <cstddef>
 #include <filesystem>
@@ -92,6 +93,24 @@ TEST(FileIo, WritesANewFileAndReplacesAnOldOneKeepingItsMode)
     ASSERT_EQ(::stat((dir / "a.txt").c_str(), &st), 0);
     EXPECT_EQ(st.st_mode & 07777, 0640U);
     EXPECT_EQ(names_in(dir), std::vector<std::string>{"a.txt"}) << "no temporary file left";
+}
+
+// The temporary's name (".NAME.PID.N.tmp") is longer than the name: a name the system takes,
+// up to NAME_MAX bytes, was refused with "File name too long" from 243 bytes on.
+TEST(FileIo, ANameOfTheLongestLengthIsWritten)
+{
+    const fs::path dir = test::scratch_dir("file_io_long_name");
+    const std::string name = std::string(NAME_MAX - 4, 'a') + ".obj";
+    ASSERT_TRUE(write_text_file(dir / name, "first", "test"));
+    ASSERT_TRUE(write_text_file(dir / name, "second", "test"));  // replacing it too
+    EXPECT_EQ(read(dir / name), "second");
+    EXPECT_EQ(names_in(dir), std::vector<std::string>{name}) << "no temporary file left";
+    const std::string too_long = std::string(NAME_MAX + 1, 'b');
+    const auto refused = write_text_file(dir / too_long, "x", "test");
+    ASSERT_FALSE(refused);
+    EXPECT_NE(refused.error().message.find("File name too long"), std::string::npos)
+        << refused.error().message;
+    EXPECT_EQ(names_in(dir), std::vector<std::string>{name});
 }
 
 TEST(FileIo, AFailedWriteKeepsTheEarlierFileAndLeavesNothingElse)
