@@ -119,7 +119,10 @@ core::Result<sim::MembraneState> load_saved_state(const std::filesystem::path& p
                                                   const sim::MembraneModel& model)
 {
     const std::string name = path.string();
-    if (lower_extension(path) != ".pgrid")
+    // By its name where it has one; a name without an extension (a pipe, `<(...)`, /dev/fd/N)
+    // is read, and the grid file's own header says whether it is one.
+    const std::string ext = lower_extension(path);
+    if (!ext.empty() && ext != ".pgrid")
         return core::fail(core::ErrorCode::InvalidArgument,
                           "--resume " + name +
                               ": a state is resumed from a .pgrid frame (u and v), not from a "

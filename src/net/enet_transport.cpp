@@ -15,6 +15,7 @@
 #include <pliant/net/enet_transport.h>
 
 #include <enet/enet.h>
+#include <enet/time.h>
 #include <poll.h>
 #include <spdlog/spdlog.h>
 #include <time.h>
@@ -363,7 +364,12 @@ public:
         if (it == connections_.end())
             return std::nullopt;
         PeerStats s = it->second.stats;
-        s.rtt_s = static_cast<double>(it->second.peer->roundTripTime) * 1e-3;
+        const ENetPeer* p = it->second.peer;
+        s.rtt_s = static_cast<double>(p->roundTripTime) * 1e-3;
+        // ENet keeps the host's clock of the last datagram from the peer (its pings come every
+        // 0.5 s when nothing else is sent).
+        s.silent_s =
+            static_cast<double>(ENET_TIME_DIFFERENCE(enet_time_get(), p->lastReceiveTime)) * 1e-3;
         return s;
     }
 

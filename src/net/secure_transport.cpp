@@ -30,11 +30,13 @@
 #include <chrono>
 #include <cstring>
 #include <deque>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <map>
 #include <optional>
 #include <string>
+#include <system_error>
 
 namespace pliant::net
 {
@@ -241,11 +243,17 @@ core::Result<SecretKey> key_from_file(const std::filesystem::path& path, std::st
             text.pop_back();
     }
     if (text.empty())
+    {
+        // Advice to write the key into the file, unless it is no file (/dev/null, a pipe).
+        std::error_code ec;
+        const std::string target =
+            std::filesystem::is_regular_file(path, ec) ? path.string() : "session.key";
         return core::fail(core::ErrorCode::InvalidArgument,
                           "key file " + path.string() +
                               " is empty (a final newline aside): it should hold 32 random bytes "
                               "(head -c 32 /dev/urandom > " +
-                              path.string() + ")");
+                              target + ")");
+    }
     if (text.size() > k_max_passphrase)
     {
         sodium_memzero(text.data(), text.size());

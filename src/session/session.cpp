@@ -1526,11 +1526,38 @@ struct Session::Impl
         if (s.role_ != SessionRole::Master || settings.max_barrier_wait_s <= 0.0 ||
             waited <= settings.max_barrier_wait_s)
             return;
+        // Whom to remove: a member that waits itself (for a stopped neighbour's halos, within
+        // the same tick) publishes nothing either, but its transport goes on answering; the
+        // silent ones (nothing on the connection for half the wait, at least 1 s: a stopped
+        // or hung process) are the cause, and only they go. Where none is silent (a member that
+        // answers but never steps, or a transport that cannot tell), every missing member goes.
+        std::vector<std::uint16_t> culprits;
+        const double silent_after = std::max(1.0, 0.5 * settings.max_barrier_wait_s);
+        for (const std::uint16_t id : missing)
+        {
+            const RemotePeer& p = peers.at(id);
+            if (!p.handle)
+                continue;
+            const std::optional<net::PeerStats> st = transport.stats(*p.handle);
+            if (st)
+                spdlog::debug("session: {} has sent nothing for {:.2f} s", describe_peer(id),
+                              st->silent_s);
+            if (st && st->silent_s > silent_after)
+                culprits.push_back(id);
+        }
+        if (culprits.empty())
+            culprits = missing;
+        else if (culprits.size() < missing.size())
+        {
+            names.clear();
+            for (const std::uint16_t id : culprits)
+                names += (names.empty() ? "" : ", ") + describe_peer(id);
+        }
         spdlog::warn(
             "session: removing {} from the session: not one step published for {:.1f} s "
             "(tick {}); its leaves go on from their last streamed state",
             names, waited, t);
-        for (const std::uint16_t id : missing)
+        for (const std::uint16_t id : culprits)
         {
             RemotePeer& p = peers.at(id);
             ++counters.stalled_removed;

@@ -370,7 +370,7 @@ if(TARGET pliant)
     add_test(NAME cli_simulate_scenario_from_a_pipe
              COMMAND sh -c "cat '${PROJECT_SOURCE_DIR}/scenes/pull.toml' | '$<TARGET_FILE:pliant>' simulate -s /dev/stdin --level 3 -j 1 -o '${CMAKE_CURRENT_BINARY_DIR}/simulate-pipe'")
     set_tests_properties(cli_simulate_scenario_from_a_pipe PROPERTIES TIMEOUT 120
-        PASS_REGULAR_EXPRESSION "101 frames, 4.000 s simulated")
+        FIXTURES_SETUP simulate_pipe PASS_REGULAR_EXPRESSION "101 frames, 4.000 s simulated")
     # A scenario whose name is not UTF-8 (Latin-1 "sz\xe9n.toml"): run.json holds it with
     # U+FFFD; the JSON writer threw and the process aborted (status 134).
     add_test(NAME cli_simulate_non_utf8_path
@@ -382,4 +382,11 @@ if(TARGET pliant)
              COMMAND sh -c "d='${CMAKE_CURRENT_BINARY_DIR}/simulate-locked' && rm -rf \"$d\" && P='$<TARGET_FILE:pliant>' && S='${PROJECT_SOURCE_DIR}/scenes/pull.toml' && { \"$P\" -q simulate -s \"$S\" --level 7 -j 1 -o \"$d\" & } && i=0 && while [ ! -e \"$d/run.json\" ] && [ $i -lt 600 ]; do sleep 0.1; i=$((i+1)); done && ! \"$P\" simulate -s \"$S\" --level 4 -j 1 -o \"$d\" && wait && grep -q '\"level\": 7' \"$d/run.json\" && grep -q '\"status\": \"complete\"' \"$d/run.json\"")
     set_tests_properties(cli_simulate_one_run_per_folder PROPERTIES TIMEOUT 300
         PASS_REGULAR_EXPRESSION "another run is writing to .*simulate-locked")
+    # A state resumed from a pipe (`--resume <(...)`, here /dev/stdin): a name without an
+    # extension is read and its header decides; it was refused as "not from a mesh".
+    add_test(NAME cli_simulate_resume_from_a_pipe
+             COMMAND sh -c "cat '${CMAKE_CURRENT_BINARY_DIR}/simulate-pipe/frame_00050.pgrid' | '$<TARGET_FILE:pliant>' simulate -s '${PROJECT_SOURCE_DIR}/scenes/pull.toml' --level 3 -j 1 --resume /dev/stdin -o '${CMAKE_CURRENT_BINARY_DIR}/simulate-pipe-resumed'")
+    set_tests_properties(cli_simulate_resume_from_a_pipe PROPERTIES TIMEOUT 120
+        FIXTURES_REQUIRED simulate_pipe
+        PASS_REGULAR_EXPRESSION "101 frames, 4.000 s simulated")
 endif()

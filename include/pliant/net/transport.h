@@ -81,6 +81,10 @@ struct PeerStats
     std::uint64_t packets_received = 0;
     std::uint64_t bad_datagrams =
         0;  ///< received and dropped by the Messenger (report_bad_datagram)
+    /// Seconds since anything came on the connection (data, an acknowledgement, a ping: a live
+    /// process's transport answers even when it sends no data); 0 where the transport cannot
+    /// tell (the simulated one).
+    double silent_s = 0.0;
 };
 
 struct TransportEvent
