@@ -198,6 +198,13 @@ int run_host(const HostOptions& opt)
     if (!opt.save.empty())
         if (auto ok = save_peer_state(**s, opt.save); !ok)
             return report(ok.error());
+    if (!(*s)->refusal().empty())
+    {
+        // Paused past the others' timeout: they went on without this master (the recording
+        // and --save above keep what it had).
+        spdlog::error("host: {}", (*s)->refusal());
+        return k_exit_failure;
+    }
     std::printf("host: %.1f s, tick %llu, %llu bytes out, %llu bytes in, %s\n", summary->elapsed_s,
                 static_cast<unsigned long long>(summary->final_tick),
                 static_cast<unsigned long long>(summary->stats.bytes_sent),

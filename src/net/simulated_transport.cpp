@@ -634,6 +634,32 @@ void SimulatedNetwork::set_link(const Address& from, const Address& to, const Li
     impl_->link(a, b).settings = link;
 }
 
+void SimulatedNetwork::suspend(const Address& a)
+{
+    const std::lock_guard lock(impl_->mutex);
+    const int ep = impl_->endpoint_at(a);
+    PLIANT_ASSERT(ep != 0, "SimulatedNetwork::suspend: address not open");
+    const std::int64_t at = impl_->now + to_us(impl_->settings.connect_timeout_s);
+    for (const auto& [h, c] : impl_->endpoints[static_cast<std::size_t>(ep)].connections)
+    {
+        Packet own;
+        own.kind = PacketKind::Timeout;
+        own.arrival_us = at;
+        own.from = c.remote;
+        own.to = ep;
+        own.to_handle = h;
+        impl_->in_flight.push(own);
+        if (c.remote_handle != 0)
+        {
+            Packet far = own;
+            far.from = ep;
+            far.to = c.remote;
+            far.to_handle = c.remote_handle;
+            impl_->in_flight.push(far);
+        }
+    }
+}
+
 void SimulatedNetwork::advance(double seconds)
 {
     PLIANT_ASSERT(seconds >= 0.0, "SimulatedNetwork::advance: negative time");

@@ -82,6 +82,15 @@ constexpr double k_provisional_s = 3.0;
 /// of the transport's peer slots for as long as its other end keeps it alive (an audit filled
 /// all 64 that way and every later joiner was turned away).
 constexpr double k_greeting_deadline_s = 10.0;
+/// After a pause (SessionSettings::pause_s), a peer that has heard no message from its master
+/// (the master: from any participant) since, and whose transport has heard nothing at all on
+/// that link for this long (s; a live ENet answers a ping every 0.5 s), takes itself for
+/// dropped without waiting for its own timeout, which starts only at its first ping after the
+/// pause and takes 5 s or more.
+constexpr double k_pause_silence_s = 2.0;
+/// A pause stops counting against the losses that follow after this long (s): ENet's longest
+/// timeout (30 s) and a margin.
+constexpr double k_pause_suspect_s = 35.0;
 /// Master: the Welcome's blob chunks go to a joiner while the transport holds less than this
 /// for it (queued or unacknowledged), so a joiner that reads slowly, or never, holds at most
 /// this much of the master's memory, not the whole model and state (docs/session.md §2).
@@ -374,14 +383,14 @@ core::Result<void> check_settings(const SessionSettings& s, const char* who)
     if (!(s.interest_boost >= 0.0))
         return bad("the interest boost must be >= 0, not " + num(s.interest_boost));
     for (const double t :
-         {s.max_halo_age_s, s.max_stall_s, s.quiescent_refresh_s, s.max_barrier_wait_s})
+         {s.max_halo_age_s, s.max_stall_s, s.quiescent_refresh_s, s.max_barrier_wait_s, s.pause_s})
         if (!(t >= 0.0) || !std::isfinite(t))
             return bad(
-                "halo age, stall, quiescent refresh and barrier wait limits must be finite and "
-                ">= 0 s (max_halo_age_s " +
+                "halo age, stall, quiescent refresh, barrier wait and pause limits must be finite "
+                "and >= 0 s (max_halo_age_s " +
                 num(s.max_halo_age_s) + ", max_stall_s " + num(s.max_stall_s) +
                 ", quiescent_refresh_s " + num(s.quiescent_refresh_s) + ", max_barrier_wait_s " +
-                num(s.max_barrier_wait_s) + ")");
+                num(s.max_barrier_wait_s) + ", pause_s " + num(s.pause_s) + ")");
     if (s.halo_rings < 3)
         return bad("exact coupling needs at least 3 halo rings, not " +
                    std::to_string(s.halo_rings));
@@ -491,7 +500,8 @@ struct RemotePeer
     bool streams_to_us = false;  ///< a LeafState or LeafBatch came from it: our Ready arrived
     /// We dialled it: until when (our clock) our Hello is repeated unreliably, unless `heard`.
     double hello_repeat_until = -1.0;
-    bool heard = false;  ///< a message came from it on a bound connection: it knows us
+    bool heard = false;      ///< a message came from it on a bound connection: it knows us
+    double heard_at = -1.0;  ///< when the last one was handled (our clock)
     bool leaving = false;
     bool departed = false;
     /// Exact coupling: the apply tick of the first partition it is no longer a member of, after
@@ -738,6 +748,15 @@ struct Session::Impl
     double next_view = 0.0;  // view_u is refreshed at frame_rate_hz
     bool leaving = false;
     double leave_started = 0.0;
+    // Pauses (SessionSettings::pause_s): where the last one ended (caller's clock; -1: none) and
+    // how long it was; the departures noticed (lose_peer) and not yet handled, which advance()
+    // weighs against a pause before following a successor or re-partitioning.
+    double pause_end = -1.0;
+    double pause_length = 0.0;
+    // Since the last pause nothing has come from the master (the master: from any participant):
+    // this peer may have been dropped (check_pause, dropped_after_pause).
+    bool pause_suspect = false;
+    std::vector<std::pair<std::uint16_t, net::DisconnectReason>> lost_pending;
 
     SessionStats counters;
     bool warned_own_force_limit = false;  ///< count_limited's flag for this peer's own forces
@@ -1570,6 +1589,7 @@ struct Session::Impl
             else
                 p.departed = true;
         }
+        settle_losses();  // the PeerLeft and the re-partition at once, not at the next advance
         barrier_since = -1.0;
     }
 
@@ -2715,20 +2735,137 @@ struct Session::Impl
             close_all(net::DisconnectReason::Quit);
         }
         else
-            follow_master();
+            lost_pending.emplace_back(id, reason);  // settle_losses(), once the clock is known
         if (leaving && handle_ids.empty())
             s.left_ = true;
-        if (s.role_ == SessionRole::Master && !s.left_)
+    }
+
+    /// Handles the departures lose_peer noticed: a participant or viewer whose master is gone
+    /// follows the successor (or becomes it); a master tells the others and re-partitions. Run
+    /// from advance(), after the pause check, since a process resumed after a long stop sees
+    /// its transport time every peer out in its first poll(), before the advance() that shows
+    /// the gap: the departures are then its own removal, not the others' (pause_s).
+    void settle_losses()
+    {
+        if (lost_pending.empty())
+            return;
+        const auto lost = std::move(lost_pending);
+        lost_pending.clear();
+        if (s.left_ || dropped_after_pause(lost))
+            return;
+        follow_master();
+        if (s.role_ != SessionRole::Master || s.left_)
+            return;
+        for (const auto& [id, reason] : lost)
         {
-            repartition_pending = true;
             net::PeerLeft msg;
             msg.peer = net::PeerId{id};
             msg.reason =
                 reason == net::DisconnectReason::None ? net::DisconnectReason::TimedOut : reason;
             send_all(make(msg, s.state_.tick));
-            if (s.coupling_ == Coupling::Fast)
-                master_repartition(s.state_.tick);
         }
+        repartition_pending = true;
+        if (s.coupling_ == Coupling::Fast)
+            master_repartition(s.state_.tick);
+    }
+
+    /// Whether `lost` is this peer's own removal after a pause (SessionSettings::pause_s): the
+    /// others dropped it while it did not run and went on without it. Then it leaves, saying
+    /// so, instead of following a successor of its own choosing (a master: instead of going on
+    /// with what is left), which would split the session in two.
+    bool dropped_after_pause(
+        const std::vector<std::pair<std::uint16_t, net::DisconnectReason>>& lost)
+    {
+        if (!pause_suspect)
+            return false;
+        bool ours = false;
+        for (const auto& [id, reason] : lost)
+            ours = ours || (s.role_ != SessionRole::Master
+                                ? net::PeerId{id} == master_id
+                                : peers.at(id).info.role == net::Role::Participant);
+        if (!ours)
+            return false;
+        leave_after_pause();
+        return true;
+    }
+
+    /// The peers whose silence after a pause tells that this peer was dropped: its master, or
+    /// (the master) the participants.
+    bool pause_witness(std::uint16_t id, const RemotePeer& p) const
+    {
+        if (p.departed)
+            return false;
+        return s.role_ == SessionRole::Master ? p.info.role == net::Role::Participant
+                                              : net::PeerId{id} == master_id;
+    }
+
+    /// While pause_suspect: a message from a witness (pause_witness) clears it; a silence of
+    /// every witness's link for k_pause_silence_s since the pause (the transport hears not even
+    /// an acknowledgement: the far end dropped this peer) means this peer was dropped.
+    void check_pause()
+    {
+        if (!pause_suspect || s.left_)
+            return;
+        const double since = last_now - pause_end;
+        if (since > k_pause_suspect_s)
+        {
+            pause_suspect = false;
+            return;
+        }
+        bool any = false;
+        bool silent = true;
+        for (const auto& [id, p] : peers)
+        {
+            if (!pause_witness(id, p))
+                continue;
+            if (p.heard_at > pause_end)
+            {
+                pause_suspect = false;  // it still sends to us: still a member
+                return;
+            }
+            any = true;
+            const auto st = p.handle ? transport.stats(*p.handle) : std::nullopt;
+            silent = silent && st && st->silent_s >= k_pause_silence_s;
+        }
+        if (any && silent && since >= k_pause_silence_s)
+            leave_after_pause();
+    }
+
+    void leave_after_pause()
+    {
+        pause_suspect = false;
+        const char* who = s.role_ == SessionRole::Master   ? "master"
+                          : s.role_ == SessionRole::Viewer ? "viewer"
+                                                           : "participant";
+        refusal = fmt::format(
+            "this {} did not run for {:.1f} s (the process was stopped, suspended or starved), "
+            "longer than the others wait for a silent peer: they dropped it and went on without "
+            "it{}; it left rather than run a second session beside theirs: {}",
+            who, pause_length,
+            s.role_ == SessionRole::Master
+                ? " (their participant with the lowest id took over as master)"
+                : "",
+            s.role_ == SessionRole::Master
+                ? "join their session through its new master, or host a new one"
+                : "join again (through the master's address: it may have changed)");
+        close_all(net::DisconnectReason::Quit);
+    }
+
+    /// Notes a pause (no advance() for SessionSettings::pause_s) ending at `now`, after `gap`.
+    void note_pause(double now, double gap)
+    {
+        pause_end = now;
+        pause_length = gap;
+        pause_suspect = true;
+        ++counters.pauses;
+        counters.longest_pause_s = std::max(counters.longest_pause_s, gap);
+        // A wait at the barrier restarts: the time this peer did not run is nobody's fault.
+        if (barrier_since >= 0.0)
+            barrier_since = now;
+        spdlog::warn(
+            "session: this peer did not run for {:.1f} s (the process was stopped, suspended or "
+            "starved); the others drop a peer silent for their transport's timeout (5-30 s)",
+            gap);
     }
 
     // --- failover (docs/session.md §6) ----------------------------------------------------------
@@ -3623,6 +3760,7 @@ struct Session::Impl
             return;
         const std::uint16_t from = idit->second;
         peers[from].heard = true;
+        peers[from].heard_at = last_now;
         if (m.type() == net::MessageType::Ready)
         {
             peers[from].has_model = true;
@@ -4036,8 +4174,12 @@ struct Session::Impl
 
     void advance(double now)
     {
+        if (advanced && settings.pause_s > 0.0 && now - last_now >= settings.pause_s && !s.left_)
+            note_pause(now, now - last_now);
         last_now = now;
         advanced = true;
+        check_pause();
+        settle_losses();
         behind = false;
         if (!ungreeted.empty())
             close_ungreeted();

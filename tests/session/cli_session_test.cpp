@@ -325,6 +325,70 @@ TEST(SessionCli, AStoppedParticipantIsRemovedAndTheOthersGoOn)
     }
 }
 
+// A process stopped (SIGSTOP) for 8 s, past ENet's 5 s timeout, is dropped by the others, who go
+// on without it (docs/session.md §6). Resumed, its own links time out: a participant used to take
+// over as master of a second session of its own, and a master to go on alone, each until its
+// --duration and with exit status 0. Now each notices the pause (SessionSettings::pause_s) and
+// exits 3 within a few seconds, saying why; the others go on. Bounded by the durations (about
+// 17 s) and a kill after 40 s. `stopped`: "participant" or "master".
+void stop_past_the_timeout(const std::string& stopped)
+{
+    const auto dir = pliant::test::scratch_dir(("session_cli_paused_" + stopped).c_str());
+    const int port = test_port(stopped == "master" ? 3 : 9);
+    const std::string exe = PLIANT_EXE;
+    const std::string d = dir.string();
+    const std::string p = std::to_string(port);
+    const bool master = stopped == "master";
+    const std::string join = "'" + exe + "' -v join 127.0.0.1:" + p + " --duration ";
+    // The stopped process runs directly in the background (its $! is the process itself);
+    // it would run 25 s, the others 16-17 s.
+    const std::string host = "'" + exe + "' -v host --level 4 --port " + p +
+                             " --mode fast --duration " + (master ? "25" : "17") +
+                             " > host.log 2>&1";
+    const std::string other = join + (master ? "16" : "25") + " --name other > b.log 2>&1";
+    const std::string stopped_name = master ? "host" : "b";
+    const std::string cmd =
+        "cd '" + d + "' && rm -f *.rc *.log *.ms; " +
+        (master ? host + " & V=$!; " : "(" + host + "; echo $? > host.rc) & ") + "sleep 0.5; (" +
+        join + "16 --name steady > a.log 2>&1; echo $? > a.rc) & sleep 0.3; " +
+        (master ? "(" + other + "; echo $? > b.rc) & " : other + " & V=$!; ") +
+        "sleep 3; (sleep 40; kill -9 $V) > /dev/null 2>&1 & W=$!; kill -STOP $V; sleep 8; "
+        "T0=$(date +%s%N); kill -CONT $V; wait $V; echo $? > " +
+        stopped_name +
+        ".rc; echo $(( ($(date +%s%N) - T0) / 1000000 )) > stopped.ms; kill $W 2>/dev/null; "
+        "wait";
+    ASSERT_EQ(std::system(cmd.c_str()), 0);
+    PLIANT_SKIP_IF_UNBOUND(dir, "host", port);
+    const std::string log = read(dir / (stopped_name + ".log"));
+    EXPECT_EQ(read(dir / (stopped_name + ".rc")), "3\n") << log;
+    EXPECT_NE(log.find("this " + stopped + " did not run for 8."), std::string::npos) << log;
+    EXPECT_NE(log.find("went on without it"), std::string::npos) << log;
+    EXPECT_EQ(log.find("takes over"), std::string::npos) << log;
+    // It ended soon after it was resumed, well before its --duration (14 s after the resume).
+    const double ms = std::stod(read(dir / "stopped.ms"));
+    EXPECT_LT(ms, 10000.0) << log;
+    // The others went on without it and ended normally.
+    for (const std::string name :
+         master ? std::vector<std::string>{"a", "b"} : std::vector<std::string>{"host", "a"})
+        EXPECT_EQ(read(dir / (name + ".rc")), "0\n") << name << ": " << read(dir / (name + ".log"));
+    if (master)
+        EXPECT_NE(read(dir / "a.log").find("master 0 lost; peer 1 takes over"), std::string::npos)
+            << read(dir / "a.log");
+    else
+        EXPECT_NE(read(dir / "host.log").find("peer 2 disconnected (timed-out)"), std::string::npos)
+            << read(dir / "host.log");
+}
+
+TEST(SessionCli, AParticipantStoppedPastTheTimeoutLeavesInsteadOfTakingOver)
+{
+    stop_past_the_timeout("participant");
+}
+
+TEST(SessionCli, AMasterStoppedPastTheTimeoutLeavesTheSessionToItsSuccessor)
+{
+    stop_past_the_timeout("master");
+}
+
 // A peer that cannot keep real time says so, and why: a lone level-9 master steps the whole
 // object, several milliseconds per 0.45 ms tick, so after three slow seconds it warns with its
 // pace and names its steps as the cause (PaceWatch, tests/session/script_test.cpp).

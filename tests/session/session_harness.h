@@ -140,6 +140,7 @@ struct Harness
     net::SimulatedNetwork net;
     std::vector<std::unique_ptr<net::Transport>> transports;
     std::vector<std::unique_ptr<Session>> peers;  ///< null once crashed
+    std::vector<char> stopped;                    ///< per peer: stop() without resume()
     std::vector<net::Address> addresses;          ///< where each peer listens
     net::Address master_address;
     double now = 0.0;
@@ -177,14 +178,30 @@ struct Harness
         transports[k].reset();
     }
 
+    /// Peer k stops running, as a process stopped with SIGSTOP: it is no longer polled or
+    /// advanced until resume(k). `past_timeout`: long enough for the others to drop it (its
+    /// links time out after the network's connect_timeout_s, SimulatedNetwork::suspend).
+    void stop(std::size_t k, bool past_timeout)
+    {
+        stopped.resize(peers.size(), 0);
+        stopped[k] = 1;
+        if (past_timeout)
+            net.suspend(addresses[k]);
+    }
+    void resume(std::size_t k) { stopped.at(k) = 0; }
+    [[nodiscard]] bool running(std::size_t k) const
+    {
+        return peers[k] && (k >= stopped.size() || stopped[k] == 0);
+    }
+
     void pump_once(double dt)
     {
-        for (auto& p : peers)
-            if (p)
-                p->poll();
-        for (auto& p : peers)
-            if (p)
-                p->advance(now);
+        for (std::size_t k = 0; k < peers.size(); ++k)
+            if (running(k))
+                peers[k]->poll();
+        for (std::size_t k = 0; k < peers.size(); ++k)
+            if (running(k))
+                peers[k]->advance(now);
         net.advance(dt);
         now += dt;
     }

@@ -502,8 +502,7 @@ void Viewer::pump_session(double now_s)
                   ": this peer left the session (the others, if any, took its share over; a step "
                   "above the stable one, or forces without a limit; docs/session.md §7)";
         else if (!session_->refusal().empty())
-            why =
-                "the session at " + session_address_ + " refused this peer: " + session_->refusal();
+            why = "this peer left the session at " + session_address_ + ": " + session_->refusal();
         else if (session_->role() == session::SessionRole::Master)
             why = "the session hosted on " + session_address_ + " ended";
         else if (const auto failure = session_->join_failure();

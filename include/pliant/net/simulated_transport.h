@@ -83,6 +83,14 @@ public:
     /// Conditions for packets from `from` to `to` (both opened addresses).
     void set_link(const Address& from, const Address& to, const LinkSettings& link);
 
+    /// The endpoint at `a` stops as a stopped process does (SIGSTOP), keeping its socket: it
+    /// answers nothing, so after connect_timeout_s every connection to it times out at the far
+    /// end, and at its own end too (resumed, its transport hears nothing back: the far ends
+    /// have dropped it). What reaches it meanwhile waits in its queue, as in a socket buffer.
+    /// The caller stops polling it for that time; a pause shorter than the timeout is only
+    /// that (no call needed).
+    void suspend(const Address& a);
+
     /// Advances the virtual clock by `seconds` (>= 0).
     void advance(double seconds);
     /// Moves every packet due by now into its endpoint's queue. Each transport's poll() does

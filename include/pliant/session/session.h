@@ -185,6 +185,14 @@ struct SessionSettings
     /// state (docs/session.md §6), s; 0: never. Any peer warns after k_barrier_warn_s, naming
     /// the peers it waits for (SessionStats::barrier_wait_s, barrier_peer).
     double max_barrier_wait_s = 10.0;
+    /// A gap of at least this between two advance() calls (s, the caller's clock) is a pause:
+    /// the process was stopped (SIGSTOP, Ctrl-Z, a suspended machine, a debugger) or starved.
+    /// The others drop a peer that stays silent for their transport's timeout (ENet: 5-30 s),
+    /// so a peer that loses its master (the master: a participant) within pause_s after a
+    /// pause takes the loss for its own removal and leaves, saying so in refusal(), rather
+    /// than take over and run a second session beside theirs (docs/session.md §6); 0: never.
+    /// Below ENet's shortest timeout (5 s) by default, and above any step or frame.
+    double pause_s = 4.0;
     std::string name = "peer";      ///< 1..32 printable ASCII
     std::uint16_t listen_port = 0;  ///< announced in Hello; 0: the port the master sees
     std::uint32_t session_id = 0;   ///< master only; 0 picks a fixed non-zero id
@@ -300,6 +308,10 @@ struct SessionStats
     /// Master, exact mode: members removed for holding the lockstep longer than
     /// SessionSettings::max_barrier_wait_s.
     std::uint64_t stalled_removed = 0;
+    /// Pauses of this peer (SessionSettings::pause_s: no advance() for that long) and the
+    /// longest, s.
+    std::uint64_t pauses = 0;
+    double longest_pause_s = 0.0;
 };
 
 /// Exact mode: a peer waiting this long at one tick for a member's Heartbeat logs a warning
@@ -456,7 +468,8 @@ public:
     [[nodiscard]] SessionStats stats() const;
     /// Why this peer left on its own when the session refused its settings, or it refused the
     /// master's model or state blob, or why it had to leave: the master removed it (exact
-    /// coupling: it held the lockstep past max_barrier_wait_s) (empty otherwise): a joiner
+    /// coupling: it held the lockstep past max_barrier_wait_s), or it was paused so long that the
+    /// others went on without it (SessionSettings::pause_s) (empty otherwise): a joiner
     /// learns the level and coupling
     /// only from the model (e.g. stream_coarsen in a fast session, docs/session.md §5.2), and
     /// decodes the blobs only once they are in (docs/protocol.md, Blob).
