@@ -369,7 +369,7 @@ core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
     // Bounded by the duration (wall clock) and by an iteration cap.
     for (std::uint64_t iteration = 0; iteration < 1'000'000'000ULL; ++iteration)
     {
-        const double now = elapsed();
+        double now = elapsed();
         if (now >= options.duration_s || session.left())
             break;
         if (options.stop != nullptr && *options.stop != 0)
@@ -380,6 +380,10 @@ core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
             break;
         }
         session.poll();
+        // Read again after poll(): a stop of the process within it must show as a gap in
+        // advance() (SessionSettings::pause_s), or the departures poll() found then would be
+        // taken for the others' (docs/session.md §6).
+        now = elapsed();
         if (summary.model_s < 0.0 && !session.ready() && now >= next_wait_note)
         {
             // A large model (level 10: ~100 MB with its state) takes a while: say it is coming.

@@ -85,8 +85,8 @@ constexpr double k_greeting_deadline_s = 10.0;
 /// After a pause (SessionSettings::pause_s), a peer that has heard no message from its master
 /// (the master: from any participant) since, and whose transport has heard nothing at all on
 /// that link for this long (s; a live ENet answers a ping every 0.5 s), takes itself for
-/// dropped without waiting for its own timeout, which starts only at its first ping after the
-/// pause and takes 5 s or more.
+/// dropped without waiting for its own timeout, which needs its retransmissions after the
+/// pause to run out and takes seconds more.
 constexpr double k_pause_silence_s = 2.0;
 /// A pause stops counting against the losses that follow after this long (s): ENet's longest
 /// timeout (30 s) and a margin.
@@ -2742,9 +2742,10 @@ struct Session::Impl
 
     /// Handles the departures lose_peer noticed: a participant or viewer whose master is gone
     /// follows the successor (or becomes it); a master tells the others and re-partitions. Run
-    /// from advance(), after the pause check, since a process resumed after a long stop sees
-    /// its transport time every peer out in its first poll(), before the advance() that shows
-    /// the gap: the departures are then its own removal, not the others' (pause_s).
+    /// from advance(), after the pause check: a process resumed after a stop past its own
+    /// transport's longest timeout (ENet: 30 s) sees every peer time out in its first poll(),
+    /// before the advance() that shows the gap, and those departures are its own removal, not
+    /// the others' (pause_s).
     void settle_losses()
     {
         if (lost_pending.empty())
@@ -2778,11 +2779,20 @@ struct Session::Impl
     {
         if (!pause_suspect)
             return false;
+        // Only a loss by timeout tells: a peer that said goodbye (Quit, a leave or a diverged
+        // step; Shutdown, handled in lose_peer) left on its own, and Kicked is this master's own
+        // removal of a member (wait_at_barrier).
         bool ours = false;
         for (const auto& [id, reason] : lost)
-            ours = ours || (s.role_ != SessionRole::Master
-                                ? net::PeerId{id} == master_id
-                                : peers.at(id).info.role == net::Role::Participant);
+        {
+            const RemotePeer& p = peers.at(id);
+            if ((reason != net::DisconnectReason::TimedOut &&
+                 reason != net::DisconnectReason::None) ||
+                p.leaving)
+                continue;
+            ours = ours || (s.role_ != SessionRole::Master ? net::PeerId{id} == master_id
+                                                           : p.info.role == net::Role::Participant);
+        }
         if (!ours)
             return false;
         leave_after_pause();
@@ -2793,7 +2803,7 @@ struct Session::Impl
     /// (the master) the participants.
     bool pause_witness(std::uint16_t id, const RemotePeer& p) const
     {
-        if (p.departed)
+        if (p.departed || p.leaving)
             return false;
         return s.role_ == SessionRole::Master ? p.info.role == net::Role::Participant
                                               : net::PeerId{id} == master_id;
@@ -2837,17 +2847,20 @@ struct Session::Impl
         const char* who = s.role_ == SessionRole::Master   ? "master"
                           : s.role_ == SessionRole::Viewer ? "viewer"
                                                            : "participant";
+        const char* then =
+            s.role_ == SessionRole::Master
+                ? "it left rather than run a second session beside theirs (their participant "
+                  "with the lowest id takes over as master): join their session through it, or "
+                  "host a new one"
+            : s.role_ == SessionRole::Viewer
+                ? "it left: join again (through the master's address: it may have changed)"
+                : "it left rather than run a second session beside theirs: join again (through "
+                  "the master's address: it may have changed)";
         refusal = fmt::format(
             "this {} did not run for {:.1f} s (the process was stopped, suspended or starved), "
             "longer than the others wait for a silent peer: they dropped it and went on without "
-            "it{}; it left rather than run a second session beside theirs: {}",
-            who, pause_length,
-            s.role_ == SessionRole::Master
-                ? " (their participant with the lowest id took over as master)"
-                : "",
-            s.role_ == SessionRole::Master
-                ? "join their session through its new master, or host a new one"
-                : "join again (through the master's address: it may have changed)");
+            "it (or left while it was stopped, their goodbye lost); {}",
+            who, pause_length, then);
         close_all(net::DisconnectReason::Quit);
     }
 

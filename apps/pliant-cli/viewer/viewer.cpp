@@ -475,8 +475,9 @@ void Viewer::leave_session(const std::string& message, bool error)
     set_status(message, error);
 }
 
-void Viewer::pump_session(double now_s)
+void Viewer::pump_session()
 {
+    double now_s = 0.0;
     // A lockstep tick needs one message round with every peer, so a participant polls several
     // times per frame (bounded, 4 ms) rather than once: otherwise the session could advance at
     // most one tick per frame.
@@ -485,11 +486,14 @@ void Viewer::pump_session(double now_s)
     do
     {
         session_->poll();
+        // The clock is read after poll(): a stop of the process within it must show as a gap
+        // in advance() (SessionSettings::pause_s), or the departures poll() found then would
+        // be taken for the others' (docs/session.md §6).
+        now_s = seconds(Clock::now().time_since_epoch());
         session_->advance(now_s);
         if (!simulates)
             break;
         session_->wait(250e-6);  // ends when a neighbour's halo or heartbeat arrives
-        now_s = seconds(Clock::now().time_since_epoch());
     } while (Clock::now() < budget_end && !session_->left());
     if (session_->left())
     {
@@ -556,7 +560,7 @@ void Viewer::simulate(double wall_dt)
             if (auto ok = session_->set_forces(std::move(list)); !ok)
                 set_status(ok.error().message, true);
         }
-        pump_session(seconds(Clock::now().time_since_epoch()));
+        pump_session();
         if (!session_)
             return;
         const session::SessionStats s = session_->stats();

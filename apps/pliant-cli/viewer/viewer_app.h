@@ -164,7 +164,7 @@ public:
     /// Leaves (or, as master, ends) the session and goes on with a local simulation of its
     /// surface; `message` becomes the status line (an error keeps it red).
     void leave_session(const std::string& message = "left the session", bool error = false);
-    void pump_session(double now_s);
+    void pump_session();
     void simulate(double wall_dt);
     void update_surface();
     void update_owners();

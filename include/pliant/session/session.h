@@ -187,10 +187,11 @@ struct SessionSettings
     double max_barrier_wait_s = 10.0;
     /// A gap of at least this between two advance() calls (s, the caller's clock) is a pause:
     /// the process was stopped (SIGSTOP, Ctrl-Z, a suspended machine, a debugger) or starved.
-    /// The others drop a peer that stays silent for their transport's timeout (ENet: 5-30 s),
-    /// so a peer that loses its master (the master: a participant) within pause_s after a
-    /// pause takes the loss for its own removal and leaves, saying so in refusal(), rather
-    /// than take over and run a second session beside theirs (docs/session.md §6); 0: never.
+    /// The others drop a peer that stays silent for their transport's timeout (ENet: 5-30 s).
+    /// Until a message comes from its master (the master: from a participant) after a pause,
+    /// a peer that loses it (a participant) by a timeout, or whose link to it stays silent for
+    /// 2 s, takes that for its own removal and leaves, saying so in refusal(), rather than
+    /// take over and run a second session beside theirs (docs/session.md §6); 0: never.
     /// Below ENet's shortest timeout (5 s) by default, and above any step or frame.
     double pause_s = 4.0;
     std::string name = "peer";      ///< 1..32 printable ASCII
@@ -364,10 +365,11 @@ public:
 
     /// Handles every pending network event (never waits).
     void poll();
-    /// Steps and streams up to the caller's clock `now_s` (monotonic, s; any origin). A peer
-    /// behind real time steps for a bounded slice of wall time per call (2 ms in exact coupling,
-    /// a frame period in fast coupling) and goes on at the next call, so that poll() keeps
-    /// serving the network.
+    /// Steps and streams up to the caller's clock `now_s` (monotonic, s; any origin), read after
+    /// the poll() before it (a stop of the process during poll() must show as a gap: pause_s).
+    /// A peer behind real time steps for a bounded slice of wall time per call (2 ms in exact
+    /// coupling, a frame period in fast coupling) and goes on at the next call, so that poll()
+    /// keeps serving the network.
     void advance(double now_s);
     /// Whether the last advance() stopped on its slice with steps still due: the caller should
     /// poll() and advance() again at once rather than sleep.
