@@ -8,9 +8,14 @@
 #include <pliant/remesh/intersections.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <span>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
 namespace pliant::remesh
 {
@@ -298,13 +303,16 @@ namespace
 /// the two faces' positions only.
 std::vector<std::array<std::uint32_t, 2>> pairs_among(const mesh::TriMesh& mesh,
                                                       std::span<const std::uint32_t> subset,
-                                                      std::span<const std::uint8_t> touched)
+                                                      std::span<const std::uint8_t> touched,
+                                                      const core::ProgressSink* stop)
 {
     const std::size_t nf = subset.empty() ? mesh.faces.size() : subset.size();
     const auto face_at = [&](std::size_t i)
     { return subset.empty() ? static_cast<std::uint32_t>(i) : subset[i]; };
     std::vector<std::array<std::uint32_t, 2>> pairs;
-    if (nf < 2)
+    // Between the serial stages (a sort of a level-10 grid's cells takes a second or more).
+    const auto asked = [&] { return stop != nullptr && stop->stop_requested(); };
+    if (nf < 2 || asked())
         return pairs;
     // face boxes and the grid (indices i, j below are into the subset)
     std::vector<std::array<Vec3, 2>> box(nf);
@@ -351,6 +359,8 @@ std::vector<std::array<std::uint32_t, 2>> pairs_among(const mesh::TriMesh& mesh,
     const auto key_of = [&](std::uint64_t i, std::uint64_t j, std::uint64_t k)
     { return (i * ny + j) * nz + k; };
 
+    if (asked())
+        return pairs;
     std::vector<Cell> cells;
     cells.reserve(nf * 4);
     for (std::size_t f = 0; f < nf; ++f)
@@ -364,9 +374,13 @@ std::vector<std::array<std::uint32_t, 2>> pairs_among(const mesh::TriMesh& mesh,
                 for (std::uint64_t k = k0; k <= k1; ++k)
                     cells.push_back({key_of(i, j, k), static_cast<std::uint32_t>(f)});
     }
+    if (asked())
+        return pairs;
     std::sort(cells.begin(), cells.end(),
               [](const Cell& x, const Cell& y)
               { return x.key != y.key ? x.key < y.key : x.face < y.face; });
+    if (asked())
+        return pairs;
     std::vector<std::size_t> runs;
     for (std::size_t i = 0; i < cells.size(); ++i)
         if (i == 0 || cells[i].key != cells[i - 1].key)
@@ -374,15 +388,29 @@ std::vector<std::array<std::uint32_t, 2>> pairs_among(const mesh::TriMesh& mesh,
     runs.push_back(cells.size());
 
     const auto nruns = static_cast<std::int64_t>(runs.size()) - 1;
+    // A stop asked of `stop` (polled by thread 0 only: a sink need not be thread-safe) ends
+    // every thread's work at its next cell or face.
+    std::atomic<bool> halt{false};
+    const auto halted = [&](bool poll)
+    {
+#ifdef _OPENMP
+        poll = poll && omp_get_thread_num() == 0;
+#endif
+        if (poll && stop != nullptr && stop->stop_requested())
+            halt.store(true, std::memory_order_relaxed);
+        return halt.load(std::memory_order_relaxed);
+    };
 #pragma omp parallel
     {
         std::vector<std::array<std::uint32_t, 2>> local;
 #pragma omp for schedule(dynamic, 64) nowait
         for (std::int64_t r = 0; r < nruns; ++r)
         {
+            if (halted((r & 63) == 0))
+                continue;
             const auto r0 = runs[static_cast<std::size_t>(r)];
             const auto r1 = runs[static_cast<std::size_t>(r) + 1];
-            for (std::size_t i = r0; i < r1; ++i)
+            for (std::size_t i = r0; i < r1 && !halted(((i - r0) & 255U) == 255U); ++i)
                 for (std::size_t j = i + 1; j < r1; ++j)
                 {
                     const std::uint32_t f = cells[i].face, g = cells[j].face;
@@ -413,13 +441,15 @@ std::vector<std::array<std::uint32_t, 2>> pairs_among(const mesh::TriMesh& mesh,
 
 }  // namespace
 
-std::vector<std::array<std::uint32_t, 2>> intersecting_pairs(const mesh::TriMesh& mesh)
+std::vector<std::array<std::uint32_t, 2>> intersecting_pairs(const mesh::TriMesh& mesh,
+                                                             const core::ProgressSink* stop)
 {
-    return pairs_among(mesh, {}, {});
+    return pairs_among(mesh, {}, {}, stop);
 }
 
 std::vector<std::array<std::uint32_t, 2>> intersecting_pairs_touching(
-    const mesh::TriMesh& mesh, std::span<const std::uint8_t> touched)
+    const mesh::TriMesh& mesh, std::span<const std::uint8_t> touched,
+    const core::ProgressSink* stop)
 {
     PLIANT_ASSERT(touched.size() == mesh.faces.size(),
                   "intersecting_pairs_touching: one flag per face");
@@ -457,12 +487,12 @@ std::vector<std::array<std::uint32_t, 2>> intersecting_pairs_touching(
         }
         subset.push_back(static_cast<std::uint32_t>(f));
     }
-    return pairs_among(mesh, subset, touched);
+    return pairs_among(mesh, subset, touched, stop);
 }
 
-std::size_t count_self_intersections(const mesh::TriMesh& mesh)
+std::size_t count_self_intersections(const mesh::TriMesh& mesh, const core::ProgressSink* stop)
 {
-    return intersecting_pairs(mesh).size();
+    return intersecting_pairs(mesh, stop).size();
 }
 
 bool is_folded(const mesh::TriMesh& output, std::size_t f, const mesh::TriMesh& input,

@@ -99,7 +99,11 @@ Vec3 closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3
 class Bvh
 {
 public:
-    explicit Bvh(const mesh::TriMesh& m) : m_(m), order_(m.faces.size())
+    /// `stop`: polled at every node of more than 2^16 faces; once it asks, the build ends early
+    /// (the tree stays valid, but slow to search: the caller, which owns the sink, discards
+    /// it).
+    explicit Bvh(const mesh::TriMesh& m, const core::ProgressSink* stop = nullptr)
+        : m_(m), order_(m.faces.size()), stop_(stop)
     {
         std::iota(order_.begin(), order_.end(), 0U);
         centroid_.resize(m.faces.size());
@@ -167,7 +171,10 @@ private:
             cbox.add(centroid_[order_[i]]);
         }
         nodes_[node].box = box;
-        if (end - begin <= 4)
+        // A stop ends the build with this node a leaf of all its faces: a valid tree, slow to
+        // search, that the stopped caller discards (a level-10 grid's build takes a second or
+        // more).
+        if (end - begin <= 4 || (end - begin > (1U << 16) && core::stop_requested(stop_)))
         {
             nodes_[node].first = begin;
             nodes_[node].count = end - begin;
@@ -197,6 +204,7 @@ private:
     std::vector<std::uint32_t> order_;
     std::vector<Vec3> centroid_;
     std::vector<Node> nodes_;
+    const core::ProgressSink* stop_;
 };
 
 /// Vertices plus `count` area-weighted random points of `m`.
@@ -298,8 +306,12 @@ SurfaceDistance surface_distance(const mesh::TriMesh& reference, const mesh::Tri
         hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
     }
     out.diagonal = core::norm(hi - lo);
-    const Bvh ref_bvh(reference);
-    const Bvh other_bvh(other);
+    const Bvh ref_bvh(reference, progress);
+    if (core::stop_requested(progress))
+        return out;  // the caller was stopped: its result is not used
+    const Bvh other_bvh(other, progress);
+    if (core::stop_requested(progress))
+        return out;
     double sq_a = 0.0, sq_b = 0.0;
     out.reference_to_other = directed(reference, other_bvh, settings, sq_a, progress, 0.0, 0.5);
     if (core::stop_requested(progress))

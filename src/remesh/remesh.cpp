@@ -129,7 +129,7 @@ core::Result<RemeshResult> remesh(const mesh::TriMesh& input, const RemeshSettin
     report.untangle = *untangled;
     if (settings.check_input)
     {
-        report.input_intersections = count_self_intersections(*m);
+        report.input_intersections = count_self_intersections(*m, progress);
         report.input_checked = true;
     }
     if (core::stop_requested(progress))

@@ -24,10 +24,13 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <limits>
 #include <ostream>
 #include <random>
 #include <span>
 #include <string>
+#include <string_view>
+#include <thread>
 #include <vector>
 
 namespace pliant::remesh
@@ -269,6 +272,53 @@ TEST(SelfIntersections, PairsTouchingMovedFacesCompleteTheEarlierCount)
         intersecting_pairs_touching(two, std::vector<std::uint8_t>(two.faces.size(), 0)).empty());
     EXPECT_EQ(intersecting_pairs_touching(two, std::vector<std::uint8_t>(two.faces.size(), 1)),
               intersecting_pairs(two));
+}
+
+// A sink that asks to stop from its `after`-th poll on, and notes the threads that polled it.
+class StopAfter final : public core::ProgressSink
+{
+public:
+    explicit StopAfter(std::size_t after) : after_(after) { threads_.reserve(1 << 16); }
+    void update(std::string_view, double) noexcept override {}
+    [[nodiscard]] bool stop_requested() const noexcept override
+    {
+        threads_.push_back(std::this_thread::get_id());  // not thread-safe: polled by one
+        return threads_.size() > after_;
+    }
+    [[nodiscard]] const std::vector<std::thread::id>& threads() const { return threads_; }
+
+private:
+    std::size_t after_;
+    mutable std::vector<std::thread::id> threads_;
+};
+
+// A long count polls its sink (from the calling thread only) and ends early once asked: a
+// count of a million faces takes seconds, and remesh's Ctrl-C waited for it (2-6 s at level 10).
+TEST(SelfIntersections, ACountPollsItsSinkAndEndsEarlyWhenAskedToStop)
+{
+    mesh::TriMesh two = scenes::icosphere(5);
+    const mesh::TriMesh other = scenes::icosphere(4);
+    const auto base = static_cast<std::uint32_t>(two.positions.size());
+    for (const Vec3& p : other.positions)
+        two.positions.push_back(p * 0.8 + Vec3{0.5, 0.1, 0.05});
+    for (const auto& f : other.faces)
+        two.faces.push_back({f[0] + base, f[1] + base, f[2] + base});
+    const auto full = intersecting_pairs(two);
+    ASSERT_GT(full.size(), 300U);
+    // Polled, from this thread only, and the same answer when not stopped.
+    StopAfter never(std::numeric_limits<std::size_t>::max());
+    EXPECT_EQ(intersecting_pairs(two, &never), full);
+    EXPECT_GT(never.threads().size(), 10U);
+    for (const std::thread::id t : never.threads())
+        EXPECT_EQ(t, std::this_thread::get_id());
+    // Asked to stop at the first poll: far from the whole count.
+    StopAfter at_once(0);
+    EXPECT_LT(intersecting_pairs(two, &at_once).size(), full.size() / 2);
+    StopAfter at_once_too(0);
+    EXPECT_LT(count_self_intersections(two, &at_once_too), full.size() / 2);
+    std::vector<std::uint8_t> all(two.faces.size(), 1);
+    StopAfter touching(0);
+    EXPECT_LT(intersecting_pairs_touching(two, all, &touching).size(), full.size() / 2);
 }
 
 TEST(SelfIntersections, FacesSharingAVertexCountOnlyWhenTheyOverlap)

@@ -22,6 +22,7 @@
 /// uniform in size); exact expansion arithmetic (Shewchuk's adaptive predicates; more code for
 /// no difference measured on real meshes).
 
+#include <pliant/core/progress.h>
 #include <pliant/core/vec3.h>
 #include <pliant/mesh/tri_mesh.h>
 
@@ -58,18 +59,24 @@ namespace pliant::remesh
 /// the other (the overlap is convex and contains the vertex, so its far side lies on such an
 /// edge). O(n log n) for meshes of even triangle sizes; parallel (OpenMP), and the
 /// result does not depend on the thread count.
+/// `stop`: its stop_requested() is polled, from one thread only, every 64 cells and every 256
+/// faces within a cell; once it answers true the count ends early and its result is incomplete
+/// (the caller, which owns the sink, discards it). A count of a million faces takes seconds.
 [[nodiscard]] std::vector<std::array<std::uint32_t, 2>> intersecting_pairs(
-    const mesh::TriMesh& mesh);
+    const mesh::TriMesh& mesh, const core::ProgressSink* stop = nullptr);
 
 /// The pairs of intersecting_pairs(mesh) that have a face f with `touched[f] != 0` (one flag per
 /// face), in the same order. After some vertices moved, these are the pairs to recount: a pair
 /// of two untouched faces keeps its answer (the untangling's rounds recount this way). Tests
 /// only the faces whose boxes meet the touched faces' bounding box.
+/// `stop` as for intersecting_pairs.
 [[nodiscard]] std::vector<std::array<std::uint32_t, 2>> intersecting_pairs_touching(
-    const mesh::TriMesh& mesh, std::span<const std::uint8_t> touched);
+    const mesh::TriMesh& mesh, std::span<const std::uint8_t> touched,
+    const core::ProgressSink* stop = nullptr);
 
-/// intersecting_pairs(mesh).size().
-[[nodiscard]] std::size_t count_self_intersections(const mesh::TriMesh& mesh);
+/// intersecting_pairs(mesh, stop).size().
+[[nodiscard]] std::size_t count_self_intersections(const mesh::TriMesh& mesh,
+                                                   const core::ProgressSink* stop = nullptr);
 
 /// Whether face `f` of `output` faces against the input surface at its samples: its normal makes
 /// a negative dot product with the normal of each input face its three vertices were sampled
