@@ -13,31 +13,23 @@
 # again 0.2 s later, sends one SIGINT and exits with the command's status, its stderr passed on.
 # Bounded: 120 s for the command to block (exit 97), 30 s to end after the signal (killed, 95).
 set -u
+script=fifo_interrupt.sh
+. "$(dirname "$0")/signal_common.sh"
 mode=$1
 fifo=$2
 shift 2
 rm -f "$fifo"
 mkfifo "$fifo" || exit 94
-dir=$(mktemp -d "${TMPDIR:-/tmp}/pliant-fifo.XXXXXX") || exit 94
 reader=
 if [ "$mode" = stalled-reader ]; then
     sleep 300 <"$fifo" &
     reader=$!
 fi
-"$@" 2>"$dir/stderr" &
-pid=$!
-finish() {
+cleanup_extra() {
     [ -n "$reader" ] && kill "$reader" 2>/dev/null
-    rm -rf "$dir" "$fifo"
+    rm -f "$fifo"
 }
-give_up() {
-    kill -KILL "$pid" 2>/dev/null
-    wait "$pid" 2>/dev/null
-    echo "fifo_interrupt.sh: $2" >&2
-    cat "$dir/stderr" >&2
-    finish
-    exit "$1"
-}
+start_command "$@"
 blocked() {
     wchan=$(cat "/proc/$pid/wchan" 2>/dev/null)
     case "$mode:$wchan" in
@@ -65,14 +57,5 @@ while :; do
     sleep 0.1
 done
 kill -INT "$pid"
-tries=0
-while kill -0 "$pid" 2>/dev/null; do
-    tries=$((tries + 1))
-    [ "$tries" -gt 300 ] && give_up 95 "one SIGINT did not end the command within 30 s"
-    sleep 0.1
-done
-wait "$pid"
-status=$?
-cat "$dir/stderr" >&2
-finish
-exit "$status"
+await_end 300 "one SIGINT did not end the command within 30 s"
+exit_with_status

@@ -9,12 +9,12 @@
 # Bounded: 300 s for the condition (exit 97 if it never holds, 96 if the command ended first),
 # then 120 s for the command to end after the signal (killed, exit 95, if it does not).
 set -u
+script=interrupt.sh
+. "$(dirname "$0")/signal_common.sh"
 kind=$1
 what=$2
 shift 2
-dir=$(mktemp -d "${TMPDIR:-/tmp}/pliant-interrupt.XXXXXX") || exit 94
-"$@" 2>"$dir/stderr" &
-pid=$!
+start_command "$@"
 ready() {
     if [ "$kind" = file ]; then
         [ -e "$what" ]
@@ -22,22 +22,13 @@ ready() {
         grep -Eq -- "$what" "$dir/stderr"
     fi
 }
-# Stops the command, shows its stderr and exits with status $1 after saying $2.
-give_up() {
-    kill -KILL "$pid" 2>/dev/null
-    wait "$pid" 2>/dev/null
-    echo "interrupt.sh: $2" >&2
-    cat "$dir/stderr" >&2
-    rm -rf "$dir"
-    exit "$1"
-}
 tries=0
 while ! ready; do
     if ! kill -0 "$pid" 2>/dev/null; then
         wait "$pid"
-        echo "interrupt.sh: the command ended (status $?) before the condition held" >&2
+        echo "$script: the command ended (status $?) before the condition held" >&2
         cat "$dir/stderr" >&2
-        rm -rf "$dir"
+        finish
         exit 96
     fi
     tries=$((tries + 1))
@@ -47,16 +38,5 @@ while ! ready; do
     sleep 0.1
 done
 kill -INT "$pid"
-tries=0
-while kill -0 "$pid" 2>/dev/null; do
-    tries=$((tries + 1))
-    if [ "$tries" -gt 1200 ]; then
-        give_up 95 "the command did not end within 120 s of SIGINT"
-    fi
-    sleep 0.1
-done
-wait "$pid"
-status=$?
-cat "$dir/stderr" >&2
-rm -rf "$dir"
-exit "$status"
+await_end 1200 "the command did not end within 120 s of SIGINT"
+exit_with_status
