@@ -393,8 +393,10 @@ std::vector<std::array<std::uint32_t, 2>> pairs_among(const mesh::TriMesh& mesh,
     std::atomic<bool> halt{false};
     const auto halted = [&](bool poll)
     {
+        if (halt.load(std::memory_order_relaxed))
+            return true;
 #ifdef _OPENMP
-        poll = poll && omp_get_thread_num() == 0;
+        poll = poll && stop != nullptr && omp_get_thread_num() == 0;
 #endif
         if (poll && stop != nullptr && stop->stop_requested())
             halt.store(true, std::memory_order_relaxed);

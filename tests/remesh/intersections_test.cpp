@@ -14,6 +14,7 @@
 #include <pliant/remesh/untangle.h>
 
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include "shapes.h"
 #include "support/fp_traps.h"
@@ -21,6 +22,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -274,26 +276,42 @@ TEST(SelfIntersections, PairsTouchingMovedFacesCompleteTheEarlierCount)
               intersecting_pairs(two));
 }
 
-// A sink that asks to stop from its `after`-th poll on, and notes the threads that polled it.
+// A sink that asks to stop from its (after + 1)-th poll on, and notes how often it was polled and
+// whether any poll came from a thread other than the one that made it.
 class StopAfter final : public core::ProgressSink
 {
 public:
-    explicit StopAfter(std::size_t after) : after_(after) { threads_.reserve(1 << 16); }
+    explicit StopAfter(std::size_t after) : after_(after) {}
     void update(std::string_view, double) noexcept override {}
     [[nodiscard]] bool stop_requested() const noexcept override
     {
-        threads_.push_back(std::this_thread::get_id());  // not thread-safe: polled by one
-        return threads_.size() > after_;
+        if (std::this_thread::get_id() != owner_)
+            foreign_.store(true);
+        return polls_.fetch_add(1) + 1 > after_;
     }
-    [[nodiscard]] const std::vector<std::thread::id>& threads() const { return threads_; }
+    [[nodiscard]] std::size_t polls() const { return polls_.load(); }
+    [[nodiscard]] bool polled_from_another_thread() const { return foreign_.load(); }
 
 private:
     std::size_t after_;
-    mutable std::vector<std::thread::id> threads_;
+    std::thread::id owner_ = std::this_thread::get_id();
+    mutable std::atomic<std::size_t> polls_{0};
+    mutable std::atomic<bool> foreign_{false};
 };
 
+// Runs `f` on one OpenMP thread (the polls are then deterministic), restoring the count after.
+template <typename F>
+auto on_one_thread(F&& f)
+{
+    const int before = omp_get_max_threads();
+    omp_set_num_threads(1);
+    auto r = f();
+    omp_set_num_threads(before);
+    return r;
+}
+
 // A long count polls its sink (from the calling thread only) and ends early once asked: a
-// count of a million faces takes seconds, and remesh's Ctrl-C waited for it (2-6 s at level 10).
+// count of a million faces takes seconds, and remesh's Ctrl-C waited for it (2-7 s at level 10).
 TEST(SelfIntersections, ACountPollsItsSinkAndEndsEarlyWhenAskedToStop)
 {
     mesh::TriMesh two = scenes::icosphere(5);
@@ -305,20 +323,37 @@ TEST(SelfIntersections, ACountPollsItsSinkAndEndsEarlyWhenAskedToStop)
         two.faces.push_back({f[0] + base, f[1] + base, f[2] + base});
     const auto full = intersecting_pairs(two);
     ASSERT_GT(full.size(), 300U);
-    // Polled, from this thread only, and the same answer when not stopped.
+    // Not stopped: the same pairs, on any number of threads, polled from this thread only.
     StopAfter never(std::numeric_limits<std::size_t>::max());
     EXPECT_EQ(intersecting_pairs(two, &never), full);
-    EXPECT_GT(never.threads().size(), 10U);
-    for (const std::thread::id t : never.threads())
-        EXPECT_EQ(t, std::this_thread::get_id());
-    // Asked to stop at the first poll: far from the whole count.
+    EXPECT_FALSE(never.polled_from_another_thread());
+    // On one thread: 3 polls between the serial stages, then one per chunk of 64 cells.
+    StopAfter counted(std::numeric_limits<std::size_t>::max());
+    EXPECT_EQ(on_one_thread([&] { return intersecting_pairs(two, &counted); }), full);
+    ASSERT_GT(counted.polls(), 3U + 20U);
+    const std::size_t chunks = counted.polls() - 3;
+    // Stopped within the parallel loop (after its k-th chunk): part of the pairs, more the later
+    // the stop, and no poll after the first that said stop.
+    std::size_t previous = 0;
+    for (const std::size_t k : {chunks / 4, chunks / 2, chunks * 3 / 4})
+    {
+        StopAfter at(3 + k);
+        const auto part = on_one_thread([&] { return intersecting_pairs(two, &at); });
+        EXPECT_LT(part.size(), full.size()) << "chunks " << k;
+        EXPECT_GE(part.size(), previous) << "chunks " << k;
+        EXPECT_TRUE(std::includes(full.begin(), full.end(), part.begin(), part.end()));
+        EXPECT_EQ(at.polls(), 3 + k + 1) << "chunks " << k;
+        previous = part.size();
+    }
+    EXPECT_GT(previous, 0U);
+    // Stopped at once: nothing, in each entry point.
     StopAfter at_once(0);
-    EXPECT_LT(intersecting_pairs(two, &at_once).size(), full.size() / 2);
+    EXPECT_TRUE(intersecting_pairs(two, &at_once).empty());
     StopAfter at_once_too(0);
-    EXPECT_LT(count_self_intersections(two, &at_once_too), full.size() / 2);
+    EXPECT_EQ(count_self_intersections(two, &at_once_too), 0U);
     std::vector<std::uint8_t> all(two.faces.size(), 1);
     StopAfter touching(0);
-    EXPECT_LT(intersecting_pairs_touching(two, all, &touching).size(), full.size() / 2);
+    EXPECT_TRUE(intersecting_pairs_touching(two, all, &touching).empty());
 }
 
 TEST(SelfIntersections, FacesSharingAVertexCountOnlyWhenTheyOverlap)

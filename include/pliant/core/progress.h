@@ -5,7 +5,8 @@
 /// \file
 /// Progress reporting from long library work (remeshing, simulating a scenario) to whatever shows
 /// it (a terminal bar in the CLI, a widget in the viewer), and the way back: the sink may ask the
-/// work to stop. Called per phase step, never from a hot loop.
+/// work to stop. update() is called per phase step, never from a hot loop; stop_requested() may
+/// also be polled within long loops (every few thousand items), from the calling thread only.
 
 #include <pliant/core/error.h>
 
@@ -23,9 +24,12 @@ public:
     /// `fraction` in [0, 1] of the named phase; called with 1.0 once when the phase ends.
     virtual void update(std::string_view phase, double fraction) noexcept = 0;
     /// Whether the work should stop (a user cancelled it; may be called from the working
-    /// thread while another sets it). Work that takes a sink polls this wherever it reports
-    /// progress and between phases, and then returns ErrorCode::Cancelled without a result
-    /// (nothing half-done is returned or written). Default: never.
+    /// thread while another sets it). Once true, it must stay true for the rest of the work:
+    /// a function that ends early on it (the self-intersection count) returns what it had,
+    /// and its caller asks again to know that the result is partial. Work that takes a sink
+    /// polls this wherever it reports progress and between phases, and then returns
+    /// ErrorCode::Cancelled without a result (nothing half-done is returned or written by the
+    /// phase functions: remesh, untangle_samples, run_scenario). Default: never.
     [[nodiscard]] virtual bool stop_requested() const noexcept { return false; }
 };
 

@@ -59,9 +59,11 @@ namespace pliant::remesh
 /// the other (the overlap is convex and contains the vertex, so its far side lies on such an
 /// edge). O(n log n) for meshes of even triangle sizes; parallel (OpenMP), and the
 /// result does not depend on the thread count.
-/// `stop`: its stop_requested() is polled, from one thread only, every 64 cells and every 256
-/// faces within a cell; once it answers true the count ends early and its result is incomplete
-/// (the caller, which owns the sink, discards it). A count of a million faces takes seconds.
+/// `stop`: its stop_requested() is polled from the calling thread only (OpenMP's thread 0; not
+/// from within an enclosing parallel region): between the serial stages, at each chunk of 64
+/// grid cells that thread takes, and every 256 faces within a cell; once it answers true the
+/// count ends early and its result is incomplete (the caller asks the sink again, which must
+/// still say true: ProgressSink, and discards it). A count of a million faces takes seconds.
 [[nodiscard]] std::vector<std::array<std::uint32_t, 2>> intersecting_pairs(
     const mesh::TriMesh& mesh, const core::ProgressSink* stop = nullptr);
 

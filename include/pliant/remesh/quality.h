@@ -54,7 +54,8 @@ struct SurfaceDistance
 /// Two-sided distance between `reference` (the input) and `other` (the remeshed surface).
 /// `progress` (optional) gets phase "measure" once per block of 32,768 samples, with fractions
 /// below 1 (the caller reports the end); if it asks to stop, the measure ends at the next block
-/// and its figures are partial (the caller discards them: remesh returns Cancelled).
+/// or within a BVH build (polled at nodes of more than 2^16 faces; then only `diagonal` is
+/// set) and its figures are partial (the caller discards them: remesh returns Cancelled).
 /// \pre both non-empty with finite positions.
 [[nodiscard]] SurfaceDistance surface_distance(const mesh::TriMesh& reference,
                                                const mesh::TriMesh& other,

@@ -99,8 +99,9 @@ struct UntangleStats
 /// points of nearby nodes: `points` and `positions` are updated in place (canonical nodes and
 /// their twins). Nodes far from any bad triangle are left untouched, bit for bit.
 /// `progress` (optional) gets phase "untangle" with fractions below 1 as the sweeps go (the
-/// caller reports the phase's end); if it asks to stop, the work ends within 64 nodes and
-/// returns ErrorCode::Cancelled with `points` and `positions` untouched.
+/// caller reports the phase's end); if it asks to stop, the work ends within 64 nodes of a
+/// sweep, at its set-up's stages or within a crossing count (intersecting_pairs) and returns
+/// ErrorCode::Cancelled with `points` and `positions` untouched.
 /// \pre `sphere` is a fold-free spherical map of `mesh` (outward faces); `positions` samples
 /// `mesh` at `points` (any sampler).
 core::Result<UntangleStats> untangle_samples(const core::TetraGrid& grid, const mesh::TriMesh& mesh,
