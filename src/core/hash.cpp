@@ -2,8 +2,6 @@
 // SPDX-FileCopyrightText: 2026 pliant contributors
 #include <pliant/core/hash.h>
 
-#include <cstring>
-
 namespace pliant::core
 {
 
@@ -14,8 +12,10 @@ std::uint64_t hash_bytes(std::span<const std::byte> bytes, std::uint64_t seed) n
     std::size_t i = 0;
     for (; i + 8 <= bytes.size(); i += 8)
     {
+        // Little-endian whatever the host, so that peers and recordings agree (docs/protocol.md).
         std::uint64_t word = 0;
-        std::memcpy(&word, bytes.data() + i, 8);
+        for (std::size_t k = 0; k < 8; ++k)
+            word |= static_cast<std::uint64_t>(bytes[i + k]) << (8 * k);
         h = (h ^ word) * k_prime;
         h ^= h >> 29;
     }

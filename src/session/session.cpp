@@ -572,6 +572,7 @@ struct Session::Impl
     std::vector<ForceEntry> my_forces;
     std::vector<ForceEntry> pending_forces;  // apply_tick = the earliest tick asked for
     std::size_t warned_idle_members = 0;     // members count last warned of leaves too few
+    double warned_full_at = -1e300;          // when a joiner was last refused for room
     bool recording = false;
     std::vector<ForceRecord> force_log;  // every force list seen, when recording
     std::vector<net::Target> my_points;
@@ -3001,8 +3002,22 @@ struct Session::Impl
     {
         if (s.role_ == SessionRole::Master && m.header.sender == net::k_no_peer)
         {
-            if (!s.model_ || next_peer_id >= 0xFFFE)
+            // A Welcome lists every peer, itself and the joiner included, at most
+            // k_max_welcome_peers: a joiner beyond that would get a Welcome that cannot be
+            // encoded (it waited for ever for its model).
+            std::size_t members = 2;  // this master and the joiner
+            for (const auto& [oid, op] : peers)
+                members += !op.departed && op.info_known ? 1 : 0;
+            if (!s.model_ || next_peer_id >= 0xFFFE || members > net::k_max_welcome_peers)
             {
+                if (members > net::k_max_welcome_peers && last_now - warned_full_at >= 10.0)
+                {
+                    warned_full_at = last_now;
+                    spdlog::warn(
+                        "session: a joiner was refused: the session holds {} peers, "
+                        "the most it can",
+                        net::k_max_welcome_peers);
+                }
                 transport.disconnect(h, net::DisconnectReason::SessionFull);
                 return;
             }
@@ -3371,10 +3386,17 @@ struct Session::Impl
             become_member(tick);
     }
 
-    void on_halo(const net::Message& m, const net::Halo& h)
+    void on_halo(std::uint16_t from, const net::Message& m, const net::Halo& h)
     {
-        if (!h.has_u || !h.has_v)
+        // An honest peer sends the accepted step's u and v in f64 (send_halos); any other
+        // stage or encoding would be taken for those values.
+        if (!h.has_u || !h.has_v || h.stage != net::k_max_halo_stage ||
+            h.encoding != net::ValueEncoding::F64)
+        {
+            reject(counters.halo_rejects, from,
+                   "a Halo that is not the accepted step's u and v in f64");
             return;
+        }
         const core::TetraGrid& g = s.model_->grid();
         for (const net::NodeRange& r : h.ranges)
             if (r.count > 0 && (r.first >= g.node_count() || r.count > g.node_count() - r.first))
@@ -3738,7 +3760,19 @@ struct Session::Impl
         case net::MessageType::Hello: on_hello(h, m, std::get<net::Hello>(m.body)); return;
         case net::MessageType::Welcome: on_welcome(h, m, std::get<net::Welcome>(m.body)); return;
         case net::MessageType::Reject:
-            if (!welcomed && !join_lost)
+            // Only the master refuses, and only a joiner it has not welcomed: from anyone else,
+            // or later, one datagram would end this peer's session.
+            if (welcomed || !master_handle || h != *master_handle)
+            {
+                if (bound)
+                    reject(counters.peer_claim_rejects, idit->second,
+                           "a Reject, which only the master sends to a joiner");
+                else
+                    reject(counters.peer_claim_rejects, h,
+                           "a Reject, which only the master sends to a joiner");
+                return;
+            }
+            if (!join_lost)
                 join_lost = std::get<net::Reject>(m.body).reason;
             close_all(net::DisconnectReason::Refused);
             return;
@@ -3911,7 +3945,7 @@ struct Session::Impl
             on_value_batch(from, m, std::get<net::ValueBatch>(m.body));
             return;
         case net::MessageType::Ack: on_ack(from, std::get<net::Ack>(m.body)); return;
-        case net::MessageType::Halo: on_halo(m, std::get<net::Halo>(m.body)); return;
+        case net::MessageType::Halo: on_halo(from, m, std::get<net::Halo>(m.body)); return;
         case net::MessageType::Heartbeat:
             if (!p.has_heartbeat || m.header.tick > p.heartbeat)
                 p.heartbeat = m.header.tick;

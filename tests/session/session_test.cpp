@@ -830,6 +830,66 @@ TEST(SessionExact, AHaloCarryingNodesItsSenderDoesNotOwnIsDropped)
     }
 }
 
+// A halo counts only as the accepted step's u and v in f64: one of an RKF45 stage (on the
+// sender's own node, so ownership does not catch it) would be taken for the step's values; it is
+// dropped and counted. And a Reject ends only a joiner's wait for the master's Welcome: one from
+// a member (to the master), or from the master to a welcomed member, is dropped and counted,
+// not obeyed (one datagram ended the receiver's session). Both sides then step on as one
+// process does.
+TEST(SessionExact, AHaloOfAnotherStageAndAMembersRejectAreDropped)
+{
+    Harness h;
+    ASSERT_TRUE(master_and_participant(h, 4343));
+    ASSERT_TRUE(h.pump_until([&] { return all_at(h, 40); }, 20000));
+    Session& m = *h.peers[0];
+    Session& part = *h.peers[1];
+    const core::TetraGrid& g = m.model()->grid();
+    const auto theirs = owned_by(part);
+    core::NodeIndex target{0};
+    for (const core::NodeIndex n : g.node_of_unique())
+        if (theirs(n))
+            target = n;
+    ASSERT_TRUE(theirs(target));
+    net::Transport& wire = *h.transports[1];
+    ASSERT_EQ(wire.peers().size(), 1U);
+    const std::uint64_t tick = m.tick() + 30;
+    net::Message forged;
+    forged.header.session = 4343;
+    forged.header.sender = part.id();
+    forged.header.sequence = 60000;
+    forged.header.tick = tick;
+    net::Halo halo;
+    halo.epoch = m.epoch();
+    halo.stage = 2;
+    halo.time = 1e-3 * static_cast<double>(tick);
+    halo.ranges = {{target.value, 1}};
+    halo.has_u = halo.has_v = true;
+    halo.u = {0.25};
+    halo.v = {-0.5};
+    forged.body = halo;
+    ASSERT_TRUE(send_raw(wire, wire.peers()[0], forged, net::Delivery::Reliable));
+    net::Message reject = forged;
+    reject.header.tick = m.tick();
+    reject.body = net::Reject{net::DisconnectReason::Refused};
+    ASSERT_TRUE(send_raw(wire, wire.peers()[0], reject, net::Delivery::Reliable));
+    net::Transport& master_wire = *h.transports[0];
+    reject.header.sender = m.id();
+    for (const net::PeerHandle to : master_wire.peers())
+        ASSERT_TRUE(send_raw(master_wire, to, reject, net::Delivery::Reliable));
+
+    ASSERT_TRUE(h.pump_until([&] { return all_at(h, tick + 20); }, 20000));
+    EXPECT_FALSE(m.left());
+    EXPECT_FALSE(part.left());
+    EXPECT_EQ(m.stats().halo_rejects, 1U);
+    EXPECT_EQ(m.stats().peer_claim_rejects, 1U);
+    EXPECT_EQ(part.stats().peer_claim_rejects, 1U);
+    for (const auto& p : h.peers)
+    {
+        const Diff du = compare(g, p->state().u, core::Field<double>(g), owned_by(*p));
+        EXPECT_EQ(du.max_abs, 0.0) << "peer " << p->id().value;  // no forces: at rest
+    }
+}
+
 // A leaf's state counts only from its owner under the partition it names: a participant that
 // sends a viewer a state of the master's leaf (a far newer tick) in the current epoch, or in an
 // epoch no master will issue, is dropped and counted; one of the next epoch is kept aside (its
@@ -1702,6 +1762,37 @@ TEST(SessionSettings, ANameTheWireCannotCarryIsRefusedNamingTheRule)
     ASSERT_FALSE(bad_rate.has_value());
     EXPECT_NE(bad_rate.error().message.find("rates must be > 0 Hz (stream 0"), std::string::npos)
         << bad_rate.error().message;
+}
+
+// A Welcome lists every peer of the session, the master and the joiner included, and holds at
+// most net::k_max_welcome_peers (64): a joiner beyond that is refused with reason session-full
+// at once. It used to be admitted, then its Welcome could not be encoded and it waited for its
+// model for ever.
+TEST(SessionLimits, AJoinerBeyondWhatAWelcomeCanListIsRefused)
+{
+    Harness h;
+    SessionSettings viewer;
+    viewer.name = "viewer";
+    h.host(2, SessionSettings{});
+    for (std::size_t k = 1; k < net::k_max_welcome_peers; ++k)
+        h.join(net::Role::Viewer, viewer);
+    ASSERT_TRUE(h.pump_until(
+        [&]
+        {
+            for (std::size_t k = 1; k < h.peers.size(); ++k)
+                if (!h.peers[k]->ready())
+                    return false;
+            return true;
+        },
+        20000));
+    Session& extra = h.join(net::Role::Viewer, viewer);
+    ASSERT_TRUE(h.pump_until([&] { return extra.left(); }, 4000));
+    EXPECT_FALSE(extra.ready());
+    ASSERT_TRUE(extra.join_failure().has_value());
+    EXPECT_EQ(extra.join_failure()->reason, net::DisconnectReason::SessionFull);
+    EXPECT_EQ(h.peers[0]->peers().size(), net::k_max_welcome_peers - 1);
+    for (std::size_t k = 1; k + 1 < h.peers.size(); ++k)
+        EXPECT_FALSE(h.peers[k]->left()) << k;
 }
 
 }  // namespace

@@ -4,7 +4,7 @@
 
 /// \file
 /// A 64-bit hash of bytes for golden-hash determinism tests and file checksums (FNV-1a over
-/// 8-byte words with a final avalanche; stable across platforms of the same endianness).
+/// little-endian 8-byte words with a final avalanche; the same on every platform).
 
 #include <cstddef>
 #include <cstdint>

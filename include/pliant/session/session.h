@@ -243,7 +243,8 @@ struct SessionStats
     std::uint64_t baseline_misses = 0;  ///< the baseline named is not held (lost, late join)
     std::uint64_t state_rejects = 0;    ///< wrong node count, or values leaving the int32 range
     /// Exact mode: Halo datagrams dropped because their sender did not own every node they carry
-    /// at their tick (an honest peer sends only its own nodes; docs/session.md §4.1).
+    /// at their tick (an honest peer sends only its own nodes; docs/session.md §4.1), or they
+    /// were not the accepted step's u and v in f64 (stage 6; any other would be taken for it).
     std::uint64_t halo_rejects = 0;
     /// Leaf states that arrived before this joiner had the model: dropped, since the next
     /// stream period resends every leaf it has not acknowledged.
@@ -282,9 +283,10 @@ struct SessionStats
     /// because its previous ones had done so less than 0.1 s before (docs/session.md §3).
     std::uint64_t points_waits = 0;
     /// Claims about who is in the session that did not hold: a PeerJoined from a peer other than
-    /// the master (dropped: only the master admits peers), or a greeting Hello on a new
-    /// connection for a peer id already connected or departed (refused: ids are never reused,
-    /// and each peer dials each other once). docs/session.md §2.
+    /// the master (dropped: only the master admits peers), a Reject from anyone but the master
+    /// of a joiner not yet welcomed (dropped: one would end the session), or a greeting Hello on
+    /// a new connection for a peer id already connected or departed (refused: ids are never
+    /// reused, and each peer dials each other once). docs/session.md §2.
     std::uint64_t peer_claim_rejects = 0;
     /// Incoming connections closed for sending no Hello within 10 s of connecting (an idle
     /// connection holds one of the transport's peer slots; docs/session.md §2).
