@@ -190,11 +190,12 @@ std::size_t brute_force_pairs(const mesh::TriMesh& m)
     return n;
 }
 
-/// Two overlapping spheres of different sizes in one mesh: their faces cross along a circle.
-mesh::TriMesh two_spheres()
+/// Two overlapping spheres of different sizes in one mesh (icospheres of `big` and `small`
+/// subdivisions): their faces cross along a circle.
+mesh::TriMesh two_spheres(int big = 3, int small = 2)
 {
-    mesh::TriMesh two = scenes::icosphere(3);
-    const mesh::TriMesh other = scenes::icosphere(2);
+    mesh::TriMesh two = scenes::icosphere(big);
+    const mesh::TriMesh other = scenes::icosphere(small);
     const auto base = static_cast<std::uint32_t>(two.positions.size());
     for (const Vec3& p : other.positions)
         two.positions.push_back(p * 0.8 + Vec3{0.5, 0.1, 0.05});
@@ -314,13 +315,7 @@ auto on_one_thread(F&& f)
 // count of a million faces takes seconds, and remesh's Ctrl-C waited for it (2-7 s at level 10).
 TEST(SelfIntersections, ACountPollsItsSinkAndEndsEarlyWhenAskedToStop)
 {
-    mesh::TriMesh two = scenes::icosphere(5);
-    const mesh::TriMesh other = scenes::icosphere(4);
-    const auto base = static_cast<std::uint32_t>(two.positions.size());
-    for (const Vec3& p : other.positions)
-        two.positions.push_back(p * 0.8 + Vec3{0.5, 0.1, 0.05});
-    for (const auto& f : other.faces)
-        two.faces.push_back({f[0] + base, f[1] + base, f[2] + base});
+    const mesh::TriMesh two = two_spheres(5, 4);
     const auto full = intersecting_pairs(two);
     ASSERT_GT(full.size(), 300U);
     // Not stopped: the same pairs, on any number of threads, polled from this thread only.

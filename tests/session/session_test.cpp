@@ -769,6 +769,28 @@ bool master_and_participant(Harness& h, std::uint32_t session,
     return pump_until_partitioned(h, 2);
 }
 
+/// A Halo from `sender` in session `session` for `tick`, of `stage`, carrying u 0.25 and v -0.5
+/// at `node` only: what a forger on a member's connection sends.
+net::Message forged_halo(std::uint32_t session, net::PeerId sender, std::uint64_t tick,
+                         std::uint32_t epoch, std::uint8_t stage, core::NodeIndex node)
+{
+    net::Message m;
+    m.header.session = session;
+    m.header.sender = sender;
+    m.header.sequence = 60000;
+    m.header.tick = tick;
+    net::Halo halo;
+    halo.epoch = epoch;
+    halo.stage = stage;
+    halo.time = 1e-3 * static_cast<double>(tick);
+    halo.ranges = {{node.value, 1}};
+    halo.has_u = halo.has_v = true;
+    halo.u = {0.25};
+    halo.v = {-0.5};
+    m.body = halo;
+    return m;
+}
+
 /// Puts `m` on `wire` to `to`, on its type's channel, as it is: what a peer's bug or a forger on
 /// a member's connection sends. \return whether it went out.
 bool send_raw(net::Transport& wire, net::PeerHandle to, const net::Message& m,
@@ -799,20 +821,7 @@ TEST(SessionExact, AHaloCarryingNodesItsSenderDoesNotOwnIsDropped)
     net::Transport& wire = *h.transports[1];
     ASSERT_EQ(wire.peers().size(), 1U);
     const std::uint64_t tick = m.tick() + 30;
-    net::Message forged;
-    forged.header.session = 4242;
-    forged.header.sender = h.peers[1]->id();
-    forged.header.sequence = 60000;
-    forged.header.tick = tick;
-    net::Halo halo;
-    halo.epoch = m.epoch();
-    halo.stage = 6;
-    halo.time = 1e-3 * static_cast<double>(tick);
-    halo.ranges = {{target.value, 1}};
-    halo.has_u = halo.has_v = true;
-    halo.u = {0.25};
-    halo.v = {-0.5};
-    forged.body = halo;
+    const net::Message forged = forged_halo(4242, h.peers[1]->id(), tick, m.epoch(), 6, target);
     ASSERT_TRUE(send_raw(wire, wire.peers()[0], forged, net::Delivery::Reliable));
 
     ASSERT_TRUE(h.pump_until([&] { return all_at(h, tick + 20); }, 20000));
@@ -853,20 +862,7 @@ TEST(SessionExact, AHaloOfAnotherStageAndAMembersRejectAreDropped)
     net::Transport& wire = *h.transports[1];
     ASSERT_EQ(wire.peers().size(), 1U);
     const std::uint64_t tick = m.tick() + 30;
-    net::Message forged;
-    forged.header.session = 4343;
-    forged.header.sender = part.id();
-    forged.header.sequence = 60000;
-    forged.header.tick = tick;
-    net::Halo halo;
-    halo.epoch = m.epoch();
-    halo.stage = 2;
-    halo.time = 1e-3 * static_cast<double>(tick);
-    halo.ranges = {{target.value, 1}};
-    halo.has_u = halo.has_v = true;
-    halo.u = {0.25};
-    halo.v = {-0.5};
-    forged.body = halo;
+    const net::Message forged = forged_halo(4343, part.id(), tick, m.epoch(), 2, target);
     ASSERT_TRUE(send_raw(wire, wire.peers()[0], forged, net::Delivery::Reliable));
     net::Message reject = forged;
     reject.header.tick = m.tick();
