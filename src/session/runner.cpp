@@ -384,6 +384,8 @@ core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
         // advance() (SessionSettings::pause_s), or the departures poll() found then would be
         // taken for the others' (docs/session.md §6).
         now = elapsed();
+        if (now >= options.duration_s)
+            break;  // as at the top: the last row then covers the last second and the wind-down
         if (summary.model_s < 0.0 && !session.ready() && now >= next_wait_note)
         {
             // A large model (level 10: ~100 MB with its state) takes a while: say it is coming.
