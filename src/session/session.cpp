@@ -3239,8 +3239,24 @@ struct Session::Impl
             return;
         std::vector<std::byte>& dst = b.kind == net::BlobKind::Model ? model_blob : state_blob;
         std::size_t& got = b.kind == net::BlobKind::Model ? model_got : state_got;
-        if (b.total_size != dst.size() || b.offset + b.data.size() > dst.size())
+        // The master sends each blob's chunks in order on the reliable, ordered channel, so each
+        // starts where the previous one ended; anything else (a gap, an overlap, another total)
+        // is a faulty master, and the blob could complete with a hole or never: refused now.
+        if (b.total_size != dst.size() || b.offset != got || b.data.size() > dst.size() - got)
+        {
+            const char* what = b.kind == net::BlobKind::Model ? "model" : "state";
+            spdlog::error(
+                "session: the master's {} blob chunk of {} bytes at byte {} of {}, "
+                "where byte {} of {} was next",
+                what, b.data.size(), b.offset, b.total_size, got, dst.size());
+            refusal = std::string("the master sent a chunk of its ") + what + " blob at byte " +
+                      std::to_string(b.offset) + " (" + std::to_string(b.data.size()) +
+                      " bytes of " + std::to_string(b.total_size) + ") where byte " +
+                      std::to_string(got) + " of " + std::to_string(dst.size()) +
+                      " was next: chunks must follow each other in order (docs/protocol.md, Blob)";
+            close_all(net::DisconnectReason::ProtocolMismatch);
             return;
+        }
         std::copy(b.data.begin(), b.data.end(), dst.begin() + b.offset);
         got += b.data.size();
         if (model_got < model_blob.size() || state_got < state_blob.size())

@@ -623,6 +623,18 @@ struct HandMadeMaster
                          .data = b};
     }
 
+    /// Bytes [offset, offset + length) of `b` as a chunk announcing `total` bytes (0: b's size).
+    static net::Blob chunk(net::BlobKind kind, const std::vector<std::byte>& b, std::size_t offset,
+                           std::size_t length, std::size_t total = 0)
+    {
+        const auto first = b.begin() + static_cast<std::ptrdiff_t>(offset);
+        return net::Blob{
+            .kind = kind,
+            .total_size = static_cast<std::uint32_t>(total != 0 ? total : b.size()),
+            .offset = static_cast<std::uint32_t>(offset),
+            .data = std::vector<std::byte>(first, first + static_cast<std::ptrdiff_t>(length))};
+    }
+
     net::Welcome welcome(std::vector<net::PeerInfo> peers) const
     {
         net::Welcome w;
@@ -697,6 +709,83 @@ TEST(SessionJoin, AStateBlobThatDoesNotDecodeIsRefused)
     EXPECT_NE((*joiner)->refusal().find("state blob: a non-finite value"), std::string::npos)
         << (*joiner)->refusal();
     EXPECT_FALSE((*joiner)->ready());
+}
+
+/// A hand-made master welcomes a joiner and sends the model whole and the state as `chunks`;
+/// \return the joiner's refusal ("" when it installed the model and state and is ready).
+std::string joiner_refusal_after(const std::vector<net::Blob>& chunks)
+{
+    net::SimulatedNetwork net;
+    auto master = net.create_endpoint();
+    const net::Address master_address = master->open({}).value();
+    auto end = net.create_endpoint();
+    EXPECT_TRUE(end->open({}));
+    auto joiner = Session::join(*end, master_address, net::Role::Participant,
+                                settings_for(Coupling::Exact, "j"));
+    EXPECT_TRUE(joiner) << joiner.error().message;
+    if (!joiner)
+        return "no joiner";
+    const HandMadeMaster hand;
+    bool welcomed = false;
+    for (int k = 0; k < 2000 && !(*joiner)->ready() && (*joiner)->refusal().empty(); ++k)
+    {
+        while (auto ev = master->poll(0))
+        {
+            if (ev->kind != net::TransportEvent::Kind::Received || welcomed)
+                continue;
+            const auto w =
+                hand.welcome({{net::PeerId{0}, net::Role::Participant, {127, 0, 0, 1}, 7000, "m"},
+                              {net::PeerId{1}, net::Role::Participant, {127, 0, 0, 1}, 7001, "j"}});
+            EXPECT_TRUE(hand.send(*master, ev->peer, 0, w));
+            EXPECT_TRUE(hand.send(*master, ev->peer, 0,
+                                  HandMadeMaster::whole(net::BlobKind::Model, hand.model)));
+            for (const net::Blob& c : chunks)
+                EXPECT_TRUE(hand.send(*master, ev->peer, 0, c));
+            welcomed = true;
+        }
+        (*joiner)->poll();
+        (*joiner)->advance(1e-3 * k);
+        net.advance(1e-3);
+    }
+    EXPECT_TRUE(welcomed);
+    EXPECT_TRUE((*joiner)->ready() || !(*joiner)->refusal().empty()) << "neither ready nor refused";
+    return (*joiner)->refusal();
+}
+
+// A blob's chunks follow each other: the state in two chunks in order is installed; a second
+// chunk that overlaps the first (even with the right bytes), leaves a gap, or announces another
+// total is refused at once, naming the bytes, rather than completing the blob with a hole (an
+// overlap counted its bytes twice) or waiting for bytes that cannot come (a gap).
+TEST(SessionJoin, BlobChunksMustFollowEachOtherInOrder)
+{
+    const HandMadeMaster hand;
+    const auto& st = hand.state;
+    const std::size_t n = st.size();
+    const std::size_t half = n / 2;
+    ASSERT_GT(half, 16U);
+    const auto kind = net::BlobKind::State;
+    EXPECT_EQ(joiner_refusal_after({HandMadeMaster::chunk(kind, st, 0, half),
+                                    HandMadeMaster::chunk(kind, st, half, n - half)}),
+              "");
+
+    const std::string overlap =
+        joiner_refusal_after({HandMadeMaster::chunk(kind, st, 0, half),
+                              HandMadeMaster::chunk(kind, st, half - 8, n - half + 8)});
+    EXPECT_NE(overlap.find("state blob at byte " + std::to_string(half - 8)), std::string::npos)
+        << overlap;
+    EXPECT_NE(overlap.find("where byte " + std::to_string(half) + " of " + std::to_string(n)),
+              std::string::npos)
+        << overlap;
+
+    const std::string gap =
+        joiner_refusal_after({HandMadeMaster::chunk(kind, st, 0, half),
+                              HandMadeMaster::chunk(kind, st, half + 8, n - half - 8)});
+    EXPECT_NE(gap.find("state blob at byte " + std::to_string(half + 8)), std::string::npos) << gap;
+
+    const std::string total =
+        joiner_refusal_after({HandMadeMaster::chunk(kind, st, 0, half),
+                              HandMadeMaster::chunk(kind, st, half, 8, n + 8)});
+    EXPECT_NE(total.find("of " + std::to_string(n + 8) + ")"), std::string::npos) << total;
 }
 
 // The Welcome's blobs come from the master only: a listed peer that the joiner dials while it
