@@ -11,7 +11,8 @@
 /// is the gnomonic one (the central projection of the regular tetrahedron with corners
 /// a = (1,1,1), b = (1,-1,-1), c = (-1,1,-1), d = (-1,-1,1)): the tests' reference values and
 /// the golden hash were taken on it. The CLI's built-in sphere and the membrane benchmark use
-/// `core::SphereMap::EqualArea`, whose even cells allow twice the stable step (docs/physics.md §5).
+/// `core::SphereMap::EqualArea`, whose even cells allow about twice the stable step (1.8x without
+/// damping, 2.05x with beta = 0.5; docs/physics.md §5).
 
 #include <pliant/core/field.h>
 #include <pliant/core/sphere_domain.h>

@@ -878,10 +878,10 @@ void add_simulate_command(CLI::App& app, const GlobalOptions& global)
             ->check(number_in(1e-6, 1e6))
             ->capture_default_str();
     CLI::Option* sphere_map =
-        cmd->add_option(
-               "--sphere-map", opt->sphere_map,
-               "How the sphere's grid lies on it when GRID is omitted: equal-area (even "
-               "cells, twice the stable step) or gnomonic (the paper's central projection)")
+        cmd->add_option("--sphere-map", opt->sphere_map,
+                        "How the sphere's grid lies on it when GRID is omitted: equal-area (even "
+                        "cells, about twice the stable step) or gnomonic (the paper's central "
+                        "projection)")
             ->check(CLI::IsMember({"equal-area", "gnomonic"}))
             ->capture_default_str();
     cmd->add_option("--resume", opt->resume,

@@ -517,8 +517,8 @@ double stable_fixed_step(const MembraneModel& model) noexcept
     if (!(omega_max > 0.0))
         return model.settings().dt_max;
     // Largest omega_max h (in steps of 1 %) at which no mode grows by more than 1e-7 per step:
-    // with damping the region reaches |omega h| ~ 3; without, every step size lets the
-    // oscillating modes grow a little (|R(iy)| - 1 ~ 1e-5 at y = 0.5).
+    // from beta h >= 0.012 the ceiling 3.5; with less damping the polynomial's growth near the
+    // imaginary axis (|R(iy)| - 1 = 1.3e-5 at y = 0.5) sets it lower (docs/physics.md §5).
     const double beta = model.settings().beta;
     for (double y = 3.5; y > 0.005; y *= 0.99)
         if (stable_at(y / omega_max, omega_max, beta, 1e-7))
@@ -575,6 +575,55 @@ void mark_forced_rows(const MembraneModel& model, Rkf45Workspace& ws)
         mark(off);
     for (const std::int64_t off : ws.rate_touched)
         mark(off);
+}
+
+/// The node of an offset into a ghost-1 plane of `model`'s stride.
+core::NodeIndex node_at_offset(const MembraneModel& model, const Field<double>& plane,
+                               std::int64_t off)
+{
+    const std::int64_t stride = plane.stride();
+    const int x = static_cast<int>(off % stride) - plane.ghost();
+    const int y = static_cast<int>(off / stride) - plane.ghost();
+    return model.grid().index(x, y);
+}
+
+/// Before a re-assembly: the forced offsets (a force set's, a linear hold's end and rate) and
+/// the masses of their nodes.
+void capture_forced_masses(const MembraneModel& model, Rkf45Workspace& ws)
+{
+    auto& out = ws.reassembly_masses;
+    out.clear();
+    for (const auto* list : {&ws.touched, &ws.end_touched, &ws.rate_touched})
+        for (const std::int64_t off : *list)
+            out.emplace_back(off, 0.0);
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end(),
+                          [](const auto& a, const auto& b) { return a.first == b.first; }),
+              out.end());
+    for (auto& [off, mass] : out)
+        mass = model.unique_mass(node_at_offset(model, ws.accel, off));
+}
+
+/// After a re-assembly: each force acceleration f / m_old becomes f / m_new (the lumped masses
+/// follow the deformed area), and so do a linear hold's end values and rate.
+void rescale_force_accels(const MembraneModel& model, Rkf45Workspace& ws)
+{
+    if (ws.reassembly_masses.empty())
+        return;
+    const bool held = !ws.accel_end.padded().empty();
+    for (const auto& [off, old_mass] : ws.reassembly_masses)
+    {
+        const double scale = old_mass / model.unique_mass(node_at_offset(model, ws.accel, off));
+        const auto o = static_cast<std::size_t>(off);
+        ws.accel.padded()[o] *= scale;
+        ws.accel_rate.padded()[o] *= scale;
+        if (held)
+            ws.accel_end.padded()[o] *= scale;
+    }
+    model.sync(ws.accel);
+    model.sync(ws.accel_rate);
+    if (held)
+        model.sync(ws.accel_end);
 }
 
 }  // namespace
@@ -705,8 +754,11 @@ StepReport step_prepared(MembraneModel& model, MembraneState& state, Rkf45Worksp
     if (reassemble)
     {
         model.sync(state.u);  // the whole surface
+        capture_forced_masses(model, ws);
         report.reassembled = model.reassemble(state.u).has_value();
         model.set_assembled_tick(state.tick);
+        if (report.reassembled)
+            rescale_force_accels(model, ws);
     }
     sync_state();
 

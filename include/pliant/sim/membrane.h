@@ -84,15 +84,24 @@ struct MembraneSettings
     double beta = 0.0;         ///< nodal velocity damping, B = beta M [1/s], >= 0
     double k_f = 0.0;          ///< elastic foundation, k_f M u [1/s^2], >= 0
     int reassemble_every = 0;  ///< R: re-assemble K and M from the deformed surface every R
-                               ///< accepted steps; 0 = never
+                               ///< accepted steps; 0 = never. The masses then become rho/3 x
+                               ///< the deformed areas (rho per deformed area), and the force
+                               ///< accelerations f/m are rescaled to them
     double rtol = 1e-4;        ///< RKF45 relative tolerance (per node, max norm), >= 0
-    double atol = 1e-8;        ///< RKF45 absolute tolerance [m for u, m/s for v], > 0
+    double atol = 1e-8;        ///< RKF45 absolute tolerance, > 0: one value for both u [m]
+                               ///< and v [m/s]
     double dt_min = 1e-7;      ///< smallest adaptive step [s], > 0
-    double dt_max = 0.05;      ///< largest adaptive step [s], >= dt_min
+    double dt_max = 0.05;      ///< largest adaptive step [s], >= dt_min. The default is far
+                               ///< above the stable step of a fine grid (1.2 ms at level 6
+                               ///< without damping, docs/physics.md §5): the error control,
+                               ///< not dt_max, keeps adaptive steps stable
     double dt_initial = 1e-3;  ///< first adaptive step [s], in [dt_min, dt_max]
     double safety = 0.9;       ///< step-size controller safety factor, in (0, 1]
     double max_growth = 5.0;   ///< largest step growth per accepted step, > 1
-    double min_shrink = 0.2;   ///< smallest step factor after a rejection, in (0, 1)
+    double min_shrink = 0.2;   ///< smallest factor from one accepted step to the next; a
+                               ///< rejection retries at h min(0.9, max(min_shrink,
+                               ///< safety err^-1/5)), a non-finite trial at h min_shrink (both
+                               ///< at least dt_min); in (0, 1)
     bool fixed_step = false;   ///< lockstep mode: every step is exactly `fixed_dt`, never rejected
     double fixed_dt = 1e-3;    ///< step of the fixed-step mode [s], > 0
     ForceHold force_hold = ForceHold::Step;   ///< how `advance_to` holds forces between calls
@@ -157,7 +166,8 @@ public:
     [[nodiscard]] const core::Field<double>& weight_y() const noexcept { return wy_; }
     [[nodiscard]] const core::Field<double>& weight_d() const noexcept { return wd_; }
     /// Stencil lumped mass rho/3 * (sum of the six grid triangles' areas) [kg] (twice the real
-    /// mass at the four corners) and its inverse.
+    /// mass at the four corners) and its inverse, on the surface last assembled: the rest
+    /// positions, or P + u N after `reassemble` (rho is then per deformed area).
     [[nodiscard]] const core::Field<double>& mass() const noexcept { return mass_; }
     [[nodiscard]] const core::Field<double>& inverse_mass() const noexcept { return inv_mass_; }
     /// 2 at the four tetrahedron corners, 1 elsewhere (see the file comment).

@@ -49,6 +49,7 @@
 #include <array>
 #include <cstdint>
 #include <span>
+#include <utility>
 #include <vector>
 
 namespace pliant::sim
@@ -60,7 +61,8 @@ namespace pliant::sim
 /// Distribution: a face gives each of its three vertices 1/3 of F.N_i; a point force gives node i
 /// (rest position within the radius) the share w_i / sum w of F.N_i, w_i = (1 - (d_i/radius)^2)^2;
 /// with no node inside the radius, the nearest node takes it all. Nodal force -> acceleration
-/// f_i / m_i with the real lumped mass m_i.
+/// f_i / m_i with the real lumped mass m_i of the current assembly (a re-assembly rescales the
+/// accelerations held in the workspace to its new masses).
 struct Force
 {
     std::int64_t face = -1;  ///< face index (0 .. 4W^2-1), or any negative value (-1) for
@@ -87,12 +89,19 @@ struct Force
 
 /// The largest fixed step [s] (within 1 %) at which no mode of `model` grows by more than 1e-7
 /// per step: omega_max is bounded by Gershgorin's theorem on M^-1 K + k_f (row sums of the
-/// stencil, 2 sum|w| / m per node, an over-estimate), and every mode's eigenvalues
-/// -beta/2 +- i sqrt(omega^2 - beta^2/4) for omega in [0, omega_max] are checked against the
-/// stability polynomial of the propagated fifth-order Fehlberg solution. That polynomial is
-/// slightly above 1 on the imaginary axis below |z| ~ 2.2 (as every fifth-order method's is),
-/// so without damping no step is strictly stable and the bound keeps the growth negligible;
-/// with the damping of real use it reaches |omega h| ~ 3 (tests/sim/rkf45_test.cpp).
+/// stencil, 2 sum|w| / m per node, an over-estimate: 1.36x the true one on the equal-area
+/// sphere at levels 5-8, 1.22-1.25x on the gnomonic one at levels 5-7), and every mode's
+/// eigenvalues -beta/2 +- i sqrt(omega^2 - beta^2/4) for omega in [0, omega_max] are checked
+/// against the stability polynomial of the propagated fifth-order Fehlberg solution, searching
+/// down from omega_max h = 3.5 in steps of 1 %. Fehlberg's polynomial has a z^6 coefficient
+/// 1/2080, below exp's 1/720, so it is above 1 on the imaginary axis for 0 < |z| < 2.046
+/// (Dormand-Prince's, 1/600, is not, near 0): without damping no step is strictly stable, and
+/// the bound keeps the growth under 1e-7 per step (omega_max h = 0.22). Damping moves every mode
+/// left by beta h / 2, so the bound depends on beta h, i.e. on beta / omega_max: omega_max h
+/// rises slowly with it (0.57 at beta / omega_max = 1e-4, 0.94 at 1e-3, 1.28 just below
+/// 0.00342) and is the ceiling 3.5 from beta >= 0.00342 omega_max (beta h >= 0.012). The same
+/// beta thus gives another omega_max h on another grid (docs/physics.md §5 has the measured
+/// steps).
 [[nodiscard]] double stable_fixed_step(const MembraneModel& model) noexcept;
 
 /// Checks forces against a model. \return InvalidArgument naming the force and the rule.
@@ -125,8 +134,10 @@ struct StepReport
     StepStatus status = StepStatus::Ok;
     std::uint32_t rejections = 0;  ///< rejected trials before the accepted one
     double dt = 0.0;               ///< the accepted step [s] (0 when nothing was accepted)
-    double error = 0.0;            ///< scaled error norm of the accepted step (<= 1 unless
-                                   ///< MinStepReached; 0 in fixed-step mode is not computed)
+    double error = 0.0;            ///< scaled error norm of the accepted step: <= 1 in
+                                   ///< adaptive mode unless MinStepReached; computed in
+                                   ///< fixed-step mode too, where it may exceed 1 and sets no
+                                   ///< flag
     bool reassembled = false;      ///< K and M were re-assembled before this step
 };
 
@@ -266,6 +277,9 @@ public:
     std::vector<std::int64_t> touched;  ///< accel offsets written by the last force set
     std::vector<std::int64_t> end_touched;   ///< accel_end offsets written (linear hold)
     std::vector<std::int64_t> rate_touched;  ///< accel_rate offsets set (linear hold)
+    /// A re-assembly's scratch: the forced offsets and their nodes' masses before it, so that
+    /// the force accelerations f / m follow the new masses.
+    std::vector<std::pair<std::int64_t, double>> reassembly_masses;
     /// [y]: accel or accel_rate may be non-zero in row y (the pipeline reads them only there).
     /// Kept by set_forces and the ramp functions; code that writes the planes directly must
     /// mark the rows it writes.
