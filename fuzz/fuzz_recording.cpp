@@ -63,7 +63,7 @@ const std::vector<std::vector<std::byte>>& samples()
             if (k == 1)
             {
                 r.final_hash = 0x1234'5678'9abc'def0ULL;
-                r.hash_mask = {0xff, 0x0f, 0x03};
+                r.hash_mask = {0xff, 0x02};  // 10 canonical nodes at level 1: 9 selected
                 net::UserForce face;
                 face.target.face = 3;
                 face.grab_id = 1;

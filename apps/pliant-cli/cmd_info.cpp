@@ -152,7 +152,8 @@ struct GridInfo
     std::vector<ChannelRange> ranges;         ///< every channel but px, py, pz and owner
     std::map<long long, std::size_t> owners;  ///< surface vertices per owner id
     /// The first owner value that is no whole number (ids are labels; counted rounded above).
-    std::optional<std::pair<core::GridCoord, double>> fractional_owner;
+    std::optional<OwnerProblem> bad_owner;  ///< the first owner value that is not a peer id
+    std::size_t bad_owners = 0;             ///< vertices whose owner value is not a peer id
 };
 
 GridInfo describe(const core::GridFile& file)
@@ -172,12 +173,14 @@ GridInfo describe(const core::GridFile& file)
             continue;
         if (f.name == "owner")
         {
+            info.bad_owner = owner_channel_problem(g, f.values);
             for (const core::NodeIndex n : g.node_of_unique())
             {
                 const double v = f.values[n];
-                ++info.owners[std::llround(v)];
-                if (!info.fractional_owner && v != std::round(v))
-                    info.fractional_owner = {g.coord(n), v};
+                if (v >= -1.0 && v <= 65535.0 && v == std::round(v))
+                    ++info.owners[std::llround(v)];
+                else
+                    ++info.bad_owners;
             }
             continue;
         }
@@ -209,6 +212,8 @@ std::optional<core::Error> grid_verdict(const std::string& path, const GridInfo&
     auto model = sim::MembraneModel::create(*info.grid, *positions, sim::MembraneSettings{});
     if (!model)
         return in_grid_file(path, model.error());
+    if (info.bad_owner)
+        return core::Error{core::ErrorCode::BadGrid, path + ": " + info.bad_owner->message};
     return std::nullopt;
 }
 
@@ -263,16 +268,16 @@ void print_grid_json(const InfoOptions& opt, const GridInfo* info,
                                    {"max", r.max},
                                    {"max_abs", r.max_abs},
                                    {"at", {r.at_max_abs.x, r.at_max_abs.y}}};
-        if (!info->owners.empty())
+        if (!info->owners.empty() || info->bad_owner)
         {
             auto owners = nlohmann::ordered_json::object();
             for (const auto& [id, count] : info->owners)
                 owners[std::to_string(id)] = count;
             j["owners"] = owners;
-            if (info->fractional_owner)
-                j["owner_not_whole"] = {
-                    {"value", info->fractional_owner->second},
-                    {"at", {info->fractional_owner->first.x, info->fractional_owner->first.y}}};
+            if (info->bad_owner)
+                j["owner_not_a_peer_id"] = {{"vertices", info->bad_owners},
+                                            {"value", info->bad_owner->value},
+                                            {"at", {info->bad_owner->at.x, info->bad_owner->at.y}}};
         }
     }
     std::cout << j.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) << '\n';
@@ -306,18 +311,18 @@ void print_grid_text(const InfoOptions& opt, const GridInfo& info,
         row(r.name.c_str(), num(r.min) + " .. " + num(r.max) + "  (largest |" + r.name + "| " +
                                 num(r.max_abs) + " at node (" + std::to_string(r.at_max_abs.x) +
                                 ", " + std::to_string(r.at_max_abs.y) + "))");
-    if (!info.owners.empty())
+    if (!info.owners.empty() || info.bad_owner)
     {
         std::string owners;
         for (const auto& [id, count] : info.owners)
             owners += (owners.empty() ? "" : ", ") + std::string("peer ") + std::to_string(id) +
                       ": " + n(count);
-        if (info.fractional_owner)
-        {
-            const auto& [at, value] = *info.fractional_owner;
-            owners += "  (rounded: not whole ids, e.g. " + num(value) + " at node (" +
-                      std::to_string(at.x) + ", " + std::to_string(at.y) + "))";
-        }
+        if (info.bad_owner)
+            owners += std::string(owners.empty() ? "" : "  ") + "(" + n(info.bad_owners) +
+                      (info.bad_owners == 1 ? " vertex holds" : " vertices hold") +
+                      " no peer id, e.g. " + num(info.bad_owner->value) + " at node (" +
+                      std::to_string(info.bad_owner->at.x) + ", " +
+                      std::to_string(info.bad_owner->at.y) + "))";
         row("owner (vertices)", owners);
     }
     row("verdict", error ? "INVALID: " + error->message : std::string(grid_valid(info)));

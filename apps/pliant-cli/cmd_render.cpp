@@ -22,6 +22,7 @@
 
 #include "cli_common.h"
 #include "commands.h"
+#include "peer_files.h"
 
 #include <algorithm>
 #include <array>
@@ -136,6 +137,8 @@ Owners owners_of(const core::TetraGrid& grid, const core::GridFile& file, int de
         std::vector<std::uint16_t> seen;
         for (std::uint32_t i = 0; i < grid.node_count(); ++i)
         {
+            // Whole numbers from -1 to 65535 (owner_channel_problem, checked for --color
+            // owner): -1 and 65535 are no owner.
             const double v = (*channel)[core::NodeIndex{i}];
             const std::uint16_t id = v >= 0.0 && v < 65535.0
                                          ? static_cast<std::uint16_t>(std::lround(v))
@@ -250,6 +253,11 @@ core::Result<GridScene> load_grid_scene(const fs::path& path, const RenderOption
     std::optional<core::Field<double>> u;
     if (const core::Field<double>* channel = file->find("u"); channel != nullptr)
         u = *channel;
+    if (const core::Field<double>* channel = file->find("owner");
+        channel != nullptr && opt.color == "owner")
+        if (const auto bad = owner_channel_problem(*grid, *channel))
+            return core::fail(ErrorCode::BadGrid, "render: " + path.string() + ": " + bad->message +
+                                                      " (`--color owner`)");
     Owners owner_info = owners_of(*grid, *file, opt.owner_depth);
     std::vector<std::uint16_t> owners = std::move(owner_info.ids);
 

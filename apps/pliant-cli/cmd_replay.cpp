@@ -67,7 +67,9 @@ int run_replay(const ReplayOptions& opt, const GlobalOptions& global)
                           result.error().message);
             return k_exit_interrupted;
         }
-        return report(result.error());
+        // "rec.prec: model blob: grid level 11, ...": the file whose content is refused.
+        return report(
+            {result.error().code, opt.recording.string() + ": " + result.error().message});
     }
     const core::TetraGrid& grid = result->model.grid();
     const std::uint64_t hash =

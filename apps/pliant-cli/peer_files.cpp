@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <string>
 #include <utility>
 #include <vector>
@@ -67,6 +68,31 @@ core::Result<void> save_peer_state(const session::Session& peer, const std::file
     file.fields.push_back({"v", std::move(v)});
     file.fields.push_back({"owner", std::move(owner)});
     return core::save_grid(path, file);
+}
+
+std::optional<OwnerProblem> owner_channel_problem(const core::TetraGrid& grid,
+                                                  const core::Field<double>& owner)
+{
+    for (std::uint32_t i = 0; i < grid.node_count(); ++i)
+    {
+        const double v = owner[core::NodeIndex{i}];
+        if (v >= -1.0 && v <= 65535.0 && v == std::round(v))
+            continue;
+        const core::GridCoord c = grid.coord(core::NodeIndex{i});
+        char value[32];  // the shortest text that reads back as v
+        for (int digits = 6; digits <= 17; ++digits)
+        {
+            std::snprintf(value, sizeof value, "%.*g", digits, v);
+            if (std::strtod(value, nullptr) == v)
+                break;
+        }
+        return OwnerProblem{c, v,
+                            "channel owner: node (" + std::to_string(c.x) + ", " +
+                                std::to_string(c.y) + ") holds " + value +
+                                ", which is not a peer id (a whole number from -1 to 65535; -1 "
+                                "and 65535: no owner)"};
+    }
+    return std::nullopt;
 }
 
 bool holds_state(const core::GridFile& file)
@@ -239,8 +265,8 @@ core::Result<RecordedHash> save_master_recording(const session::Session& master,
             ++out.covered;
         }
     }
-    if (out.covered == nodes.size())
-        mask.clear();
+    if (out.covered == nodes.size() || out.covered == 0)
+        mask.clear();  // every node; or none, with hash 0 (unknown)
     recording.hash_mask = std::move(mask);
     recording.final_hash =
         out.covered == 0

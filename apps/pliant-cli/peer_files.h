@@ -13,6 +13,7 @@
 
 #include <cstddef>
 #include <filesystem>
+#include <optional>
 #include <string>
 
 namespace pliant::cli
@@ -36,6 +37,19 @@ core::Result<void> save_peer_state(const session::Session& peer, const std::file
 /// `demo`'s final.pgrid, `replay -o` and `simulate`'s frames write. Their px/py/pz are the
 /// deformed surface P + uN, not a rest shape.
 [[nodiscard]] bool holds_state(const core::GridFile& file);
+
+/// Where a channel `owner` (docs/grid-format.md) holds something that is not a peer id: the
+/// first node, in node order, whose value is not a whole number from -1 to 65535 (-1 and 65535:
+/// no owner), and the message "channel owner: node (x, y) holds V, which is not a peer id ...";
+/// nothing when every value is one.
+struct OwnerProblem
+{
+    core::GridCoord at;
+    double value = 0.0;
+    std::string message;
+};
+[[nodiscard]] std::optional<OwnerProblem> owner_channel_problem(const core::TetraGrid& grid,
+                                                                const core::Field<double>& owner);
 
 /// The refusal for a state file given where a rest geometry is expected (`command`'s GRID). Its
 /// suggested command resumes from `resume` when the user gave one, else from `path`.

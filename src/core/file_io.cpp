@@ -211,9 +211,48 @@ Result<void> check_input_file(const fs::path& path, std::string_view what)
                                                                        : "no such file");
     if (fs::is_directory(st))
         return refuse("is a folder, not a file");
+    // A device has no end to read to (/dev/zero, /dev/urandom) or waits on a terminal.
+    if (fs::is_character_file(st) || fs::is_block_file(st))
+        return refuse("is a device, not a file");
     if (::access(path.c_str(), R_OK) != 0)
         return refuse(reason(errno));
     return {};
+}
+
+Result<std::vector<std::byte>> read_input_file(const fs::path& path, std::size_t max_bytes,
+                                               std::string_view what)
+{
+    if (auto readable = check_input_file(path); !readable)
+        return readable.error();
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0)
+        return fail(ErrorCode::IoError, path.string() + ": " + reason(errno));
+    std::vector<std::byte> bytes;
+    std::vector<std::byte> chunk(std::size_t{1} << 20);
+    for (;;)
+    {
+        const ::ssize_t n = ::read(fd, chunk.data(), chunk.size());
+        if (n < 0 && errno == EINTR)
+            continue;
+        if (n < 0)
+        {
+            const int err = errno;
+            ::close(fd);
+            return fail(ErrorCode::IoError, path.string() + ": " + reason(err));
+        }
+        if (n == 0)
+            break;
+        if (static_cast<std::size_t>(n) > max_bytes - std::min(max_bytes, bytes.size()))
+        {
+            ::close(fd);
+            return fail(ErrorCode::ParseError, path.string() + ": more than " +
+                                                   std::to_string(max_bytes) +
+                                                   " bytes, larger than any " + std::string(what));
+        }
+        bytes.insert(bytes.end(), chunk.begin(), chunk.begin() + n);
+    }
+    ::close(fd);
+    return bytes;
 }
 
 namespace

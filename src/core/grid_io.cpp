@@ -8,8 +8,6 @@
 #include <bit>
 #include <cmath>
 #include <cstring>
-#include <fstream>
-#include <iterator>
 
 namespace pliant::core
 {
@@ -22,6 +20,7 @@ static_assert(std::endian::native == std::endian::little,
 constexpr char k_magic[8] = {'P', 'L', 'I', 'A', 'N', 'T', 'G', '\0'};
 constexpr std::uint32_t k_version = 1;
 constexpr std::size_t k_name_bytes = 16;
+constexpr std::uint32_t k_max_channels = 64;
 
 template <typename T>
 void put(std::vector<std::byte>& out, const T& v)
@@ -51,25 +50,46 @@ private:
     std::size_t pos_ = 0;
 };
 
+/// "channel 3 ('name')" for messages; bytes outside printable ASCII shown as \xNN, so that a
+/// hostile file's name cannot send control sequences to the terminal.
+std::string channel_label(std::size_t index, std::string_view name)
+{
+    std::string out = "channel " + std::to_string(index) + " ('";
+    for (const char c : name)
+    {
+        const auto b = static_cast<unsigned char>(c);
+        if (b >= 0x20 && b < 0x7f && c != '\\')
+            out += c;
+        else
+        {
+            constexpr char hex[] = "0123456789abcdef";
+            out += "\\x";
+            out += hex[b >> 4];
+            out += hex[b & 15];
+        }
+    }
+    return out + "')";
+}
+
 /// The rules of a channel (docs/grid-format.md) that both save_grid and load_grid enforce, so
 /// that every file written can be read: a name of 1..15 printable ASCII characters, finite
 /// values, twin nodes equal to their canonical nodes: bit for bit when reading (`bitwise`), by
 /// value when saving (the writer copies the canonical node's bits onto its twins, so +0 and -0
 /// become one). `where` prefixes the message.
-Result<void> check_channel(const TetraGrid& grid, const std::string& name,
+Result<void> check_channel(const TetraGrid& grid, std::size_t index, const std::string& name,
                            const Field<double>& values, const std::string& where, bool bitwise)
 {
     const bool printable =
         std::all_of(name.begin(), name.end(), [](char c) { return c > 0x20 && c < 0x7f; });
     if (name.empty() || name.size() >= k_name_bytes || !printable)
-        return fail(ErrorCode::BadGrid, where + "channel name '" + name +
-                                            "' must have 1..15 printable ASCII characters");
+        return fail(ErrorCode::BadGrid, where + channel_label(index, name) +
+                                            ": a name must have 1..15 printable ASCII characters");
     for (std::uint32_t i = 0; i < grid.node_count(); ++i)
         if (!std::isfinite(values[NodeIndex{i}]))
         {
             const GridCoord c = grid.coord(NodeIndex{i});
             return fail(ErrorCode::BadGrid,
-                        where + "channel '" + name + "' has a non-finite value at node (" +
+                        where + channel_label(index, name) + " has a non-finite value at node (" +
                             std::to_string(c.x) + "," + std::to_string(c.y) + ")");
         }
     for (const TwinPair& t : grid.twins())
@@ -79,8 +99,8 @@ Result<void> check_channel(const TetraGrid& grid, const std::string& name,
         {
             const GridCoord a = grid.coord(t.twin), b = grid.coord(t.canonical);
             return fail(ErrorCode::BadGrid,
-                        where + "channel '" + name + "': twin node (" + std::to_string(a.x) + "," +
-                            std::to_string(a.y) + ") differs from its canonical node (" +
+                        where + channel_label(index, name) + ": twin node (" + std::to_string(a.x) +
+                            "," + std::to_string(a.y) + ") differs from its canonical node (" +
                             std::to_string(b.x) + "," + std::to_string(b.y) + ")" +
                             (bitwise ? " (twins hold bit-identical values)" : ""));
         }
@@ -107,20 +127,25 @@ Result<std::vector<std::byte>> encode_grid(const GridFile& file, const std::stri
                reinterpret_cast<const std::byte*>(k_magic) + sizeof(k_magic));
     put(out, k_version);
     put(out, static_cast<std::uint32_t>(file.level));
+    if (file.fields.size() > k_max_channels)
+        return fail(ErrorCode::InvalidArgument, source + ": " + std::to_string(file.fields.size()) +
+                                                    " channels; a grid file holds at most " +
+                                                    std::to_string(k_max_channels));
     put(out, static_cast<std::uint32_t>(file.fields.size()));
     std::vector<double> plane(grid->node_count());
-    for (const NamedField& f : file.fields)
+    for (std::size_t i = 0; i < file.fields.size(); ++i)
     {
+        const NamedField& f = file.fields[i];
         if (f.values.level() != file.level)
             return fail(ErrorCode::InvalidArgument,
-                        source + ": channel '" + f.name + "' is of level " +
+                        source + ": " + channel_label(i, f.name) + " is of level " +
                             std::to_string(f.values.level()) + ", the file of level " +
                             std::to_string(file.level));
-        if (auto ok = check_channel(*grid, f.name, f.values, source + ": ", false); !ok)
+        if (auto ok = check_channel(*grid, i, f.name, f.values, source + ": ", false); !ok)
             return fail(ErrorCode::InvalidArgument, ok.error().message);
         if (file.find(f.name) != &f.values)
             return fail(ErrorCode::InvalidArgument,
-                        source + ": channel '" + f.name + "' appears twice");
+                        source + ": " + channel_label(i, f.name) + ": the name appears twice");
         char name[k_name_bytes] = {};
         std::memcpy(name, f.name.data(), f.name.size());
         out.insert(out.end(), reinterpret_cast<const std::byte*>(name),
@@ -171,9 +196,10 @@ Result<GridFile> decode_grid(std::span<const std::byte> bytes, const std::string
         return fail(ErrorCode::BadGrid,
                     where + "level " + std::to_string(level) + " is outside 1..10");
     const std::size_t plane_bytes = grid->node_count() * sizeof(double);
-    if (channels > 64)
-        return fail(ErrorCode::ParseError,
-                    where + std::to_string(channels) + " channels; a grid file holds at most 64");
+    if (channels > k_max_channels)
+        return fail(ErrorCode::ParseError, where + std::to_string(channels) +
+                                               " channels; a grid file holds at most " +
+                                               std::to_string(k_max_channels));
     // Sizes of the whole file: header, channels, checksum.
     const std::size_t header_bytes = sizeof(k_magic) + 12;
     const std::size_t expected = header_bytes + channels * (k_name_bytes + plane_bytes) + 8;
@@ -194,15 +220,16 @@ Result<GridFile> decode_grid(std::span<const std::byte> bytes, const std::string
         NamedField f{std::string(name), Field<double>(*grid)};
         // NUL-padded: a byte after the name's end that is not NUL is not a name this writes.
         if (std::any_of(name + f.name.size(), name + k_name_bytes, [](char ch) { return ch != 0; }))
-            return fail(ErrorCode::BadGrid, where + "channel " + std::to_string(c) + " ('" +
-                                                f.name +
-                                                "'): its name field is not padded with NUL bytes");
+            return fail(ErrorCode::BadGrid,
+                        where + channel_label(c, std::string_view(name, k_name_bytes)) +
+                            ": its name field is not padded with NUL bytes");
         f.values.copy_from(plane);
-        if (auto ok = check_channel(*grid, f.name, f.values, where, true); !ok)
+        if (auto ok = check_channel(*grid, c, f.name, f.values, where, true); !ok)
             return ok.error();
         for (const NamedField& other : file.fields)
             if (other.name == f.name)
-                return fail(ErrorCode::BadGrid, where + "channel '" + f.name + "' appears twice");
+                return fail(ErrorCode::BadGrid,
+                            where + channel_label(c, f.name) + ": the name appears twice");
         file.fields.push_back(std::move(f));
     }
     return file;
@@ -210,17 +237,15 @@ Result<GridFile> decode_grid(std::span<const std::byte> bytes, const std::string
 
 Result<GridFile> load_grid(const std::filesystem::path& path)
 {
-    // A directory opens as a stream on Linux and then throws from the first read.
-    std::error_code ec;
-    if (std::filesystem::is_directory(path, ec))
-        return fail(ErrorCode::IoError, path.string() + ": is a directory, not a grid file");
-    if (auto readable = check_input_file(path); !readable)
-        return readable.error();
-    std::ifstream is(path, std::ios::binary);
-    if (!is)
-        return fail(ErrorCode::IoError, path.string() + ": cannot open for reading");
-    std::vector<char> raw((std::istreambuf_iterator<char>(is)), std::istreambuf_iterator<char>());
-    return decode_grid(std::as_bytes(std::span<const char>(raw)), path.string());
+    // The largest file: 64 channels of level 10 (a FIFO fed for ever stops there).
+    static_assert(k_max_level == 10);
+    constexpr std::size_t k_level10_nodes = (2 * 1024 + 1) * (1024 + 1);
+    constexpr std::size_t k_max_file =
+        sizeof(k_magic) + 12 + k_max_channels * (k_name_bytes + 8 * k_level10_nodes) + 8;
+    auto bytes = read_input_file(path, k_max_file, "grid file");
+    if (!bytes)
+        return bytes.error();
+    return decode_grid(*bytes, path.string());
 }
 
 GridFile make_geometry_file(const TetraGrid& grid, const Vec3Field<double>& positions)

@@ -8,9 +8,9 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cstring>
-#include <fstream>
-#include <iterator>
+#include <optional>
 #include <string>
 
 namespace pliant::session
@@ -74,10 +74,56 @@ core::Unexpected bad_file(const std::string& source, std::size_t offset, const s
                       source + ": byte " + std::to_string(offset) + ": " + why);
 }
 
+/// TetraGrid::unique_count() of a level, without building the grid: 2 W^2 + 2, W = 2^level.
+std::size_t unique_node_count(int level) noexcept
+{
+    const std::size_t w = std::size_t{1} << level;
+    return 2 * w * w + 2;
+}
+
+/// The bytes before the first entry of a version-1 file with an empty model blob, and the
+/// checksum: no recording is shorter.
+constexpr std::size_t k_min_size = 8 + 4 + 8 + 8 + 4 + 4 + 8;
+/// Where a version-2 file's hash mask begins.
+constexpr std::size_t k_mask_offset = 8 + 4 + 8 + 8 + 4;
+
+/// Why `mask` cannot select the nodes `final_hash` covers for the grid of `model` (a model blob:
+/// its level is byte 5), or nothing when it can: empty (every node), or one bit per canonical
+/// node, ceil(N / 8) bytes with the bits past N clear; a non-zero hash must cover a node.
+std::optional<std::string> mask_problem(std::span<const std::byte> model,
+                                        std::span<const std::uint8_t> mask,
+                                        std::uint64_t final_hash)
+{
+    if (mask.empty())
+        return std::nullopt;
+    if (model.size() < 6)
+        return "a model blob too short to give its grid's level, on which the hash mask's "
+               "length depends";
+    const int level = std::to_integer<int>(model[5]);
+    if (level < core::k_min_level || level > core::k_max_level)
+        return "a model blob of grid level " + std::to_string(level) +
+               " (pliant's grids: 1 to 10), on which the hash mask's length depends";
+    const std::size_t nodes = unique_node_count(level);
+    if (mask.size() != (nodes + 7) / 8)
+        return "a hash mask of " + std::to_string(mask.size()) + " bytes; the level-" +
+               std::to_string(level) + " grid's " + std::to_string(nodes) +
+               " canonical nodes take " + std::to_string((nodes + 7) / 8);
+    if (nodes % 8 != 0 && (mask.back() >> (nodes % 8)) != 0)
+        return "a hash mask that selects nodes past the grid's " + std::to_string(nodes);
+    if (final_hash != 0 &&
+        std::all_of(mask.begin(), mask.end(), [](std::uint8_t b) { return b == 0; }))
+        return "a final hash over no node (a hash mask that selects none: such a recording "
+               "carries hash 0, unknown)";
+    return std::nullopt;
+}
+
 }  // namespace
 
 core::Result<std::vector<std::byte>> encode_recording(const Recording& recording)
 {
+    if (const auto problem =
+            mask_problem(recording.model, recording.hash_mask, recording.final_hash))
+        return core::fail(core::ErrorCode::InvalidArgument, "save_recording: " + *problem);
     std::vector<std::byte> out;
     for (const char c : k_magic)
         out.push_back(static_cast<std::byte>(c));
@@ -120,19 +166,24 @@ core::Result<void> save_recording(const std::filesystem::path& path, const Recor
 
 core::Result<Recording> load_recording(const std::filesystem::path& path)
 {
-    std::ifstream file(path, std::ios::binary);
-    if (!file)
-        return core::fail(core::ErrorCode::IoError, "cannot read recording " + path.string());
-    std::vector<char> raw((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
-    return decode_recording(std::as_bytes(std::span<const char>(raw)), path.string());
+    // No bound in the format (one entry per force list); 4 GiB stops a FIFO fed for ever.
+    auto bytes = core::read_input_file(path, std::size_t{1} << 32, "recording pliant reads");
+    if (!bytes)
+        return bytes.error();
+    return decode_recording(*bytes, path.string());
 }
 
 core::Result<Recording> decode_recording(std::span<const std::byte> bytes,
                                          const std::string& source)
 {
-    if (bytes.size() < k_magic.size() + 8 ||
+    if (bytes.size() < k_magic.size() ||
         std::memcmp(bytes.data(), k_magic.data(), k_magic.size()) != 0)
-        return bad_file(source, 0, "not a pliant recording (magic PLIANTR)");
+        return bad_file(source, 0, "not a pliant recording (it does not begin with PLIANTR)");
+    if (bytes.size() < k_min_size)
+        return bad_file(source, bytes.size(),
+                        "truncated: " + std::to_string(bytes.size()) +
+                            " bytes, and no recording is shorter than " +
+                            std::to_string(k_min_size));
     const std::size_t body = bytes.size() - 8;
     Reader tail{bytes.subspan(body)};
     if (tail.get(8) != core::hash_bytes(bytes.first(body)))
@@ -158,6 +209,8 @@ core::Result<Recording> decode_recording(std::span<const std::byte> bytes,
     const auto count = r.get(4);
     if (!r.ok)
         return bad_file(source, r.pos, "truncated header");
+    if (const auto problem = mask_problem(rec.model, rec.hash_mask, rec.final_hash))
+        return bad_file(source, k_mask_offset, *problem);
     for (std::uint64_t i = 0; i < count; ++i)
     {
         const std::size_t at = r.pos;
@@ -277,18 +330,19 @@ bool in_mask(std::span<const std::uint8_t> mask, std::size_t k)
 std::uint64_t state_hash(const core::TetraGrid& grid, const core::Field<double>& u,
                          const core::Field<double>& v, std::span<const std::uint8_t> mask)
 {
-    std::vector<double> values;
-    values.reserve(2 * grid.unique_count());
+    // u and v of each node as little-endian f64, so that the hash is the same on any host.
+    std::vector<std::byte> bytes;
+    bytes.reserve(16 * grid.unique_count());
     const auto nodes = grid.node_of_unique();
     for (std::size_t k = 0; k < nodes.size(); ++k)
     {
         if (!in_mask(mask, k))
             continue;
         const core::GridCoord c = grid.coord(nodes[k]);
-        values.push_back(u.at(c.x, c.y));
-        values.push_back(v.at(c.x, c.y));
+        put(bytes, std::bit_cast<std::uint64_t>(u.at(c.x, c.y)), 8);
+        put(bytes, std::bit_cast<std::uint64_t>(v.at(c.x, c.y)), 8);
     }
-    return core::hash_span(std::span<const double>(values));
+    return core::hash_bytes(bytes);
 }
 
 std::size_t hash_mask_count(const core::TetraGrid& grid, std::span<const std::uint8_t> mask)

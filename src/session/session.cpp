@@ -221,44 +221,84 @@ std::vector<std::byte> encode_model(const sim::MembraneModel& model, Coupling co
 
 core::Result<DecodedModel> decode_model(std::span<const std::byte> blob)
 {
+    const auto refuse = [](const std::string& why)
+    { return core::fail(core::ErrorCode::InvalidArgument, "model blob: " + why); };
     Reader r{blob};
-    const bool magic = r.u32() == k_model_magic;
+    const std::uint32_t magic = r.u32();
     const std::uint8_t version = r.u8();
-    if (!magic || version < 1 || version > k_model_version)
-        return core::fail(core::ErrorCode::InvalidArgument, "model blob: bad magic or version");
+    if (!r.ok)
+        return refuse(std::to_string(blob.size()) + " bytes, shorter than its header");
+    if (magic != k_model_magic)
+        return refuse("it does not begin with PLSM");
+    if (version < 1 || version > k_model_version)
+        return refuse("version " + std::to_string(version) + ", this build reads 1 to " +
+                      std::to_string(k_model_version));
     const int level = r.u8();
     const std::uint8_t coupling = r.u8();
     const std::uint8_t clearance = version >= 2 ? r.u8() : 0;
     const std::uint8_t fixed = r.u8();
-    if (level < core::k_min_level || level > core::k_max_level || coupling < 1 || coupling > 2 ||
-        clearance > 2 || fixed > 1)
-        return core::fail(core::ErrorCode::InvalidArgument, "model blob: bad header");
+    if (!r.ok)
+        return refuse(std::to_string(blob.size()) + " bytes, shorter than its header");
+    if (level < core::k_min_level || level > core::k_max_level)
+        return refuse("grid level " + std::to_string(level) + ", pliant's grids are of levels " +
+                      std::to_string(core::k_min_level) + " to " +
+                      std::to_string(core::k_max_level));
+    if (coupling < 1 || coupling > 2)
+        return refuse("coupling " + std::to_string(coupling) + ", 1 (exact) or 2 (fast)");
+    if (clearance > 2)
+        return refuse("point clearance " + std::to_string(clearance) +
+                      ", 0 (the coupling's rule), 1 (grown) or 2 (inside)");
+    if (fixed > 1)
+        return refuse("fixed-step flag " + std::to_string(fixed) + ", 0 or 1");
+    const core::TetraGrid g = core::TetraGrid::create(level).value();
+    const std::size_t expect =
+        (version >= 2 ? 13 : 12) + (version >= 3 ? 14 : 13) * 8 + g.node_count() * 24;
+    if (blob.size() != expect)
+        return refuse(std::to_string(blob.size()) + " bytes; a version-" + std::to_string(version) +
+                      " model of level " + std::to_string(level) + " takes " +
+                      std::to_string(expect));
     sim::MembraneSettings s;
     s.fixed_step = fixed == 1;
     const std::uint32_t reassemble = r.u32();
     if (reassemble > (1u << 30))
-        return core::fail(
-            core::ErrorCode::InvalidArgument,
-            "model blob: re-assembly every " + std::to_string(reassemble) + " steps, at most 2^30");
+        return refuse("re-assembly every " + std::to_string(reassemble) + " steps, at most 2^30");
     s.reassemble_every = static_cast<int>(reassemble);
-    for (double* v : {&s.T, &s.rho, &s.beta, &s.k_f, &s.rtol, &s.atol, &s.dt_min, &s.dt_max,
-                      &s.dt_initial, &s.safety, &s.max_growth, &s.min_shrink, &s.fixed_dt})
-        *v = r.f64();
+    const std::pair<const char*, double*> settings[] = {{"tension T", &s.T},
+                                                        {"density rho", &s.rho},
+                                                        {"damping beta", &s.beta},
+                                                        {"foundation k_f", &s.k_f},
+                                                        {"rtol", &s.rtol},
+                                                        {"atol", &s.atol},
+                                                        {"dt_min", &s.dt_min},
+                                                        {"dt_max", &s.dt_max},
+                                                        {"dt_initial", &s.dt_initial},
+                                                        {"safety", &s.safety},
+                                                        {"max_growth", &s.max_growth},
+                                                        {"min_shrink", &s.min_shrink},
+                                                        {"fixed_dt", &s.fixed_dt}};
+    for (const auto& [name, value] : settings)
+    {
+        *value = r.f64();
+        if (!r.ok)
+            return refuse(std::string("setting ") + name + " is not finite");
+    }
     if (version >= 3)
+    {
         s.max_force = r.f64();
-    const core::TetraGrid g = core::TetraGrid::create(level).value();
-    const std::size_t expect =
-        (version >= 2 ? 13 : 12) + (version >= 3 ? 14 : 13) * 8 + g.node_count() * 24;
-    if (!r.ok || blob.size() != expect)
-        return core::fail(core::ErrorCode::InvalidArgument, "model blob: bad length or value");
+        if (!r.ok)
+            return refuse("setting max_force is not finite");
+    }
     core::Vec3Field<double> rest{core::Field<double>(g), core::Field<double>(g),
                                  core::Field<double>(g)};
     for (int y = 0; y < g.ny(); ++y)
         for (int x = 0; x < g.nx(); ++x)
             for (int c = 0; c < 3; ++c)
+            {
                 rest[static_cast<std::size_t>(c)].at(x, y) = r.f64();
-    if (!r.ok)
-        return core::fail(core::ErrorCode::InvalidArgument, "model blob: non-finite position");
+                if (!r.ok)
+                    return refuse("the rest position of node (" + std::to_string(x) + "," +
+                                  std::to_string(y) + ") is not finite");
+            }
     for (const core::TwinPair& t : g.twins())
         for (const core::Field<double>& plane : rest)
             if (plane[t.twin] != plane[t.canonical] ||

@@ -5,6 +5,7 @@
     make_bad_grid.py point OUT   every node at the origin (a point, not a surface)
     make_bad_grid.py far OUT     every node at the origin but node (8, 4), at x = 1e300
     make_bad_grid.py owner OUT   as point, with a channel "owner" of 0 but 0.5 at node (8, 4)
+    make_bad_grid.py set-owner IN OUT VALUE   IN (with a channel "owner") but VALUE at node (8, 4)
 Written by the format's rules (layout, names, checksum), independently of pliant's writer."""
 import struct
 import sys
@@ -29,7 +30,31 @@ def checksum(data):
     return h
 
 
+def set_owner(src, out, value):
+    """Copies the grid file `src` with its channel "owner" set to `value` at node (8, 4)."""
+    with open(src, "rb") as f:
+        data = bytearray(f.read())
+    _, level, channels = struct.unpack_from("<III", data, 8)
+    w = 1 << level
+    nx, ny = 2 * w + 1, w + 1
+    at = 20
+    for _ in range(channels):
+        name = bytes(data[at:at + 16]).rstrip(b"\0").decode()
+        if name == "owner":
+            struct.pack_into("<d", data, at + 16 + 8 * (4 * nx + 8), value)
+            break
+        at += 16 + 8 * nx * ny
+    else:
+        sys.exit("no channel owner in " + src)
+    struct.pack_into("<Q", data, len(data) - 8, checksum(bytes(data[:-8])))
+    with open(out, "wb") as f:
+        f.write(data)
+
+
 def main():
+    if sys.argv[1] == "set-owner":
+        set_owner(sys.argv[2], sys.argv[3], float(sys.argv[4]))
+        return
     kind, out = sys.argv[1], sys.argv[2]
     level = 3
     w = 1 << level

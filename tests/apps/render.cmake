@@ -109,11 +109,20 @@ if(TARGET pliant AND TARGET pliant_png_check)
             set_tests_properties(cli_render_refuses_an_undrawable_${kind} PROPERTIES TIMEOUT 60
                                  ENVIRONMENT "${_env}")
         endforeach()
-        # `info` says when owner ids are not whole numbers (it counts them rounded).
+        # `info` says when owner values are not peer ids (whole numbers from -1 to 65535),
+        # counting only the ids.
         set(_bad ${CMAKE_CURRENT_BINARY_DIR}/render-inputs/owner.pgrid)
         add_test(NAME cli_info_names_fractional_owners
-                 COMMAND sh -c "'${PLIANT_PYTHON3}' '${CMAKE_CURRENT_SOURCE_DIR}/make_bad_grid.py' owner '${_bad}' && '${CMAKE_COMMAND}' '-DCOMMAND=$<TARGET_FILE:pliant>;info;${_bad}' -DEXIT=1 '-DSTDOUT_REGEX=owner .vertices. +peer 0: 129, peer 1: 1  .rounded: not whole ids, e.g. 0.5 at node .8, 4..' -P '${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake'")
+                 COMMAND sh -c "'${PLIANT_PYTHON3}' '${CMAKE_CURRENT_SOURCE_DIR}/make_bad_grid.py' owner '${_bad}' && '${CMAKE_COMMAND}' '-DCOMMAND=$<TARGET_FILE:pliant>;info;${_bad}' -DEXIT=1 '-DSTDOUT_REGEX=owner .vertices. +peer 0: 129  .1 vertex holds no peer id, e.g. 0.5 at node .8, 4..' -P '${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake'")
         set_tests_properties(cli_info_names_fractional_owners PROPERTIES TIMEOUT 60)
+        # The demo's final.pgrid with an owner of 1e300 at node (8, 4): `render --color owner`
+        # refuses it naming the node (it drew the node as no one's), `info` says it is invalid
+        # (it printed "peer -9223372036854775808").
+        set(_bad ${CMAKE_CURRENT_BINARY_DIR}/render-inputs/owner-far.pgrid)
+        add_test(NAME cli_render_refuses_an_owner_that_is_no_peer_id
+                 COMMAND sh -c "'${PLIANT_PYTHON3}' '${CMAKE_CURRENT_SOURCE_DIR}/make_bad_grid.py' set-owner '${CMAKE_CURRENT_BINARY_DIR}/demo-quick/final.pgrid' '${_bad}' 1e300 && '${CMAKE_COMMAND}' '-DCOMMAND=$<TARGET_FILE:pliant>;render;${_bad};-o;${_r}/owner-far.png;--color;owner' -DEXIT=1 '-DSTDERR_REGEX=channel owner: node .8, 4. holds 1e.300, which is not a peer id' '-DABSENT=${_r}/owner-far.png' -P '${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake' && '${CMAKE_COMMAND}' '-DCOMMAND=$<TARGET_FILE:pliant>;info;${_bad}' -DEXIT=1 '-DSTDOUT_REGEX=1 vertex holds no peer id, e.g. 1e.300 at node .8, 4.' -P '${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake'")
+        set_tests_properties(cli_render_refuses_an_owner_that_is_no_peer_id PROPERTIES TIMEOUT 60
+                             FIXTURES_REQUIRED demo_quick ENVIRONMENT "${_env}")
     endif()
 
     # Ctrl-C during a sequence (the 101 frames of cli_simulate_pull), once f_0003.png is

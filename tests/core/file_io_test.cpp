@@ -233,6 +233,38 @@ TEST(FileIo, CheckInputFileSaysWhyAndOpensNothing)
     // it for reading here would block, since nobody writes to it.
     ASSERT_EQ(::mkfifo((dir / "fifo").c_str(), 0600), 0);
     EXPECT_TRUE(check_input_file(dir / "fifo", "--key-file"));
+
+    // A device has no end to read to (/dev/zero) or waits on a terminal: refused.
+    auto device = check_input_file("/dev/zero", "--resume");
+    ASSERT_FALSE(device);
+    EXPECT_EQ(device.error().message, "--resume: /dev/zero: is a device, not a file");
+}
+
+// read_input_file reads a file whole, up to a bound it names when passed, and refuses what
+// check_input_file refuses.
+TEST(FileIo, ReadInputFileReadsWholeUpToItsBound)
+{
+    const fs::path dir = test::scratch_dir("file_io_read");
+    const std::string text(3 << 20, 'x');  // more than one read's chunk (1 MiB)
+    put(dir / "big", text);
+    const auto whole = read_input_file(dir / "big", text.size(), "test file");
+    ASSERT_TRUE(whole) << whole.error().message;
+    ASSERT_EQ(whole->size(), text.size());
+    EXPECT_EQ(std::to_integer<char>((*whole)[text.size() - 1]), 'x');
+
+    const auto over = read_input_file(dir / "big", text.size() - 1, "test file");
+    ASSERT_FALSE(over);
+    EXPECT_EQ(over.error().code, ErrorCode::ParseError);
+    EXPECT_EQ(over.error().message, (dir / "big").string() + ": more than " +
+                                        std::to_string(text.size() - 1) +
+                                        " bytes, larger than any test file");
+
+    const auto device = read_input_file("/dev/zero", 100, "test file");
+    ASSERT_FALSE(device);
+    EXPECT_EQ(device.error().code, ErrorCode::IoError);
+    const auto missing = read_input_file(dir / "missing", 100, "test file");
+    ASSERT_FALSE(missing);
+    EXPECT_EQ(missing.error().code, ErrorCode::IoError);
 }
 
 }  // namespace

@@ -94,7 +94,9 @@ TEST(GridIo, RefusesCorruptTruncatedAndForeignFiles)
     auto folder = load_grid(dir / "folder.pgrid");
     ASSERT_FALSE(folder.has_value());
     EXPECT_EQ(folder.error().code, ErrorCode::IoError);
-    EXPECT_NE(folder.error().message.find("folder.pgrid: is a directory"), std::string::npos);
+    EXPECT_NE(folder.error().message.find("folder.pgrid: is a folder, not a file"),
+              std::string::npos)
+        << folder.error().message;
 }
 
 TEST(GridIo, RefusesTwinsThatDiffer)
@@ -147,7 +149,7 @@ TEST(GridIo, NonFiniteValuesAreRefusedNamingTheNode)
     auto saved = save_grid(dir / "bad.pgrid", make_geometry_file(g, bad));
     ASSERT_FALSE(saved);
     EXPECT_EQ(saved.error().code, ErrorCode::InvalidArgument);
-    EXPECT_NE(saved.error().message.find("channel 'py' has a non-finite value at node (3,1)"),
+    EXPECT_NE(saved.error().message.find("channel 1 ('py') has a non-finite value at node (3,1)"),
               std::string::npos)
         << saved.error().message;
     EXPECT_FALSE(std::filesystem::exists(dir / "bad.pgrid"));
@@ -282,7 +284,8 @@ TEST(GridIo, NamesArePaddedWithNulAndDistinct)
     const auto repeated = decode_grid(reseal(twice), "mem");
     ASSERT_FALSE(repeated);
     EXPECT_EQ(repeated.error().code, ErrorCode::BadGrid);
-    EXPECT_NE(repeated.error().message.find("'px' appears twice"), std::string::npos)
+    EXPECT_NE(repeated.error().message.find("channel 1 ('px'): the name appears twice"),
+              std::string::npos)
         << repeated.error().message;
 
     file.fields[1].name = "px";
@@ -290,6 +293,53 @@ TEST(GridIo, NamesArePaddedWithNulAndDistinct)
     ASSERT_FALSE(out);
     EXPECT_EQ(out.error().code, ErrorCode::InvalidArgument);
     EXPECT_NE(out.error().message.find("appears twice"), std::string::npos);
+
+    // A name with a control byte (ESC [ 2 J clears a terminal) is refused with the byte shown
+    // as \x1b, naming the channel's index.
+    auto escape = good;
+    std::memcpy(escape.data() + 20 + plane, "p\x1b[2J", 5);
+    const auto hostile = decode_grid(reseal(escape), "mem");
+    ASSERT_FALSE(hostile);
+    EXPECT_EQ(hostile.error().code, ErrorCode::BadGrid);
+    EXPECT_NE(hostile.error().message.find("channel 1 ('p\\x1b[2J')"), std::string::npos)
+        << hostile.error().message;
+    EXPECT_EQ(hostile.error().message.find('\x1b'), std::string::npos) << hostile.error().message;
+}
+
+// The writer refuses what the reader refuses: more than 64 channels (encode_grid wrote them and
+// decode_grid refused its own output).
+TEST(GridIo, MoreThan64ChannelsAreRefusedOnTheWayOutAsOnTheWayIn)
+{
+    const TetraGrid g = TetraGrid::create(1).value();
+    GridFile file;
+    file.level = 1;
+    for (int c = 0; c < 64; ++c)
+        file.fields.push_back({"c" + std::to_string(c), Field<double>(g)});
+    const auto bytes = encode_grid(file, "mem");
+    ASSERT_TRUE(bytes) << bytes.error().message;
+    EXPECT_TRUE(decode_grid(*bytes, "mem"));
+    file.fields.push_back({"c64", Field<double>(g)});
+    const auto refused = encode_grid(file, "mem");
+    ASSERT_FALSE(refused);
+    EXPECT_EQ(refused.error().code, ErrorCode::InvalidArgument);
+    EXPECT_NE(refused.error().message.find("65 channels; a grid file holds at most 64"),
+              std::string::npos)
+        << refused.error().message;
+}
+
+// A device is refused before any read (/dev/zero has no end: load_grid read it until memory ran
+// out).
+TEST(GridIo, ADeviceIsRefusedWithoutReading)
+{
+    const auto dir = test::scratch_dir("grid_io_device");
+    const auto zero = dir / "zero.pgrid";
+    std::filesystem::remove(zero);
+    std::filesystem::create_symlink("/dev/zero", zero);
+    const auto device = load_grid(zero);
+    ASSERT_FALSE(device);
+    EXPECT_EQ(device.error().code, ErrorCode::IoError);
+    EXPECT_NE(device.error().message.find("is a device, not a file"), std::string::npos)
+        << device.error().message;
 }
 
 }  // namespace

@@ -13,8 +13,12 @@
 #include "support/test_paths.h"
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <span>
+#include <string>
+#include <vector>
 
 namespace pliant::session::test
 {
@@ -248,7 +252,10 @@ TEST(Recording, FileRoundTripsExactlyAndRefusesCorruption)
     // A hash over part of the nodes keeps its mask; a file of version 1 (no mask: every node)
     // still loads.
     Recording masked = rec;
-    masked.hash_mask = {0x05, 0x00, 0x80};
+    ASSERT_EQ(grid.unique_count(), 130U);  // 17 bytes of mask, 2 bits used in the last
+    masked.hash_mask.assign(17, 0);
+    masked.hash_mask[0] = 0x05;
+    masked.hash_mask[16] = 0x02;
     ASSERT_TRUE(save_recording(dir / "masked.prec", masked));
     auto masked_back = load_recording(dir / "masked.prec");
     ASSERT_TRUE(masked_back) << masked_back.error().message;
@@ -290,6 +297,101 @@ TEST(Recording, FileRoundTripsExactlyAndRefusesCorruption)
     expect_refused(magic, "wrong magic");
     expect_refused({}, "empty file");
     EXPECT_EQ(load_recording(dir / "missing.prec").error().code, core::ErrorCode::IoError);
+}
+
+/// `bytes` with its last 8 bytes replaced by the checksum of the rest.
+std::vector<char> resealed(std::vector<char> bytes)
+{
+    const std::uint64_t h =
+        core::hash_bytes(std::as_bytes(std::span<const char>(bytes.data(), bytes.size() - 8)));
+    for (int k = 0; k < 8; ++k)
+        bytes[bytes.size() - 8 + static_cast<std::size_t>(k)] =
+            static_cast<char>((h >> (8 * k)) & 0xFF);
+    return bytes;
+}
+
+// The hash mask holds one bit per canonical node of the model's grid or nothing: a mask of
+// another length, one selecting nodes past the grid's, or one selecting none under a non-zero
+// hash is refused on the way out and on the way in, naming the byte (before, any mask was taken:
+// a mask selecting nothing "verified" any replay, a short one covered only its first nodes). A
+// file too short for a header says so, and so do a folder and a device.
+TEST(Recording, AHashMaskMustFitTheGridAndSelectANode)
+{
+    const core::TetraGrid grid = core::TetraGrid::create(3).value();
+    auto model =
+        sim::MembraneModel::create(grid, scenes::sphere_grid(grid, 1.0), material()).value();
+    Recording rec;
+    rec.model = encode_model(model, Coupling::Exact);
+    rec.final_tick = 10;
+    rec.final_hash = 0x42;
+    rec.hash_mask.assign(17, 0);
+    rec.hash_mask[3] = 0x10;
+    const auto dir = pliant::test::scratch_dir("recording_mask");
+    ASSERT_TRUE(save_recording(dir / "good.prec", rec));
+    const std::vector<char> good = read_all(dir / "good.prec");
+    ASSERT_TRUE(load_recording(dir / "good.prec"));
+
+    const auto refused_on_save =
+        [&](std::vector<std::uint8_t> mask, std::uint64_t hash, const std::string& why)
+    {
+        Recording bad = rec;
+        bad.hash_mask = std::move(mask);
+        bad.final_hash = hash;
+        const auto saved = save_recording(dir / "unsaved.prec", bad);
+        ASSERT_FALSE(saved) << why;
+        EXPECT_EQ(saved.error().code, core::ErrorCode::InvalidArgument);
+        EXPECT_NE(saved.error().message.find(why), std::string::npos) << saved.error().message;
+        EXPECT_FALSE(std::filesystem::exists(dir / "unsaved.prec"));
+    };
+    refused_on_save({0x01}, 0x42,
+                    "a hash mask of 1 bytes; the level-3 grid's 130 canonical "
+                    "nodes take 17");
+    std::vector<std::uint8_t> past(17, 0);
+    past[16] = 0x04;  // node 130: there are 130, 0..129
+    refused_on_save(past, 0x42, "selects nodes past the grid's 130");
+    refused_on_save(std::vector<std::uint8_t>(17, 0), 0x42, "a final hash over no node");
+    // Hash 0 is "unknown": a mask is then not checked for a selection.
+    Recording unknown = rec;
+    unknown.final_hash = 0;
+    unknown.hash_mask.assign(17, 0);
+    EXPECT_TRUE(save_recording(dir / "unknown.prec", unknown));
+
+    const auto refused_on_load = [&](const std::vector<char>& bytes, const std::string& why)
+    {
+        write_all(dir / "bad.prec", bytes);
+        const auto r = load_recording(dir / "bad.prec");
+        ASSERT_FALSE(r) << why;
+        EXPECT_EQ(r.error().code, core::ErrorCode::ParseError);
+        EXPECT_NE(r.error().message.find(why), std::string::npos) << r.error().message;
+    };
+    // The mask's 17 bytes begin at byte 32 (after its u32 size at 28).
+    std::vector<char> bytes = good;
+    bytes[32 + 16] = 0x04;
+    refused_on_load(resealed(bytes), "byte 32: a hash mask that selects nodes past");
+    bytes = good;
+    bytes[32 + 3] = 0;
+    refused_on_load(resealed(bytes), "byte 32: a final hash over no node");
+    bytes = good;
+    bytes[28] = 1;  // a mask of 1 byte: the first of the 17 is kept
+    bytes.erase(bytes.begin() + 33, bytes.begin() + 49);
+    refused_on_load(resealed(bytes), "byte 32: a hash mask of 1 bytes");
+
+    refused_on_load(std::vector<char>(good.begin(), good.begin() + 10),
+                    "truncated: 10 bytes, and no recording is shorter than 44");
+    refused_on_load(resealed(std::vector<char>(good.begin(), good.begin() + 16)),
+                    "truncated: 16 bytes");
+    refused_on_load({'x', 'y'}, "not a pliant recording");
+
+    const auto folder = load_recording(dir);
+    ASSERT_FALSE(folder);
+    EXPECT_NE(folder.error().message.find("is a folder, not a file"), std::string::npos)
+        << folder.error().message;
+    std::filesystem::remove(dir / "zero.prec");
+    std::filesystem::create_symlink("/dev/zero", dir / "zero.prec");
+    const auto device = load_recording(dir / "zero.prec");
+    ASSERT_FALSE(device);
+    EXPECT_NE(device.error().message.find("is a device, not a file"), std::string::npos)
+        << device.error().message;
 }
 
 // A recording made by a build of an earlier protocol version (Force's layout is the same since

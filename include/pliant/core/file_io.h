@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <span>
 #include <string_view>
+#include <vector>
 
 namespace pliant::core
 {
@@ -53,10 +54,19 @@ struct FileContent
 
 /// Checks that an input file named by a user can be read, without opening it (a FIFO or
 /// /dev/fd/N from a shell's process substitution passes and is not consumed). \return IoError
-/// "`what`: PATH: no such file" (or "is a folder, not a file", or the system's reason, e.g.
-/// "Permission denied"); with `what` empty the message starts with PATH.
+/// "`what`: PATH: no such file" (or "is a folder, not a file", "is a device, not a file" for a
+/// character or block device such as /dev/zero, which has no end to read to, or the system's
+/// reason, e.g. "Permission denied"); with `what` empty the message starts with PATH.
 [[nodiscard]] Result<void> check_input_file(const std::filesystem::path& path,
                                             std::string_view what = {});
+
+/// The whole content of an input file (check_input_file first; a FIFO is read to its end), at
+/// most `max_bytes`: \return IoError as check_input_file, or the system's reason for a failed
+/// open or read; ParseError "PATH: more than N bytes, larger than any `what`" past `max_bytes`
+/// (the read stops there; `what` names the format, e.g. "grid file").
+[[nodiscard]] Result<std::vector<std::byte>> read_input_file(const std::filesystem::path& path,
+                                                             std::size_t max_bytes,
+                                                             std::string_view what);
 
 /// Checks, before the work that produces it, that an output can be written at `path`, and
 /// leaves nothing behind: `path` is not a folder, its folder exists, is a folder and is

@@ -21,9 +21,8 @@
 ///   replay the same inputs on one process but the result differs; `replay` says so by
 ///   returning the coupling, and `pliant replay` warns.
 ///
-/// File (little-endian): "PLIANTR\0", u32 version = 1, u64 final tick, u64 final state hash
-/// (0 = unknown), u32 model blob size, the blob, u32 entry count, per entry u16 size and the
-/// datagram; then u64 hash_bytes of everything before it.
+/// File (`.prec`, little-endian): magic, version, final tick and hash, hash mask, model blob,
+/// Force entries, checksum; every byte and check: docs/session.md §9.1 to §9.3.
 
 #include <pliant/core/field.h>
 #include <pliant/core/progress.h>
