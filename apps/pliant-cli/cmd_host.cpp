@@ -59,7 +59,7 @@ struct HostOptions
     StreamOptions stream;  ///< --compress, --cap, --stream-coarsen
 };
 
-int run_host(const HostOptions& opt)
+int run_host(const HostOptions& opt, const GlobalOptions& global)
 {
     auto geometry =
         load_rest_geometry("host", opt.grid, opt.level, 1.0, opt.sphere_map, opt.resume);
@@ -168,8 +168,11 @@ int run_host(const HostOptions& opt)
                  grid.level(), opt.mode,
                  (*s)->point_clearance() == session::PointClearance::Inside ? "inside" : "grown",
                  limit > 0.0 ? fmt::format("{:.3g} N", limit) : std::string("none"), bound->port);
-    std::printf("hosting on port %u\n", static_cast<unsigned>(bound->port));
-    std::fflush(stdout);
+    if (!global.quiet)  // -q: errors only
+    {
+        std::printf("hosting on port %u\n", static_cast<unsigned>(bound->port));
+        std::fflush(stdout);
+    }
     if (!opt.record.empty())
         if (auto ok = (*s)->start_recording(); !ok)
             return report(ok.error());
@@ -188,7 +191,7 @@ int run_host(const HostOptions& opt)
                 "host: {}: the master owned no node at the end, so the recording "
                 "holds no final hash; `pliant replay` replays it without a check",
                 opt.record);
-        else
+        else if (!global.quiet)
             std::printf(
                 "host: recorded %s: final hash of tick %llu over the master's %zu of "
                 "%zu nodes\n",
@@ -205,11 +208,12 @@ int run_host(const HostOptions& opt)
         spdlog::error("host: {}", (*s)->refusal());
         return k_exit_failure;
     }
-    std::printf("host: %.1f s, tick %llu, %llu bytes out, %llu bytes in, %s\n", summary->elapsed_s,
-                static_cast<unsigned long long>(summary->final_tick),
-                static_cast<unsigned long long>(summary->stats.bytes_sent),
-                static_cast<unsigned long long>(summary->stats.bytes_received),
-                refused_summary(*transport, summary->auth_refused).c_str());
+    if (!global.quiet)
+        std::printf("host: %.1f s, tick %llu, %llu bytes out, %llu bytes in, %s\n",
+                    summary->elapsed_s, static_cast<unsigned long long>(summary->final_tick),
+                    static_cast<unsigned long long>(summary->stats.bytes_sent),
+                    static_cast<unsigned long long>(summary->stats.bytes_received),
+                    refused_summary(*transport, summary->auth_refused).c_str());
     return end_status(**s, "host", summary->stats_error);
 }
 
@@ -313,7 +317,8 @@ void add_host_command(CLI::App& app, const GlobalOptions& global)
         ->capture_default_str();
     add_secret_options(cmd, opt->passphrase, opt->key_file);
     add_stream_options(cmd, opt->stream);
-    cmd->callback(command_callback(global, [opt]() -> int { return run_host(*opt); }));
+    cmd->callback(
+        command_callback(global, [opt, &global]() -> int { return run_host(*opt, global); }));
 }
 
 const CommandRegistrar k_register_host{{"host", 50, &add_host_command}};

@@ -320,7 +320,7 @@ void print_grid_text(const InfoOptions& opt, const GridInfo& info,
         if (info.bad_owner)
             owners += std::string(owners.empty() ? "" : "  ") + "(" + n(info.bad_owners) +
                       (info.bad_owners == 1 ? " vertex holds" : " vertices hold") +
-                      " no peer id, e.g. " + num(info.bad_owner->value) + " at node (" +
+                      " no peer id, e.g. " + info.bad_owner->value_text + " at node (" +
                       std::to_string(info.bad_owner->at.x) + ", " +
                       std::to_string(info.bad_owner->at.y) + "))";
         row("owner (vertices)", owners);

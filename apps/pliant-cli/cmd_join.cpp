@@ -41,7 +41,7 @@ struct JoinOptions
     StreamOptions stream;  ///< --compress, --cap, --stream-coarsen
 };
 
-int run_join(const JoinOptions& opt)
+int run_join(const JoinOptions& opt, const GlobalOptions& global)
 {
     auto master = net::resolve_address(opt.master);
     if (!master)
@@ -98,7 +98,8 @@ int run_join(const JoinOptions& opt)
     }
     if (!(*s)->ready() && run.stop != nullptr && *run.stop != 0)
     {
-        std::printf("join: interrupted before the model arrived from %s\n", opt.master.c_str());
+        if (!global.quiet)
+            std::printf("join: interrupted before the model arrived from %s\n", opt.master.c_str());
         return 0;  // Ctrl-C is a clean end, as after the model
     }
     if (!(*s)->ready())
@@ -120,13 +121,14 @@ int run_join(const JoinOptions& opt)
     if (!opt.save.empty())
         if (auto ok = save_peer_state(**s, opt.save); !ok)
             return report(ok.error());
-    std::printf(
-        "join (id %u): model in %.2f s; %.1f s, tick %llu, %llu bytes out, %llu bytes in, %s\n",
-        static_cast<unsigned>((*s)->id().value), summary->model_s, summary->elapsed_s,
-        static_cast<unsigned long long>(summary->final_tick),
-        static_cast<unsigned long long>(summary->stats.bytes_sent),
-        static_cast<unsigned long long>(summary->stats.bytes_received),
-        refused_summary(*transport, summary->auth_refused).c_str());
+    if (!global.quiet)  // -q: errors only
+        std::printf(
+            "join (id %u): model in %.2f s; %.1f s, tick %llu, %llu bytes out, %llu bytes in, %s\n",
+            static_cast<unsigned>((*s)->id().value), summary->model_s, summary->elapsed_s,
+            static_cast<unsigned long long>(summary->final_tick),
+            static_cast<unsigned long long>(summary->stats.bytes_sent),
+            static_cast<unsigned long long>(summary->stats.bytes_received),
+            refused_summary(*transport, summary->auth_refused).c_str());
     return end_status(**s, "join", summary->stats_error);
 }
 
@@ -172,7 +174,8 @@ void add_join_command(CLI::App& app, const GlobalOptions& global)
         ->capture_default_str();
     add_secret_options(cmd, opt->passphrase, opt->key_file);
     add_stream_options(cmd, opt->stream);
-    cmd->callback(command_callback(global, [opt]() -> int { return run_join(*opt); }));
+    cmd->callback(
+        command_callback(global, [opt, &global]() -> int { return run_join(*opt, global); }));
 }
 
 const CommandRegistrar k_register_join{{"join", 51, &add_join_command}};

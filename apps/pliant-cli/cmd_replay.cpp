@@ -75,14 +75,17 @@ int run_replay(const ReplayOptions& opt, const GlobalOptions& global)
     const std::uint64_t hash =
         session::state_hash(grid, result->state.u, result->state.v, recording->hash_mask);
     const std::size_t covered = session::hash_mask_count(grid, recording->hash_mask);
-    std::printf(
-        "replayed %llu ticks (%.3f s at a fixed step of %.4g s), level %d, %zu force "
-        "lists\n",
-        static_cast<unsigned long long>(result->state.tick), result->state.time,
-        result->model.settings().fixed_dt, grid.level(), recording->forces.size());
-    if (covered == grid.unique_count())
+    // -q: errors only (the exit status says whether the replay matched).
+    const bool say = !global.quiet;
+    if (say)
+        std::printf(
+            "replayed %llu ticks (%.3f s at a fixed step of %.4g s), level %d, %zu force "
+            "lists\n",
+            static_cast<unsigned long long>(result->state.tick), result->state.time,
+            result->model.settings().fixed_dt, grid.level(), recording->forces.size());
+    if (say && covered == grid.unique_count())
         std::printf("final state hash %016llx\n", static_cast<unsigned long long>(hash));
-    else
+    else if (say)
         std::printf(
             "final state hash %016llx over the %zu of %zu nodes the recording's hash "
             "covers (the master's own)\n",
@@ -99,16 +102,28 @@ int run_replay(const ReplayOptions& opt, const GlobalOptions& global)
         rc = k_exit_failure;
     }
     else if (opt.until && *opt.until != recording->final_tick)
-        std::printf("stopped before the recording's end: no recorded hash to compare\n");
+    {
+        if (say)
+            std::printf("stopped before the recording's end: no recorded hash to compare\n");
+    }
     else if (recording->final_hash == 0)
-        std::printf("the recording holds no final hash to compare with\n");
+    {
+        if (say)
+            std::printf("the recording holds no final hash to compare with\n");
+    }
     else if (result->coupling == session::Coupling::Fast)
-        std::printf(
-            "fast coupling: a replay reproduces the inputs, not the timing-dependent "
-            "state (recorded hash %016llx)\n",
-            static_cast<unsigned long long>(recording->final_hash));
+    {
+        if (say)
+            std::printf(
+                "fast coupling: a replay reproduces the inputs, not the timing-dependent "
+                "state (recorded hash %016llx)\n",
+                static_cast<unsigned long long>(recording->final_hash));
+    }
     else if (hash == recording->final_hash)
-        std::printf("bit-identical to the recorded session\n");
+    {
+        if (say)
+            std::printf("bit-identical to the recorded session\n");
+    }
     else
     {
         spdlog::error("replay: the state differs from the recorded session's (hash {:016x})",
@@ -138,7 +153,8 @@ int run_replay(const ReplayOptions& opt, const GlobalOptions& global)
             written = mesh::export_mesh(opt.out, mesh::from_grid(grid, positions));
         if (!written)
             return report(written.error());
-        std::printf("wrote the deformed surface to %s\n", opt.out.string().c_str());
+        if (say)
+            std::printf("wrote the deformed surface to %s\n", opt.out.string().c_str());
     }
     return rc;
 }

@@ -773,13 +773,15 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
         if (auto ok = record.write(); !ok)
             return report(ok.error());
         completed = true;
-        std::printf(
-            "%d frames, %.3f s simulated in %.3f s wall (%.2fx real time), level %d, %zu "
-            "vertices, %llu steps, %llu rejections, %d thread(s), %s precision -> %s\n",
-            frames + 1, state.time, wall, wall > 0.0 ? state.time / wall : 0.0, grid.level(),
-            grid.unique_count(), static_cast<unsigned long long>(total_steps),
-            static_cast<unsigned long long>(total_rejections), ws.max_threads,
-            std::string(sim::to_string(sc.settings.precision)).c_str(), opt.out.string().c_str());
+        if (!global.quiet)  // -q: errors only
+            std::printf(
+                "%d frames, %.3f s simulated in %.3f s wall (%.2fx real time), level %d, %zu "
+                "vertices, %llu steps, %llu rejections, %d thread(s), %s precision -> %s\n",
+                frames + 1, state.time, wall, wall > 0.0 ? state.time / wall : 0.0, grid.level(),
+                grid.unique_count(), static_cast<unsigned long long>(total_steps),
+                static_cast<unsigned long long>(total_rejections), ws.max_threads,
+                std::string(sim::to_string(sc.settings.precision)).c_str(),
+                opt.out.string().c_str());
         if (total_at_min > 0)
             spdlog::warn(
                 "{} = {:.3g} s{}: {} of {} steps were taken at dt_min with the error above "

@@ -86,7 +86,7 @@ std::optional<OwnerProblem> owner_channel_problem(const core::TetraGrid& grid,
             if (std::strtod(value, nullptr) == v)
                 break;
         }
-        return OwnerProblem{c, v,
+        return OwnerProblem{c, v, value,
                             "channel owner: node (" + std::to_string(c.x) + ", " +
                                 std::to_string(c.y) + ") holds " + value +
                                 ", which is not a peer id (a whole number from -1 to 65535; -1 "

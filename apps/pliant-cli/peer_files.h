@@ -46,6 +46,7 @@ struct OwnerProblem
 {
     core::GridCoord at;
     double value = 0.0;
+    std::string value_text;  ///< the shortest text that reads back as `value`
     std::string message;
 };
 [[nodiscard]] std::optional<OwnerProblem> owner_channel_problem(const core::TetraGrid& grid,

@@ -195,6 +195,24 @@ Result<void> write_text_file(const fs::path& path, std::string_view text, std::s
     return write_file(path, std::as_bytes(std::span<const char>(text.data(), text.size())), who);
 }
 
+namespace
+{
+
+/// Whether `path` is the null device (std::filesystem::equivalent refuses to compare devices).
+bool is_dev_null(const fs::path& path)
+{
+    struct stat a
+    {
+    };
+    struct stat b
+    {
+    };
+    return ::stat(path.c_str(), &a) == 0 && ::stat("/dev/null", &b) == 0 && S_ISCHR(a.st_mode) &&
+           a.st_rdev == b.st_rdev;
+}
+
+}  // namespace
+
 Result<void> check_input_file(const fs::path& path, std::string_view what)
 {
     const auto refuse = [&](const std::string& why)
@@ -211,8 +229,9 @@ Result<void> check_input_file(const fs::path& path, std::string_view what)
                                                                        : "no such file");
     if (fs::is_directory(st))
         return refuse("is a folder, not a file");
-    // A device has no end to read to (/dev/zero, /dev/urandom) or waits on a terminal.
-    if (fs::is_character_file(st) || fs::is_block_file(st))
+    // A device has no end to read to (/dev/zero, /dev/urandom) or waits on a terminal; /dev/null
+    // reads as an empty file (`-s /dev/null`: a scenario of defaults).
+    if ((fs::is_character_file(st) || fs::is_block_file(st)) && !is_dev_null(path))
         return refuse("is a device, not a file");
     if (::access(path.c_str(), R_OK) != 0)
         return refuse(reason(errno));

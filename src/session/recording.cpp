@@ -84,36 +84,52 @@ std::size_t unique_node_count(int level) noexcept
 /// The bytes before the first entry of a version-1 file with an empty model blob, and the
 /// checksum: no recording is shorter.
 constexpr std::size_t k_min_size = 8 + 4 + 8 + 8 + 4 + 4 + 8;
-/// Where a version-2 file's hash mask begins.
-constexpr std::size_t k_mask_offset = 8 + 4 + 8 + 8 + 4;
+/// Where a version-2 file's hash mask size and its bytes begin.
+constexpr std::size_t k_mask_size_offset = 8 + 4 + 8 + 8;
+constexpr std::size_t k_mask_offset = k_mask_size_offset + 4;
+
+/// Why a hash mask cannot select the nodes a final hash covers, and the offset of the field at
+/// fault (the mask's size or its bytes).
+struct MaskProblem
+{
+    std::size_t offset = 0;
+    std::string why;
+};
 
 /// Why `mask` cannot select the nodes `final_hash` covers for the grid of `model` (a model blob:
 /// its level is byte 5), or nothing when it can: empty (every node), or one bit per canonical
 /// node, ceil(N / 8) bytes with the bits past N clear; a non-zero hash must cover a node.
-std::optional<std::string> mask_problem(std::span<const std::byte> model,
+std::optional<MaskProblem> mask_problem(std::span<const std::byte> model,
                                         std::span<const std::uint8_t> mask,
                                         std::uint64_t final_hash)
 {
     if (mask.empty())
         return std::nullopt;
     if (model.size() < 6)
-        return "a model blob too short to give its grid's level, on which the hash mask's "
-               "length depends";
+        return MaskProblem{k_mask_size_offset,
+                           "a model blob too short to give its grid's level, on which the hash "
+                           "mask's length depends"};
     const int level = std::to_integer<int>(model[5]);
     if (level < core::k_min_level || level > core::k_max_level)
-        return "a model blob of grid level " + std::to_string(level) +
-               " (pliant's grids: 1 to 10), on which the hash mask's length depends";
+        return MaskProblem{k_mask_size_offset,
+                           "a model blob of grid level " + std::to_string(level) +
+                               " (pliant's grids: 1 to 10), on which the hash mask's length "
+                               "depends"};
     const std::size_t nodes = unique_node_count(level);
     if (mask.size() != (nodes + 7) / 8)
-        return "a hash mask of " + std::to_string(mask.size()) + " bytes; the level-" +
-               std::to_string(level) + " grid's " + std::to_string(nodes) +
-               " canonical nodes take " + std::to_string((nodes + 7) / 8);
+        return MaskProblem{k_mask_size_offset,
+                           "a hash mask of " + std::to_string(mask.size()) + " bytes; the level-" +
+                               std::to_string(level) + " grid's " + std::to_string(nodes) +
+                               " canonical nodes take " + std::to_string((nodes + 7) / 8)};
     if (nodes % 8 != 0 && (mask.back() >> (nodes % 8)) != 0)
-        return "a hash mask that selects nodes past the grid's " + std::to_string(nodes);
+        return MaskProblem{
+            k_mask_offset + mask.size() - 1,
+            "a hash mask that selects nodes past the grid's " + std::to_string(nodes)};
     if (final_hash != 0 &&
         std::all_of(mask.begin(), mask.end(), [](std::uint8_t b) { return b == 0; }))
-        return "a final hash over no node (a hash mask that selects none: such a recording "
-               "carries hash 0, unknown)";
+        return MaskProblem{k_mask_offset,
+                           "a final hash over no node (a hash mask that selects none: such a "
+                           "recording carries hash 0, unknown)"};
     return std::nullopt;
 }
 
@@ -123,7 +139,7 @@ core::Result<std::vector<std::byte>> encode_recording(const Recording& recording
 {
     if (const auto problem =
             mask_problem(recording.model, recording.hash_mask, recording.final_hash))
-        return core::fail(core::ErrorCode::InvalidArgument, "save_recording: " + *problem);
+        return core::fail(core::ErrorCode::InvalidArgument, "save_recording: " + problem->why);
     std::vector<std::byte> out;
     for (const char c : k_magic)
         out.push_back(static_cast<std::byte>(c));
@@ -210,7 +226,7 @@ core::Result<Recording> decode_recording(std::span<const std::byte> bytes,
     if (!r.ok)
         return bad_file(source, r.pos, "truncated header");
     if (const auto problem = mask_problem(rec.model, rec.hash_mask, rec.final_hash))
-        return bad_file(source, k_mask_offset, *problem);
+        return bad_file(source, problem->offset, problem->why);
     for (std::uint64_t i = 0; i < count; ++i)
     {
         const std::size_t at = r.pos;

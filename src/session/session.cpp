@@ -3275,7 +3275,7 @@ struct Session::Impl
 
     void on_blob(const net::Blob& b)
     {
-        if (!welcomed || s.model_)
+        if (!welcomed || s.model_ || s.left_)  // left: refused a chunk already
             return;
         std::vector<std::byte>& dst = b.kind == net::BlobKind::Model ? model_blob : state_blob;
         std::size_t& got = b.kind == net::BlobKind::Model ? model_got : state_got;

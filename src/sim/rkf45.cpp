@@ -577,49 +577,29 @@ void mark_forced_rows(const MembraneModel& model, Rkf45Workspace& ws)
         mark(off);
 }
 
-/// The node of an offset into a ghost-1 plane of `model`'s stride.
-core::NodeIndex node_at_offset(const MembraneModel& model, const Field<double>& plane,
-                               std::int64_t off)
-{
-    const std::int64_t stride = plane.stride();
-    const int x = static_cast<int>(off % stride) - plane.ghost();
-    const int y = static_cast<int>(off / stride) - plane.ghost();
-    return model.grid().index(x, y);
-}
-
-/// Before a re-assembly: the forced offsets (a force set's, a linear hold's end and rate) and
-/// the masses of their nodes.
+/// Before a re-assembly: the stencil masses it will replace (allocated by the first).
 void capture_forced_masses(const MembraneModel& model, Rkf45Workspace& ws)
 {
-    auto& out = ws.reassembly_masses;
-    out.clear();
-    for (const auto* list : {&ws.touched, &ws.end_touched, &ws.rate_touched})
-        for (const std::int64_t off : *list)
-            out.emplace_back(off, 0.0);
-    std::sort(out.begin(), out.end());
-    out.erase(std::unique(out.begin(), out.end(),
-                          [](const auto& a, const auto& b) { return a.first == b.first; }),
-              out.end());
-    for (auto& [off, mass] : out)
-        mass = model.unique_mass(node_at_offset(model, ws.accel, off));
+    ws.reassembly_masses = model.mass();  // same size after the first: no allocation
 }
 
 /// After a re-assembly: each force acceleration f / m_old becomes f / m_new (the lumped masses
-/// follow the deformed area), and so do a linear hold's end values and rate.
+/// follow the deformed area), and so do a linear hold's end values and rate. Every node is
+/// scaled (the planes are zero off the forced nodes), so nothing is listed or allocated. The
+/// ratio of stencil masses is that of the real masses: a corner's factor 2 cancels.
 void rescale_force_accels(const MembraneModel& model, Rkf45Workspace& ws)
 {
-    if (ws.reassembly_masses.empty())
-        return;
     const bool held = !ws.accel_end.padded().empty();
-    for (const auto& [off, old_mass] : ws.reassembly_masses)
-    {
-        const double scale = old_mass / model.unique_mass(node_at_offset(model, ws.accel, off));
-        const auto o = static_cast<std::size_t>(off);
-        ws.accel.padded()[o] *= scale;
-        ws.accel_rate.padded()[o] *= scale;
-        if (held)
-            ws.accel_end.padded()[o] *= scale;
-    }
+    const core::TetraGrid& g = model.grid();
+    for (int y = 0; y < g.ny(); ++y)
+        for (int x = 0; x < g.nx(); ++x)
+        {
+            const double scale = ws.reassembly_masses.at(x, y) / model.mass().at(x, y);
+            ws.accel.at(x, y) *= scale;
+            ws.accel_rate.at(x, y) *= scale;
+            if (held)
+                ws.accel_end.at(x, y) *= scale;
+        }
     model.sync(ws.accel);
     model.sync(ws.accel_rate);
     if (held)

@@ -238,6 +238,7 @@ TEST(FileIo, CheckInputFileSaysWhyAndOpensNothing)
     auto device = check_input_file("/dev/zero", "--resume");
     ASSERT_FALSE(device);
     EXPECT_EQ(device.error().message, "--resume: /dev/zero: is a device, not a file");
+    EXPECT_TRUE(check_input_file("/dev/null", "--scenario"));  // reads as an empty file
 }
 
 // read_input_file reads a file whole, up to a bound it names when passed, and refuses what

@@ -364,17 +364,18 @@ TEST(Recording, AHashMaskMustFitTheGridAndSelectANode)
         EXPECT_EQ(r.error().code, core::ErrorCode::ParseError);
         EXPECT_NE(r.error().message.find(why), std::string::npos) << r.error().message;
     };
-    // The mask's 17 bytes begin at byte 32 (after its u32 size at 28).
+    // The mask's 17 bytes begin at byte 32 (after its u32 size at 28): a size is refused at
+    // 28, the bits past the last node at the mask's last byte, a mask selecting none at 32.
     std::vector<char> bytes = good;
     bytes[32 + 16] = 0x04;
-    refused_on_load(resealed(bytes), "byte 32: a hash mask that selects nodes past");
+    refused_on_load(resealed(bytes), "byte 48: a hash mask that selects nodes past");
     bytes = good;
     bytes[32 + 3] = 0;
     refused_on_load(resealed(bytes), "byte 32: a final hash over no node");
     bytes = good;
     bytes[28] = 1;  // a mask of 1 byte: the first of the 17 is kept
     bytes.erase(bytes.begin() + 33, bytes.begin() + 49);
-    refused_on_load(resealed(bytes), "byte 32: a hash mask of 1 bytes");
+    refused_on_load(resealed(bytes), "byte 28: a hash mask of 1 bytes");
 
     refused_on_load(std::vector<char>(good.begin(), good.begin() + 10),
                     "truncated: 10 bytes, and no recording is shorter than 44");

@@ -569,6 +569,51 @@ TEST(SessionModelBlob, RefusesTwinsThatDifferAndAHugeReassemblyPeriod)
         << twin_refused.error().message;
 }
 
+// A refused model blob says which rule it broke (the welcome's refusal and `pliant replay` show
+// it): before, "bad header", "bad magic or version" or "bad length or value" for all of these.
+TEST(SessionModelBlob, ARefusalNamesTheRuleBroken)
+{
+    const core::TetraGrid g = core::TetraGrid::create(2).value();
+    const auto model = sim::MembraneModel::create(g, scenes::sphere_grid(g, 1.0), material());
+    ASSERT_TRUE(model);
+    const auto blob = encode_model(*model, Coupling::Exact);
+    const auto refusal = [&](std::size_t at, std::byte value)
+    {
+        auto bad = blob;
+        bad[at] = value;
+        const auto r = decode_model(bad);
+        return r ? std::string("accepted") : r.error().message;
+    };
+    // magic (4), version, level, coupling, clearance, fixed, re-assembly (4), 14 settings.
+    EXPECT_EQ(refusal(0, std::byte{'X'}), "model blob: it does not begin with PLSM");
+    EXPECT_EQ(refusal(4, std::byte{9}), "model blob: version 9, this build reads 1 to 3");
+    EXPECT_EQ(refusal(5, std::byte{11}),
+              "model blob: grid level 11, pliant's grids are of levels 1 to 10");
+    EXPECT_EQ(refusal(6, std::byte{3}), "model blob: coupling 3, 1 (exact) or 2 (fast)");
+    EXPECT_EQ(refusal(8, std::byte{2}), "model blob: fixed-step flag 2, 0 or 1");
+    // rho, the second setting: its exponent bits all set (NaN or inf).
+    constexpr std::size_t k_rho_at = 13 + 8;
+    auto nan_rho = blob;
+    nan_rho[k_rho_at + 7] = std::byte{0x7f};
+    nan_rho[k_rho_at + 6] = std::byte{0xf8};
+    EXPECT_EQ(decode_model(nan_rho).error().message,
+              "model blob: setting density rho is not finite");
+    // The rest position of node (1, 0): after the 14 settings, 24 bytes per node.
+    auto nan_position = blob;
+    const std::size_t at = 13 + 14 * 8 + 24 * static_cast<std::size_t>(g.index(1, 0).value);
+    nan_position[at + 7] = std::byte{0x7f};
+    nan_position[at + 6] = std::byte{0xf8};
+    EXPECT_EQ(decode_model(nan_position).error().message,
+              "model blob: the rest position of node (1,0) is not finite");
+    const auto cut = decode_model(std::span(blob).first(blob.size() - 1));
+    ASSERT_FALSE(cut);
+    EXPECT_EQ(cut.error().message, "model blob: " + std::to_string(blob.size() - 1) +
+                                       " bytes; a version-3 model of level 2 takes " +
+                                       std::to_string(blob.size()));
+    EXPECT_EQ(decode_model(std::span(blob).first(3)).error().message,
+              "model blob: 3 bytes, shorter than its header");
+}
+
 // The Welcome's state blob: every node's u and v, the tick and time, round trip bit for bit;
 // a wrong length or a non-finite value is refused with a message (a joiner then leaves rather
 // than step on from rest, apart from the session).

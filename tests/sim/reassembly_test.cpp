@@ -199,6 +199,21 @@ TEST(MembraneReassembly, AllocatesNothingAfterTheFirst)
     const std::uint64_t allocations = test::allocations() - before;
     EXPECT_EQ(reassemblies, 3);  // before the steps from ticks 4, 6 and 8
     EXPECT_EQ(allocations, 0U);
+
+    // Forces over many more nodes, and a linear hold towards them (its rate and end values are
+    // rescaled too): the re-assemblies that follow still allocate nothing.
+    Force wide = pull();
+    wide.radius = 1.2;
+    begin_force_ramp(m, ws, {&wide, 1}, s.time, s.time + 0.05);
+    const std::uint64_t before_wide = test::allocations();
+    for (int k = 0; k < 4; ++k)
+    {
+        const StepReport r = step_prepared(m, s, ws);
+        ASSERT_EQ(r.status, StepStatus::Ok);
+        reassemblies += r.reassembled ? 1 : 0;
+    }
+    EXPECT_EQ(reassemblies, 5);
+    EXPECT_EQ(test::allocations() - before_wide, 0U);
 }
 
 }  // namespace

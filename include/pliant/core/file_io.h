@@ -55,7 +55,8 @@ struct FileContent
 /// Checks that an input file named by a user can be read, without opening it (a FIFO or
 /// /dev/fd/N from a shell's process substitution passes and is not consumed). \return IoError
 /// "`what`: PATH: no such file" (or "is a folder, not a file", "is a device, not a file" for a
-/// character or block device such as /dev/zero, which has no end to read to, or the system's
+/// character or block device such as /dev/zero, which has no end to read to (/dev/null, which
+/// reads as an empty file, passes), or the system's
 /// reason, e.g. "Permission denied"); with `what` empty the message starts with PATH.
 [[nodiscard]] Result<void> check_input_file(const std::filesystem::path& path,
                                             std::string_view what = {});

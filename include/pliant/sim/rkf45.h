@@ -49,7 +49,6 @@
 #include <array>
 #include <cstdint>
 #include <span>
-#include <utility>
 #include <vector>
 
 namespace pliant::sim
@@ -277,9 +276,9 @@ public:
     std::vector<std::int64_t> touched;  ///< accel offsets written by the last force set
     std::vector<std::int64_t> end_touched;   ///< accel_end offsets written (linear hold)
     std::vector<std::int64_t> rate_touched;  ///< accel_rate offsets set (linear hold)
-    /// A re-assembly's scratch: the forced offsets and their nodes' masses before it, so that
-    /// the force accelerations f / m follow the new masses.
-    std::vector<std::pair<std::int64_t, double>> reassembly_masses;
+    /// A re-assembly's scratch: the stencil masses before it, so that the force accelerations
+    /// f / m follow the new masses (allocated by the first re-assembly).
+    core::Field<double> reassembly_masses;
     /// [y]: accel or accel_rate may be non-zero in row y (the pipeline reads them only there).
     /// Kept by set_forces and the ramp functions; code that writes the planes directly must
     /// mark the rows it writes.
