@@ -131,11 +131,16 @@ int run_refine(const RefineOptions& opt, const GlobalOptions& global)
         const double ms =
             std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
                 .count();
+        // The threads used: one per 65,536 fine nodes at most (subdiv::refine_threads).
+        const int used = subdiv::refine_threads(plan, opt.threads);
         spdlog::debug(
             "refine: level {} -> {}: {:.3f} ms for {} channel(s), {} grid nodes ({} "
-            "surface vertices), {} thread(s)",
+            "surface vertices), {} thread(s){}",
             plan.coarse_level(), plan.fine_level(), ms, channels.size(),
-            plan.fine_grid().node_count(), plan.fine_grid().unique_count(), opt.threads);
+            plan.fine_grid().node_count(), plan.fine_grid().unique_count(), used,
+            used < opt.threads
+                ? fmt::format(" (-j {}: at most one per 65,536 fine nodes)", opt.threads)
+                : std::string());
     }
     const double total_ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();

@@ -2,8 +2,8 @@
 // SPDX-FileCopyrightText: 2026 pliant contributors
 // `pliant remesh [MESH] --level N -o OUT [--report FILE.json]`: remeshes a closed genus-0 mesh
 // onto the tetrahedral grid (docs/remesh.md). OUT by extension: .pgrid (native grid file,
-// docs/grid-format.md), .obj, .ply, .pfm. `--gpu` samples through an offscreen OpenGL context
-// (render::sample_on_gpu on the gnomonic domain map, render::locate_on_gpu plus exact CPU
+// docs/grid-format.md), .obj, .ply, .gltf, .glb, .pfm. `--gpu` samples through an offscreen OpenGL
+// context (render::sample_on_gpu on the gnomonic domain map, render::locate_on_gpu plus exact CPU
 // interpolation on the equal-area one; docs/remesh.md, "GPU sampling").
 #include <pliant/core/file_io.h>
 #include <pliant/core/grid_io.h>
@@ -187,8 +187,10 @@ int run_remesh(const RemeshOptions& opt, const GlobalOptions& global)
             q.untangle.intersections,
             q.input_checked ? std::to_string(q.input_intersections) : std::string("unchecked"),
             q.untangle.folded,
-            opt.no_untangle ? "the sampling made self-intersections or folds, and --no-untangle "
-                              "kept them; leave it out to untangle them"
+            opt.no_untangle ? "the sampling made them and --no-untangle kept them, so the surface "
+                              "stays closer to the input but folds over or crosses itself; leave "
+                              "--no-untangle out for a surface without them, at some distance "
+                              "from the input (\"What untangling costs\")"
                             : "the remesher added self-intersections or folds that untangling "
                               "could not remove; try another --level");
 
@@ -236,9 +238,9 @@ void add_remesh_command(CLI::App& app, const GlobalOptions& global)
         "inverted triangles is never written. Output triangles that fold over or cross\n"
         "each other where the map is very anisotropic are untangled by moving their samples\n"
         "along the surface (--no-untangle keeps them); a warning says when the output still\n"
-        "crosses itself more than the input. The quality report (distances, PSNR, stretch,\n"
-        "area spread, times) is printed and, with --report, written as JSON (keys in\n"
-        "docs/remesh.md).\n\n"
+        "crosses itself more than the input or has a folded triangle. The quality report\n"
+        "(distances, PSNR, stretch, area spread, times) is printed and, with --report,\n"
+        "written as JSON (keys in docs/remesh.md).\n\n"
         "--gpu samples on the GPU. The sphere-mapped mesh is rendered from the sphere's centre\n"
         "into a float framebuffer, one view per tetrahedron face. With --domain-map gnomonic\n"
         "this is the reference paper's look-up: original positions as colours, each grid node\n"
@@ -273,8 +275,10 @@ void add_remesh_command(CLI::App& app, const GlobalOptions& global)
                   "Skip the distance measurement (about as long as the remeshing itself); the "
                   "--report JSON then has no distance keys");
     cmd->add_flag("--no-untangle", opt->no_untangle,
-                  "Keep the samples where the domain map puts them, folds and all (the report "
-                  "still counts them; for comparison, docs/remesh.md §3.2)");
+                  "Keep the samples where the domain map puts them, folds and crossings "
+                  "included: closer to the input (higher PSNR), but the surface may fold over "
+                  "and cross itself; the report still counts them (docs/remesh.md §3.2, \"What "
+                  "untangling costs\")");
     cmd->add_option("--domain-map", opt->domain_map,
                     "Where the grid's nodes lie on the sphere: equal-area (even samples) or "
                     "gnomonic (the paper's central projection)")

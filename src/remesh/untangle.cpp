@@ -286,9 +286,9 @@ core::Result<UntangleStats> untangle_samples(const core::TetraGrid& grid, const 
     mean_edge /= static_cast<double>(out.faces.size());
 
     // Quality of output face f: its signed area against the input's normal at its samples (the
-    // most favourable of the three), over the sum of its squared edges (scale-free; 0.29 for an
-    // equilateral triangle, negative when folded, as is_folded counts). A star's quality is its
-    // worst face's.
+    // most favourable of the three), over the sum of its squared edges (scale-free; at most
+    // sqrt(3)/12 ~ 0.144, for an equilateral triangle on the input; negative when folded, as
+    // is_folded counts). A star's quality is its worst face's.
     const auto quality = [&](std::uint32_t f)
     {
         const auto& t = out.faces[f];
@@ -379,18 +379,19 @@ core::Result<UntangleStats> untangle_samples(const core::TetraGrid& grid, const 
         return false;
     };
 
-    // Barrier energy of v's star: the number of its folded faces first (a move never folds
-    // more of them), then the sum over its faces of 1 / chi(q), q the face's quality and
-    // chi(q) = (q + sqrt(q^2 + eps^2)) / 2, a smooth stand-in for max(q, 0) (the untangling
-    // energy of Garanzha et al. 2021, "Foldover-free maps in 50 lines of code"). It is finite
-    // for a folded face (about 4|q| / eps^2, at most a few thousand for q >= -0.29), so a folded
-    // star has a slope to follow towards positive areas, and it rises steeply as a face of
-    // positive area flattens. Unlike the worst face's quality, the sum sees every face of the
-    // star, so a node can trade a little of one face for a lot of another. Measured on fox:
-    // without the fold count first (the barrier alone, eps 0.02) untangling ended with more
-    // folds than before (level 5: 11 against 6), the sum preferring slightly folded slivers to
-    // worse-shaped neighbours.
-    constexpr double k_fold_cost = 1e6;     // more than any star's barrier sum
+    // Barrier energy of v's star: the number of its folded faces first (at the rounds' eps 0.02 a
+    // move never folds more of them; at the patch passes' eps 0.000625 one badly folded face,
+    // q < -0.098, outweighs a fold, and the pass's global check bounds the result), then the sum
+    // over its faces of 1 / chi(q), q the face's quality and chi(q) = (q + sqrt(q^2 + eps^2)) / 2,
+    // a smooth stand-in for max(q, 0) (the untangling energy of Garanzha et al. 2021,
+    // "Foldover-free maps in 50 lines of code"). It is finite for a folded face (about 4|q| /
+    // eps^2: at most about 1,450 at eps 0.02, as q >= -0.144), so a folded star has a slope to
+    // follow towards positive areas, and it rises steeply as a face of positive area flattens.
+    // Unlike the worst face's quality, the sum sees every face of the star, so a node can trade a
+    // little of one face for a lot of another. Measured on fox: without the fold count first (the
+    // barrier alone, eps 0.02) untangling ended with more folds than before (level 5: 11 against
+    // 6), the sum preferring slightly folded slivers to worse-shaped neighbours.
+    constexpr double k_fold_cost = 1e6;     // more than a star's barrier sum at eps 0.02
     double eps = settings.barrier_epsilon;  // the patch passes shrink it
     const auto energy = [&](std::uint32_t v)
     {

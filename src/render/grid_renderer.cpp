@@ -18,6 +18,7 @@ namespace pliant::render
 struct GridRenderer::Impl
 {
     GridNormals normal_source = GridNormals::PassToBuffer;
+    core::Vec3Field<double> displaced;  // upload_displaced's P + u N, kept for the next call
     Program program;        // grid.vert, grid_fetch.vert or grid_vertex_normals.vert; + phong.frag
     Program normal_pass;    // grid_normal_pass.vert + .frag (not for VertexShader)
     GLuint vao = 0;         // no attributes: the programs read gl_VertexID and textures
@@ -345,8 +346,10 @@ void GridRenderer::upload_displaced(const core::TetraGrid& grid,
                                     const core::Vec3Field<double>& rest_normals,
                                     const core::Field<double>& u)
 {
-    core::Vec3Field<double> p{core::Field<double>(grid), core::Field<double>(grid),
-                              core::Field<double>(grid)};
+    core::Vec3Field<double>& p = impl_->displaced;  // allocated once per level
+    for (auto& plane : p)
+        if (plane.padded().empty() || plane.level() != grid.level() || plane.ghost() != 0)
+            plane = core::Field<double>(grid);
     for (int c = 0; c < 3; ++c)
     {
         const auto i = static_cast<std::size_t>(c);

@@ -545,12 +545,21 @@ void rows_serial(const RowJob<T>& job, int y0, int y1, bool streamed) noexcept
     stream_fence();
 }
 
+/// The threads a refinement of `rows` coarse rows of `n` + 1 nodes uses when `threads` are
+/// asked: at most one per k_min_nodes_per_thread fine nodes, at least one.
+int threads_for(long rows, long n, int threads) noexcept
+{
+    const long fine_nodes = 4L * rows * (n + 1);
+    return std::max(1,
+                    static_cast<int>(std::min<long>(threads, fine_nodes / k_min_nodes_per_thread)));
+}
+
 template <typename T>
 void run_rows(const RowJob<T>& job, int threads) noexcept
 {
     const long fine_nodes = 4L * job.rows * (job.n + 1);
     const bool streamed = static_cast<std::size_t>(fine_nodes) * sizeof(T) >= k_stream_bytes;
-    threads = static_cast<int>(std::min<long>(threads, fine_nodes / k_min_nodes_per_thread));
+    threads = threads_for(job.rows, job.n, threads);
     if (threads <= 1)
     {
         rows_serial(job, 0, job.rows, streamed);
@@ -568,6 +577,11 @@ void run_rows(const RowJob<T>& job, int threads) noexcept
 }
 
 }  // namespace
+
+int refine_threads(const ConvolutionPlan& plan, int threads) noexcept
+{
+    return threads_for(plan.coarse_grid().ny(), 2L * plan.coarse_grid().w(), threads);
+}
 
 template <typename T>
 void refine(const ConvolutionPlan& plan, const core::Field<T>& in, core::Field<T>& out,

@@ -54,7 +54,8 @@ struct UntangleSettings
     /// neighbour.
     double reach = 0.8;
     /// Smoothing never takes a star (a node's faces) below this quality: signed area against
-    /// the input's normal over the sum of squared edges, 0.29 for an equilateral triangle.
+    /// the input's normal over the sum of squared edges, at most sqrt(3)/12 ~ 0.144 (an
+    /// equilateral triangle on the input), so 0.02 is about a seventh of that.
     double min_quality = 0.02;
     /// Width of the barrier on the faces' quality that a star still folded after the compass
     /// search descends (its folded faces counted first, then the sum of a smoothed 1/quality);

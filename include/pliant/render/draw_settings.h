@@ -25,7 +25,7 @@ enum class ColorMode : std::uint8_t
 {
     None,          ///< `DrawSettings::base_color` everywhere
     Displacement,  ///< diverging map: blue (inwards) - grey (0) - red (outwards)
-    Owner,         ///< a palette colour per owner id (`GridRenderer::upload_owners`)
+    Owner,         ///< the palette colour of owner id % 8 (`GridRenderer::upload_owners`)
 };
 
 enum class Shading : std::uint8_t

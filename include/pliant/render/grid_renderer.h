@@ -22,8 +22,10 @@
 ///   GridNormals::VertexShader sums the normal in every vertex invocation (the first design).
 ///   All three give the same picture; docs/rendering.md compares their speed.
 /// - The fragment shader shades with Phong under a head light.
-/// Only positions (and owners when they change) are streamed per frame; nothing is allocated
-/// after the first upload of a level.
+/// Only positions (and owners when they change) are streamed per frame; further uploads at the
+/// level of the last one allocate nothing. An upload at another level (even one uploaded before)
+/// re-creates the textures, the attribute buffer and the CPU staging buffers at its size; only
+/// the index buffers are kept per level.
 ///
 /// Alternatives rejected: normals on the CPU in a second texture (another full pass and upload
 /// per frame: the point of the paper's scheme is that the GPU does it); a geometry shader for
@@ -91,7 +93,10 @@ public:
     /// Draws into the bound framebuffer (viewport width x height), clearing it first unless
     /// `settings.clear` is false. Except with GridNormals::VertexShader, first reruns the normal
     /// pass (and copy) if positions or owners changed since the last draw (into its own
-    /// framebuffer; the caller's binding is restored). \pre something was uploaded.
+    /// framebuffer; the caller's binding is restored). Only the framebuffer bindings are
+    /// restored: the viewport, depth test, depth func (GL_LEQUAL) and depth mask, clear colour,
+    /// program, vertex array (0), active texture unit (0) and the textures on units 0 and 1 stay
+    /// as `draw` set them (docs/rendering.md). \pre something was uploaded.
     void draw(const DrawSettings& settings, int width, int height) const;
 
     /// The camera `draw` uses for these settings and this image size.

@@ -17,7 +17,8 @@
 ///   get the mask of their edge direction; if `out` has a ghost ring, it fills it. So `out` is
 ///   ready to be refined again. Twins of `out` are equal bit for bit: the sums are grouped so
 ///   that the gluing maps only permute commutative pairs, and the input's twins are equal
-///   (tests/subdiv/refine_test.cpp checks every twin at levels 1..10; no copy pass is made).
+///   (tests/subdiv/refine_test.cpp checks every twin of the outputs of levels 2..10, refined from
+///   levels 1..9; no copy pass is made).
 /// - No allocation, no logging, no exceptions. `threads` > 1 splits the rows between OpenMP
 ///   threads (at most one per 65,536 fine nodes: smaller grids run on one thread); every node is
 ///   computed by the same code whatever the thread count, so results are bit-identical for any
@@ -43,6 +44,11 @@ template <typename T>
 void refine(const ConvolutionPlan& plan, const core::Field<T>& in, core::Field<T>& out,
             int threads = 1) noexcept;
 
+/// The OpenMP threads `refine` with `plan` uses when asked for `threads`: at most one per
+/// 65,536 fine nodes (a level-7 output runs on one, level 8 on up to 2, level 9 on up to 8),
+/// at least one.
+[[nodiscard]] int refine_threads(const ConvolutionPlan& plan, int threads) noexcept;
+
 /// Refines three planes (positions, normals) with the same contract per plane.
 template <typename T>
 void refine(const ConvolutionPlan& plan, const core::Vec3Field<T>& in, core::Vec3Field<T>& out,
@@ -62,7 +68,8 @@ template <typename T>
 
 /// Refines `plans.size()` levels in a row (plans from `make_plans`, consecutive levels). Unlike
 /// `refine`, this fills `in`'s ghosts itself: `in` is any level-n field with equal twins (any
-/// ghost width, ghosts need not be valid). Allocates the intermediate and result fields; the
+/// ghost width, ghosts need not be valid; twins are not synced here, so unequal twins in give
+/// unequal twins out: `core::sync_twins` first). Allocates the intermediate and result fields; the
 /// result has ghost width `out_ghost` (ghosts filled).
 template <typename T>
 [[nodiscard]] core::Field<T> refine_levels(std::span<const ConvolutionPlan> plans,
