@@ -226,15 +226,35 @@ void write_all(const std::filesystem::path& p, const std::vector<char>& bytes)
         .write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
 }
 
+/// `bytes` with its last 8 bytes replaced by the checksum of the rest.
+std::vector<char> resealed(std::vector<char> bytes)
+{
+    const std::uint64_t h =
+        core::hash_bytes(std::as_bytes(std::span<const char>(bytes.data(), bytes.size() - 8)));
+    for (int k = 0; k < 8; ++k)
+        bytes[bytes.size() - 8 + static_cast<std::size_t>(k)] =
+            static_cast<char>((h >> (8 * k)) & 0xFF);
+    return bytes;
+}
+
+/// A recording of the level-3 sphere's model (exact coupling) at `final_tick` with `final_hash`,
+/// no force lists.
+Recording sphere_recording(std::uint64_t final_tick, std::uint64_t final_hash)
+{
+    const core::TetraGrid grid = core::TetraGrid::create(3).value();
+    Recording rec;
+    rec.model = encode_model(
+        sim::MembraneModel::create(grid, scenes::sphere_grid(grid, 1.0), material()).value(),
+        Coupling::Exact);
+    rec.final_tick = final_tick;
+    rec.final_hash = final_hash;
+    return rec;
+}
+
 TEST(Recording, FileRoundTripsExactlyAndRefusesCorruption)
 {
     const core::TetraGrid grid = core::TetraGrid::create(3).value();
-    auto model =
-        sim::MembraneModel::create(grid, scenes::sphere_grid(grid, 1.0), material()).value();
-    Recording rec;
-    rec.model = encode_model(model, Coupling::Exact);
-    rec.final_tick = 1234;
-    rec.final_hash = 0x0123456789ABCDEFULL;
+    Recording rec = sphere_recording(1234, 0x0123456789ABCDEFULL);
     rec.forces.push_back(ForceRecord{0, 5, {point_push(0.1, 0.2, 0.9, 0.25, 0.5)}});
     rec.forces.push_back(ForceRecord{3, 77, {face_pull(12, 0.25), face_pull(13, -0.5)}});
     rec.forces.push_back(ForceRecord{3, 90, {}});
@@ -265,12 +285,7 @@ TEST(Recording, FileRoundTripsExactlyAndRefusesCorruption)
         std::vector<char> v1 = read_all(path);
         v1[8] = 1;                                   // version
         v1.erase(v1.begin() + 28, v1.begin() + 32);  // the mask size
-        const std::uint64_t h =
-            core::hash_bytes(std::as_bytes(std::span<const char>(v1.data(), v1.size() - 8)));
-        for (int k = 0; k < 8; ++k)
-            v1[v1.size() - 8 + static_cast<std::size_t>(k)] =
-                static_cast<char>((h >> (8 * k)) & 0xFF);
-        write_all(dir / "v1.prec", v1);
+        write_all(dir / "v1.prec", resealed(v1));
         auto old = load_recording(dir / "v1.prec");
         ASSERT_TRUE(old) << old.error().message;
         EXPECT_EQ(old->final_hash, rec.final_hash);
@@ -299,17 +314,6 @@ TEST(Recording, FileRoundTripsExactlyAndRefusesCorruption)
     EXPECT_EQ(load_recording(dir / "missing.prec").error().code, core::ErrorCode::IoError);
 }
 
-/// `bytes` with its last 8 bytes replaced by the checksum of the rest.
-std::vector<char> resealed(std::vector<char> bytes)
-{
-    const std::uint64_t h =
-        core::hash_bytes(std::as_bytes(std::span<const char>(bytes.data(), bytes.size() - 8)));
-    for (int k = 0; k < 8; ++k)
-        bytes[bytes.size() - 8 + static_cast<std::size_t>(k)] =
-            static_cast<char>((h >> (8 * k)) & 0xFF);
-    return bytes;
-}
-
 // The hash mask holds one bit per canonical node of the model's grid or nothing: a mask of
 // another length, one selecting nodes past the grid's, or one selecting none under a non-zero
 // hash is refused on the way out and on the way in, naming the byte (before, any mask was taken:
@@ -317,14 +321,8 @@ std::vector<char> resealed(std::vector<char> bytes)
 // file too short for a header says so, and so do a folder and a device.
 TEST(Recording, AHashMaskMustFitTheGridAndSelectANode)
 {
-    const core::TetraGrid grid = core::TetraGrid::create(3).value();
-    auto model =
-        sim::MembraneModel::create(grid, scenes::sphere_grid(grid, 1.0), material()).value();
-    Recording rec;
-    rec.model = encode_model(model, Coupling::Exact);
-    rec.final_tick = 10;
-    rec.final_hash = 0x42;
-    rec.hash_mask.assign(17, 0);
+    Recording rec = sphere_recording(10, 0x42);
+    rec.hash_mask.assign(17, 0);  // 130 canonical nodes at level 3
     rec.hash_mask[3] = 0x10;
     const auto dir = pliant::test::scratch_dir("recording_mask");
     ASSERT_TRUE(save_recording(dir / "good.prec", rec));

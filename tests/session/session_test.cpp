@@ -707,58 +707,10 @@ struct HandMadeMaster
     }
 };
 
-// A master whose state blob holds a non-finite value, its announced hash matching, so that
-// only decoding can tell: the joiner refuses the welcome, says why and never installs the model,
-// rather than step on from rest apart from the session. The master here is hand-made: a
-// transport endpoint that answers the joiner's Hello with a Welcome and the two blobs.
-TEST(SessionJoin, AStateBlobThatDoesNotDecodeIsRefused)
-{
-    net::SimulatedNetwork net;
-    auto master = net.create_endpoint();
-    const net::Address master_address = master->open({}).value();
-    auto end = net.create_endpoint();
-    ASSERT_TRUE(end->open({}));
-    auto joiner = Session::join(*end, master_address, net::Role::Participant,
-                                settings_for(Coupling::Exact, "j"));
-    ASSERT_TRUE(joiner) << joiner.error().message;
-
-    HandMadeMaster hand;
-    const double inf = std::numeric_limits<double>::infinity();
-    std::memcpy(hand.state.data() + 16 + 16 * 40, &inf, 8);  // u of node 40
-    ASSERT_LE(hand.model.size(), 32768U);
-    bool welcomed = false;
-    for (int k = 0; k < 2000 && (*joiner)->refusal().empty(); ++k)
-    {
-        while (auto ev = master->poll(0))
-        {
-            if (ev->kind != net::TransportEvent::Kind::Received || welcomed)
-                continue;
-            auto hello = net::decode(ev->data);
-            ASSERT_TRUE(hello);
-            ASSERT_EQ(hello->type(), net::MessageType::Hello);
-            const auto w =
-                hand.welcome({{net::PeerId{0}, net::Role::Participant, {127, 0, 0, 1}, 7000, "m"},
-                              {net::PeerId{1}, net::Role::Participant, {127, 0, 0, 1}, 7001, "j"}});
-            ASSERT_TRUE(hand.send(*master, ev->peer, 0, w));
-            ASSERT_TRUE(hand.send(*master, ev->peer, 0,
-                                  HandMadeMaster::whole(net::BlobKind::Model, hand.model)));
-            ASSERT_TRUE(hand.send(*master, ev->peer, 0,
-                                  HandMadeMaster::whole(net::BlobKind::State, hand.state)));
-            welcomed = true;
-        }
-        (*joiner)->poll();
-        (*joiner)->advance(1e-3 * k);
-        net.advance(1e-3);
-    }
-    ASSERT_TRUE(welcomed);
-    EXPECT_NE((*joiner)->refusal().find("state blob: a non-finite value"), std::string::npos)
-        << (*joiner)->refusal();
-    EXPECT_FALSE((*joiner)->ready());
-}
-
-/// A hand-made master welcomes a joiner and sends the model whole and the state as `chunks`;
-/// \return the joiner's refusal ("" when it installed the model and state and is ready).
-std::string joiner_refusal_after(const std::vector<net::Blob>& chunks)
+/// `hand` welcomes a joiner (announcing its model and state) and sends the model whole and the
+/// state as `chunks`; \return the joiner's refusal ("" when it installed the model and state and
+/// is ready).
+std::string joiner_refusal_after(const HandMadeMaster& hand, const std::vector<net::Blob>& chunks)
 {
     net::SimulatedNetwork net;
     auto master = net.create_endpoint();
@@ -770,7 +722,6 @@ std::string joiner_refusal_after(const std::vector<net::Blob>& chunks)
     EXPECT_TRUE(joiner) << joiner.error().message;
     if (!joiner)
         return "no joiner";
-    const HandMadeMaster hand;
     bool welcomed = false;
     for (int k = 0; k < 2000 && !(*joiner)->ready() && (*joiner)->refusal().empty(); ++k)
     {
@@ -797,6 +748,21 @@ std::string joiner_refusal_after(const std::vector<net::Blob>& chunks)
     return (*joiner)->refusal();
 }
 
+// A master whose state blob holds a non-finite value, its announced hash matching, so that
+// only decoding can tell: the joiner refuses the welcome, says why and never installs the model,
+// rather than step on from rest apart from the session. The master here is hand-made: a
+// transport endpoint that answers the joiner's Hello with a Welcome and the two blobs.
+TEST(SessionJoin, AStateBlobThatDoesNotDecodeIsRefused)
+{
+    HandMadeMaster hand;
+    const double inf = std::numeric_limits<double>::infinity();
+    std::memcpy(hand.state.data() + 16 + 16 * 40, &inf, 8);  // u of node 40
+    ASSERT_LE(hand.model.size(), 32768U);
+    const std::string refusal =
+        joiner_refusal_after(hand, {HandMadeMaster::whole(net::BlobKind::State, hand.state)});
+    EXPECT_NE(refusal.find("state blob: a non-finite value"), std::string::npos) << refusal;
+}
+
 // A blob's chunks follow each other: the state in two chunks in order is installed; a second
 // chunk that overlaps the first (even with the right bytes), leaves a gap, or announces another
 // total is refused at once, naming the bytes, rather than completing the blob with a hole (an
@@ -809,13 +775,13 @@ TEST(SessionJoin, BlobChunksMustFollowEachOtherInOrder)
     const std::size_t half = n / 2;
     ASSERT_GT(half, 16U);
     const auto kind = net::BlobKind::State;
-    EXPECT_EQ(joiner_refusal_after({HandMadeMaster::chunk(kind, st, 0, half),
-                                    HandMadeMaster::chunk(kind, st, half, n - half)}),
+    EXPECT_EQ(joiner_refusal_after(hand, {HandMadeMaster::chunk(kind, st, 0, half),
+                                          HandMadeMaster::chunk(kind, st, half, n - half)}),
               "");
 
     const std::string overlap =
-        joiner_refusal_after({HandMadeMaster::chunk(kind, st, 0, half),
-                              HandMadeMaster::chunk(kind, st, half - 8, n - half + 8)});
+        joiner_refusal_after(hand, {HandMadeMaster::chunk(kind, st, 0, half),
+                                    HandMadeMaster::chunk(kind, st, half - 8, n - half + 8)});
     EXPECT_NE(overlap.find("state blob at byte " + std::to_string(half - 8)), std::string::npos)
         << overlap;
     EXPECT_NE(overlap.find("where byte " + std::to_string(half) + " of " + std::to_string(n)),
@@ -823,13 +789,13 @@ TEST(SessionJoin, BlobChunksMustFollowEachOtherInOrder)
         << overlap;
 
     const std::string gap =
-        joiner_refusal_after({HandMadeMaster::chunk(kind, st, 0, half),
-                              HandMadeMaster::chunk(kind, st, half + 8, n - half - 8)});
+        joiner_refusal_after(hand, {HandMadeMaster::chunk(kind, st, 0, half),
+                                    HandMadeMaster::chunk(kind, st, half + 8, n - half - 8)});
     EXPECT_NE(gap.find("state blob at byte " + std::to_string(half + 8)), std::string::npos) << gap;
 
     const std::string total =
-        joiner_refusal_after({HandMadeMaster::chunk(kind, st, 0, half),
-                              HandMadeMaster::chunk(kind, st, half, 8, n + 8)});
+        joiner_refusal_after(hand, {HandMadeMaster::chunk(kind, st, 0, half),
+                                    HandMadeMaster::chunk(kind, st, half, 8, n + 8)});
     EXPECT_NE(total.find("of " + std::to_string(n + 8) + ")"), std::string::npos) << total;
 }
 
