@@ -177,7 +177,7 @@ GridInfo describe(const core::GridFile& file)
             for (const core::NodeIndex n : g.node_of_unique())
             {
                 const double v = f.values[n];
-                if (v >= -1.0 && v <= 65535.0 && v == std::round(v))
+                if (is_owner_value(v))
                     ++info.owners[std::llround(v)];
                 else
                     ++info.bad_owners;

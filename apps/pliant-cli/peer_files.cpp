@@ -14,7 +14,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <string>
 #include <utility>
 #include <vector>
@@ -76,16 +75,10 @@ std::optional<OwnerProblem> owner_channel_problem(const core::TetraGrid& grid,
     for (std::uint32_t i = 0; i < grid.node_count(); ++i)
     {
         const double v = owner[core::NodeIndex{i}];
-        if (v >= -1.0 && v <= 65535.0 && v == std::round(v))
+        if (is_owner_value(v))
             continue;
         const core::GridCoord c = grid.coord(core::NodeIndex{i});
-        char value[32];  // the shortest text that reads back as v
-        for (int digits = 6; digits <= 17; ++digits)
-        {
-            std::snprintf(value, sizeof value, "%.*g", digits, v);
-            if (std::strtod(value, nullptr) == v)
-                break;
-        }
+        const std::string value = fmt::format("{}", v);  // the shortest text that reads back as v
         return OwnerProblem{c, v, value,
                             "channel owner: node (" + std::to_string(c.x) + ", " +
                                 std::to_string(c.y) + ") holds " + value +

@@ -38,6 +38,13 @@ core::Result<void> save_peer_state(const session::Session& peer, const std::file
 /// deformed surface P + uN, not a rest shape.
 [[nodiscard]] bool holds_state(const core::GridFile& file);
 
+/// Whether `v` is a value of a channel `owner`: a whole number from -1 to 65535 (-1 and 65535: no
+/// owner; docs/grid-format.md).
+[[nodiscard]] constexpr bool is_owner_value(double v) noexcept
+{
+    return v >= -1.0 && v <= 65535.0 && v == static_cast<double>(static_cast<long>(v));
+}
+
 /// Where a channel `owner` (docs/grid-format.md) holds something that is not a peer id: the
 /// first node, in node order, whose value is not a whole number from -1 to 65535 (-1 and 65535:
 /// no owner), and the message "channel owner: node (x, y) holds V, which is not a peer id ...";
