@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <exception>
 #include <limits>
 #include <span>
 
@@ -402,6 +403,16 @@ std::vector<std::array<std::uint32_t, 2>> pairs_among(const mesh::TriMesh& mesh,
             halt.store(true, std::memory_order_relaxed);
         return halt.load(std::memory_order_relaxed);
     };
+    // An exception must not leave the parallel region (std::terminate): the first one (a
+    // std::bad_alloc as the pairs grow) stops every thread and is thrown again after it.
+    std::exception_ptr failure;
+    const auto fail = [&]
+    {
+#pragma omp critical(pliant_remesh_intersections_failure)
+        if (!failure)
+            failure = std::current_exception();
+        halt.store(true, std::memory_order_relaxed);
+    };
 #pragma omp parallel
     {
         std::vector<std::array<std::uint32_t, 2>> local;
@@ -410,33 +421,50 @@ std::vector<std::array<std::uint32_t, 2>> pairs_among(const mesh::TriMesh& mesh,
         {
             if (halted((r & 63) == 0))
                 continue;
-            const auto r0 = runs[static_cast<std::size_t>(r)];
-            const auto r1 = runs[static_cast<std::size_t>(r) + 1];
-            for (std::size_t i = r0; i < r1 && !halted(((i - r0) & 255U) == 255U); ++i)
-                for (std::size_t j = i + 1; j < r1; ++j)
-                {
-                    const std::uint32_t f = cells[i].face, g = cells[j].face;
-                    const auto& bf = box[f];
-                    const auto& bg = box[g];
-                    if (bf[1].x < bg[0].x || bg[1].x < bf[0].x || bf[1].y < bg[0].y ||
-                        bg[1].y < bf[0].y || bf[1].z < bg[0].z || bg[1].z < bf[0].z)
-                        continue;
-                    // test each pair once: in the cell of the low corner of the boxes' overlap
-                    const std::uint64_t own = key_of(cell_of(std::max(bf[0].x, bg[0].x), lo.x, nx),
-                                                     cell_of(std::max(bf[0].y, bg[0].y), lo.y, ny),
-                                                     cell_of(std::max(bf[0].z, bg[0].z), lo.z, nz));
-                    if (own != cells[i].key)
-                        continue;
-                    const std::uint32_t mf = face_at(f), mg = face_at(g);
-                    if (!touched.empty() && touched[mf] == 0 && touched[mg] == 0)
-                        continue;
-                    if (faces_meet<true>(mesh, mf, mg))
-                        local.push_back({std::min(mf, mg), std::max(mf, mg)});
-                }
+            try
+            {
+                const auto r0 = runs[static_cast<std::size_t>(r)];
+                const auto r1 = runs[static_cast<std::size_t>(r) + 1];
+                for (std::size_t i = r0; i < r1 && !halted(((i - r0) & 255U) == 255U); ++i)
+                    for (std::size_t j = i + 1; j < r1; ++j)
+                    {
+                        const std::uint32_t f = cells[i].face, g = cells[j].face;
+                        const auto& bf = box[f];
+                        const auto& bg = box[g];
+                        if (bf[1].x < bg[0].x || bg[1].x < bf[0].x || bf[1].y < bg[0].y ||
+                            bg[1].y < bf[0].y || bf[1].z < bg[0].z || bg[1].z < bf[0].z)
+                            continue;
+                        // test each pair once: in the cell of the low corner of the boxes' overlap
+                        const std::uint64_t own =
+                            key_of(cell_of(std::max(bf[0].x, bg[0].x), lo.x, nx),
+                                   cell_of(std::max(bf[0].y, bg[0].y), lo.y, ny),
+                                   cell_of(std::max(bf[0].z, bg[0].z), lo.z, nz));
+                        if (own != cells[i].key)
+                            continue;
+                        const std::uint32_t mf = face_at(f), mg = face_at(g);
+                        if (!touched.empty() && touched[mf] == 0 && touched[mg] == 0)
+                            continue;
+                        if (faces_meet<true>(mesh, mf, mg))
+                            local.push_back({std::min(mf, mg), std::max(mf, mg)});
+                    }
+            }
+            catch (...)
+            {
+                fail();
+            }
         }
 #pragma omp critical(pliant_remesh_intersections)
-        pairs.insert(pairs.end(), local.begin(), local.end());
+        try
+        {
+            pairs.insert(pairs.end(), local.begin(), local.end());
+        }
+        catch (...)
+        {
+            fail();
+        }
     }
+    if (failure)
+        std::rethrow_exception(failure);
     std::sort(pairs.begin(), pairs.end());
     return pairs;
 }

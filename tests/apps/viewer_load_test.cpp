@@ -8,15 +8,13 @@
 #include <pliant/core/error.h>
 
 #include <gtest/gtest.h>
-#include <sys/resource.h>
-#include <unistd.h>
 
 #include "../../apps/pliant-cli/viewer/mesh_loader.h"
+#include "support/address_space.h"
 #include "support/fp_traps.h"
 #include "support/test_paths.h"
 
 #include <chrono>
-#include <cstddef>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -83,26 +81,13 @@ TEST(ViewerLoad, DestroyingAJobMidwayCancelsIt)
     EXPECT_TRUE(started);
 }
 
-/// This process's address space in bytes (/proc/self/statm's first field, in pages). Unused
-/// under AddressSanitizer, where the test that needs it is skipped.
-[[maybe_unused]] std::size_t address_space_bytes()
-{
-    std::FILE* f = std::fopen("/proc/self/statm", "r");
-    if (f == nullptr)
-        return 0;
-    unsigned long pages = 0;
-    const int n = std::fscanf(f, "%lu", &pages);
-    std::fclose(f);
-    return n == 1 ? pages * static_cast<std::size_t>(::sysconf(_SC_PAGESIZE)) : 0;
-}
-
 // A load that runs out of memory is an error of the load (shown in the viewer's window), not an
 // exception leaving the worker thread, which ended the viewer (std::terminate). In a child
 // process whose address space is limited to 96 MiB above what it holds: spot remeshed at level
 // 10 needs far more.
 TEST(ViewerLoad, RunningOutOfMemoryIsAnErrorOfTheLoad)
 {
-#if defined(__SANITIZE_ADDRESS__)
+#if defined(PLIANT_TEST_ASAN)
     GTEST_SKIP() << "AddressSanitizer's shadow memory needs more address space than any limit";
 #else
     // threadsafe: the child runs the test from the start (this process has threads); the
@@ -116,11 +101,7 @@ TEST(ViewerLoad, RunningOutOfMemoryIsAnErrorOfTheLoad)
     const auto child = []
     {
         const test::FpTrapsOff off;
-        const std::size_t held = address_space_bytes();
-        if (held == 0)
-            std::_Exit(2);
-        const ::rlimit limit{held + (96u << 20), held + (96u << 20)};
-        if (::setrlimit(RLIMIT_AS, &limit) != 0)
+        if (!test::limit_address_space(96u << 20))
             std::_Exit(3);
         LoadJob job(test::source_dir() / "data" / "spot.obj", 10);
         if (!wait_for([&] { return job.done(); }, std::chrono::seconds(120)))

@@ -17,6 +17,7 @@
 #include <omp.h>
 
 #include "shapes.h"
+#include "support/address_space.h"
 #include "support/fp_traps.h"
 #include "support/test_paths.h"
 
@@ -26,7 +27,9 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <limits>
+#include <new>
 #include <ostream>
 #include <random>
 #include <span>
@@ -398,6 +401,64 @@ TEST(SelfIntersections, FlatFansInAxisPlanesCountOverlappingSectorsOnly)
         EXPECT_EQ(count_self_intersections(m), 1U) << "axis " << axis;
         EXPECT_EQ(brute_force_pairs(m), 1U) << "axis " << axis;
     }
+}
+
+/// `k` horizontal triangles (planes z = const) and `k` vertical ones (x = const), each
+/// horizontal one crossing each vertical one along a segment of y in [-1, 1]: k² intersecting
+/// pairs, all in one cell of the broad phase's grid.
+mesh::TriMesh crossing_stacks(std::uint32_t k)
+{
+    mesh::TriMesh m;
+    for (std::uint32_t i = 0; i < k; ++i)
+    {
+        const double c = -0.5 + (static_cast<double>(i) + 0.5) / static_cast<double>(k);
+        const auto v = static_cast<std::uint32_t>(m.positions.size());
+        m.positions.insert(m.positions.end(), {Vec3{-4, -2, c}, Vec3{4, -2, c}, Vec3{0, 4, c},
+                                               Vec3{c, -4, -2}, Vec3{c, 4, -2}, Vec3{c, 0, 4}});
+        m.faces.push_back({v, v + 1, v + 2});
+        m.faces.push_back({v + 3, v + 4, v + 5});
+    }
+    return m;
+}
+
+// Running out of memory while the pairs are gathered (on the OpenMP threads) is a
+// std::bad_alloc for the caller, as anywhere else, not std::terminate ending the process
+// (remesh and the viewer report it as "out of memory"). In a child process whose address space
+// is limited to 48 MiB above what it holds: the 2,100² pairs need 8 bytes each, 34 MiB, in a
+// vector that doubles.
+TEST(SelfIntersections, RunningOutOfMemoryAmongThePairsIsABadAlloc)
+{
+    EXPECT_EQ(count_self_intersections(crossing_stacks(12)), 144U);
+#if defined(PLIANT_TEST_ASAN)
+    GTEST_SKIP() << "AddressSanitizer's shadow memory needs more address space than any limit";
+#else
+    struct Restore
+    {
+        std::string style = GTEST_FLAG_GET(death_test_style);
+        ~Restore() { GTEST_FLAG_SET(death_test_style, style); }
+    } const restore;
+    GTEST_FLAG_SET(death_test_style, "threadsafe");  // the child runs the test from the start
+    const auto child = []
+    {
+        const mesh::TriMesh m = crossing_stacks(2100);
+        // the OpenMP threads and their stacks first, then the limit
+        if (count_self_intersections(crossing_stacks(4)) != 16 ||
+            !test::limit_address_space(48u << 20))
+            std::_Exit(3);
+        try
+        {
+            const std::size_t n = count_self_intersections(m);
+            std::fprintf(stderr, "no bad_alloc: %zu pairs\n", n);
+            std::_Exit(4);
+        }
+        catch (const std::bad_alloc&)
+        {
+            std::fprintf(stderr, "std::bad_alloc reached the caller\n");
+            std::_Exit(0);
+        }
+    };
+    EXPECT_EXIT(child(), ::testing::ExitedWithCode(0), "std::bad_alloc reached the caller");
+#endif
 }
 
 TEST(SelfIntersections, FoldCounterSeesAFlippedTriangle)
