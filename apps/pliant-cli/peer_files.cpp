@@ -298,9 +298,11 @@ std::string join_failure_message(const std::string& master, const session::JoinF
                " join the new master), and that no firewall drops UDP to it" +
                (secured ? ", and that the master has the same --passphrase or --key-file" : "");
     case net::DisconnectReason::ProtocolMismatch:
-    case net::DisconnectReason::WrongSession:
         return head + "speaks another protocol" + why +
                ": run the same pliant version on every peer";
+    case net::DisconnectReason::WrongSession:
+        return head + "took this peer's datagrams for another session's" + why +
+               ": it may be a new session at the same address; start this peer again to join it";
     case net::DisconnectReason::SessionFull:
         return head + "has no room for another peer" + why +
                ": all its peer slots (64) are taken, or this machine's address holds 16 "

@@ -11,6 +11,18 @@
 namespace pliant::net
 {
 
+std::string_view describe(const Drop& drop) noexcept
+{
+    switch (drop.reason)
+    {
+    case DropReason::Undecodable: return to_string(drop.error);
+    case DropReason::WrongChannel: return "wrong-channel";
+    case DropReason::WrongSession: return "wrong-session";
+    case DropReason::WrongSender: return "wrong-sender";
+    }
+    return "unknown";
+}
+
 Unexpected<Drop> Peer::drop(DropReason reason, DecodeError error) noexcept
 {
     ++bad_;
@@ -147,16 +159,20 @@ std::optional<MessengerEvent> Messenger::poll(int timeout_ms) noexcept
             ++drops;
             ++dropped_;
             transport_.report_bad_datagram(ev->peer);
-            spdlog::debug("net: dropped a datagram from peer {} ({} bytes): reason {}, {}",
-                          ev->peer.value, ev->data.size(), static_cast<int>(m.error().reason),
-                          to_string(m.error().error));
+            spdlog::debug("net: dropped a datagram from peer {} ({} bytes): {}", ev->peer.value,
+                          ev->data.size(), describe(m.error()));
             if (p.bad_datagrams() > settings_.bad_datagram_limit)
             {
+                // A connection that ends on another session's datagram is told so (reason 6):
+                // most likely a peer of an earlier session at a reused address.
+                const DisconnectReason why = m.error().reason == DropReason::WrongSession
+                                                 ? DisconnectReason::WrongSession
+                                                 : DisconnectReason::TooManyBadDatagrams;
                 const auto address = transport_.remote_address(ev->peer);
                 spdlog::warn("net: disconnected {}: {} bad datagrams (the last: {}, {} bytes)",
                              address ? to_string(*address) : std::string("a peer"),
-                             p.bad_datagrams(), to_string(m.error().error), ev->data.size());
-                transport_.disconnect(ev->peer, DisconnectReason::TooManyBadDatagrams);
+                             p.bad_datagrams(), describe(m.error()), ev->data.size());
+                transport_.disconnect(ev->peer, why);
             }
             continue;
         }

@@ -214,6 +214,34 @@ TEST(Messenger, SpoofedSenderAndForeignSessionAreDropped)
     EXPECT_EQ(n.b.dropped(), 2u);
 }
 
+// A connection cut off on another session's datagram is told reason 6 (wrong session), not 4:
+// the likeliest cause is a peer of an earlier session at a reused address.
+TEST(Messenger, APeerOfAnotherSessionIsCutOffAsWrongSession)
+{
+    Net n;
+    n.b.set_session(0xC0FFEE01u);
+    for (int i = 0; i < 6; ++i)
+        ASSERT_TRUE(n.a.send(n.a_to_b, ping(0xBADBADu, PeerId{3})));
+    const auto events = n.drain_b();
+    ASSERT_EQ(events.size(), 1u);
+    EXPECT_EQ(events[0].kind, MessengerEvent::Kind::Disconnected);
+    EXPECT_EQ(events[0].reason, DisconnectReason::WrongSession);
+    std::optional<DisconnectReason> told;
+    for (int i = 0; i < 50 && !told; ++i)
+    {
+        n.net.advance(0.001);
+        while (auto ev = n.a.poll())
+            if (ev->kind == MessengerEvent::Kind::Disconnected)
+                told = ev->reason;
+    }
+    EXPECT_EQ(told, DisconnectReason::WrongSession);
+    EXPECT_EQ(describe(Drop{DropReason::WrongSession}), "wrong-session");
+    EXPECT_EQ(describe(Drop{DropReason::WrongChannel}), "wrong-channel");
+    EXPECT_EQ(describe(Drop{DropReason::WrongSender}), "wrong-sender");
+    EXPECT_EQ(describe(Drop{DropReason::Undecodable, DecodeError::BadMagic}),
+              to_string(DecodeError::BadMagic));
+}
+
 /// A hub and three leaves connected to it over a simulated network, every connection event
 /// polled; `handles`: the hub's handle of each leaf, `leaf_addr`: each leaf's address.
 struct Star

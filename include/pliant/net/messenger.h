@@ -24,6 +24,7 @@
 #include <map>
 #include <optional>
 #include <span>
+#include <string_view>
 #include <vector>
 
 namespace pliant::net
@@ -43,6 +44,10 @@ struct Drop
     DropReason reason = DropReason::Undecodable;
     DecodeError error = DecodeError::TooShort;  ///< meaningful for Undecodable
 };
+
+/// What a drop says of the datagram: its decode error's name when it did not decode
+/// ("bad-magic"), else "wrong-channel", "wrong-session" or "wrong-sender".
+[[nodiscard]] std::string_view describe(const Drop& drop) noexcept;
 
 /// One connection's receive policy and counters.
 class Peer
