@@ -372,9 +372,6 @@ std::string lower_extension(const std::filesystem::path& p)
     return ext;
 }
 
-/// docs/operations.md: 32 random bytes, as `head -c 32 /dev/urandom` writes.
-constexpr std::uintmax_t k_key_file_advised_bytes = 32;
-
 void add_secret_options(CLI::App* cmd, std::string& passphrase, std::string& key_file)
 {
     cmd->add_option("--passphrase", passphrase,
@@ -390,56 +387,6 @@ void add_secret_options(CLI::App* cmd, std::string& passphrase, std::string& key
     cmd->add_option("--key-file", key_file, "File whose bytes are the shared secret")
         ->check(existing_input_file("--key-file"))
         ->excludes("--passphrase");
-}
-
-core::Result<std::unique_ptr<net::Transport>> secure_or_plain(std::unique_ptr<net::Transport> inner,
-                                                              const std::string& passphrase,
-                                                              const std::string& key_file)
-{
-    std::optional<core::Result<net::SecretKey>> key;
-    const char* env = std::getenv("PLIANT_PASSPHRASE");
-    if (!passphrase.empty())
-        key = net::derive_key(passphrase);
-    else if (!key_file.empty())
-    {
-        key = net::key_from_file(key_file);
-        std::error_code ec;
-        const auto size = std::filesystem::file_size(key_file, ec);
-        if (*key && !ec && size < k_key_file_advised_bytes)
-            spdlog::warn(
-                "{}: a key of {} bytes is easy to guess; a key file should hold {} "
-                "random bytes (head -c 32 /dev/urandom > {})",
-                key_file, size, k_key_file_advised_bytes, key_file);
-        // As ssh does for private keys, though only as a warning: whoever can read the file
-        // can join the session and read its traffic.
-        struct ::stat st
-        {
-        };
-        if (*key && ::stat(key_file.c_str(), &st) == 0 && (st.st_mode & 077) != 0)
-            spdlog::warn(
-                "{}: the key file can be read by {} (mode {:04o}): whoever can read it "
-                "can join the session and read its traffic; chmod 600 {}",
-                key_file, (st.st_mode & 007) != 0 ? "every user" : "its group", st.st_mode & 07777,
-                key_file);
-    }
-    else if (env != nullptr && *env == '\0')
-        return core::fail(core::ErrorCode::InvalidArgument,
-                          "PLIANT_PASSPHRASE is set but empty: that would leave the session open "
-                          "to anyone; give it a value, or unset it");
-    else if (env != nullptr)
-        key = net::derive_key(env);
-    if (!key)
-    {
-        spdlog::warn(
-            "no --passphrase, --key-file or PLIANT_PASSPHRASE: the session is neither "
-            "encrypted nor authenticated");
-        return inner;
-    }
-    if (!*key)
-        return core::fail((*key).error().code, (*key).error().message);
-    spdlog::info("datagrams are authenticated and encrypted (ChaCha20-Poly1305)");
-    return std::unique_ptr<net::Transport>(
-        std::make_unique<net::SecureTransport>(std::move(inner), **key));
 }
 
 std::string refused_summary(net::Transport& transport, std::uint64_t auth_refused)

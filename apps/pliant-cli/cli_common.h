@@ -156,13 +156,6 @@ std::string lower_extension(const std::filesystem::path& p);
 /// anyone.
 void add_secret_options(CLI::App* cmd, std::string& passphrase, std::string& key_file);
 
-/// Wraps `inner` in net::SecureTransport when --passphrase, --key-file or PLIANT_PASSPHRASE gives
-/// a key (in that order); otherwise warns once and returns it unencrypted (docs/operations.md).
-/// `pliant host` and `pliant join`.
-core::Result<std::unique_ptr<net::Transport>> secure_or_plain(std::unique_ptr<net::Transport> inner,
-                                                              const std::string& passphrase,
-                                                              const std::string& key_file);
-
 /// "N connections refused" for the last line of `host` and `join`, N = the encryption layer's
 /// refusals (`auth_refused`) plus the connections ENet closed at once for want of room (the
 /// session full, or too many from one address), each kind named when there are any:

@@ -904,6 +904,16 @@ int run_demo_with_viewer(const DemoOptions& opt, const GlobalOptions& global)
             why);
         return k_exit_failure;
     }
+    // The screenshot's path is checked before the run, as `pliant view` does: a bad one found
+    // at the end failed the whole run and left no outputs.
+    if (!opt.screenshot.empty())
+    {
+        std::error_code ec;
+        if (opt.screenshot.has_parent_path())
+            std::filesystem::create_directories(opt.screenshot.parent_path(), ec);
+        if (auto ok = check_writable(opt.screenshot, "demo --view: --screenshot"); !ok)
+            return report(ok.error());
+    }
     LiveLink link;
     link.interrupt = install_interrupt_flag();
     std::future<std::uint16_t> port = link.master_port.get_future();

@@ -44,6 +44,8 @@ struct ViewOptions
     bool no_vsync = false;
     bool hide_panels = false;
     std::string resume;  ///< a saved state of INPUT to start the local simulation from
+    std::string passphrase;
+    std::string key_file;
 };
 
 int run_view(const ViewOptions& opt)
@@ -108,7 +110,12 @@ int run_view(const ViewOptions& opt)
             return report(saved.error());
         resume_state = std::make_shared<const sim::MembraneState>(std::move(*saved));
     }
+    // The secret is derived once (Argon2id takes a while), before any window opens.
+    auto secret = session_secret(opt.passphrase, opt.key_file);
+    if (!secret)
+        return report(secret.error());
     viewer::ViewerOptions v;
+    v.secret = *secret;
     v.input = opt.input;
     v.resume = opt.resume;
     v.resume_state = std::move(resume_state);
@@ -151,7 +158,9 @@ void add_view_command(CLI::App& app, const GlobalOptions& global)
         "C colouring; Space pause; R rest; H hides the panels. --script, --screenshot and\n"
         "--exit-after make a headless run for tests (docs/viewer.md); their clocks start when\n"
         "the object shows. Ctrl-C in the terminal closes the viewer as its window does (a\n"
-        "session left with its hand-over, --screenshot written), exit status 130.\n\n"
+        "session left with its hand-over, --screenshot written), exit status 130. A session\n"
+        "with a secret (host/join --passphrase or --key-file) needs the same one here, for\n"
+        "joining and for the Session panel's host.\n\n"
         "Examples:\n"
         "  pliant view                                   # the bundled cow, level 6\n"
         "  pliant view spot.pgrid --display-level 8\n"
@@ -183,6 +192,7 @@ void add_view_command(CLI::App& app, const GlobalOptions& global)
     cmd->add_option("-p,--port", opt->port, "UDP port for sessions (0: any)")
         ->check(port_number(0))
         ->capture_default_str();
+    add_secret_options(cmd, opt->passphrase, opt->key_file);
     cmd->add_flag("--no-vsync", opt->no_vsync, "Draw as fast as possible (for measuring fps)");
     cmd->add_flag("--hide-panels", opt->hide_panels, "Start with the panels hidden (H toggles)");
     cmd->add_option("--resume", opt->resume,

@@ -7,6 +7,7 @@
 #include <pliant/session/recording.h>
 
 #include <spdlog/spdlog.h>
+#include <sys/stat.h>
 
 #include "../../scenes/grid_shapes.h"
 #include "cli_common.h"
@@ -14,6 +15,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <string>
 #include <utility>
 #include <vector>
@@ -268,6 +270,75 @@ core::Result<RecordedHash> save_master_recording(const session::Session& master,
     if (auto saved = session::save_recording(path, recording); !saved)
         return saved.error();
     return out;
+}
+
+/// docs/operations.md: 32 random bytes, as `head -c 32 /dev/urandom` writes.
+constexpr std::uintmax_t k_key_file_advised_bytes = 32;
+
+core::Result<std::optional<net::SecretKey>> session_secret(const std::string& passphrase,
+                                                           const std::string& key_file)
+{
+    std::optional<core::Result<net::SecretKey>> key;
+    const char* env = std::getenv("PLIANT_PASSPHRASE");
+    if (!passphrase.empty())
+        key = net::derive_key(passphrase);
+    else if (!key_file.empty())
+    {
+        key = net::key_from_file(key_file);
+        std::error_code ec;
+        const auto size = std::filesystem::file_size(key_file, ec);
+        if (*key && !ec && size < k_key_file_advised_bytes)
+            spdlog::warn(
+                "{}: a key of {} bytes is easy to guess; a key file should hold {} "
+                "random bytes (head -c 32 /dev/urandom > {})",
+                key_file, size, k_key_file_advised_bytes, key_file);
+        // As ssh does for private keys, though only as a warning: whoever can read the file
+        // can join the session and read its traffic.
+        struct ::stat st
+        {
+        };
+        if (*key && ::stat(key_file.c_str(), &st) == 0 && (st.st_mode & 077) != 0)
+            spdlog::warn(
+                "{}: the key file can be read by {} (mode {:04o}): whoever can read it "
+                "can join the session and read its traffic; chmod 600 {}",
+                key_file, (st.st_mode & 007) != 0 ? "every user" : "its group", st.st_mode & 07777,
+                key_file);
+    }
+    else if (env != nullptr && *env == '\0')
+        return core::fail(core::ErrorCode::InvalidArgument,
+                          "PLIANT_PASSPHRASE is set but empty: that would leave the session open "
+                          "to anyone; give it a value, or unset it");
+    else if (env != nullptr)
+        key = net::derive_key(env);
+    if (!key)
+        return std::optional<net::SecretKey>();
+    if (!*key)
+        return core::fail((*key).error().code, (*key).error().message);
+    return std::optional<net::SecretKey>(**key);
+}
+
+std::unique_ptr<net::Transport> secure_or_plain(std::unique_ptr<net::Transport> inner,
+                                                const std::optional<net::SecretKey>& secret)
+{
+    if (!secret)
+    {
+        spdlog::warn(
+            "no --passphrase, --key-file or PLIANT_PASSPHRASE: the session is neither "
+            "encrypted nor authenticated");
+        return inner;
+    }
+    spdlog::info("datagrams are authenticated and encrypted (ChaCha20-Poly1305)");
+    return std::make_unique<net::SecureTransport>(std::move(inner), *secret);
+}
+
+core::Result<std::unique_ptr<net::Transport>> secure_or_plain(std::unique_ptr<net::Transport> inner,
+                                                              const std::string& passphrase,
+                                                              const std::string& key_file)
+{
+    auto secret = session_secret(passphrase, key_file);
+    if (!secret)
+        return core::fail(secret.error().code, secret.error().message);
+    return secure_or_plain(std::move(inner), *secret);
 }
 
 std::string join_failure_message(const std::string& master, const session::JoinFailure& f,

@@ -8,11 +8,14 @@
 #include <pliant/core/result.h>
 #include <pliant/core/tetra_grid.h>
 #include <pliant/core/vec3.h>
+#include <pliant/net/secure_transport.h>
+#include <pliant/net/transport.h>
 #include <pliant/session/session.h>
 #include <pliant/sim/membrane.h>
 
 #include <cstddef>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -106,6 +109,24 @@ struct RecordedHash
 /// before the model; save_recording's errors.
 core::Result<RecordedHash> save_master_recording(const session::Session& master,
                                                  const std::filesystem::path& path);
+
+/// The session's shared secret: from `passphrase`, else the file `key_file`, else the
+/// environment's PLIANT_PASSPHRASE (docs/operations.md); warns of a key file shorter than 32
+/// bytes or readable by others. nullopt when none is given. \return InvalidArgument for a set
+/// but empty PLIANT_PASSPHRASE; derive_key's and key_from_file's errors. For `host`, `join`
+/// and `view`.
+[[nodiscard]] core::Result<std::optional<net::SecretKey>> session_secret(
+    const std::string& passphrase, const std::string& key_file);
+
+/// `inner` wrapped in net::SecureTransport under `secret`, or, with none, `inner` itself and a
+/// warning that the session is neither encrypted nor authenticated.
+[[nodiscard]] std::unique_ptr<net::Transport> secure_or_plain(
+    std::unique_ptr<net::Transport> inner, const std::optional<net::SecretKey>& secret);
+
+/// secure_or_plain under session_secret(passphrase, key_file): `pliant host` and `pliant join`.
+[[nodiscard]] core::Result<std::unique_ptr<net::Transport>> secure_or_plain(
+    std::unique_ptr<net::Transport> inner, const std::string& passphrase,
+    const std::string& key_file);
 
 /// What a joiner's user can do about a connection to the master that ended before the Welcome
 /// (docs/operations.md, "What failures look like"): "join: MASTER ..." with the reason and the

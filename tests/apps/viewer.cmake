@@ -172,6 +172,26 @@ if(TARGET pliant AND PLIANT_HAVE_VIEWER AND PLIANT_XVFB)
                      -DTIMEOUT=50 -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
     set_tests_properties(cli_view_join_unreachable PROPERTIES TIMEOUT 60
         ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0;LIBGL_ALWAYS_SOFTWARE=1")
+    # A session with a secret: the viewer joins it with the same key file and, without one,
+    # says what is missing (viewer_secure_join.sh; about 10 s).
+    add_test(NAME cli_view_joins_a_secured_session
+             COMMAND sh ${CMAKE_CURRENT_SOURCE_DIR}/viewer_secure_join.sh $<TARGET_FILE:pliant>
+                     ${CMAKE_CURRENT_SOURCE_DIR}/with_xvfb.sh
+                     ${CMAKE_CURRENT_BINARY_DIR}/view-secure)
+    set_tests_properties(cli_view_joins_a_secured_session PROPERTIES TIMEOUT 150
+        SKIP_RETURN_CODE 77
+        ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0;LIBGL_ALWAYS_SOFTWARE=1")
+    # `demo --view` checks its --screenshot path before the run, as `view` does (found at the
+    # end, a bad one failed the whole run and left no outputs).
+    file(WRITE ${CMAKE_CURRENT_BINARY_DIR}/demo-view-not-a-folder "")
+    add_test(NAME cli_demo_view_bad_screenshot_path
+             COMMAND ${CMAKE_COMMAND}
+                     "-DCOMMAND=${_xvfb};$<TARGET_FILE:pliant>;demo;--quick;--view;--out;${CMAKE_CURRENT_BINARY_DIR}/demo-view-bad-shot;--screenshot;${CMAKE_CURRENT_BINARY_DIR}/demo-view-not-a-folder/s.png;--exit-after;1"
+                     -DEXIT=1
+                     "-DSTDERR_REGEX=demo --view: --screenshot: cannot write .*demo-view-not-a-folder is not a folder"
+                     -DTIMEOUT=50 -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+    set_tests_properties(cli_demo_view_bad_screenshot_path PROPERTIES TIMEOUT 60
+        ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0;LIBGL_ALWAYS_SOFTWARE=1")
     # An input that is neither a file nor a HOST:PORT that resolves says both (RFC 6761: names
     # under .invalid never resolve), before any window: with no display at all (a missing file
     # was reported as "no display" first).

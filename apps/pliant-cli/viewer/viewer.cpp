@@ -212,6 +212,8 @@ Viewer::Viewer(const ViewerOptions& options) : options_(options)
         color_ = render::ColorMode::Owner;
     draw_.color = color_;
     display_level_ = options.display_level;
+    if (options.port != 0)  // the Session panel's host listens on --port too
+        host_port_ = options.port;
 }
 
 Viewer::~Viewer()
@@ -361,7 +363,7 @@ bool Viewer::join_session(const std::string& address, bool participant)
         return false;
     }
     leave_session();
-    transport_ = net::make_enet_transport();
+    transport_ = cli::secure_or_plain(net::make_enet_transport(), options_.secret);
     auto bound = transport_->open(net::Address{{0, 0, 0, 0}, options_.port});
     if (!bound)
     {
@@ -382,6 +384,7 @@ bool Viewer::join_session(const std::string& address, bool participant)
     }
     session_ = std::move(*s);
     session_address_ = address;
+    hosting_ = false;
     // The Session panel's field shows the address tried, so a retry is one click.
     std::snprintf(join_address_.data(), join_address_.size(), "%s", address.c_str());
     joined_ = false;
@@ -405,7 +408,7 @@ bool Viewer::host_session(std::uint16_t port, bool exact)
         return false;
     }
     leave_session();
-    transport_ = net::make_enet_transport();
+    transport_ = cli::secure_or_plain(net::make_enet_transport(), options_.secret);
     auto bound = transport_->open(net::Address{{0, 0, 0, 0}, port});
     if (!bound)
     {
@@ -413,7 +416,9 @@ bool Viewer::host_session(std::uint16_t port, bool exact)
         transport_.reset();
         return false;
     }
-    sim::MembraneSettings material = material_;
+    // What the local simulation runs with (the Material panel's edits once applied), not the
+    // panel's fields.
+    sim::MembraneSettings material = local_ ? local_->model().settings() : material_;
     material.fixed_step = exact;
     session::SessionSettings settings;
     settings.coupling = exact ? session::Coupling::Exact : session::Coupling::Fast;
@@ -430,6 +435,7 @@ bool Viewer::host_session(std::uint16_t port, bool exact)
     session_ = std::move(*s);
     session_address_ = "port " + std::to_string(bound->port);
     joined_ = true;
+    hosting_ = true;
     open_session_panel_ = true;
     local_.reset();
     shown_epoch_ = 0;
@@ -459,8 +465,9 @@ void Viewer::leave_session(const std::string& message, bool error)
             session_->wait(500e-6);
         }
     }
-    // Keep showing the object: a local simulation of the session's model from rest.
-    if (!surface_ && session_->model() != nullptr)
+    // Keep showing the object: a local simulation of the session's model from rest (whatever
+    // was shown before the join); the earlier object only when the model never arrived.
+    if (!hosting_ && session_->model() != nullptr)
     {
         const sim::MembraneModel& m = *session_->model();
         surface_.emplace(LoadedSurface{m.grid(), m.rest_positions(), "the session's surface"});
@@ -512,7 +519,8 @@ void Viewer::pump_session()
         else if (const auto failure = session_->join_failure();
                  failure && failure->reason != net::DisconnectReason::TimedOut &&
                  failure->reason != net::DisconnectReason::None)
-            why = cli::join_failure_message(session_address_, *failure, false);
+            why =
+                cli::join_failure_message(session_address_, *failure, options_.secret.has_value());
         else if (!session_->ready())
             why = "could not reach the master at " + session_address_ +
                   ": no answer (is `pliant host` running there, on that UDP port?)";
@@ -583,9 +591,10 @@ void Viewer::simulate(double wall_dt)
     {
         // A grab's spring is held over the frame: slow frames get a shorter simulated interval
         // (slow motion) rather than an unstable hold (grab_hold_limit).
-        const double interval =
-            grab_ ? std::min(k_max_frame_interval, grab_hold_limit(material_, *grab_))
-                  : k_max_frame_interval;
+        const double interval = grab_
+                                    ? std::min(k_max_frame_interval,
+                                               grab_hold_limit(local_->model().settings(), *grab_))
+                                    : k_max_frame_interval;
         local_->advance(wall_dt, forces, interval);
         step_ms_.push(static_cast<float>(local_->last_step_seconds() * 1e3));
     }

@@ -5,10 +5,13 @@
 // `pliant view`: the interactive viewer (GLFW + Dear ImGui, docs/viewer.md). Only built when
 // viewer.cmake found GLFW and ImGui (PLIANT_HAVE_VIEWER); cmd_view.cpp parses the options.
 
+#include <pliant/net/secure_transport.h>
+
 #include <csignal>
 #include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 
 namespace pliant::sim
@@ -35,6 +38,9 @@ struct ViewerOptions
     bool participant = false;          ///< join HOST:PORT as a participant (default viewer)
     std::string name = "viewer";       ///< peer name in sessions
     std::uint16_t port = 0;            ///< UDP port for sessions (0: any when joining)
+    /// The sessions' shared secret (--passphrase, --key-file, PLIANT_PASSPHRASE): every join
+    /// and host goes through net::SecureTransport with it; none: unencrypted, with a warning.
+    std::optional<net::SecretKey> secret;
     bool vsync = true;
     bool hide_panels = false;
     bool owner_colors = false;  ///< start in owner colours (default: displacement; C cycles)

@@ -118,6 +118,7 @@ public:
     bool open_session_panel_ = false;  ///< unfold the Session panel once (joined or hosting)
     std::string session_address_;      ///< the master's HOST:PORT (hosting: "port N")
     bool joined_ = false;              ///< the status line said the join completed
+    bool hosting_ = false;             ///< the session was started here (its surface is ours)
     bool resume_applied_ = false;      ///< ViewerOptions::resume_state went to a simulation
     bool session_failed_ = false;      ///< a session ended on its own (a headless run fails)
 
