@@ -320,9 +320,10 @@ core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
         const SessionStats s = session.stats();
         const std::uint64_t refused = auth_refused();
         // Behind real time: say so, and why (a joiner's clock jumps to the master's with the
-        // model, so samples start one row after it simulates).
+        // model, so samples start one row after it simulates). A peer that reached its
+        // --ticks stops stepping on purpose: not slow.
         const bool simulating = session.ready() && session.role() != SessionRole::Viewer &&
-                                s.owned_nodes > 0 && !session.left();
+                                s.owned_nodes > 0 && !session.left() && !session.at_max_ticks();
         if (simulating && pace_from_here)
         {
             const PaceSample sample{

@@ -430,6 +430,8 @@ public:
     [[nodiscard]] bool left() const noexcept { return left_; }
     /// The tick of the integrated state (exact mode: the lockstep tick).
     [[nodiscard]] std::uint64_t tick() const noexcept { return state_.tick; }
+    /// Stepping ended on purpose: tick() reached this peer's SessionSettings::max_ticks.
+    [[nodiscard]] bool at_max_ticks() const noexcept;
     [[nodiscard]] double time() const noexcept { return state_.time; }
     /// The newest session time and tick this peer shows: its own (time(), tick()) when it
     /// simulates, else (a viewer) those of the newest leaf state received.
