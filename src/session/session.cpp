@@ -1175,27 +1175,17 @@ struct Session::Impl
                                 exact ? k_exact_ring_cost : 0.0);
     }
 
-    void master_repartition(std::uint64_t apply)
+    /// Members the partition `owners` leaves without a leaf simulate nothing: a grid with fewer
+    /// leaves than members (level 1 has 2: with 3 participants two of the four members owned
+    /// nothing, without a word). Said once per member count, not per epoch, and whether or not
+    /// the partition changed (a member seated with no leaf mostly leaves it as it was).
+    void warn_idle_members(const std::vector<net::PeerId>& owners)
     {
-        repartition_pending = false;
-        auto owners = compute_partition();
-        const PartitionEntry* cur = newest();
-        if (cur != nullptr && cur->owners == owners)
-            return;
-        const std::uint32_t epoch = next_epoch++;
-        add_partition(apply, epoch, owners);
-        net::Partition msg;
-        msg.epoch = epoch;
-        msg.leaf_depth = static_cast<std::uint8_t>(s.graph_->depth());
-        msg.owners = std::move(owners);
-        // Members the partition leaves without a leaf simulate nothing: a grid with fewer leaves
-        // than members (level 1 has 2: with 3 participants two of the four members owned
-        // nothing, without a word). Said once per member count, not per epoch.
         std::size_t seated = 1;  // the master
         for (const auto& [id, p] : peers)
             if (p.ready && !p.leaving && !p.departed && p.info.role == net::Role::Participant)
                 ++seated;
-        std::vector<net::PeerId> holders(msg.owners.begin(), msg.owners.end());
+        std::vector<net::PeerId> holders(owners.begin(), owners.end());
         std::sort(holders.begin(), holders.end());
         const auto holding =
             static_cast<std::size_t>(std::unique(holders.begin(), holders.end()) - holders.begin());
@@ -1206,8 +1196,24 @@ struct Session::Impl
                 "session: the grid's {} leaves (level {}) are shared by {} of the {} "
                 "members; the others simulate nothing (a finer level gives every member "
                 "a share)",
-                msg.owners.size(), s.model_->grid().level(), holding, seated);
+                owners.size(), s.model_->grid().level(), holding, seated);
         }
+    }
+
+    void master_repartition(std::uint64_t apply)
+    {
+        repartition_pending = false;
+        auto owners = compute_partition();
+        warn_idle_members(owners);
+        const PartitionEntry* cur = newest();
+        if (cur != nullptr && cur->owners == owners)
+            return;
+        const std::uint32_t epoch = next_epoch++;
+        add_partition(apply, epoch, owners);
+        net::Partition msg;
+        msg.epoch = epoch;
+        msg.leaf_depth = static_cast<std::uint8_t>(s.graph_->depth());
+        msg.owners = std::move(owners);
         send_all(make(msg, apply));
         spdlog::debug("session: master partition epoch {} from tick {}", epoch, apply);
     }

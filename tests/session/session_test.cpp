@@ -10,6 +10,7 @@
 
 #include "session_harness.h"
 #include "support/fp_traps.h"
+#include "support/log_capture.h"
 
 #include <algorithm>
 #include <array>
@@ -460,6 +461,30 @@ TEST(SessionFast, PointClearanceInsideGivesBandsAndJoinersTakeTheMastersChoice)
     EXPECT_EQ(bands.shares[0].fragments, 2U);  // the master's two caps
     EXPECT_EQ(bands.shares[1].fragments, 1U);  // the participant's band
     EXPECT_LT(bands.busiest_cost, 0.52);
+}
+
+// A grid with fewer leaves than members leaves some without a share, and the master says so:
+// level 1 has 2 leaves; the first participant takes one, the second joins to a partition that
+// does not change. The warning came only with a new partition, so never in this case.
+TEST(SessionPartition, AMemberSeatedWithoutALeafIsWarnedAbout)
+{
+    const pliant::test::LogCapture captured;
+    Harness h;
+    Session& master = h.host(1, settings_for(Coupling::Fast, "master"));
+    Session& a = h.join(net::Role::Participant, settings_for(Coupling::Fast, "a"));
+    ASSERT_TRUE(pump_until_partitioned(h, 2));
+    EXPECT_EQ(captured.text().find("simulate nothing"), std::string::npos) << captured.text();
+    const std::vector<net::PeerId> before = master.owners();
+    Session& b = h.join(net::Role::Participant, settings_for(Coupling::Fast, "b"));
+    ASSERT_TRUE(h.pump_until([&] { return b.ready(); }, 8000));
+    h.pump_until([] { return false; }, 400);  // the master's repartition on b's Ready
+    EXPECT_EQ(master.owners(), before);
+    EXPECT_TRUE(a.ready());
+    EXPECT_NE(
+        captured.text().find("warning: session: the grid's 2 leaves (level 1) are shared by 2 "
+                             "of the 3 members; the others simulate nothing"),
+        std::string::npos)
+        << captured.text();
 }
 
 // The model blob carries the clearance (version 2); a version-1 blob, as recordings made
