@@ -4292,6 +4292,14 @@ struct Session::Impl
         behind = false;
         if (!ungreeted.empty())
             close_ungreeted();
+        // Also while the model is arriving: the Hellos to the peers the Welcome listed go out
+        // before it (a download can outlast their k_greeting_repeat_s).
+        if (now >= next_greeting_repeat && !s.left_)
+        {
+            repeat_greetings();
+            next_greeting_repeat = std::max(next_greeting_repeat + 1.0 / settings.stream_rate_hz,
+                                            now - 1.0 / settings.stream_rate_hz);
+        }
         if (!s.model_ || s.left_)
             return;
         if (!clock_set)
@@ -4336,12 +4344,6 @@ struct Session::Impl
             stream();
             next_stream = std::max(next_stream + 1.0 / settings.stream_rate_hz,
                                    now - 1.0 / settings.stream_rate_hz);
-        }
-        if (now >= next_greeting_repeat && !s.left_)
-        {
-            repeat_greetings();
-            next_greeting_repeat = std::max(next_greeting_repeat + 1.0 / settings.stream_rate_hz,
-                                            now - 1.0 / settings.stream_rate_hz);
         }
         if (s.model_ && !s.left_ && now >= next_view)
         {

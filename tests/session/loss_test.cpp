@@ -575,6 +575,62 @@ TEST(SessionLoss, ALostHelloCostsAStreamPeriodNotARetransmission)
     EXPECT_GT(lost_hellos, 0) << "the seeds must include a lost greeting";
 }
 
+// The same while the joiner's model is still arriving: its Hellos to the peers it dialled are
+// repeated from the Welcome on, not only once it holds the model (before, they were not, and
+// the first participant bound the second's connection 2-4 s later, at ENet's retransmission).
+// The master's link to the second joiner loses 60 % of its datagrams, so the model's chunks
+// arrive seconds after the Welcome. Seeds 3-5 lose a Hello while the model is still arriving
+// (of seeds 1-7, the others lose none or receive the model first).
+TEST(SessionLoss, AHelloLostWhileTheModelArrivesCostsAStreamPeriod)
+{
+    constexpr int level = 6;
+    int lost_hellos = 0;
+    for (std::uint64_t seed = 3; seed <= 5; ++seed)
+    {
+        net::SimulatedNetworkSettings ns;
+        ns.seed = seed;
+        ns.link.latency_s = 0.020;
+        ns.retransmit_s = 2.0;
+        Harness h(ns);
+        SessionSettings set;
+        set.coupling = Coupling::Fast;
+        set.name = "master";
+        h.host(level, set);
+        set.name = "first";
+        Session& first = h.join(net::Role::Participant, set);
+        ASSERT_TRUE(h.pump_until([&] { return first.ready(); }, 200000)) << "seed " << seed;
+        set.name = "second";
+        Session& second = h.join(net::Role::Participant, set);
+        net::LinkSettings far = ns.link;
+        far.loss = 0.6;
+        h.net.set_link(h.addresses[0], h.addresses[2], far);
+        h.net.set_link(h.addresses[2], h.addresses[0], far);
+        net::LinkSettings lossy = ns.link;
+        lossy.loss = 0.5;
+        h.net.set_link(h.addresses[1], h.addresses[2], lossy);
+        h.net.set_link(h.addresses[2], h.addresses[1], lossy);
+        std::uint64_t resent = 0;
+        ASSERT_TRUE(h.pump_until(
+            [&]
+            {
+                if (second.stats().peers_connected == 2)
+                    return true;
+                resent = h.net.totals().retransmitted;
+                return false;
+            },
+            200000))
+            << "seed " << seed;
+        lost_hellos += h.net.totals().retransmitted > resent ? 1 : 0;
+        const double dialled_at = h.now;
+        EXPECT_FALSE(second.ready()) << "seed " << seed << ": the model must still be on its way";
+        ASSERT_TRUE(h.pump_until([&] { return first.stats().peers_connected == 2; }, 40000))
+            << "seed " << seed;
+        EXPECT_LT(h.now - dialled_at, 0.25) << "seed " << seed;
+        EXPECT_FALSE(second.ready()) << "seed " << seed;
+    }
+    EXPECT_GT(lost_hellos, 0) << "the seeds must include a lost greeting";
+}
+
 TEST(SessionLoss, ExactLockstepUnderLossAndLatencyStaysEqualToASingleProcess)
 {
     // The lockstep's halos and heartbeats are reliable: loss costs retransmissions and latency
