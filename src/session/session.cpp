@@ -2428,6 +2428,31 @@ struct Session::Impl
         batch.clear();
     }
 
+    /// Whether a receiver that acknowledged `base` (an entry of `entries`) shows exactly the
+    /// leaf's quantised values now (qu, qv: `n` of each): `base` holds them, and so does every
+    /// entry sent after it, which the receiver may have taken instead. Comparing values and
+    /// not entries: with two receivers acknowledging different entries of a leaf at rest, each
+    /// all-zero delta sent to one added an entry the other had not acknowledged, and the leaf
+    /// went out every stream period, to each in turn.
+    [[nodiscard]] bool shows_now(const std::deque<QuantisedLeaf>& entries,
+                                 const QuantisedLeaf& base, std::size_t n) const
+    {
+        const auto same = [&](const QuantisedLeaf& e)
+        {
+            return e.qu.size() == n && e.qv.size() == n &&
+                   std::equal(e.qu.begin(), e.qu.end(), qu.begin()) &&
+                   std::equal(e.qv.begin(), e.qv.end(), qv.begin());
+        };
+        for (auto it = entries.rbegin(); it != entries.rend(); ++it)
+        {
+            if (!same(*it))
+                return false;
+            if (&*it == &base)
+                return true;
+        }
+        return false;  // not in the history (cannot be: acked_baseline returns one of it)
+    }
+
     /// Quantised streaming of leaf `l` to every peer (docs/protocol.md §5.5). \return false if
     /// the leaf's values do not quantise (the caller sends f64).
     bool stream_quantised(const PartitionEntry* p, std::uint32_t l)
@@ -2452,9 +2477,7 @@ struct Session::Impl
             std::vector<double>* prio = capped() ? &priority[pid] : nullptr;
             if (prio != nullptr)
                 prio->resize(s.graph_->size(), 0.0);
-            if (base != nullptr && base == &sent[l].back() && !refresh &&
-                std::equal(base->qu.begin(), base->qu.end(), qu.begin()) &&
-                std::equal(base->qv.begin(), base->qv.end(), qv.begin()))
+            if (base != nullptr && !refresh && shows_now(sent[l], *base, n))
             {
                 ++counters.quiescent_skips;  // the receiver shows exactly this already
                 if (prio != nullptr)

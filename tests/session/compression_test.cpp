@@ -274,6 +274,31 @@ TEST(SessionCompression, QuiescentLeavesCostOnlyARefreshThatKeepsTheHaloAgeBound
     EXPECT_EQ(view_mismatches(h, true), 0u);
 }
 
+// With two receivers per leaf the same holds: a viewer that joins later acknowledges other
+// states than the participant, and a leaf at rest went to whichever receiver lagged each
+// period (each all-zero delta pushed a new entry the other had not acknowledged): about every
+// other stream period instead of every 0.25 s, and the refresh never came due.
+TEST(SessionCompression, QuiescentLeavesCostOnlyARefreshWithTwoReceiversToo)
+{
+    Harness h;
+    ASSERT_TRUE(start_at_rest(h, SessionSettings{}.quiescent_refresh_s));
+    for (int k = 0; k < 1000; ++k)
+        h.pump_once(0.0005);
+    Session& viewer = h.join(net::Role::Viewer, compressed(Coupling::Fast, "viewer"));
+    ASSERT_TRUE(h.pump_until([&] { return viewer.ready(); }, 8000));
+    for (int k = 0; k < 1000; ++k)  // its key states, their acks
+        h.pump_once(0.0005);
+    const std::uint64_t sent = total(h, &SessionStats::leaf_states_sent);
+    for (int k = 0; k < 4000; ++k)  // 2 s
+        h.pump_once(0.0005);
+    // Every leaf goes to its two receivers 8 times in 2 s, give or take one at the window's ends.
+    const auto leaves = static_cast<std::uint64_t>(viewer.leaf_graph()->size());
+    const std::uint64_t refreshes = total(h, &SessionStats::leaf_states_sent) - sent;
+    EXPECT_GE(refreshes, 2 * 7 * leaves);
+    EXPECT_LE(refreshes, 2 * 9 * leaves);
+    EXPECT_EQ(view_mismatches(h, true), 0u);
+}
+
 TEST(SessionCompression, LossyDuplicatingLinksStillConvergeToTheOwnersBits)
 {
     net::SimulatedNetworkSettings ns;
