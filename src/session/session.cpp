@@ -684,6 +684,18 @@ struct Session::Impl
         double render = 0.0;  // the playout time of the last update_view (never decreases)
         double last_now = 0.0;
         bool set = false;
+        // The sender's stream period as seen here: the smallest growth of `newest` among the
+        // last k_period_samples (0: none yet). The receiver's own stream_rate_hz says nothing
+        // of it (a viewer streams nothing; peers may stream at other rates).
+        static constexpr std::size_t k_period_samples = 8;
+        std::array<double, k_period_samples> growth{};
+        std::size_t growths = 0;
+        void grew(double by) noexcept { growth[growths++ % k_period_samples] = by; }
+        [[nodiscard]] double period() const noexcept
+        {
+            const std::size_t n = std::min(growths, k_period_samples);
+            return n == 0 ? 0.0 : *std::min_element(growth.begin(), growth.begin() + n);
+        }
     };
     std::vector<ViewHistory> history;
     std::vector<std::uint32_t> updated;  // leaves whose shown state changed in this poll
@@ -4176,6 +4188,8 @@ struct Session::Impl
             Playout& pl = playout[h.sender];
             if ((!pl.set && !pl.fresh) || leaf_time[l] > pl.newest)
             {
+                if ((pl.set || pl.fresh) && leaf_time[l] > pl.newest)
+                    pl.grew(leaf_time[l] - pl.newest);
                 pl.newest = leaf_time[l];
                 pl.fresh = true;
             }
@@ -4187,7 +4201,8 @@ struct Session::Impl
     /// the two states received around its sender's playout time (held at the newest or oldest
     /// outside them). A sender's playout time is now + offset, the offset slewed towards the
     /// smallest lead of its newest state over now (sampled when it grows, recovering at
-    /// k_view_leak) minus k_view_periods stream periods, so that a state is usually there on
+    /// k_view_leak) minus k_view_periods of the sender's stream periods (Playout::period, as
+    /// observed here), so that a state is usually there on
     /// both sides even when one is late or lost; it never goes backwards (a sender slower than
     /// real time, such as a lockstep, is then shown at its newest states). Linear, not cubic
     /// Hermite with the received v: the grid's fastest modes have |v| / |u| up to ~150/s, and v
@@ -4201,11 +4216,14 @@ struct Session::Impl
         if (!settings.interpolate_view)
             return;
         double delay = 0.0;
-        const double margin = k_view_periods / settings.stream_rate_hz;
         for (auto& [sender, pl] : playout)
         {
             if (!pl.set && !pl.fresh)
                 continue;
+            // Two of the sender's periods as observed (this peer's own until one is).
+            const double observed = pl.period();
+            const double margin =
+                k_view_periods * (observed > 0.0 ? observed : 1.0 / settings.stream_rate_hz);
             const double dt = pl.set ? std::max(0.0, now - pl.last_now) : 0.0;
             pl.last_now = now;
             if (!pl.set)

@@ -631,6 +631,37 @@ TEST(SessionLoss, AHelloLostWhileTheModelArrivesCostsAStreamPeriod)
     EXPECT_GT(lost_hellos, 0) << "the seeds must include a lost greeting";
 }
 
+// The view plays two of the sender's stream periods behind its newest state, whatever the
+// receiver's own stream_rate_hz: a viewer streams nothing, and peers may stream at other rates.
+// The margin came from the receiver's own rate: a host at 10 Hz seen by a viewer at the
+// default 60 Hz was held at its newest state two thirds of each period (33 ms of margin for
+// states 100 ms apart), and a viewer given 1 Hz showed a 60 Hz host 2 s late.
+TEST(SessionView, ThePlayoutMarginIsTwoOfTheSendersPeriods)
+{
+    const auto delay = [](double host_hz, double viewer_hz)
+    {
+        Harness h;
+        SessionSettings set;
+        set.coupling = Coupling::Fast;
+        set.name = "master";
+        set.stream_rate_hz = host_hz;
+        h.host(4, set);
+        set.name = "viewer";
+        set.stream_rate_hz = viewer_hz;
+        Session& viewer = h.join(net::Role::Viewer, set);
+        EXPECT_TRUE(h.pump_until([&] { return viewer.ready(); }, 8000));
+        for (int k = 0; k < 4000; ++k)  // 2 s: the playout settles
+            h.pump_once(0.0005);
+        return viewer.stats().view_delay_s;
+    };
+    const double slow_host = delay(10.0, 60.0);
+    EXPECT_GT(slow_host, 0.15);
+    EXPECT_LT(slow_host, 0.3);
+    const double slow_viewer = delay(60.0, 1.0);
+    EXPECT_GT(slow_viewer, 0.02);
+    EXPECT_LT(slow_viewer, 0.06);
+}
+
 TEST(SessionLoss, ExactLockstepUnderLossAndLatencyStaysEqualToASingleProcess)
 {
     // The lockstep's halos and heartbeats are reliable: loss costs retransmissions and latency
