@@ -77,6 +77,11 @@ int run_join(const JoinOptions& opt, const GlobalOptions& global)
     auto bound = transport->open(net::Address{{0, 0, 0, 0}, opt.port});
     if (!bound)
         return report(bound.error());
+    if (opt.port == 0 && !opt.viewer)
+        spdlog::info(
+            "join: listening on port {} (after a failover that makes this peer the "
+            "master, joiners dial it there; --port fixes it)",
+            bound->port);
     session::SessionSettings settings;
     settings.name = opt.name;
     settings.listen_port = bound->port;
@@ -106,6 +111,12 @@ int run_join(const JoinOptions& opt, const GlobalOptions& global)
     {
         if (const auto failure = (*s)->join_failure())
             spdlog::error("{}", join_failure_message(opt.master, *failure, run.secure != nullptr));
+        else if ((*s)->left())  // the master went while the model was arriving
+            spdlog::error(
+                "join: the master {} was lost before the model had all arrived; join the "
+                "session again through its new master (after a failover, the participant with "
+                "the lowest id)",
+                opt.master);
         else if (summary->stats.bytes_received == 0)  // --duration ended before any answer
             spdlog::error(
                 "join: {} never answered within --duration {:g} s: check the address and port, "

@@ -2997,9 +2997,19 @@ struct Session::Impl
             close_all(net::DisconnectReason::Quit);  // our leave is done: nobody left to hand to
             return;
         }
-        if (!s.model_ || !next)
+        if (!s.model_)
         {
-            // Nothing to continue with: joined without the model yet, or nobody left to simulate.
+            // Nothing to continue with: the model was still arriving.
+            spdlog::warn(
+                "session: master {} lost before this peer had the model; this peer ends "
+                "(join the session again through its new master, the participant with "
+                "the lowest id)",
+                master_id.value);
+            close_all(net::DisconnectReason::Quit);
+            return;
+        }
+        if (!next)
+        {
             spdlog::warn("session: master {} lost and no successor; the session ends",
                          master_id.value);
             close_all(net::DisconnectReason::Quit);
@@ -3036,6 +3046,13 @@ struct Session::Impl
     {
         s.role_ = SessionRole::Master;
         ++counters.promotions;
+        // Joiners from now on must dial this peer: say where (`pliant join` listens on a port
+        // of the system's choosing unless given --port).
+        if (settings.listen_port != 0)
+            spdlog::info("session: this peer (id {}) is the master now; joiners dial it on port {}",
+                         s.id_.value, settings.listen_port);
+        else
+            spdlog::info("session: this peer (id {}) is the master now", s.id_.value);
         foreign_partitions.clear();
         const PartitionEntry* cur = newest();
         if (cur != nullptr)

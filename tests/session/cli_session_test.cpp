@@ -171,6 +171,15 @@ TEST(SessionCli, KillingAParticipantThenTheMasterLeavesTheOthersRunning)
         << read(dir / "a.log");
     EXPECT_NE(read(dir / "v.log").find("peer 1 takes over"), std::string::npos)
         << read(dir / "v.log");
+    // The successor says where later joiners find it: the port it said it listens on.
+    const std::string a_log = read(dir / "a.log");
+    const std::string listening = "join: listening on port ";
+    const auto at = a_log.find(listening);
+    ASSERT_NE(at, std::string::npos) << a_log;
+    const std::string own_port = std::to_string(std::stoi(a_log.substr(at + listening.size())));
+    EXPECT_NE(a_log.find("this peer (id 1) is the master now; joiners dial it on port " + own_port),
+              std::string::npos)
+        << a_log;
     // Level 4: 2 * 16^2 + 2 canonical nodes, all owned by the one participant left.
     const auto a = rows(dir / "a.csv");
     const auto v = rows(dir / "v.csv");

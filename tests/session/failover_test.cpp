@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "session_harness.h"
+#include "support/log_capture.h"
 
 #include <cstdio>
 #include <set>
@@ -387,6 +388,33 @@ void run_master_leaves(Coupling c)
 
 // Only the master admits: a joiner that dials another peer (an old address, the wrong peer) is
 // refused at once instead of waiting for a Welcome that never comes.
+// A joiner whose master goes while the model is still arriving cannot follow a successor (it
+// has nothing to continue with): it leaves, and says why, not that no successor exists.
+TEST(SessionFailover, AJoinerWhoseMasterGoesBeforeTheModelLeavesSayingSo)
+{
+    const pliant::test::LogCapture captured;
+    net::SimulatedNetworkSettings ns = quick_network();
+    ns.retransmit_s = 0.5;
+    Harness h(ns);
+    h.host(k_failover_level, failover_settings(Coupling::Fast, "master"));
+    Session& first = h.join(net::Role::Participant, failover_settings(Coupling::Fast, "first"));
+    ASSERT_TRUE(h.pump_until([&] { return first.ready(); }, 8000));
+    Session& second = h.join(net::Role::Participant, failover_settings(Coupling::Fast, "second"));
+    net::LinkSettings lossy = ns.link;
+    lossy.loss = 0.6;  // the model's chunks take retransmissions
+    h.net.set_link(h.addresses[0], h.addresses[2], lossy);
+    ASSERT_TRUE(h.pump_until([&] { return second.id() != net::k_no_peer; }, 20000));
+    ASSERT_FALSE(second.ready()) << "the model must still be on its way";
+    h.crash(0);
+    ASSERT_TRUE(h.pump_until([&] { return second.left(); }, 20000));
+    EXPECT_FALSE(second.ready());
+    EXPECT_NE(captured.text().find("master 0 lost before this peer had the model"),
+              std::string::npos)
+        << captured.text();
+    EXPECT_EQ(captured.text().find("no successor"), std::string::npos) << captured.text();
+    EXPECT_FALSE(first.left());  // the first participant carries on as the master
+}
+
 TEST(SessionFailover, JoiningThroughAPeerThatIsNotTheMasterIsRefused)
 {
     Harness h(quick_network());
