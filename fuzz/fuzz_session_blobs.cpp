@@ -49,17 +49,21 @@ void check_model(std::span<const std::byte> blob)
         fuzz::require(!decoded.error().message.empty(), k_target, "a refusal without a message");
         return;
     }
-    const auto again = session::encode_model(decoded->model, decoded->coupling, decoded->clearance);
-    if (blob.size() > 4 && blob[4] < std::byte{3})
+    const auto encode = [](const session::DecodedModel& d)
     {
-        // Versions 1 and 2: the encoder writes version 3; that must decode to the same model.
+        return d.max_barrier_wait_s
+                   ? session::encode_model(d.model, d.coupling, d.clearance, *d.max_barrier_wait_s)
+                   : session::encode_model(d.model, d.coupling, d.clearance);
+    };
+    const auto again = encode(*decoded);
+    if (blob.size() > 4 && blob[4] < std::byte{4})
+    {
+        // Versions 1 to 3: the encoder writes version 4; that must decode to the same model.
         auto second = session::decode_model(again);
         fuzz::require(second.has_value(), k_target,
                       "an older model version re-encodes to a refused blob");
-        fuzz::require(
-            same_bytes(session::encode_model(second->model, second->coupling, second->clearance),
-                       again),
-            k_target, "an older model version does not round-trip");
+        fuzz::require(same_bytes(encode(*second), again), k_target,
+                      "an older model version does not round-trip");
         return;
     }
     fuzz::require(same_bytes(again, blob), k_target,

@@ -292,7 +292,8 @@ core::Result<ReplayResult> replay(const Recording& recording, int threads,
     auto decoded = decode_model(recording.model);
     if (!decoded)
         return core::fail(decoded.error().code, decoded.error().message);
-    auto [model, coupling, clearance] = std::move(decoded).value();
+    sim::MembraneModel model = std::move(decoded->model);
+    const Coupling coupling = decoded->coupling;
     if (!model.settings().fixed_step)
         return core::fail(core::ErrorCode::InvalidArgument,
                           "replay: the recorded model is not fixed-step");

@@ -32,7 +32,7 @@ constexpr std::uint32_t k_model_magic = 0x4D534C50;  // "PLSM"
 /// Version 2 adds the point clearance byte after the coupling; version 3 the force limit after
 /// the step settings. Older blobs (recordings made before them) still decode: version 1 with
 /// the coupling's rule, versions 1 and 2 with no force limit (as they were made).
-constexpr std::uint8_t k_model_version = 3;
+constexpr std::uint8_t k_model_version = 4;
 constexpr double k_leave_timeout_s = 5.0;
 /// The most wall time one advance() call spends stepping in exact coupling before it returns to
 /// let the caller poll() (s). ENet moves at most its window (64 KiB) of reliable data per
@@ -196,7 +196,8 @@ std::uint8_t clearance_byte(std::optional<PointClearance> c)
 }  // namespace
 
 std::vector<std::byte> encode_model(const sim::MembraneModel& model, Coupling coupling,
-                                    std::optional<PointClearance> clearance)
+                                    std::optional<PointClearance> clearance,
+                                    double max_barrier_wait_s)
 {
     const core::TetraGrid& g = model.grid();
     const sim::MembraneSettings& s = model.settings();
@@ -210,7 +211,7 @@ std::vector<std::byte> encode_model(const sim::MembraneModel& model, Coupling co
     w.u32(static_cast<std::uint32_t>(std::max(0, s.reassemble_every)));
     for (const double v :
          {s.T, s.rho, s.beta, s.k_f, s.rtol, s.atol, s.dt_min, s.dt_max, s.dt_initial, s.safety,
-          s.max_growth, s.min_shrink, s.fixed_dt, s.max_force})
+          s.max_growth, s.min_shrink, s.fixed_dt, s.max_force, max_barrier_wait_s})
         w.f64(v);
     for (int y = 0; y < g.ny(); ++y)
         for (int x = 0; x < g.nx(); ++x)
@@ -251,8 +252,8 @@ core::Result<DecodedModel> decode_model(std::span<const std::byte> blob)
     if (fixed > 1)
         return refuse("fixed-step flag " + std::to_string(fixed) + ", 0 or 1");
     const core::TetraGrid g = core::TetraGrid::create(level).value();
-    const std::size_t expect =
-        (version >= 2 ? 13 : 12) + (version >= 3 ? 14 : 13) * 8 + g.node_count() * 24;
+    const std::size_t settings_count = version >= 4 ? 15 : version >= 3 ? 14 : 13;
+    const std::size_t expect = (version >= 2 ? 13 : 12) + settings_count * 8 + g.node_count() * 24;
     if (blob.size() != expect)
         return refuse(std::to_string(blob.size()) + " bytes; a version-" + std::to_string(version) +
                       " model of level " + std::to_string(level) + " takes " +
@@ -288,6 +289,16 @@ core::Result<DecodedModel> decode_model(std::span<const std::byte> blob)
         if (!r.ok)
             return refuse("setting max_force is not finite");
     }
+    std::optional<double> barrier;
+    if (version >= 4)
+    {
+        barrier = r.f64();
+        if (!r.ok)
+            return refuse("setting max_barrier_wait_s is not finite");
+        if (*barrier < 0.0)
+            return refuse("max_barrier_wait_s " + std::to_string(*barrier) +
+                          ", which must be >= 0 s (0: never)");
+    }
     core::Vec3Field<double> rest{core::Field<double>(g), core::Field<double>(g),
                                  core::Field<double>(g)};
     for (int y = 0; y < g.ny(); ++y)
@@ -316,7 +327,7 @@ core::Result<DecodedModel> decode_model(std::span<const std::byte> blob)
     std::optional<PointClearance> clear;
     if (clearance != 0)
         clear = clearance == 1 ? PointClearance::AsGrown : PointClearance::Inside;
-    return DecodedModel{std::move(model).value(), static_cast<Coupling>(coupling), clear};
+    return DecodedModel{std::move(model).value(), static_cast<Coupling>(coupling), clear, barrier};
 }
 
 std::vector<std::byte> encode_state(const core::TetraGrid& grid, const core::Field<double>& u,
@@ -3249,7 +3260,7 @@ struct Session::Impl
         const core::TetraGrid& g = s.model_->grid();
         if (!model_blob_shared)  // the model never changes: encoded once, shared by every feed
             model_blob_shared = std::make_shared<const std::vector<std::byte>>(
-                encode_model(*s.model_, s.coupling_, s.clearance_));
+                encode_model(*s.model_, s.coupling_, s.clearance_, settings.max_barrier_wait_s));
         const std::vector<std::byte>& model = *model_blob_shared;
         flush_display();
         auto state = encode_state(g, s.display_u_, s.display_v_, s.state_.tick, s.state_.time);
@@ -3391,6 +3402,10 @@ struct Session::Impl
         }
         s.coupling_ = decoded->coupling;
         s.clearance_ = decoded->clearance;
+        // The session's limit, which this peer applies if it becomes the master (the joiner's
+        // own setting is not used, as for the clearance).
+        if (decoded->max_barrier_wait_s)
+            settings.max_barrier_wait_s = *decoded->max_barrier_wait_s;
         install_model(std::move(decoded->model));
         const core::TetraGrid& g = s.model_->grid();
         if (s.role_ != SessionRole::Viewer)
@@ -4541,6 +4556,11 @@ bool Session::behind() const noexcept
     return impl_->behind;
 }
 
+double Session::max_barrier_wait() const noexcept
+{
+    return impl_->settings.max_barrier_wait_s;
+}
+
 bool Session::at_max_ticks() const noexcept
 {
     return impl_->settings.max_ticks != 0 && state_.tick >= impl_->settings.max_ticks;
@@ -4624,7 +4644,7 @@ Recording Session::recording() const
 {
     Recording r;
     if (model_ != nullptr)
-        r.model = encode_model(*model_, coupling_, clearance_);
+        r.model = encode_model(*model_, coupling_, clearance_, impl_->settings.max_barrier_wait_s);
     r.final_tick = state_.tick;
     r.forces = impl_->force_log;
     return r;

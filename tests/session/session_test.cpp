@@ -506,9 +506,10 @@ TEST(SessionModelBlob, CarriesThePointClearanceAndReadsVersionOne)
     }
     auto blob = encode_model(*model, Coupling::Exact, PointClearance::AsGrown);
     constexpr std::size_t k_clearance_at = 7;  // magic (4), version, level, coupling
-    ASSERT_EQ(std::to_integer<int>(blob[4]), 3);
-    // Back to version 2: without the force limit (the 14th setting).
-    blob.erase(blob.begin() + 13 + 13 * 8, blob.begin() + 13 + 14 * 8);
+    ASSERT_EQ(std::to_integer<int>(blob[4]), 4);
+    // Back to version 2: without the force limit and the barrier limit (the 14th and 15th
+    // settings).
+    blob.erase(blob.begin() + 13 + 13 * 8, blob.begin() + 13 + 15 * 8);
     blob[4] = std::byte{2};
     ASSERT_EQ(std::to_integer<int>(blob[k_clearance_at]), 1);
     auto bad = blob;
@@ -523,7 +524,7 @@ TEST(SessionModelBlob, CarriesThePointClearanceAndReadsVersionOne)
     EXPECT_FALSE(old->clearance.has_value());
     EXPECT_EQ(old->model.rest_positions()[0].at(3, 2), model->rest_positions()[0].at(3, 2));
     EXPECT_FALSE(decode_model(std::span(v1).first(v1.size() - 1)));  // exact lengths
-    v1[4] = std::byte{4};
+    v1[4] = std::byte{5};
     EXPECT_FALSE(decode_model(v1));  // a version from the future
 }
 
@@ -552,11 +553,54 @@ TEST(SessionModelBlob, CarriesTheForceLimit)
     EXPECT_NE(refused.error().message.find("max_force"), std::string::npos)
         << refused.error().message;
     auto v2 = blob;
-    v2.erase(v2.begin() + k_limit_at, v2.begin() + k_limit_at + 8);
+    v2.erase(v2.begin() + k_limit_at, v2.begin() + k_limit_at + 16);  // and the barrier limit
     v2[4] = std::byte{2};
     const auto old = decode_model(v2);
     ASSERT_TRUE(old) << old.error().message;
     EXPECT_EQ(old->model.settings().max_force, 0.0);
+}
+
+// Version 4 carries the session's barrier limit (SessionSettings::max_barrier_wait_s), which a
+// joiner applies once it becomes the master: a successor used its own, the default 10 s, so a
+// host's `--max-barrier-wait 0` (never remove a member) was lost at a failover. Version 3
+// reads as unset (the joiner keeps its own); a negative limit is refused.
+TEST(SessionModelBlob, CarriesTheBarrierLimitWhichAJoinerTakes)
+{
+    const core::TetraGrid g = core::TetraGrid::create(3).value();
+    const auto model = sim::MembraneModel::create(g, scenes::sphere_grid(g, 1.0), material());
+    ASSERT_TRUE(model);
+    for (const double limit : {0.0, 1.5, 10.0})
+    {
+        const auto back = decode_model(encode_model(*model, Coupling::Exact, std::nullopt, limit));
+        ASSERT_TRUE(back) << back.error().message;
+        EXPECT_EQ(back->max_barrier_wait_s, limit);
+    }
+    auto blob = encode_model(*model, Coupling::Exact, std::nullopt, 1.5);
+    constexpr std::size_t k_barrier_at = 13 + 14 * 8;  // header (13), 14 settings
+    auto negative = blob;
+    const double minus = -1.0;
+    std::memcpy(negative.data() + k_barrier_at, &minus, sizeof minus);  // little-endian hosts
+    const auto refused = decode_model(negative);
+    ASSERT_FALSE(refused);
+    EXPECT_NE(refused.error().message.find("max_barrier_wait_s"), std::string::npos)
+        << refused.error().message;
+    auto v3 = blob;
+    v3.erase(v3.begin() + k_barrier_at, v3.begin() + k_barrier_at + 8);
+    v3[4] = std::byte{3};
+    const auto old = decode_model(v3);
+    ASSERT_TRUE(old) << old.error().message;
+    EXPECT_FALSE(old->max_barrier_wait_s.has_value());
+
+    // Through a session: the joiner's own 10 s gives way to the host's 1.5 s.
+    Harness h;
+    SessionSettings ms = settings_for(Coupling::Exact, "master");
+    ms.max_barrier_wait_s = 1.5;
+    Session& master = h.host(3, ms);
+    Session& p = h.join(net::Role::Participant, settings_for(Coupling::Exact, "part"));
+    EXPECT_EQ(p.max_barrier_wait(), SessionSettings{}.max_barrier_wait_s);
+    ASSERT_TRUE(h.pump_until([&] { return p.ready(); }, 8000));
+    EXPECT_EQ(master.max_barrier_wait(), 1.5);
+    EXPECT_EQ(p.max_barrier_wait(), 1.5);
 }
 
 // Every field of a model blob is checked: a twin whose rest position is not its canonical
@@ -574,7 +618,7 @@ TEST(SessionModelBlob, RefusesTwinsThatDifferAndAHugeReassemblyPeriod)
     EXPECT_EQ(encode_model(back->model, back->coupling, back->clearance), blob);
 
     constexpr std::size_t k_reassemble_at = 9;  // magic, version, level, coupling, clearance, fixed
-    constexpr std::size_t k_positions_at = k_reassemble_at + 4 + 14 * 8;  // 14 settings
+    constexpr std::size_t k_positions_at = k_reassemble_at + 4 + 15 * 8;  // 15 settings
     auto huge = blob;
     huge[k_reassemble_at + 3] = std::byte{0x41};  // 0x41000000 > 2^30
     const auto refused = decode_model(huge);
@@ -609,9 +653,9 @@ TEST(SessionModelBlob, ARefusalNamesTheRuleBroken)
         const auto r = decode_model(bad);
         return r ? std::string("accepted") : r.error().message;
     };
-    // magic (4), version, level, coupling, clearance, fixed, re-assembly (4), 14 settings.
+    // magic (4), version, level, coupling, clearance, fixed, re-assembly (4), 15 settings.
     EXPECT_EQ(refusal(0, std::byte{'X'}), "model blob: it does not begin with PLSM");
-    EXPECT_EQ(refusal(4, std::byte{9}), "model blob: version 9, this build reads 1 to 3");
+    EXPECT_EQ(refusal(4, std::byte{9}), "model blob: version 9, this build reads 1 to 4");
     EXPECT_EQ(refusal(5, std::byte{11}),
               "model blob: grid level 11, pliant's grids are of levels 1 to 10");
     EXPECT_EQ(refusal(6, std::byte{3}), "model blob: coupling 3, 1 (exact) or 2 (fast)");
@@ -623,9 +667,9 @@ TEST(SessionModelBlob, ARefusalNamesTheRuleBroken)
     nan_rho[k_rho_at + 6] = std::byte{0xf8};
     EXPECT_EQ(decode_model(nan_rho).error().message,
               "model blob: setting density rho is not finite");
-    // The rest position of node (1, 0): after the 14 settings, 24 bytes per node.
+    // The rest position of node (1, 0): after the 15 settings, 24 bytes per node.
     auto nan_position = blob;
-    const std::size_t at = 13 + 14 * 8 + 24 * static_cast<std::size_t>(g.index(1, 0).value);
+    const std::size_t at = 13 + 15 * 8 + 24 * static_cast<std::size_t>(g.index(1, 0).value);
     nan_position[at + 7] = std::byte{0x7f};
     nan_position[at + 6] = std::byte{0xf8};
     EXPECT_EQ(decode_model(nan_position).error().message,
@@ -633,7 +677,7 @@ TEST(SessionModelBlob, ARefusalNamesTheRuleBroken)
     const auto cut = decode_model(std::span(blob).first(blob.size() - 1));
     ASSERT_FALSE(cut);
     EXPECT_EQ(cut.error().message, "model blob: " + std::to_string(blob.size() - 1) +
-                                       " bytes; a version-3 model of level 2 takes " +
+                                       " bytes; a version-4 model of level 2 takes " +
                                        std::to_string(blob.size()));
     EXPECT_EQ(decode_model(std::span(blob).first(3)).error().message,
               "model blob: 3 bytes, shorter than its header");

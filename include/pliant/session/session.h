@@ -430,6 +430,9 @@ public:
     [[nodiscard]] bool left() const noexcept { return left_; }
     /// The tick of the integrated state (exact mode: the lockstep tick).
     [[nodiscard]] std::uint64_t tick() const noexcept { return state_.tick; }
+    /// The session's SessionSettings::max_barrier_wait_s, which this peer applies as master: the
+    /// master's own; a joiner takes the master's from the Welcome (its own is not used).
+    [[nodiscard]] double max_barrier_wait() const noexcept;
     /// Stepping ended on purpose: tick() reached this peer's SessionSettings::max_ticks.
     [[nodiscard]] bool at_max_ticks() const noexcept;
     [[nodiscard]] double time() const noexcept { return state_.time; }
@@ -513,22 +516,27 @@ private:
 };
 
 /// Encodes a model (level, material, rest positions) and the master's session-wide choices
-/// (coupling, point clearance; unset: the coupling's rule) as the Welcome's model blob.
+/// (coupling, point clearance, unset: the coupling's rule; the barrier limit,
+/// SessionSettings::max_barrier_wait_s) as the Welcome's model blob, version 4.
 [[nodiscard]] std::vector<std::byte> encode_model(
     const sim::MembraneModel& model, Coupling coupling,
-    std::optional<PointClearance> clearance = std::nullopt);
+    std::optional<PointClearance> clearance = std::nullopt,
+    double max_barrier_wait_s = SessionSettings{}.max_barrier_wait_s);
 
 /// A decoded model blob.
 struct DecodedModel
 {
     sim::MembraneModel model;
     Coupling coupling = Coupling::Exact;
-    std::optional<PointClearance> clearance;  ///< unset: the coupling's rule (and version 1)
+    std::optional<PointClearance> clearance;   ///< unset: the coupling's rule (and version 1)
+    std::optional<double> max_barrier_wait_s;  ///< unset before version 4
 };
-/// Decodes a model blob (version 2, or version 1, which has no clearance byte). Every field is
-/// checked: the header's values, the length, finite values, a re-assembly period of at most
-/// 2^30 steps, and twin nodes whose rest positions equal their canonical node's, so that a
-/// version-2 blob it accepts encodes back to the same bytes (fuzz/fuzz_session_blobs.cpp).
+/// Decodes a model blob: version 4; 3, without the barrier limit; 2, without the force limit
+/// either; 1, without the clearance byte either (docs/protocol.md §6). Every field is checked:
+/// the header's values, the length, finite values, a re-assembly period of at most 2^30 steps,
+/// a barrier limit >= 0, and twin nodes whose rest positions equal their canonical node's, so
+/// that a version-4 blob it accepts encodes back to the same bytes
+/// (fuzz/fuzz_session_blobs.cpp).
 /// \return InvalidArgument for a malformed blob; the model's errors (settings out of range, a
 /// degenerate face).
 core::Result<DecodedModel> decode_model(std::span<const std::byte> blob);
