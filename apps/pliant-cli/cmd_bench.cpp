@@ -485,6 +485,8 @@ int run_bench(const BenchOptions& opt, const GlobalOptions& global)
         else
             for (const Plot& p : k_plots)
             {
+                if (*interrupted != 0)
+                    break;
                 const fs::path script = plots_dir / p.script;
                 if (!fs::exists(opt.out / (std::string(p.needs) + ".csv"), ec) ||
                     !fs::exists(script, ec))
@@ -494,7 +496,9 @@ int run_bench(const BenchOptions& opt, const GlobalOptions& global)
                 double seconds = 0.0;
                 const fs::path log = opt.out / (std::string(p.script) + ".log");
                 const int rc = run_child({gnuplot.string(), "-e", vars, script.string()}, log,
-                                         "      plotting", global, seconds);
+                                         "      plotting", global, seconds, interrupted);
+                if (*interrupted != 0)
+                    break;  // said below
                 if (rc == 0)
                 {
                     if (!global.quiet)
@@ -507,6 +511,17 @@ int run_bench(const BenchOptions& opt, const GlobalOptions& global)
                                   script.string(), rc, log.string());
                 }
             }
+    }
+    // Ctrl-C while plotting: the data are written, the other plots are not made, and bench
+    // ends as interrupted (it waited for gnuplot and exited 0, or, the signal reaching gnuplot
+    // too, reported its end as a failed plot).
+    if (*interrupted != 0)
+    {
+        spdlog::error(
+            "bench: interrupted while plotting; {} holds every suite's results (run "
+            "the command again for the plots)",
+            (opt.out / "results.json").string());
+        return k_exit_interrupted;
     }
     return failures == 0 ? 0 : k_exit_failure;
 }

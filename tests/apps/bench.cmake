@@ -48,6 +48,23 @@ if(TARGET pliant)
                          -P ${PROJECT_SOURCE_DIR}/apps/pliant-cli/bench/check_bench_outputs.cmake)
         set_tests_properties(cli_bench_interrupted_outputs PROPERTIES
             FIXTURES_REQUIRED bench_interrupted)
+        # Ctrl-C while the plots are drawn: the data are written, bench forwards the signal to
+        # gnuplot and exits 130 saying so (it waited for gnuplot and exited 0). A stand-in
+        # gnuplot on PATH marks that it started and waits; the plot script is an empty file.
+        set(_bench_plot ${CMAKE_CURRENT_BINARY_DIR}/bench-plot-interrupted)
+        set(_fake_gnuplot_dir ${CMAKE_CURRENT_BINARY_DIR}/fake-gnuplot)
+        file(MAKE_DIRECTORY ${_fake_gnuplot_dir}/plots)
+        file(WRITE ${_fake_gnuplot_dir}/plots/bandwidth.gp "")
+        file(WRITE ${_fake_gnuplot_dir}/gnuplot
+             "#!/bin/sh\ntouch '${_bench_plot}/gnuplot-started'\nexec sleep 60\n")
+        file(CHMOD ${_fake_gnuplot_dir}/gnuplot PERMISSIONS OWNER_READ OWNER_WRITE
+             OWNER_EXECUTE GROUP_READ GROUP_EXECUTE WORLD_READ WORLD_EXECUTE)
+        pliant_add_interrupt_test(cli_bench_interrupted_while_plotting
+            FILE ${_bench_plot}/gnuplot-started FRESH_DIR ${_bench_plot}
+            STDERR_REGEX "bench: interrupted while plotting. .*results.json holds every suite's results"
+            TIMEOUT 170
+            ENVIRONMENT "PATH=${_fake_gnuplot_dir}:$ENV{PATH}"
+            ARGS bench net --quick --plots-dir ${_fake_gnuplot_dir}/plots --out ${_bench_plot})
         # Two SIGTERMs in quick succession (a second Ctrl-C): bench ends its running suite
         # program (SIGKILL) and winds down with exit 130; the second signal ended pliant and
         # left the program running, orphaned.

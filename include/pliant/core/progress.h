@@ -29,7 +29,7 @@ public:
     /// and its caller asks again to know that the result is partial. Work that takes a sink
     /// polls this wherever it reports progress and between phases, and then returns
     /// ErrorCode::Cancelled without a result (nothing half-done is returned or written by the
-    /// phase functions: remesh, untangle_samples, run_scenario). Default: never.
+    /// phase functions: remesh, untangle_samples, session::replay). Default: never.
     [[nodiscard]] virtual bool stop_requested() const noexcept { return false; }
 };
 

@@ -93,7 +93,8 @@ struct TwinPair
     NodeIndex canonical;
 };
 
-/// The widest ghost ring a field may have (the butterfly and cotangent stencils need 2 and 1).
+/// The widest ghost ring a field may have (the refinement's convolutions and the membrane's
+/// stencil need 1: subdiv::k_refine_ghost, sim's planes).
 inline constexpr int k_max_ghost = 4;
 inline constexpr int k_min_level = 1;
 inline constexpr int k_max_level = 10;

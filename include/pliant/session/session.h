@@ -142,10 +142,10 @@ struct SessionSettings
     double bandwidth_cap_mbit_s = 0.0;
     double interest_boost = 8.0;  ///< >= 0
     /// Coarse streaming (docs/session.md §5.2): 0 sends every node of a leaf (the default);
-    /// k in 1..3 sends only the leaf's nodes at the level k below the grid's (x and y multiples
+    /// k in 1..2 sends only the leaf's nodes at the level k below the grid's (x and y multiples
     /// of 2^k, about 4^-k of the bytes), which receivers refine back with butterfly subdivision
     /// for display. Needs level - k >= 1 and 2^(k+1) dividing the leaf side (8 cells at levels
-    /// >= 3, so k <= 2 there).
+    /// >= 3, fewer below: so k <= 2 at every level).
     /// Display only: exact-mode halos stay f64 at full resolution. Refused with fast coupling
     /// (the streamed values are the neighbours' Dirichlet values there) and with QuantisedDelta
     /// (its baselines are whole leaves). A per-sender choice; every peer refines what it gets.
@@ -271,8 +271,9 @@ struct SessionStats
     /// LeafStates from a peer that does not own the leaf under the partition they name: dropped
     /// (or, taken provisionally before that partition arrived, undone then).
     std::uint64_t foreign_states = 0;
-    /// User forces acting in this peer's last step (every peer's grabs; fast coupling drops a
-    /// departed peer's, exact coupling keeps them, docs/session.md §6).
+    /// User forces acting in this peer's last step (every peer's grabs; a departed peer's end:
+    /// in fast coupling as each peer notices, in exact coupling at the first tick of the
+    /// partition without it, on every peer alike; docs/session.md §6).
     std::size_t active_forces = 0;
     /// Forces received (in Force lists of other peers, or set here) longer than the session's
     /// max_force: they act scaled down to it (SessionSettings::max_force).
