@@ -111,12 +111,6 @@ int run_join(const JoinOptions& opt, const GlobalOptions& global)
     {
         if (const auto failure = (*s)->join_failure())
             spdlog::error("{}", join_failure_message(opt.master, *failure, run.secure != nullptr));
-        else if ((*s)->left())  // the master went while the model was arriving
-            spdlog::error(
-                "join: the master {} was lost before the model had all arrived; join the "
-                "session again through its new master (after a failover, the participant with "
-                "the lowest id)",
-                opt.master);
         else if (summary->stats.bytes_received == 0)  // --duration ended before any answer
             spdlog::error(
                 "join: {} never answered within --duration {:g} s: check the address and port, "

@@ -3010,12 +3010,12 @@ struct Session::Impl
         }
         if (!s.model_)
         {
-            // Nothing to continue with: the model was still arriving.
-            spdlog::warn(
-                "session: master {} lost before this peer had the model; this peer ends "
-                "(join the session again through its new master, the participant with "
-                "the lowest id)",
-                master_id.value);
+            // Nothing to continue with: the model was still arriving. Said as the refusal, which
+            // `pliant join` and the viewer report.
+            refusal = "the master (peer " + std::to_string(master_id.value) +
+                      ") was lost before this peer had the model; join the session again "
+                      "through its new master, the participant with the lowest id";
+            spdlog::warn("session: {}", refusal);
             close_all(net::DisconnectReason::Quit);
             return;
         }

@@ -408,9 +408,11 @@ TEST(SessionFailover, AJoinerWhoseMasterGoesBeforeTheModelLeavesSayingSo)
     h.crash(0);
     ASSERT_TRUE(h.pump_until([&] { return second.left(); }, 20000));
     EXPECT_FALSE(second.ready());
-    EXPECT_NE(captured.text().find("master 0 lost before this peer had the model"),
+    EXPECT_NE(captured.text().find("the master (peer 0) was lost before this peer had the model"),
               std::string::npos)
         << captured.text();
+    EXPECT_NE(second.refusal().find("was lost before this peer had the model"), std::string::npos)
+        << second.refusal();
     EXPECT_EQ(captured.text().find("no successor"), std::string::npos) << captured.text();
     EXPECT_FALSE(first.left());  // the first participant carries on as the master
 }
