@@ -151,7 +151,7 @@ std::optional<MessengerEvent> Messenger::poll(int timeout_ms) noexcept
         if (it == peers_.end())
             continue;  // a straggler from a connection already cut off
         Peer& p = it->second;
-        if (p.bad_datagrams() > settings_.bad_datagram_limit)
+        if (p.cut() || p.bad_datagrams() > settings_.bad_datagram_limit)
             continue;  // being disconnected: ignore the rest
         auto m = p.accept(ev->channel, ev->data);
         if (!m)
@@ -161,6 +161,21 @@ std::optional<MessengerEvent> Messenger::poll(int timeout_ms) noexcept
             transport_.report_bad_datagram(ev->peer);
             spdlog::debug("net: dropped a datagram from peer {} ({} bytes): {}", ev->peer.value,
                           ev->data.size(), describe(m.error()));
+            // Our magic and another version (byte 4): a pliant of another version, which would
+            // never be understood. Cut at once with reason 5, so that it can say so; it waited
+            // for a timeout before, and was told nothing.
+            if (m.error().reason == DropReason::Undecodable &&
+                m.error().error == DecodeError::BadVersion && ev->data.size() > 4)
+            {
+                const auto address = transport_.remote_address(ev->peer);
+                spdlog::warn("net: disconnected {}: it speaks protocol version {}, this build {}",
+                             address ? to_string(*address) : std::string("a peer"),
+                             std::to_integer<int>(ev->data[4]),
+                             static_cast<int>(k_protocol_version));
+                p.set_cut();
+                transport_.disconnect(ev->peer, DisconnectReason::ProtocolMismatch);
+                continue;
+            }
             if (p.bad_datagrams() > settings_.bad_datagram_limit)
             {
                 // A connection that ends on another session's datagram is told so (reason 6):

@@ -242,6 +242,31 @@ TEST(Messenger, APeerOfAnotherSessionIsCutOffAsWrongSession)
               to_string(DecodeError::BadMagic));
 }
 
+// A datagram of our magic and another protocol version comes from a pliant of another
+// version: cut at once with reason 5 (protocol mismatch), which the other side can report as
+// such; before, it was one bad datagram among 16, and a joiner waited for a timeout.
+TEST(Messenger, AnotherProtocolVersionIsCutAtOnceAsAMismatch)
+{
+    Net n;
+    std::vector<std::byte> other = encode_vec(ping());
+    other[4] = static_cast<std::byte>(k_protocol_version + 1);
+    ASSERT_TRUE(n.ta->send(n.a_to_b, Channel::Control, other, Delivery::Reliable));
+    const auto events = n.drain_b();
+    ASSERT_EQ(events.size(), 1u);
+    EXPECT_EQ(events[0].kind, MessengerEvent::Kind::Disconnected);
+    EXPECT_EQ(events[0].reason, DisconnectReason::ProtocolMismatch);
+    std::optional<DisconnectReason> told;
+    for (int i = 0; i < 50 && !told; ++i)
+    {
+        n.net.advance(0.001);
+        while (auto ev = n.a.poll())
+            if (ev->kind == MessengerEvent::Kind::Disconnected)
+                told = ev->reason;
+    }
+    EXPECT_EQ(told, DisconnectReason::ProtocolMismatch);
+    EXPECT_EQ(n.b.dropped(), 1u);
+}
+
 /// A hub and three leaves connected to it over a simulated network, every connection event
 /// polled; `handles`: the hub's handle of each leaf, `leaf_addr`: each leaf's address.
 struct Star

@@ -11,7 +11,8 @@
 /// does no I/O, so it is tested without a network. `Messenger` owns one `Peer` per connection of a
 /// Transport, encodes outgoing messages into one reusable buffer, reports bad datagrams to the
 /// transport's counters and disconnects a peer past the threshold with
-/// DisconnectReason::TooManyBadDatagrams.
+/// DisconnectReason::TooManyBadDatagrams (WrongSession when the last one was another
+/// session's), or at its first datagram of another protocol version with ProtocolMismatch.
 ///
 /// Threading: single-threaded, like the Transport it wraps.
 
@@ -73,6 +74,9 @@ public:
     [[nodiscard]] PeerId id() const noexcept { return id_; }
     [[nodiscard]] std::uint64_t bad_datagrams() const noexcept { return bad_; }
     [[nodiscard]] std::uint64_t good_datagrams() const noexcept { return good_; }
+    /// Being disconnected by the Messenger: the rest of its datagrams are ignored.
+    [[nodiscard]] bool cut() const noexcept { return cut_; }
+    void set_cut() noexcept { cut_ = true; }
     /// Drops by DecodeError (index = value), for statistics.
     [[nodiscard]] const std::array<std::uint32_t, k_decode_error_count + 1>& errors() const noexcept
     {
@@ -87,6 +91,7 @@ private:
     PeerId id_ = k_no_peer;
     std::uint64_t bad_ = 0;
     std::uint64_t good_ = 0;
+    bool cut_ = false;
     std::array<std::uint32_t, k_decode_error_count + 1> errors_{};
 };
 

@@ -46,7 +46,7 @@ enum class DisconnectReason : std::uint8_t
     Shutdown = 2,             ///< the process is ending
     TimedOut = 3,             ///< no traffic within the transport's timeout
     TooManyBadDatagrams = 4,  ///< the peer sent more bad datagrams than the threshold
-    ProtocolMismatch = 5,     ///< wrong magic or version
+    ProtocolMismatch = 5,     ///< another protocol version; a joiner's refusal of the blobs
     WrongSession = 6,         ///< a datagram for another session
     Refused = 7,              ///< the master does not admit the peer
     SessionFull = 8,          ///< no room for another peer
