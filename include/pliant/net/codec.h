@@ -45,7 +45,8 @@ enum class DecodeError : std::uint8_t
     NonFinite = 14,       ///< a NaN or infinite float
     BadName = 15,         ///< a name of bad length or with a non-printable byte
     Duplicate = 16,       ///< a peer listed twice
-    BadCompression = 17,  ///< packed residuals that are not one bounded, exact zstd frame (§5.5)
+    BadCompression = 17,  ///< packed residuals that do not unpack exactly: not one bounded zstd
+                          ///< frame, or Rice codes breaking a rule of §5.6
 };
 inline constexpr std::uint8_t k_decode_error_count = 17;
 
@@ -81,8 +82,10 @@ enum class EncodeError : std::uint8_t
 [[nodiscard]] Expected<std::size_t, EncodeError> encode(const Message& message,
                                                         std::span<std::byte> out) noexcept;
 
-/// Parses one datagram. \return the message, or the first rule it breaks, checked in the order of
-/// docs/protocol.md (header fields, then the body's fields in order, then the body's length).
+/// Parses one datagram. \return the message, or the first rule it breaks: the header's fields,
+/// then what reading the body checks in field order (reserved bytes, enumerations, counts,
+/// depths), then the body's length, then the values' rules (leaf ids, levels, ranges, finite
+/// values, ids in lists); docs/protocol.md §4.
 [[nodiscard]] Expected<Message, DecodeError> decode(std::span<const std::byte> datagram) noexcept;
 
 }  // namespace pliant::net

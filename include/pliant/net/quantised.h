@@ -95,7 +95,8 @@ void dequantise(std::span<const std::int32_t> q, int exponent, std::span<double>
 /// Unpacks bits written by pack_residuals_rice into du and dv (n values each). Hostile bytes:
 /// parameters above k_max_rice_parameter, a value that does not fit 32 bits, an escape where the
 /// short form fits, bits past the end, a byte too many or non-zero padding are all
-/// DecodeError::BadCompression; the work is bounded by 2n values of at most 61 bits.
+/// DecodeError::BadCompression; the work is bounded by 2n values of at most 56 bits (an
+/// escape: 24 + 32).
 [[nodiscard]] std::optional<DecodeError> unpack_residuals_rice(std::span<const std::byte> packed,
                                                                std::span<std::int32_t> du,
                                                                std::span<std::int32_t> dv) noexcept;
