@@ -90,14 +90,7 @@ TEST(ViewerLoad, RunningOutOfMemoryIsAnErrorOfTheLoad)
 #if defined(PLIANT_TEST_ASAN)
     GTEST_SKIP() << "AddressSanitizer's shadow memory needs more address space than any limit";
 #else
-    // threadsafe: the child runs the test from the start (this process has threads); the
-    // style is restored for the tests after this one.
-    struct Restore
-    {
-        std::string style = GTEST_FLAG_GET(death_test_style);
-        ~Restore() { GTEST_FLAG_SET(death_test_style, style); }
-    } const restore;
-    GTEST_FLAG_SET(death_test_style, "threadsafe");
+    const test::ThreadsafeDeathTests threadsafe;
     const auto child = []
     {
         const test::FpTrapsOff off;

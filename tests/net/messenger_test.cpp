@@ -13,6 +13,9 @@
 #include "net/sample_messages.h"
 
 #include <algorithm>
+#include <optional>
+#include <utility>
+#include <vector>
 
 namespace pliant::net
 {
@@ -98,6 +101,30 @@ struct Net
                 }
         }
         EXPECT_TRUE(a_up && b_up);
+    }
+
+    /// The reason a learns when b has cut it (within 50 ms).
+    std::optional<DisconnectReason> told_a()
+    {
+        std::optional<DisconnectReason> told;
+        for (int i = 0; i < 50 && !told; ++i)
+        {
+            net.advance(0.001);
+            while (auto ev = a.poll())
+                if (ev->kind == MessengerEvent::Kind::Disconnected)
+                    told = ev->reason;
+        }
+        return told;
+    }
+
+    /// Why b cut a (its only event within 50 ms), and what a was told.
+    std::pair<std::optional<DisconnectReason>, std::optional<DisconnectReason>> cut_reasons()
+    {
+        const auto events = drain_b();
+        std::optional<DisconnectReason> cut;
+        if (events.size() == 1 && events[0].kind == MessengerEvent::Kind::Disconnected)
+            cut = events[0].reason;
+        return {cut, told_a()};
     }
 
     std::vector<MessengerEvent> drain_b(int ms = 50)
@@ -188,15 +215,7 @@ TEST(Messenger, BadDatagramsAreDroppedCountedAndTheSenderCutOff)
     ASSERT_EQ(events.size(), 1u);
     EXPECT_EQ(events[0].kind, MessengerEvent::Kind::Disconnected);
     EXPECT_EQ(events[0].reason, DisconnectReason::TooManyBadDatagrams);
-    std::optional<DisconnectReason> told;
-    for (int i = 0; i < 50 && !told; ++i)
-    {
-        n.net.advance(0.001);
-        while (auto ev = n.a.poll())
-            if (ev->kind == MessengerEvent::Kind::Disconnected)
-                told = ev->reason;
-    }
-    EXPECT_EQ(told, DisconnectReason::TooManyBadDatagrams);
+    EXPECT_EQ(n.told_a(), DisconnectReason::TooManyBadDatagrams);
     EXPECT_EQ(n.b.dropped(), 6u);
 }
 
@@ -222,19 +241,8 @@ TEST(Messenger, APeerOfAnotherSessionIsCutOffAsWrongSession)
     n.b.set_session(0xC0FFEE01u);
     for (int i = 0; i < 6; ++i)
         ASSERT_TRUE(n.a.send(n.a_to_b, ping(0xBADBADu, PeerId{3})));
-    const auto events = n.drain_b();
-    ASSERT_EQ(events.size(), 1u);
-    EXPECT_EQ(events[0].kind, MessengerEvent::Kind::Disconnected);
-    EXPECT_EQ(events[0].reason, DisconnectReason::WrongSession);
-    std::optional<DisconnectReason> told;
-    for (int i = 0; i < 50 && !told; ++i)
-    {
-        n.net.advance(0.001);
-        while (auto ev = n.a.poll())
-            if (ev->kind == MessengerEvent::Kind::Disconnected)
-                told = ev->reason;
-    }
-    EXPECT_EQ(told, DisconnectReason::WrongSession);
+    EXPECT_EQ(n.cut_reasons(), std::pair(std::optional{DisconnectReason::WrongSession},
+                                         std::optional{DisconnectReason::WrongSession}));
     EXPECT_EQ(describe(Drop{DropReason::WrongSession}), "wrong-session");
     EXPECT_EQ(describe(Drop{DropReason::WrongChannel}), "wrong-channel");
     EXPECT_EQ(describe(Drop{DropReason::WrongSender}), "wrong-sender");
@@ -251,19 +259,8 @@ TEST(Messenger, AnotherProtocolVersionIsCutAtOnceAsAMismatch)
     std::vector<std::byte> other = encode_vec(ping());
     other[4] = static_cast<std::byte>(k_protocol_version + 1);
     ASSERT_TRUE(n.ta->send(n.a_to_b, Channel::Control, other, Delivery::Reliable));
-    const auto events = n.drain_b();
-    ASSERT_EQ(events.size(), 1u);
-    EXPECT_EQ(events[0].kind, MessengerEvent::Kind::Disconnected);
-    EXPECT_EQ(events[0].reason, DisconnectReason::ProtocolMismatch);
-    std::optional<DisconnectReason> told;
-    for (int i = 0; i < 50 && !told; ++i)
-    {
-        n.net.advance(0.001);
-        while (auto ev = n.a.poll())
-            if (ev->kind == MessengerEvent::Kind::Disconnected)
-                told = ev->reason;
-    }
-    EXPECT_EQ(told, DisconnectReason::ProtocolMismatch);
+    EXPECT_EQ(n.cut_reasons(), std::pair(std::optional{DisconnectReason::ProtocolMismatch},
+                                         std::optional{DisconnectReason::ProtocolMismatch}));
     EXPECT_EQ(n.b.dropped(), 1u);
 }
 

@@ -432,12 +432,7 @@ TEST(SelfIntersections, RunningOutOfMemoryAmongThePairsIsABadAlloc)
 #if defined(PLIANT_TEST_ASAN)
     GTEST_SKIP() << "AddressSanitizer's shadow memory needs more address space than any limit";
 #else
-    struct Restore
-    {
-        std::string style = GTEST_FLAG_GET(death_test_style);
-        ~Restore() { GTEST_FLAG_SET(death_test_style, style); }
-    } const restore;
-    GTEST_FLAG_SET(death_test_style, "threadsafe");  // the child runs the test from the start
+    const test::ThreadsafeDeathTests threadsafe;
     const auto child = []
     {
         const mesh::TriMesh m = crossing_stacks(2100);

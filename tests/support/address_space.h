@@ -6,7 +6,10 @@
 // use this skip under it (PLIANT_TEST_ASAN).
 #pragma once
 
+#include <gtest/gtest.h>
+
 #include <cstddef>
+#include <string>
 
 #if defined(__SANITIZE_ADDRESS__)
 #define PLIANT_TEST_ASAN 1
@@ -25,5 +28,19 @@ namespace pliant::test
 
 /// Sets RLIMIT_AS to address_space_bytes() + `margin`; whether it could.
 [[nodiscard]] bool limit_address_space(std::size_t margin);
+
+/// GoogleTest's "threadsafe" death tests for a scope (the child runs the test from the start,
+/// as a process with threads needs); the style before is restored for the tests after.
+class ThreadsafeDeathTests
+{
+public:
+    ThreadsafeDeathTests() { GTEST_FLAG_SET(death_test_style, "threadsafe"); }
+    ~ThreadsafeDeathTests() { GTEST_FLAG_SET(death_test_style, style_); }
+    ThreadsafeDeathTests(const ThreadsafeDeathTests&) = delete;
+    ThreadsafeDeathTests& operator=(const ThreadsafeDeathTests&) = delete;
+
+private:
+    std::string style_ = GTEST_FLAG_GET(death_test_style);
+};
 
 }  // namespace pliant::test
