@@ -14,6 +14,7 @@
 
 #include <cstdio>
 #include <deque>
+#include <optional>
 
 namespace pliant::session::test
 {
@@ -517,6 +518,73 @@ TEST(SessionLoss, ASilentNeighbourHoldsTheClockOnceThenStepsOnUntilTheTakeOver)
             << "peer " << k << " fell behind real time";
 }
 
+/// One run of the lost-Hello set-up: a fast session at `level` over 20 ms links retransmitting
+/// after 2 s; the master and a first participant holding the model, then a second participant
+/// whose links to the first lose half their datagrams, and to the master `master_loss`. Runs
+/// until the second has its connection to the first, then until the first has bound it.
+struct HelloRun
+{
+    bool lost = false;           ///< a greeting to the first needed a retransmission
+    double bound_after = 0.0;    ///< s from the second's connection to the first's binding
+    bool ready_dialled = false;  ///< the second held the model when its connection came up
+    bool ready_bound = false;    ///< ... and when the first bound it
+};
+std::optional<HelloRun> hello_run(int level, std::uint64_t seed, double master_loss)
+{
+    net::SimulatedNetworkSettings ns;
+    ns.seed = seed;
+    ns.link.latency_s = 0.020;
+    ns.retransmit_s = 2.0;
+    Harness h(ns);
+    SessionSettings set;
+    set.coupling = Coupling::Fast;
+    set.name = "master";
+    h.host(level, set);
+    set.name = "first";
+    Session& first = h.join(net::Role::Participant, set);
+    if (!h.pump_until([&] { return first.ready(); }, 200000))
+        return std::nullopt;
+    set.name = "second";
+    Session& second = h.join(net::Role::Participant, set);
+    if (master_loss > 0.0)
+    {
+        net::LinkSettings far = ns.link;
+        far.loss = master_loss;
+        h.net.set_link(h.addresses[0], h.addresses[2], far);
+        h.net.set_link(h.addresses[2], h.addresses[0], far);
+    }
+    net::LinkSettings lossy = ns.link;
+    lossy.loss = 0.5;
+    h.net.set_link(h.addresses[1], h.addresses[2], lossy);
+    h.net.set_link(h.addresses[2], h.addresses[1], lossy);
+    // The second dials the first once the Welcome lists it; its connection is up when the
+    // first accepts (the simulated handshake is reliable, so it may take a retransmission).
+    // Retransmissions are drawn when a packet is sent. The second's greetings to the first
+    // (Hello, Ready, its points) leave in the poll in which its connection comes up, and the
+    // first sends it nothing reliable before it knows it: a retransmission drawn in that poll is
+    // a lost greeting (the other links to the first are clean).
+    std::uint64_t resent = 0;
+    if (!h.pump_until(
+            [&]
+            {
+                if (second.stats().peers_connected == 2)
+                    return true;
+                resent = h.net.totals().retransmitted;
+                return false;
+            },
+            200000))
+        return std::nullopt;
+    HelloRun run;
+    run.lost = h.net.totals().retransmitted > resent;
+    run.ready_dialled = second.ready();
+    const double dialled_at = h.now;
+    if (!h.pump_until([&] { return first.stats().peers_connected == 2; }, 40000))
+        return std::nullopt;
+    run.bound_after = h.now - dialled_at;
+    run.ready_bound = second.ready();
+    return run;
+}
+
 TEST(SessionLoss, ALostHelloCostsAStreamPeriodNotARetransmission)
 {
     // A joiner dials every peer it is told of and greets it with a Hello, the only way that peer
@@ -527,50 +595,13 @@ TEST(SessionLoss, ALostHelloCostsAStreamPeriodNotARetransmission)
     // stream period until the peer answers. Here the link between the two participants loses
     // half its datagrams and retransmits after 2 s; once the second participant has its
     // connection to the first, the first must have it too within 0.25 s.
-    constexpr int level = 4;
     int lost_hellos = 0;  // seeds where a greeting between them needed a retransmission
     for (std::uint64_t seed = 1; seed <= 8; ++seed)
     {
-        net::SimulatedNetworkSettings ns;
-        ns.seed = seed;
-        ns.link.latency_s = 0.020;
-        ns.retransmit_s = 2.0;
-        Harness h(ns);
-        SessionSettings set;
-        set.coupling = Coupling::Fast;
-        set.name = "master";
-        h.host(level, set);
-        set.name = "first";
-        Session& first = h.join(net::Role::Participant, set);
-        ASSERT_TRUE(h.pump_until([&] { return first.ready(); }, 200000)) << "seed " << seed;
-        set.name = "second";
-        Session& second = h.join(net::Role::Participant, set);
-        net::LinkSettings lossy = ns.link;
-        lossy.loss = 0.5;
-        h.net.set_link(h.addresses[1], h.addresses[2], lossy);
-        h.net.set_link(h.addresses[2], h.addresses[1], lossy);
-        // The second dials the first once the Welcome lists it; its connection is up when the
-        // first accepts (the simulated handshake is reliable, so it may take a retransmission).
-        // Retransmissions are drawn when a packet is sent. The second's greetings to the first
-        // (Hello, Ready, its points) leave in the poll in which its connection comes up, and the
-        // first sends it nothing reliable before it knows it: a retransmission drawn in that
-        // poll is a lost greeting (the other links are clean).
-        std::uint64_t resent = 0;
-        ASSERT_TRUE(h.pump_until(
-            [&]
-            {
-                if (second.stats().peers_connected == 2)
-                    return true;
-                resent = h.net.totals().retransmitted;
-                return false;
-            },
-            200000))
-            << "seed " << seed;
-        lost_hellos += h.net.totals().retransmitted > resent ? 1 : 0;
-        const double dialled_at = h.now;
-        ASSERT_TRUE(h.pump_until([&] { return first.stats().peers_connected == 2; }, 20000))
-            << "seed " << seed;
-        EXPECT_LT(h.now - dialled_at, 0.25) << "seed " << seed;
+        const auto run = hello_run(4, seed, 0.0);
+        ASSERT_TRUE(run) << "seed " << seed;
+        lost_hellos += run->lost ? 1 : 0;
+        EXPECT_LT(run->bound_after, 0.25) << "seed " << seed;
     }
     EXPECT_GT(lost_hellos, 0) << "the seeds must include a lost greeting";
 }
@@ -583,50 +614,15 @@ TEST(SessionLoss, ALostHelloCostsAStreamPeriodNotARetransmission)
 // (of seeds 1-7, the others lose none or receive the model first).
 TEST(SessionLoss, AHelloLostWhileTheModelArrivesCostsAStreamPeriod)
 {
-    constexpr int level = 6;
     int lost_hellos = 0;
     for (std::uint64_t seed = 3; seed <= 5; ++seed)
     {
-        net::SimulatedNetworkSettings ns;
-        ns.seed = seed;
-        ns.link.latency_s = 0.020;
-        ns.retransmit_s = 2.0;
-        Harness h(ns);
-        SessionSettings set;
-        set.coupling = Coupling::Fast;
-        set.name = "master";
-        h.host(level, set);
-        set.name = "first";
-        Session& first = h.join(net::Role::Participant, set);
-        ASSERT_TRUE(h.pump_until([&] { return first.ready(); }, 200000)) << "seed " << seed;
-        set.name = "second";
-        Session& second = h.join(net::Role::Participant, set);
-        net::LinkSettings far = ns.link;
-        far.loss = 0.6;
-        h.net.set_link(h.addresses[0], h.addresses[2], far);
-        h.net.set_link(h.addresses[2], h.addresses[0], far);
-        net::LinkSettings lossy = ns.link;
-        lossy.loss = 0.5;
-        h.net.set_link(h.addresses[1], h.addresses[2], lossy);
-        h.net.set_link(h.addresses[2], h.addresses[1], lossy);
-        std::uint64_t resent = 0;
-        ASSERT_TRUE(h.pump_until(
-            [&]
-            {
-                if (second.stats().peers_connected == 2)
-                    return true;
-                resent = h.net.totals().retransmitted;
-                return false;
-            },
-            200000))
-            << "seed " << seed;
-        lost_hellos += h.net.totals().retransmitted > resent ? 1 : 0;
-        const double dialled_at = h.now;
-        EXPECT_FALSE(second.ready()) << "seed " << seed << ": the model must still be on its way";
-        ASSERT_TRUE(h.pump_until([&] { return first.stats().peers_connected == 2; }, 40000))
-            << "seed " << seed;
-        EXPECT_LT(h.now - dialled_at, 0.25) << "seed " << seed;
-        EXPECT_FALSE(second.ready()) << "seed " << seed;
+        const auto run = hello_run(6, seed, 0.6);
+        ASSERT_TRUE(run) << "seed " << seed;
+        lost_hellos += run->lost ? 1 : 0;
+        EXPECT_FALSE(run->ready_dialled) << "seed " << seed << ": the model must be on its way";
+        EXPECT_LT(run->bound_after, 0.25) << "seed " << seed;
+        EXPECT_FALSE(run->ready_bound) << "seed " << seed;
     }
     EXPECT_GT(lost_hellos, 0) << "the seeds must include a lost greeting";
 }
