@@ -179,7 +179,7 @@ std::optional<MessengerEvent> Messenger::poll(int timeout_ms) noexcept
             if (p.bad_datagrams() > settings_.bad_datagram_limit)
             {
                 // A connection that ends on another session's datagram is told so (reason 6):
-                // most likely a peer of an earlier session at a reused address.
+                // it belongs to another session (programs that set distinct session ids).
                 const DisconnectReason why = m.error().reason == DropReason::WrongSession
                                                  ? DisconnectReason::WrongSession
                                                  : DisconnectReason::TooManyBadDatagrams;

@@ -30,8 +30,10 @@ namespace
 
 constexpr std::uint32_t k_model_magic = 0x4D534C50;  // "PLSM"
 /// Version 2 adds the point clearance byte after the coupling; version 3 the force limit after
-/// the step settings. Older blobs (recordings made before them) still decode: version 1 with
-/// the coupling's rule, versions 1 and 2 with no force limit (as they were made).
+/// the step settings; version 4 the session's barrier limit after it. Older blobs (recordings
+/// made before them) still decode: version 1 with the coupling's rule, versions 1 and 2 with
+/// no force limit (as they were made), versions 1 to 3 with no barrier limit (a joiner keeps
+/// its own).
 constexpr std::uint8_t k_model_version = 4;
 constexpr double k_leave_timeout_s = 5.0;
 /// The most wall time one advance() call spends stepping in exact coupling before it returns to
