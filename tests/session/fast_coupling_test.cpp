@@ -137,11 +137,10 @@ Outcome run_drags(int level, int participants, double seconds, bool quantised = 
     return out;
 }
 
-// Before the interface damping (src/session/session.cpp, fast_advance): max |u| reached ~1 m
-// after 4 s and ~1e3 m after 5.5 s in this 2-peer session, 7e8 m after 8 s with 3 peers; the
-// single process stays at ~0.17 m. The error bound is docs/session.md §4.2's for drags that
-// cross partition borders (measured: 2 peers 0.31 worst / 0.04 at the end, 3 peers 0.42 /
-// 0.36).
+// Before the interface damping (session_coupling.cpp, fast_advance): max |u| reached ~1 m after 4 s
+// and ~1e3 m after 5.5 s in this 2-peer session, 7e8 m after 8 s with 3 peers; the single process
+// stays at ~0.17 m. The error bound is docs/session.md §4.2's for drags that cross partition
+// borders (measured: 2 peers 0.31 worst / 0.04 at the end, 3 peers 0.42 / 0.36).
 TEST(SessionFastDrag, TwoPeersStayBoundedUnderContinuousDrags)
 {
     const Outcome o = run_drags(6, 2, 8.0);
