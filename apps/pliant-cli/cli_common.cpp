@@ -27,6 +27,7 @@
 #include <string>
 #include <thread>
 #include <variant>
+#include <vector>
 
 namespace pliant::cli
 {
@@ -125,6 +126,44 @@ core::Result<void> check_writable(const std::filesystem::path& path, std::string
 std::filesystem::path gltf_buffer_of(const std::filesystem::path& gltf)
 {
     return std::filesystem::path(gltf).replace_extension(".bin");
+}
+
+std::optional<std::string> file_clash(std::span<const NamedFile> inputs,
+                                      std::span<const NamedFile> outputs)
+{
+    // Every file the outputs write, a .gltf's buffer as a file of its own.
+    struct Written
+    {
+        std::filesystem::path path;
+        std::string what;
+    };
+    std::vector<Written> written;
+    for (const NamedFile& out : outputs)
+    {
+        if (out.path.empty())
+            continue;
+        written.push_back({out.path, std::string(out.what) + " " + out.path.string()});
+        if (lower_extension(out.path) == ".gltf")
+            written.push_back({gltf_buffer_of(out.path), gltf_buffer_of(out.path).string() +
+                                                             " (the buffer of " +
+                                                             std::string(out.what) + "'s .gltf)"});
+    }
+    // An input that does not exist is replaced by nothing: reading it fails with its own
+    // message ("no such file"), which is the user's real problem.
+    std::error_code ec;
+    for (const Written& w : written)
+        for (const NamedFile& in : inputs)
+            if (!in.path.empty() && std::filesystem::exists(in.path, ec) &&
+                same_file(w.path, in.path))
+                return w.what + " would replace the input " + std::string(in.what) + " " +
+                       in.path.string() + "; give another output file";
+    for (std::size_t a = 0; a < written.size(); ++a)
+        for (std::size_t b = a + 1; b < written.size(); ++b)
+            if (same_file(written[a].path, written[b].path))
+                return written[a].what + " and " + written[b].what +
+                       " are one file: one would overwrite the other; give each output its "
+                       "own file";
+    return std::nullopt;
 }
 
 std::filesystem::path bundled_mesh()

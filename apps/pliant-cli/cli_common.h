@@ -16,7 +16,10 @@
 #include <filesystem>
 #include <memory>
 #include <new>
+#include <optional>
+#include <span>
 #include <string>
+#include <string_view>
 
 namespace pliant::net
 {
@@ -143,6 +146,22 @@ core::Result<void> check_writable(const std::filesystem::path& path, std::string
 
 /// Where `mesh::export_mesh` writes a `.gltf`'s buffer: `<stem>.bin` beside it.
 [[nodiscard]] std::filesystem::path gltf_buffer_of(const std::filesystem::path& gltf);
+
+/// A file a command reads or writes, and the argument or option that names it ("GRID", "-o").
+struct NamedFile
+{
+    std::filesystem::path path;
+    std::string_view what;
+};
+
+/// The usage rule of every command that reads some files and writes others: no output may
+/// replace an input, and no two outputs may be one file. Each output, and a `.gltf`'s buffer
+/// file (gltf_buffer_of), is compared with every input and every other output (same_file);
+/// empty paths and inputs that do not exist are skipped. \return the first clash, worded for the
+/// user ("-o rest.pgrid would replace the input GRID rest.pgrid; give another output file"), or
+/// nothing.
+[[nodiscard]] std::optional<std::string> file_clash(std::span<const NamedFile> inputs,
+                                                    std::span<const NamedFile> outputs);
 
 /// The bundled default mesh (data/spot.obj), found next to the executable's install or in the
 /// source tree.

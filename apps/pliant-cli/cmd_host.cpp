@@ -83,15 +83,11 @@ int run_host(const HostOptions& opt, const GlobalOptions& global)
             !ok)
             return report(ok.error());
     }
-    if (!opt.stats.empty())
-        if (auto ok = check_writable(opt.stats, "host: --stats"); !ok)
-            return report(ok.error());
-    if (!opt.record.empty())
-        if (auto ok = check_writable(opt.record, "host: --record"); !ok)
-            return report(ok.error());
-    if (!opt.save.empty())
-        if (auto ok = check_writable(opt.save, "host: --save"); !ok)
-            return report(ok.error());
+    // --save may name the --resume file: it was read whole at the start, and saving over it
+    // is how a session carries on from where it stopped.
+    const NamedFile inputs[] = {{opt.grid, "GRID"}, {opt.script, "--script"}};
+    if (auto status = check_peer_outputs("host", inputs, opt.stats, opt.record, opt.save))
+        return *status;
     if (!opt.resume.empty() && !opt.record.empty())
         return report({core::ErrorCode::InvalidArgument,
                        "host: --record needs a session that starts at rest (`pliant replay` "

@@ -64,12 +64,9 @@ int run_join(const JoinOptions& opt, const GlobalOptions& global)
                 !ok)
                 return report(ok.error());
     }
-    if (!opt.stats.empty())
-        if (auto ok = check_writable(opt.stats, "join: --stats"); !ok)
-            return report(ok.error());
-    if (!opt.save.empty())
-        if (auto ok = check_writable(opt.save, "join: --save"); !ok)
-            return report(ok.error());
+    const NamedFile inputs[] = {{opt.script, "--script"}};
+    if (auto status = check_peer_outputs("join", inputs, opt.stats, {}, opt.save))
+        return *status;
     auto secured = secure_or_plain(net::make_enet_transport(), opt.passphrase, opt.key_file);
     if (!secured)
         return report(secured.error());

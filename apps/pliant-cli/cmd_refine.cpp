@@ -56,12 +56,11 @@ int run_refine(const RefineOptions& opt, const GlobalOptions& global)
     // Before the work, not after it; nothing is created (the output is written whole at the end).
     if (auto ok = check_writable(opt.out, "refine: -o"); !ok)
         return report(ok.error());
-    if (same_file(opt.grid, opt.out))
+    const NamedFile inputs[] = {{opt.grid, "GRID"}};
+    const NamedFile outputs[] = {{opt.out, "-o"}};
+    if (const auto clash = file_clash(inputs, outputs))
     {
-        spdlog::error(
-            "refine: -o {} is the input GRID: writing it would replace the input; "
-            "give another output file",
-            opt.out.string());
+        spdlog::error("refine: {}", *clash);
         return k_exit_usage;
     }
     // Ctrl-C: stop between levels and channels, or while an OBJ/PLY is formatted; nothing

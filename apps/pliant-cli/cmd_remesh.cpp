@@ -60,30 +60,17 @@ int run_remesh(const RemeshOptions& opt, const GlobalOptions& global)
     // (nothing is created; the outputs are written whole at the end, core::write_files)
     if (auto ok = check_writable(opt.output, "remesh: -o"); !ok)
         return report(ok.error());
-    const std::filesystem::path side =
-        ext == ".gltf" ? gltf_buffer_of(opt.output) : std::filesystem::path();
-    for (const std::filesystem::path& out : {opt.output, side, opt.report})
-        if (!out.empty() && same_file(input, out))
-        {
-            spdlog::error(
-                "remesh: {} would replace the input mesh {}; give another output "
-                "file",
-                out.string(), input.string());
-            return k_exit_usage;
-        }
+    const NamedFile inputs[] = {{input, "mesh"}};
+    const NamedFile outputs[] = {{opt.output, "-o"}, {opt.report, "--report"}};
+    if (const auto clash = file_clash(inputs, outputs))
+    {
+        spdlog::error("remesh: {}", *clash);
+        return k_exit_usage;
+    }
     if (!opt.report.empty())
     {
         if (auto ok = check_writable(opt.report, "remesh: --report"); !ok)
             return report(ok.error());
-        if (same_file(opt.report, opt.output) || (!side.empty() && same_file(opt.report, side)))
-        {
-            spdlog::error(
-                "remesh: --report {} names the same file as {}; give the report "
-                "another name",
-                opt.report.string(),
-                same_file(opt.report, opt.output) ? "-o" : "the .gltf's buffer file");
-            return k_exit_usage;
-        }
     }
 
     auto m = mesh::import_mesh(input);

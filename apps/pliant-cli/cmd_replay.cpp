@@ -47,6 +47,13 @@ int run_replay(const ReplayOptions& opt, const GlobalOptions& global)
     if (!opt.out.empty())
         if (auto ok = check_writable(opt.out, "replay: -o"); !ok)
             return report(ok.error());
+    const NamedFile inputs[] = {{opt.recording, "RECORDING"}};
+    const NamedFile outputs[] = {{opt.out, "-o"}};
+    if (const auto clash = file_clash(inputs, outputs))
+    {
+        spdlog::error("replay: {}", *clash);
+        return k_exit_usage;
+    }
     auto recording = session::load_recording(opt.recording);
     if (!recording)
         return report(recording.error());

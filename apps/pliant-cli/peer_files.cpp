@@ -71,6 +71,29 @@ core::Result<void> save_peer_state(const session::Session& peer, const std::file
     return core::save_grid(path, file);
 }
 
+std::optional<int> check_peer_outputs(const std::string& command, std::span<const NamedFile> inputs,
+                                      const std::string& stats, const std::string& record,
+                                      const std::string& save)
+{
+    if (!save.empty() && lower_extension(save) != ".pgrid")
+        return report({core::ErrorCode::UnsupportedFormat,
+                       command + ": --save " + save +
+                           " must end in .pgrid: it holds the state (u, v and the owner of every "
+                           "node), which no mesh format keeps; `pliant refine FILE.pgrid --levels "
+                           "1 -o mesh.obj` or `pliant render` make a mesh or a picture of it"});
+    const NamedFile outputs[] = {{stats, "--stats"}, {record, "--record"}, {save, "--save"}};
+    for (const NamedFile& out : outputs)
+        if (!out.path.empty())
+            if (auto ok = check_writable(out.path, command + ": " + std::string(out.what)); !ok)
+                return report(ok.error());
+    if (const auto clash = file_clash(inputs, outputs))
+    {
+        spdlog::error("{}: {}", command, *clash);
+        return k_exit_usage;
+    }
+    return std::nullopt;
+}
+
 std::optional<OwnerProblem> owner_channel_problem(const core::TetraGrid& grid,
                                                   const core::Field<double>& owner)
 {

@@ -13,10 +13,13 @@
 #include <pliant/session/session.h>
 #include <pliant/sim/membrane.h>
 
+#include "cli_common.h"
+
 #include <cstddef>
 #include <filesystem>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 
 namespace pliant::cli
@@ -28,6 +31,17 @@ namespace pliant::cli
 /// under its newest partition. \return InvalidArgument before the peer has the model; save_grid's
 /// errors.
 core::Result<void> save_peer_state(const session::Session& peer, const std::filesystem::path& path);
+
+/// The output options of `host` and `join` (`command`), checked before the session starts:
+/// `--save` must end in .pgrid (it holds the state: u, v and owners, which no mesh format
+/// keeps); --stats, --record and --save must be writable (check_writable); and none may replace
+/// one of `inputs` (GRID, --script) or another output (file_clash). Logs the refusal. \return
+/// the exit status to end with (k_exit_bad_input, or k_exit_usage for a clash), or nothing.
+[[nodiscard]] std::optional<int> check_peer_outputs(const std::string& command,
+                                                    std::span<const NamedFile> inputs,
+                                                    const std::string& stats,
+                                                    const std::string& record,
+                                                    const std::string& save);
 
 /// The exit status of a peer whose run is over: 0; k_exit_failure with an error naming
 /// `command` and the tick when the peer's state diverged (Session::diverged; what it holds and

@@ -32,7 +32,7 @@ if(TARGET pliant)
                       refine ${cli_dir}/spot3.pgrid --levels 8 -o ${cli_dir}/x.obj)
     # -o naming the input is refused before anything is read (it replaced the input).
     pliant_cli_expect(cli_refine_output_is_the_input 2 STDERR
-                      "refine: -o .*spot3.pgrid is the input GRID"
+                      "refine: -o .*spot3.pgrid would replace the input GRID"
                       refine ${cli_dir}/spot3.pgrid --levels 1 -o ${cli_dir}/../cli-refine/spot3.pgrid)
     pliant_cli_expect(cli_remesh_output_is_the_input 2 STDERR
                       "remesh: .*in.obj would replace the input mesh"

@@ -142,13 +142,61 @@ if(TARGET pliant)
     set_tests_properties(cli_refine_gltf_buffer_checked_first PROPERTIES
                          FIXTURES_REQUIRED cli_outputs)
     pliant_cli_expect(cli_remesh_report_is_the_output 2 STDERR
-                      "--report .*same.obj names the same file as -o"
+                      "-o .*same.obj and --report .*same.obj are one file"
                       remesh ${PROJECT_SOURCE_DIR}/data/spot.obj --level 3
                       -o ${out_dir}/same.obj --report ${out_dir}/same.obj)
     pliant_cli_expect(cli_remesh_report_is_the_buffer 2 STDERR
-                      "--report .*same.bin names the same file as the .gltf's buffer file"
+                      "same.bin .the buffer of -o's .gltf. and --report .*same.bin are one file"
                       remesh ${PROJECT_SOURCE_DIR}/data/spot.obj --level 3
                       -o ${out_dir}/same.gltf --report ${out_dir}/same.bin)
+    # No output replaces an input, a .gltf's buffer (<stem>.bin) included, nor another output
+    # (file_clash): usage errors (exit 2) before any work, the input left as it was. Inputs are
+    # read by content, not by name, so a grid or recording may be called X.bin.
+    # pliant_refuses_clash(NAME REGEX KEEP ARGS...): exit 2, stderr matching REGEX, KEEP unchanged.
+    function(pliant_refuses_clash name regex keep)
+        list(JOIN ARGN ";" args)
+        add_test(NAME ${name}
+                 COMMAND ${CMAKE_COMMAND} "-DCOMMAND=$<TARGET_FILE:pliant>;${args}" -DEXIT=2
+                         "-DSTDERR_REGEX=${regex}" "-DKEEP=${keep}"
+                         -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+        set_tests_properties(${name} PROPERTIES TIMEOUT 120 FIXTURES_REQUIRED cli_outputs
+                             ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0")
+    endfunction()
+    pliant_refuses_clash(cli_refine_gltf_buffer_is_the_input
+                         "refine: .*clash/in.bin .the buffer of -o's .gltf. would replace the input GRID"
+                         ${out_dir}/clash/in.bin
+                         refine ${out_dir}/clash/in.bin --levels 1 -o ${out_dir}/clash/in.gltf)
+    pliant_refuses_clash(cli_replay_output_is_the_recording
+                         "replay: -o .*clash/rec.ply would replace the input RECORDING"
+                         ${out_dir}/clash/rec.ply
+                         replay ${out_dir}/clash/rec.ply -o ${out_dir}/clash/rec.ply)
+    pliant_refuses_clash(cli_replay_gltf_buffer_is_the_recording
+                         "replay: .*clash/r.bin .the buffer of -o's .gltf. would replace the input RECORDING"
+                         ${out_dir}/clash/r.bin
+                         replay ${out_dir}/clash/r.bin -o ${out_dir}/clash/r.gltf)
+    pliant_refuses_clash(cli_host_save_is_the_grid
+                         "host: --save .*spot3.pgrid would replace the input GRID" ""
+                         host ${out_dir}/spot3.pgrid --port 47999 --duration 1
+                         --save ${out_dir}/spot3.pgrid)
+    pliant_refuses_clash(cli_host_outputs_are_one_file
+                         "host: --stats .*one.csv and --record .*one.csv are one file"
+                         ${out_dir}/clash/one.csv
+                         host ${out_dir}/spot3.pgrid --port 47999 --duration 1
+                         --stats ${out_dir}/clash/one.csv --record ${out_dir}/clash/one.csv)
+    pliant_refuses_clash(cli_join_outputs_are_one_file
+                         "join: --stats .*both.pgrid and --save .*both.pgrid are one file" ""
+                         join 127.0.0.1:9 --duration 1 --stats ${out_dir}/both.pgrid
+                         --save ${out_dir}/both.pgrid)
+    # --save holds the state (u, v, owners): another extension than .pgrid is bad input.
+    pliant_cli_expect(cli_host_save_must_be_a_grid 1 STDERR
+                      "host: --save .*state.obj must end in .pgrid"
+                      host ${out_dir}/spot3.pgrid --port 47999 --duration 1
+                      --save ${out_dir}/state.obj)
+    set_tests_properties(cli_host_save_must_be_a_grid PROPERTIES FIXTURES_REQUIRED cli_outputs)
+    # An input that does not exist is "no such file", not an output that would replace it.
+    pliant_cli_expect(cli_remesh_missing_input_named_as_output 1 STDERR
+                      "missing.obj: cannot open: no such file"
+                      remesh ${out_dir}/missing.obj --level 3 -o ${out_dir}/missing.obj)
 
     # render: usage errors exit 2 (an output that is not .png: 1, as remesh's); a folder is not "no such file"; --level-up past level 10
     # says so; extensions in any case.
