@@ -11,8 +11,8 @@
 // masks (offsets from the constexpr masks, so the compiler sees which taps coincide; GCC 12
 // still folds some repeats into the additions: 19 vector loads per 16 positions, against 25
 // for separate per-row loops). It takes __restrict pointers, so GCC vectorises it even when
-// called from an OpenMP-outlined region (the outlining drops __restrict on captured
-// variables; see TESTING-NOTES.md).
+// called from an OpenMP-outlined region (GCC's outlining drops __restrict on captured
+// variables, and a loop on them is then not vectorised; -fopt-info-vec shows which loops are).
 //
 // Output planes larger than the last-level cache can hold beside their input (level 10) are
 // written with streaming stores: without them every output line was first read from memory

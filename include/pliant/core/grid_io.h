@@ -48,8 +48,9 @@ struct GridFile
 };
 
 /// The bytes of `file` as a `.pgrid` file; `source` names it in messages. \return
-/// InvalidArgument for a bad or repeated name, a channel that breaks the rules above or a field
-/// of another level; BadGrid for a level outside 1..10. Twins are written with their canonical
+/// InvalidArgument for a bad or repeated name, a channel that breaks the rules above, a field
+/// of another level, or a level outside 1..10 (TetraGrid::create's error, whose message does
+/// not name `source`). Twins are written with their canonical
 /// node's bits (a twin may hold -0 where its node holds +0; the file holds one of them).
 Result<std::vector<std::byte>> encode_grid(const GridFile& file, const std::string& source);
 

@@ -47,8 +47,9 @@ struct ImportReport
 ///
 /// \return the mesh, or an error whose message names the file:
 ///   - IoError: the file is missing or unreadable;
-///   - EmptyInput: an empty file, or a file with no faces;
-///   - UnsupportedFormat: an extension not listed above;
+///   - EmptyInput: an empty file (0 bytes, whatever the extension, since the file is read
+///     first; only white space in an .obj, .off or .gltf), or a file with no faces;
+///   - UnsupportedFormat: a non-empty file with an extension not listed above;
 ///   - ParseError: malformed or truncated content (e.g. a binary STL whose size is not
 ///     84 + 50·n bytes, a binary PLY shorter than its header's counts);
 ///   - NonFiniteCoordinate: a vertex position with NaN or infinity (the message says which).
@@ -77,9 +78,10 @@ struct ImportReport
 /// result is ErrorCode::Cancelled (glTF is looked at once, before Assimp's exporter runs).
 /// \return IoError when a file cannot be written or Assimp's exporter fails (the message names
 ///   the file and carries Assimp's); UnsupportedFormat for another extension (the message lists
-///   the four); for glTF also InvalidArgument (a name check_export_name refuses), EmptyInput (no
-///   faces), BadIndex (a face index >= vertex count) and NonFiniteCoordinate (a coordinate that is
-///   not a finite float).
+///   the four); NonFiniteCoordinate for a vertex with NaN or infinity, used or not (nothing is
+///   written; for glTF also a coordinate beyond the float range); for glTF also InvalidArgument
+///   (a name check_export_name refuses), EmptyInput (no faces) and BadIndex (a face index >=
+///   vertex count).
 [[nodiscard]] core::Result<void> export_mesh(const std::filesystem::path& path, const TriMesh& mesh,
                                              core::ProgressSink* progress = nullptr);
 

@@ -90,19 +90,23 @@ struct QualityReport
     std::string domain_map;           ///< "equal-area" or "gnomonic"
     double rms_stretch = 0.0;
     double stretch_efficiency = 0.0;
-    /// Pairs of input faces sharing no vertex that intersect (intersecting_pairs); 0 when not
-    /// checked (RemeshSettings::check_input).
+    /// Pairs of input faces sharing no edge that meet anywhere but at a shared vertex
+    /// (intersecting_pairs; pairs sharing one vertex count too); 0 when not checked
+    /// (RemeshSettings::check_input).
     std::size_t input_intersections = 0;
     bool input_checked = false;
     /// Output triangles facing against the input surface at their samples (is_folded) and
-    /// intersecting pairs of output triangles sharing no vertex: as sampled, and in the result
-    /// (after untangling).
+    /// intersecting pairs of output triangles by the same rule as `input_intersections`: as
+    /// sampled, and in the result (after untangling).
     UntangleStats untangle;
     bool measured = false;  ///< whether `distance` was computed
     SurfaceDistance distance;
     AreaSpread areas;
-    std::size_t brute_force_locations = 0;  ///< CPU sampler only (0 for another sampler)
-    std::string sampler = "cpu";            ///< "cpu", or RemeshSettings::sampler_name
+    /// Nodes whose walk fell back to the exhaustive scan: the CPU sampler only (0 whenever
+    /// RemeshSettings::sampler is set, even one that walks on the CPU, as `pliant remesh --gpu`
+    /// does on the equal-area map).
+    std::size_t brute_force_locations = 0;
+    std::string sampler = "cpu";  ///< "cpu", or RemeshSettings::sampler_name
     std::vector<PhaseTime> phases;
     double total_seconds = 0.0;
 };

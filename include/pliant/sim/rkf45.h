@@ -98,7 +98,10 @@ struct Force
 /// the bound keeps the growth under 1e-7 per step (omega_max h = 0.22). Damping moves every mode
 /// left by beta h / 2, so the bound depends on beta h, i.e. on beta / omega_max: omega_max h
 /// rises slowly with it (0.57 at beta / omega_max = 1e-4, 0.94 at 1e-3, 1.28 just below
-/// 0.00342) and is the ceiling 3.5 from beta >= 0.00342 omega_max (beta h >= 0.012). The same
+/// 0.00342) and is the ceiling 3.5 for beta from 0.00342 omega_max (beta h = 0.012) up to
+/// 0.084 omega_max. More damping shortens the step a little (the stable region is only 0.14
+/// wide at Im z = 3.5: 3.46 at 0.09, 3.04 at 0.5), and from beta ~ omega_max the over-damped
+/// modes near -beta bound it at beta h < 3.68, the end of the stable real interval. The same
 /// beta thus gives another omega_max h on another grid (docs/physics.md §5 has the measured
 /// steps).
 [[nodiscard]] double stable_fixed_step(const MembraneModel& model) noexcept;
