@@ -65,6 +65,7 @@
 #include <new>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <thread>
 #include <vector>
 
@@ -430,15 +431,33 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
         return k_exit_usage;
     }
     // The run starts: every output of an earlier run goes (a failed start above leaves them),
-    // so that the folder never mixes two runs, even when this one fails part-way.
+    // so that the folder never mixes two runs, even when this one fails part-way. Only the
+    // demo's own names: frame_NNNN.png (four digits or more), not every frame_* (a simulate
+    // run's frame_NNNNN.pgrid in the same folder is the user's).
+    const auto is_demo_frame = [](const std::string& name)
+    {
+        constexpr std::string_view prefix = "frame_", suffix = ".png";
+        if (name.size() < prefix.size() + 4 + suffix.size() || !name.starts_with(prefix) ||
+            !name.ends_with(suffix))
+            return false;
+        return std::all_of(name.begin() + prefix.size(), name.end() - suffix.size(),
+                           [](char c) { return c >= '0' && c <= '9'; });
+    };
+    std::size_t removed = 0;
     for (const auto& entry : fs::directory_iterator(opt.out, ec))
     {
         const std::string name = entry.path().filename().string();
-        if (name.rfind("frame_", 0) == 0 || name == "demo.gif" || name == "demo.mp4" ||
-            name == "summary.md" || name == "session.prec" || name == "final.pgrid" ||
-            name == "timeline.csv" || name == "grid.pgrid" || name == "remesh-report.json")
-            fs::remove(entry.path(), ec);
+        if (entry.is_regular_file(ec) &&
+            (is_demo_frame(name) || name == "demo.gif" || name == "demo.mp4" ||
+             name == "summary.md" || name == "session.prec" || name == "final.pgrid" ||
+             name == "timeline.csv" || name == "grid.pgrid" || name == "remesh-report.json"))
+            removed += fs::remove(entry.path(), ec) ? 1 : 0;
     }
+    if (removed > 0)
+        spdlog::info(
+            "demo: removed {} file(s) of an earlier run from {} (frame_NNNN.png, "
+            "demo.gif, summary.md, ...)",
+            removed, opt.out.string());
     if (auto saved = core::save_grid(opt.out / "grid.pgrid",
                                      core::make_geometry_file(grid, remeshed->positions));
         !saved)
@@ -992,7 +1011,8 @@ void add_demo_command(CLI::App& app, const GlobalOptions& global)
         "Output (in --out, default demo-out/): frame_NNNN.png, demo.gif (with ImageMagick or\n"
         "ffmpeg), summary.md, session.prec (`pliant replay`), grid.pgrid, final.pgrid (the\n"
         "final state with the owning peer per node: `pliant render final.pgrid --color owner`),\n"
-        "timeline.csv, remesh-report.json.\n\n"
+        "timeline.csv, remesh-report.json; these files of an earlier run there are removed\n"
+        "first (other files stay).\n\n"
         "With a display, --view opens the viewer (`pliant view`) on the running session instead\n"
         "of rendering frames: the peers run in real time on a second thread, the two users'\n"
         "grabs repeat every --duration seconds, and closing the window ends the session (the\n"
