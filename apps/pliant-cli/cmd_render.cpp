@@ -311,10 +311,11 @@ core::Result<void> save(const Target& target, const fs::path& path)
     return render::write_png(path, target.framebuffer.read_rgba8());
 }
 
-/// The first pass over a sequence: every frame read and checked before any PNG is written (a
-/// bad frame stops the run with nothing written, not with part of an earlier sequence
-/// replaced), and the largest |u| over the "u" channels (0 when none has one), so that one
-/// colour range serves every frame.
+/// The first pass over a sequence: every frame read and checked as the drawing pass will
+/// (load_grid_scene: its owner channel with `--color owner`, check_drawable) before any PNG is
+/// written, so a bad frame stops the run with nothing written, not with part of an earlier
+/// sequence removed; and the largest |u| over the "u" channels (0 when none has one), so that
+/// one colour range serves every frame.
 core::Result<double> check_frames(const std::vector<fs::path>& files, const RenderOptions& opt,
                                   const core::GridFile* rest)
 {
@@ -342,8 +343,18 @@ core::Result<double> check_frames(const std::vector<fs::path>& files, const Rend
             for (int y = 0; y < u->ny(); ++y)
                 for (int x = 0; x < u->nx(); ++x)
                     largest = std::max(largest, std::abs(u->at(x, y)));
+        if (auto scene = load_grid_scene(path, opt, rest); !scene)
+            return scene.error();
     }
     return largest;
+}
+
+/// Frame i of the sequence written as `dir/stem_NNNN.png` (four digits, more from 10,000).
+fs::path frame_path(const fs::path& dir, const std::string& stem, std::size_t i)
+{
+    std::array<char, 32> number{};
+    std::snprintf(number.data(), number.size(), "_%04zu.png", i);
+    return dir / (stem + number.data());
 }
 
 /// "full colour at |u| = ... m (...)" for the summary line.
@@ -370,6 +381,9 @@ int run_frames(const RenderOptions& opt, render::DrawSettings settings, Target& 
     if (files.empty())
         return report({ErrorCode::EmptyInput, "render: no .pgrid files in " + opt.frames.string()});
 
+    const fs::path dir = opt.out.parent_path();
+    const std::string stem = opt.out.stem().string();
+
     std::optional<core::GridFile> rest;
     if (!opt.input.empty())
     {
@@ -386,19 +400,30 @@ int run_frames(const RenderOptions& opt, render::DrawSettings settings, Target& 
     if (!checked)
         return report(checked.error());
     const double largest = *checked;
+    // The sequence's folder is made if missing (a sequence usually gets a folder of its own),
+    // then every frame's file is checked writable (no folder or device in the way), before an
+    // earlier sequence goes and before any drawing.
+    if (!dir.empty())
+    {
+        fs::create_directories(dir, ec);
+        if (ec)
+            return report({ErrorCode::IoError, "render: -o: cannot make the folder " +
+                                                   dir.string() + ": " + ec.message()});
+    }
+    for (std::size_t i = 0; i < files.size(); ++i)
+        if (auto ok = check_writable(frame_path(dir, stem, i), "render: -o"); !ok)
+            return report(ok.error());
     auto renderer = render::GridRenderer::create();
     if (!renderer)
         return report(renderer.error());
 
-    const fs::path dir = opt.out.parent_path();
-    const std::string stem = opt.out.stem().string();
     // An earlier sequence's frames under the same name go first (regular files only), so that a
     // shorter run leaves no frames of a longer one after its own.
     std::size_t removed = 0;
     for (const auto& entry : fs::directory_iterator(dir.empty() ? fs::path(".") : dir, ec))
     {
         const std::string name = entry.path().filename().string();
-        const bool frame = name.size() == stem.size() + 9 && name.starts_with(stem + "_") &&
+        const bool frame = name.size() >= stem.size() + 9 && name.starts_with(stem + "_") &&
                            name.ends_with(".png") &&
                            std::all_of(name.begin() + static_cast<std::ptrdiff_t>(stem.size()) + 1,
                                        name.end() - 4, [](char c) { return c >= '0' && c <= '9'; });
@@ -416,12 +441,10 @@ int run_frames(const RenderOptions& opt, render::DrawSettings settings, Target& 
     {
         if (*interrupted != 0)
         {
-            std::array<char, 32> last{};
-            std::snprintf(last.data(), last.size(), "_%04zu.png", i - 1);
             spdlog::error("render: interrupted after {} of {} frames{}", i, files.size(),
                           i == 0 ? std::string()
-                                 : " (" + (dir / (stem + "_0000.png")).string() + " to " +
-                                       (dir / (stem + last.data())).string() + ")");
+                                 : " (" + frame_path(dir, stem, 0).string() + " to " +
+                                       frame_path(dir, stem, i - 1).string() + ")");
             return k_exit_interrupted;
         }
         auto scene = load_grid_scene(files[i], opt, rest ? &*rest : nullptr);
@@ -458,10 +481,7 @@ int run_frames(const RenderOptions& opt, render::DrawSettings settings, Target& 
         }
         target.framebuffer.bind();
         renderer->draw(settings, target.width, target.height);
-        std::array<char, 32> number{};
-        std::snprintf(number.data(), number.size(), "_%04zu.png", i);
-        const fs::path out = dir / (stem + number.data());
-        if (auto saved = save(target, out); !saved)
+        if (auto saved = save(target, frame_path(dir, stem, i)); !saved)
             return report(saved.error());
         progress.update("render", static_cast<double>(i + 1) / static_cast<double>(files.size()));
     }

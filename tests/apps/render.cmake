@@ -93,6 +93,14 @@ if(TARGET pliant AND TARGET pliant_png_check)
                      -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
     set_tests_properties(cli_render_frames_clear_an_earlier_run PROPERTIES TIMEOUT 120
                          FIXTURES_REQUIRED render_frames ENVIRONMENT "${_env}")
+    # Every frame's file is checked before an earlier sequence goes: a folder named f_0002.png
+    # is refused with the earlier f_0000.png still there (it was removed, frames 0 and 1
+    # drawn, and the run stopped at frame 2 with a message not naming render or -o).
+    set(_blocked ${_r}/seq-blocked)
+    add_test(NAME cli_render_frames_blocked_output_keeps_the_earlier_sequence
+             COMMAND sh -c "mkdir -p '${_blocked}/f_0002.png' && '${CMAKE_COMMAND}' '-DCOMMAND=$<TARGET_FILE:pliant>;render;--frames;${_r}/frames;-o;${_blocked}/f.png;--size;64x48' -DEXIT=1 '-DSTDERR_REGEX=render: -o: cannot write .*f_0002.png' '-DKEEP=${_blocked}/f_0000.png' -P '${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake'")
+    set_tests_properties(cli_render_frames_blocked_output_keeps_the_earlier_sequence PROPERTIES
+                         TIMEOUT 60 FIXTURES_REQUIRED render_frames ENVIRONMENT "${_env}")
     # Grids the reader accepts but no picture can show (written by make_bad_grid.py from the
     # format's rules): refused, where an all-white picture was written with exit 0.
     find_program(PLIANT_PYTHON3 python3)
@@ -109,6 +117,15 @@ if(TARGET pliant AND TARGET pliant_png_check)
             set_tests_properties(cli_render_refuses_an_undrawable_${kind} PROPERTIES TIMEOUT 60
                                  ENVIRONMENT "${_env}")
         endforeach()
+        # --frames: a frame the drawing pass would refuse (no surface) is found in the first
+        # pass, before an earlier sequence goes (it removed the earlier frames, then stopped at
+        # the bad one); an -o whose folder is missing is refused before the frames are read
+        # (it was made, and the frames written there).
+        set(_undrawable ${CMAKE_CURRENT_BINARY_DIR}/render-inputs/frames-undrawable)
+        add_test(NAME cli_render_frames_undrawable_keeps_the_earlier_sequence
+                 COMMAND sh -c "mkdir -p '${_undrawable}' && cp '${_r}/frames/frame_00000.pgrid' '${_undrawable}/a.pgrid' && '${PLIANT_PYTHON3}' '${CMAKE_CURRENT_SOURCE_DIR}/make_bad_grid.py' point '${_undrawable}/b.pgrid' && '${CMAKE_COMMAND}' '-DCOMMAND=$<TARGET_FILE:pliant>;render;--frames;${_undrawable};-o;${_r}/seq-kept/f.png;--size;64x48' -DEXIT=1 '-DSTDERR_REGEX=b.pgrid: every node lies at one point' '-DKEEP=${_r}/seq-kept/f_0000.png;${_r}/seq-kept/f_0001.png' -P '${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake'")
+        set_tests_properties(cli_render_frames_undrawable_keeps_the_earlier_sequence PROPERTIES
+                             TIMEOUT 60 FIXTURES_REQUIRED render_frames ENVIRONMENT "${_env}")
         # `info` says when owner values are not peer ids (whole numbers from -1 to 65535),
         # counting only the ids.
         set(_bad ${CMAKE_CURRENT_BINARY_DIR}/render-inputs/owner.pgrid)
