@@ -12,6 +12,7 @@
 #include <cerrno>
 #include <csignal>
 #include <cstdio>
+#include <cstring>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -34,7 +35,11 @@ namespace
 ///   went into simulate's energy.csv);
 /// - SIGXFSZ is ignored, so that a write past a file-size limit (`ulimit -f`) fails with EFBIG
 ///   and the command says "File too large" and removes its new file, instead of the process
-///   being killed with the new file left beside the output.
+///   being killed with the new file left beside the output;
+/// - SIGPIPE is ignored, so that a reader that goes away (`pliant simulate ... 2>&1 | head`, a
+///   pager quit) does not kill the run at its next progress line, with its outputs half
+///   written and run.json saying "running": the work goes on to its end, and a lost standard
+///   output is reported by finish().
 void prepare_process()
 {
     for (int fd = 0; fd <= 2; ++fd)
@@ -45,6 +50,20 @@ void prepare_process()
                 ::close(opened);
         }
     std::signal(SIGXFSZ, SIG_IGN);
+    std::signal(SIGPIPE, SIG_IGN);
+}
+
+/// The exit status of a command that ended with `rc`: what it printed to standard output must
+/// have been written (a full disk, a closed pipe: `pliant info --json > /dev/full` exited 0 with
+/// the answer lost); if not, an error on stderr and status 1 unless `rc` already says failure.
+int finish(int rc)
+{
+    if (std::fflush(stdout) == 0 && std::ferror(stdout) == 0)
+        return rc;
+    const int error = errno;
+    std::fprintf(stderr, "error: pliant: cannot write to standard output: %s [io-error]\n",
+                 std::strerror(error != 0 ? error : EIO));
+    return rc != 0 ? rc : k_exit_bad_input;
 }
 
 /// After a failed parse: "pliant remesh: unknown option '--bogus'" for the first argument that
@@ -124,7 +143,7 @@ int main(int argc, char** argv)
     }
     catch (const CLI::RuntimeError& e)
     {
-        return e.get_exit_code();  // a subcommand's own result (command_callback)
+        return pliant::cli::finish(e.get_exit_code());  // a subcommand's own result
     }
     catch (const pliant::cli::InputFileError& e)
     {
@@ -150,7 +169,7 @@ int main(int argc, char** argv)
         // --help and --version exit 0; every other CLI11 error is a usage error, whatever code
         // CLI11 gives it (105 for a bad value, 106 for a missing option...): one documented code.
         const int rc = app.exit(e);
-        return rc == 0 ? 0 : pliant::cli::k_exit_usage;
+        return pliant::cli::finish(rc == 0 ? 0 : pliant::cli::k_exit_usage);
     }
-    return 0;
+    return pliant::cli::finish(0);
 }

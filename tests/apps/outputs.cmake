@@ -235,6 +235,24 @@ if(TARGET pliant)
                      -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
     set_tests_properties(cli_render_frames_bad_frame_writes_nothing PROPERTIES
                          FIXTURES_REQUIRED cli_frames ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0")
+    # Standard output that cannot be written is an error (exit 1), not an answer lost with exit
+    # 0; a reader that went away does not kill the run (SIGPIPE ignored): the work ends, its
+    # file is written, and the lost output is reported (it was killed at the next progress
+    # line, status 141, nothing written).
+    add_test(NAME cli_stdout_full_is_an_error
+             COMMAND ${CMAKE_COMMAND}
+                     "-DCOMMAND=sh;-c;'$<TARGET_FILE:pliant>' info '${PROJECT_SOURCE_DIR}/data/spot.obj' --json > /dev/full"
+                     -DEXIT=1 "-DSTDERR_REGEX=cannot write to standard output: No space left on device"
+                     -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+    find_program(PLIANT_PYTHON3 python3)
+    if(PLIANT_PYTHON3)
+        add_test(NAME cli_closed_pipe_does_not_kill_the_run
+                 COMMAND ${PLIANT_PYTHON3} ${CMAKE_CURRENT_SOURCE_DIR}/closed_pipe.py 1
+                         ${out_dir}/piped.pgrid $<TARGET_FILE:pliant> remesh
+                         ${PROJECT_SOURCE_DIR}/data/spot.obj --level 3 -o ${out_dir}/piped.pgrid)
+        set_tests_properties(cli_closed_pipe_does_not_kill_the_run PROPERTIES TIMEOUT 300
+                             ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0")
+    endif()
     # -q: only errors. info's answer is then its exit status.
     pliant_cli_expect(cli_quiet_info 0 STDOUT "^$" -q info ${PROJECT_SOURCE_DIR}/data/spot.obj)
     pliant_cli_expect(cli_quiet_render 0 STDOUT "^$"
