@@ -8,6 +8,7 @@
 #include <array>
 #include <charconv>
 #include <cstdint>
+#include <cstdio>
 #include <limits>
 #include <optional>
 #include <vector>
@@ -995,45 +996,221 @@ public:
     std::string why;
 };
 
-/// A `.gltf` is JSON: Assimp's glTF readers do not recognise a file whose JSON does not parse
-/// and say only "No suitable reader found", so the scan parses it first and says where it breaks.
-core::Result<ScanResult> scan_gltf(std::string_view bytes, const std::string& name)
+/// Where the glTF JSON `json` (at byte `base` of the file `bytes`) breaks, if it does.
+core::Result<void> check_json(std::string_view bytes, std::size_t base, std::string_view json,
+                              const std::string& name)
 {
-    if (auto text = check_text(bytes, name, "glTF"); !text)
-        return text.error();
     JsonBreak check;
-    if (nlohmann::json::sax_parse(bytes.begin(), bytes.end(), &check))
-        return ScanResult{.format = Format::Gltf};
-    const std::size_t at = std::min(check.offset, bytes.size());
+    if (nlohmann::json::sax_parse(json.begin(), json.end(), &check))
+        return {};
+    const std::size_t at = base + std::min(check.offset, json.size());
     const std::size_t line_start = bytes.rfind('\n', at == 0 ? 0 : at - 1);
     const std::size_t column =
         line_start == std::string_view::npos || at == 0 ? at + 1 : at - line_start;
     const std::string place = "at byte " + std::to_string(at) + " (line " +
                               std::to_string(first_line_of(bytes, at)) + ", column " +
                               std::to_string(column) + ")";
-    return fail(ErrorCode::ParseError, name + ": the glTF JSON does not parse " + place +
-                                           (at == bytes.size() ? ", where the file ends" : "") +
-                                           ": " + check.why);
+    return fail(ErrorCode::ParseError,
+                name + ": the glTF JSON does not parse " + place +
+                    (at == bytes.size()         ? ", where the file ends"
+                     : at == base + json.size() ? ", where the JSON chunk ends"
+                                                : "") +
+                    ": " + check.why);
 }
 
+/// A `.gltf` is JSON: Assimp's glTF readers do not recognise a file whose JSON does not parse
+/// and say only "No suitable reader found", so the scan parses it first and says where it breaks.
+core::Result<ScanResult> scan_gltf(std::string_view bytes, const std::string& name)
+{
+    if (auto text = check_text(bytes, name, "glTF"); !text)
+        return text.error();
+    if (auto ok = check_json(bytes, 0, bytes, name); !ok)
+        return ok.error();
+    return ScanResult{.format = Format::Gltf, .json_offset = 0, .json_size = bytes.size()};
+}
+
+std::uint32_t read_u32_le(std::string_view bytes, std::size_t at)
+{
+    const auto* p = reinterpret_cast<const unsigned char*>(bytes.data()) + at;
+    return static_cast<std::uint32_t>(p[0]) | static_cast<std::uint32_t>(p[1]) << 8 |
+           static_cast<std::uint32_t>(p[2]) << 16 | static_cast<std::uint32_t>(p[3]) << 24;
+}
+
+/// A GLB file (glTF 2.0 binary): a 12-byte header (magic, version, length), then chunks of an
+/// 8-byte header (length, type) and their bytes, the first one JSON. Every chunk must lie within
+/// the declared length (a chunk length of 4 GiB in a 712-byte file had Assimp's reader allocate
+/// it, and then say only "No suitable reader found"), and the JSON must parse.
 core::Result<ScanResult> scan_glb(std::string_view bytes, const std::string& name)
 {
     if (bytes.size() < 12 || bytes.substr(0, 4) != "glTF")
         return fail(ErrorCode::ParseError, name +
                                                ": not a GLB file: no 'glTF' magic in the "
                                                "12-byte header");
-    const auto* p = reinterpret_cast<const unsigned char*>(bytes.data()) + 8;
-    const std::uint64_t length =
-        static_cast<std::uint64_t>(p[0]) | static_cast<std::uint64_t>(p[1]) << 8 |
-        static_cast<std::uint64_t>(p[2]) << 16 | static_cast<std::uint64_t>(p[3]) << 24;
+    const std::uint32_t version = read_u32_le(bytes, 4);
+    const std::uint64_t length = read_u32_le(bytes, 8);
     if (length > bytes.size())
         return fail(ErrorCode::ParseError, name + ": truncated GLB file: the header declares " +
                                                plural(static_cast<std::size_t>(length), "byte") +
                                                ", the file has " + std::to_string(bytes.size()));
-    return ScanResult{.format = Format::Glb};
+    if (version != 2)  // glTF 1.0's binary layout has no chunks; Assimp reads it as it is
+        return ScanResult{.format = Format::Glb};
+    constexpr std::uint32_t k_json_chunk = 0x4E4F534A;  // "JSON"
+    ScanResult result{.format = Format::Glb};
+    std::size_t chunk = 0;
+    for (std::uint64_t at = 12; at < length; ++chunk)
+    {
+        if (length - at < 8)
+            return fail(ErrorCode::ParseError,
+                        name + ": GLB chunk " + std::to_string(chunk) + " at byte " +
+                            std::to_string(at) + ": its 8-byte header runs past the " +
+                            std::to_string(length) + " bytes the file declares");
+        const std::uint64_t size = read_u32_le(bytes, static_cast<std::size_t>(at));
+        const std::uint32_t type = read_u32_le(bytes, static_cast<std::size_t>(at) + 4);
+        if (size > length - at - 8)
+            return fail(ErrorCode::ParseError, name + ": GLB chunk " + std::to_string(chunk) +
+                                                   " at byte " + std::to_string(at) + " declares " +
+                                                   plural(static_cast<std::size_t>(size), "byte") +
+                                                   ", past the " + std::to_string(length) +
+                                                   " bytes the file declares");
+        if (chunk == 0)
+        {
+            if (type != k_json_chunk)
+                return fail(
+                    ErrorCode::ParseError, name + ": GLB chunk 0 is not JSON (its type is 0x" +
+                                               [type]
+                                               {
+                                                   std::array<char, 12> hex{};
+                                                   std::snprintf(hex.data(), hex.size(), "%08X",
+                                                                 type);
+                                                   return std::string(hex.data());
+                                               }() +
+                                               "); a GLB file starts with its JSON chunk");
+            const auto offset = static_cast<std::size_t>(at) + 8;
+            const std::string_view json = bytes.substr(offset, static_cast<std::size_t>(size));
+            if (auto ok = check_json(bytes, offset, json, name); !ok)
+                return ok.error();
+            result.json_offset = offset;
+            result.json_size = json.size();
+        }
+        at += 8 + size;
+    }
+    if (chunk == 0)
+        return fail(ErrorCode::ParseError, name + ": GLB file without chunks (no JSON)");
+    return result;
 }
 
+/// Collects `buffers[i].uri` and `buffers[i].byteLength` of a glTF JSON (already known to
+/// parse) without building it.
+class BufferList final : public nlohmann::json_sax<nlohmann::json>
+{
+public:
+    struct Buffer
+    {
+        std::optional<std::string> uri;
+        std::optional<std::uint64_t> byte_length;
+    };
+    std::vector<Buffer> buffers;
+
+    bool null() override { return value_seen(); }
+    bool boolean(bool /*value*/) override { return value_seen(); }
+    bool number_integer(number_integer_t /*value*/) override { return value_seen(); }
+    bool number_unsigned(number_unsigned_t value) override
+    {
+        if (in_buffer_field("byteLength"))
+            buffers.back().byte_length = value;
+        return value_seen();
+    }
+    bool number_float(number_float_t /*value*/, const string_t& /*text*/) override
+    {
+        return value_seen();
+    }
+    bool string(string_t& value) override
+    {
+        if (in_buffer_field("uri"))
+            buffers.back().uri = value;
+        return value_seen();
+    }
+    bool binary(binary_t& /*value*/) override { return value_seen(); }
+    bool start_object(std::size_t /*elements*/) override { return open(false); }
+    bool key(string_t& value) override
+    {
+        stack_.back().key = value;
+        return true;
+    }
+    bool end_object() override { return close(); }
+    bool start_array(std::size_t /*elements*/) override { return open(true); }
+    bool end_array() override { return close(); }
+    bool parse_error(std::size_t /*position*/, const std::string& /*last_token*/,
+                     const nlohmann::detail::exception& /*e*/) override
+    {
+        return false;
+    }
+
+private:
+    struct Level
+    {
+        bool array = false;
+        std::string key;
+    };
+    std::vector<Level> stack_;
+
+    /// The value being read is field `field` of an element of the top-level "buffers" array.
+    [[nodiscard]] bool in_buffer_field(std::string_view field) const
+    {
+        return stack_.size() == 3 && !stack_[0].array && stack_[0].key == "buffers" &&
+               stack_[1].array && !stack_[2].array && stack_[2].key == field;
+    }
+    bool open(bool array)
+    {
+        if (stack_.size() == 2 && !stack_[0].array && stack_[0].key == "buffers" &&
+            stack_[1].array && !array)
+            buffers.emplace_back();
+        stack_.push_back({array, {}});
+        return true;
+    }
+    bool close()
+    {
+        stack_.pop_back();
+        return true;
+    }
+    static bool value_seen() { return true; }
+};
+
 }  // namespace
+
+core::Result<void> check_gltf_buffers(std::string_view json, const std::filesystem::path& folder,
+                                      const std::string& name)
+{
+    BufferList list;
+    if (!nlohmann::json::sax_parse(json.begin(), json.end(), &list))
+        return {};  // the scan said where it breaks; nothing more to check here
+    for (std::size_t i = 0; i < list.buffers.size(); ++i)
+    {
+        const BufferList::Buffer& b = list.buffers[i];
+        if (!b.uri || b.uri->starts_with("data:"))
+            continue;  // the GLB's own chunk, or bytes inside the JSON
+        // Taken as written: Assimp 5.2 does not decode %-escapes either (mesh::export_mesh
+        // refuses to write a name that would need one).
+        const std::string& file = *b.uri;
+        const std::string what = name + ": buffer " + std::to_string(i) + "'s file '" + file + "'";
+        std::error_code ec;
+        const auto status = std::filesystem::status(folder / file, ec);
+        if (ec || !std::filesystem::exists(status))
+            return fail(ErrorCode::IoError, what + " (beside it): no such file");
+        if (std::filesystem::is_directory(status))
+            return fail(ErrorCode::IoError, what + ": it is a directory");
+        // A FIFO blocks the reader for ever, a device has no end (/dev/zero).
+        if (!std::filesystem::is_regular_file(status))
+            return fail(ErrorCode::IoError,
+                        what + ": not a regular file (a device, FIFO or socket)");
+        const std::uintmax_t size = std::filesystem::file_size(folder / file, ec);
+        if (!ec && b.byte_length && size < *b.byte_length)
+            return fail(ErrorCode::ParseError, what + " holds " + plural(size, "byte") +
+                                                   ", the glTF declares byteLength " +
+                                                   std::to_string(*b.byte_length));
+    }
+    return {};
+}
 
 std::string_view format_name(Format format) noexcept
 {

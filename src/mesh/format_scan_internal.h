@@ -20,6 +20,7 @@
 #include <pliant/core/result.h>
 
 #include <cstddef>
+#include <filesystem>
 #include <string>
 #include <string_view>
 
@@ -55,6 +56,9 @@ struct ScanResult
     /// into triangles. OBJ, when the file starts with a UTF-8 byte-order mark (Assimp's reader
     /// drops the first line then): the file without it.
     std::string rewritten{};
+    /// glTF and GLB: where the JSON lies in the bytes (the whole `.gltf`; a GLB's JSON chunk).
+    std::size_t json_offset = 0;
+    std::size_t json_size = 0;
 };
 
 /// Checks `bytes` (the whole file) against the structure of the format its lower-case extension
@@ -65,5 +69,13 @@ struct ScanResult
 /// parse), UnsupportedFormat (unknown extension, a PLY encoding pliant does not read).
 [[nodiscard]] core::Result<ScanResult> scan_format(std::string_view bytes, std::string_view ext,
                                                    const std::string& name);
+
+/// The external buffers a glTF JSON (`json`, known to parse) names, in `folder`: each must be
+/// a regular file (a FIFO hung the reader, a device has no end) of at least its byteLength.
+/// Data URIs and a GLB's own chunk are not files. \return IoError (missing, a directory, not a
+/// regular file) or ParseError (shorter than its byteLength), naming the buffer and the file.
+[[nodiscard]] core::Result<void> check_gltf_buffers(std::string_view json,
+                                                    const std::filesystem::path& folder,
+                                                    const std::string& name);
 
 }  // namespace pliant::mesh::detail

@@ -745,6 +745,68 @@ TEST_F(BadFiles, GltfJsonThatDoesNotParseSaysWhere)
     EXPECT_EQ(utf.message.find('\xFF'), std::string::npos) << utf.message;
 }
 
+// A .gltf names its buffers by URI, and Assimp opens them itself: a FIFO there hung the reader
+// for ever, a device has no end. Each must be a regular file of at least its byteLength.
+TEST_F(BadFiles, GltfBufferFilesMustBeRegularFilesOfTheirLength)
+{
+    ASSERT_TRUE(export_mesh(dir_ / "t.gltf", scenes::tetrahedron()));  // t.gltf and t.bin
+    ASSERT_TRUE(import_mesh(dir_ / "t.gltf"));
+    const std::string json = test::read_all(dir_ / "t.gltf");
+    ASSERT_NE(json.find("\"t.bin\""), std::string::npos);
+    const auto naming = [&](const std::string& file)
+    {
+        std::string j = json;
+        j.replace(j.find("\"t.bin\""), 7, "\"" + file + "\"");
+        return j;
+    };
+    const core::Error missing = error_of("missing.gltf", naming("nothere.bin"));
+    EXPECT_EQ(missing.code, ErrorCode::IoError);
+    EXPECT_NE(missing.message.find("buffer 0's file 'nothere.bin' (beside it): no such file"),
+              std::string::npos)
+        << missing.message;
+    const auto fifo = dir_ / "fifo.bin";
+    std::filesystem::remove(fifo);
+    ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+    const core::Error piped = error_of("fifo.gltf", naming("fifo.bin"));  // blocked for ever
+    EXPECT_EQ(piped.code, ErrorCode::IoError);
+    EXPECT_NE(piped.message.find("buffer 0's file 'fifo.bin': not a regular file"),
+              std::string::npos)
+        << piped.message;
+    EXPECT_EQ(error_of("zero.gltf", naming("/dev/zero")).code, ErrorCode::IoError);
+    test::write_bytes(dir_ / "short.bin", "abc");
+    const core::Error short_buffer = error_of("short.gltf", naming("short.bin"));
+    EXPECT_EQ(short_buffer.code, ErrorCode::ParseError);
+    EXPECT_NE(short_buffer.message.find("'short.bin' holds 3 bytes, the glTF declares byteLength"),
+              std::string::npos)
+        << short_buffer.message;
+}
+
+// A GLB's chunks must lie within its declared length: a JSON chunk declaring 4 GiB in a small
+// file had Assimp's reader allocate it (4 GB, a minute) before it said "No suitable reader".
+TEST_F(BadFiles, GlbChunksMustFitTheFile)
+{
+    ASSERT_TRUE(export_mesh(dir_ / "ok.glb", scenes::tetrahedron()));
+    const std::string glb = test::read_all(dir_ / "ok.glb");
+    ASSERT_GT(glb.size(), 20U);
+    std::string huge = glb;
+    huge[12] = '\xF0';
+    huge[13] = huge[14] = huge[15] = '\xFF';  // chunk 0's length: 0xFFFFFFF0
+    const core::Error past = error_of("huge.glb", huge);
+    EXPECT_EQ(past.code, ErrorCode::ParseError);
+    EXPECT_NE(past.message.find("GLB chunk 0 at byte 12 declares 4294967280 bytes, past the " +
+                                std::to_string(glb.size()) + " bytes the file declares"),
+              std::string::npos)
+        << past.message;
+    std::string binary_first = glb;
+    binary_first.replace(16, 4, std::string("BIN\0", 4));  // chunk 0's type
+    EXPECT_NE(error_of("bin.glb", binary_first).message.find("GLB chunk 0 is not JSON"),
+              std::string::npos);
+    std::string broken = glb;
+    broken[20] = '[';  // the JSON's first byte: '{' becomes '['
+    EXPECT_NE(error_of("broken.glb", broken).message.find("the glTF JSON does not parse at byte 2"),
+              std::string::npos);
+}
+
 TEST_F(BadFiles, NonFiniteCoordinatesAreReportedWithTheirFace)
 {
     const core::Error nan = error_of("nan.obj",
