@@ -51,6 +51,10 @@ namespace pliant::cli
 namespace
 {
 
+/// The most steps one sim::advance_to call takes; a frame that needs more goes on with further
+/// calls (the call is a unit of work, not a limit of the frame).
+constexpr std::uint64_t k_steps_per_call = 1'000'000;
+
 struct SimulateOptions
 {
     std::filesystem::path grid;
@@ -677,8 +681,8 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
             const auto advance = [&](double t_next)
             {
                 active_forces(sc, state.time, t_next, centre, forces);
-                const sim::AdvanceReport r =
-                    sim::advance_to(*model, state, ws, t_next, forces, {}, 10'000'000, &in_frame);
+                const sim::AdvanceReport r = sim::advance_to(*model, state, ws, t_next, forces, {},
+                                                             k_steps_per_call, &in_frame);
                 rep.status = rep.status | r.status;
                 rep.steps += r.steps;
                 rep.rejections += r.rejections;
@@ -689,8 +693,11 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
             {
                 // Whole steps only: the frame is written at the last step boundary at or before its
                 // time and the remainder waits for the next frame (docs/physics.md §7). A force's
-                // start or end inside the frame splits it at the first boundary at or after it (at
-                // it, when it lies on one).
+                // start or end inside the frame splits it at the last boundary at or before it
+                // (at it, when it lies on one), so that the step containing it is a piece of its
+                // own: the linear hold ramps the force over that step only (split at the first
+                // boundary after it, the ramp began at the piece's start, up to a frame before
+                // the force's start).
                 for (;;)
                 {
                     const double t = state.time;
@@ -706,7 +713,7 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
                         for (const double e : {f.start, f.end})
                             if (e > t + slack)
                                 if (const double n_e =
-                                        std::max(1.0, std::ceil((e - t - slack) / h));
+                                        std::max(1.0, std::floor((e - t + slack) / h));
                                     n_e < n)
                                 {
                                     n = n_e;
@@ -734,13 +741,22 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
                         for (const double e : {f.start, f.end})
                             if (e > state.time + 1e-12 && e < t_next)
                                 t_next = e;
+                    const double before = state.time;
                     const sim::AdvanceReport r = advance(t_next);
                     if (sim::has_flag(r.status, sim::StepStatus::NonFinite))
                         return diverged("the state became non-finite", frame - 1);
                     if (r.stopped)
                         return stopped(frame - 1);
-                    if (!r.reached)
-                        break;  // max_steps: the remainder waits for the next frame
+                    // A call ends after k_steps_per_call steps; the frame goes on with the next
+                    // (it was written there, early, and the run still said "complete"). Steps
+                    // that no longer move the clock (dt_min below its resolution) end the run.
+                    if (!r.reached && !(state.time > before))
+                        return failed({core::ErrorCode::InvalidArgument,
+                                       opt.scenario.string() + ": the steps no longer advance "
+                                                               "the time at t = " +
+                                           fmt_number(state.time) +
+                                           " s (dt_min is below its resolution); raise dt_min"},
+                                      frame - 1);
                 }
             }
             if (auto ok = write_frame(opt, *model, state, frame); !ok)

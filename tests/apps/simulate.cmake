@@ -158,6 +158,26 @@ if(TARGET pliant)
     pliant_cli_expect(cli_simulate_refuses_endless_adaptive_steps 1 STDERR
                       "tiny_adaptive_steps.toml:7: 'integrator.dt_max' = 1e-299 s would take over 1e\\+12 steps"
                       simulate --scenario ${scenarios}/tiny_adaptive_steps.toml -o ${CMAKE_CURRENT_BINARY_DIR}/simulate-tiny-adaptive --level 3)
+    # A frame needing more steps than one advance call takes goes on to its time (run.json's
+    # simulated_s 0.0012 s, not the 0.001 s where the first call stopped).
+    find_program(PLIANT_PYTHON3 python3)
+    if(PLIANT_PYTHON3)
+        set(_many_steps ${CMAKE_CURRENT_BINARY_DIR}/simulate-frame-of-many-steps)
+        add_test(NAME cli_simulate_frame_of_many_steps_reaches_its_time
+                 COMMAND sh -c "'$<TARGET_FILE:pliant>' -q simulate --scenario '${scenarios}/frame_of_many_steps.toml' -o '${_many_steps}' --level 1 -j 1 && '${PLIANT_PYTHON3}' -c \"import json,sys; r=json.load(open('${_many_steps}/run.json'))['result']; print(r); sys.exit(0 if r['status']=='complete' and abs(r['simulated_s']-0.0012)<1e-9 else 1)\"")
+        set_tests_properties(cli_simulate_frame_of_many_steps_reaches_its_time PROPERTIES
+                             TIMEOUT 300)
+    endif()
+    # With fixed steps a force's start is a step boundary away from the frames: the linear hold
+    # ramps it over the step that contains its start, so frames at 20 or 25 per second give
+    # the same last state (the ramp began at the previous frame: 0.0214 J against 0.0204 J).
+    if(PLIANT_PYTHON3)
+        set(_hold ${CMAKE_CURRENT_BINARY_DIR}/simulate-linear-hold)
+        add_test(NAME cli_simulate_linear_hold_ramps_over_the_start_step
+                 COMMAND sh -c "for r in 20 25; do '$<TARGET_FILE:pliant>' -q simulate --scenario '${scenarios}/linear_hold_fps'$r'.toml' -o '${_hold}'$r --level 3 -j 1 || exit 1; done && '${PLIANT_PYTHON3}' -c \"import sys; last=lambda d: open(d+'/energy.csv').read().split()[-1].split(',')[1:6]; a,b=last('${_hold}20'),last('${_hold}25'); print(a, b); sys.exit(0 if a==b else 1)\"")
+        set_tests_properties(cli_simulate_linear_hold_ramps_over_the_start_step PROPERTIES
+                             TIMEOUT 300)
+    endif()
     pliant_cli_expect(cli_simulate_refuses_a_step_beyond_the_run 1 STDERR
                       "step_beyond_duration.toml:7: 'integrator.fixed_dt' = 100 s is longer than 'duration' = 0.1 s: no step fits"
                       simulate --scenario ${scenarios}/step_beyond_duration.toml -o ${CMAKE_CURRENT_BINARY_DIR}/simulate-step-beyond --level 3)
