@@ -203,6 +203,30 @@ TEST(Rkf45, RejectsAndShrinksAnOversizedStep)
     EXPECT_EQ(s.time, r.dt);
 }
 
+// Rejections go on until dt_min, however many it takes: with min_shrink 0.95 each retry shrinks h
+// by 0.9, so 1 ms to 1e-13 s takes 219 of them; a cap of 200 ended the step as NonFinite, the
+// state finite (pliant simulate said "the state became non-finite" and stopped).
+TEST(Rkf45, ManyRejectionsEndAtDtMinNotAsNonFinite)
+{
+    MembraneSettings set = ode_settings();
+    set.rtol = 0.0;
+    set.atol = 1e-300;  // no trial meets it: every one is rejected down to dt_min
+    set.min_shrink = 0.95;
+    set.dt_initial = set.dt_max = 1e-3;
+    set.dt_min = 1e-13;
+    MembraneModel m = test::sphere_model(3, set);
+    MembraneState s = initial_state(m);
+    s.u.at(5, 3) = 1e-3;  // a displacement, so the error is not 0
+    m.sync(s.u);
+    Rkf45Workspace ws(m, 1);
+    const StepReport r = step(m, s, ws, {});
+    EXPECT_FALSE(has_flag(r.status, StepStatus::NonFinite));
+    EXPECT_TRUE(has_flag(r.status, StepStatus::MinStepReached));
+    EXPECT_GT(r.rejections, 200U);
+    EXPECT_EQ(r.dt, 1e-13);
+    EXPECT_EQ(s.tick, 1U);
+}
+
 // AdvanceReport::at_min_steps counts the accepted steps flagged MinStepReached (pliant simulate
 // reports them): every one with dt_min = dt_max and a tolerance no step of that size meets, none
 // with a free step size.

@@ -100,8 +100,8 @@ struct MembraneSettings
     double max_growth = 5.0;   ///< largest step growth per accepted step, > 1
     double min_shrink = 0.2;   ///< smallest factor from one accepted step to the next; a
                                ///< rejection retries at h min(0.9, max(min_shrink,
-                               ///< safety err^-1/5)), a non-finite trial at h min_shrink (both
-                               ///< at least dt_min); in (0, 1)
+                               ///< safety err^-1/5)), a non-finite trial at
+                               ///< h min(0.9, min_shrink) (both at least dt_min); in (0, 1)
     bool fixed_step = false;   ///< lockstep mode: every step is exactly `fixed_dt`, never rejected
     double fixed_dt = 1e-3;    ///< step of the fixed-step mode [s], > 0
     ForceHold force_hold = ForceHold::Step;   ///< how `advance_to` holds forces between calls
