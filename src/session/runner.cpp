@@ -400,6 +400,16 @@ core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
             // The grid is known from here on (a joiner learns it from the welcome).
             const auto faces = static_cast<std::int64_t>(session.model()->grid().face_count());
             script_error = check_script(options.script, faces, session.role(), options.script_name);
+            // A tick to stop at is a lockstep's (the coupling is known only now): a fast peer
+            // stopped there leaves its share unstepped while the others step on against it.
+            if (script_error && session.role() != SessionRole::Viewer &&
+                session.coupling() == Coupling::Fast && session.max_ticks() != 0)
+                script_error = core::fail(
+                    core::ErrorCode::InvalidArgument,
+                    "--ticks " + std::to_string(session.max_ticks()) +
+                        " is for exact sessions, and this session's coupling is fast: its peers "
+                        "step on their own clocks, and this one would leave its share unstepped "
+                        "from that tick on while the others step on; leave out --ticks");
             if (!script_error)
                 break;
         }

@@ -791,6 +791,11 @@ bool Session::at_max_ticks() const noexcept
     return impl_->settings.max_ticks != 0 && state_.tick >= impl_->settings.max_ticks;
 }
 
+std::uint64_t Session::max_ticks() const noexcept
+{
+    return impl_->settings.max_ticks;
+}
+
 void Session::set_points_of_interest(std::vector<net::Target> points)
 {
     if (points.size() > net::k_max_points)

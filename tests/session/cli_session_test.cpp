@@ -467,8 +467,9 @@ namespace
 {
 
 // --stream-coarsen (docs/session.md §5.2): an exact-mode host streaming one level down feeds a
-// viewer; a participant asking for it in a fast session exits non-zero with the reason. Bounded
-// by the durations (about 3 s each).
+// viewer; a participant asking for it in a fast session exits non-zero with the reason, and one
+// giving --ticks there exits 1 (it stopped stepping its share at that tick, silently, for the
+// rest of the session). Bounded by the durations (about 3 s each).
 TEST(SessionCli, StreamCoarsenFeedsAViewerAndIsRefusedInFastMode)
 {
     const auto dir = pliant::test::scratch_dir("session_cli_coarse");
@@ -485,7 +486,9 @@ TEST(SessionCli, StreamCoarsenFeedsAViewerAndIsRefusedInFastMode)
         "' host --level 4 --mode fast --port " + q +
         " --duration 2.5 > fast.log 2>&1; echo $? > fast.rc) & sleep 0.3; " + "('" + exe +
         "' join 127.0.0.1:" + q +
-        " --stream-coarsen 1 --duration 2 > refused.log 2>&1; echo $? > refused.rc) & wait";
+        " --stream-coarsen 1 --duration 2 > refused.log 2>&1; echo $? > refused.rc) & " + "('" +
+        exe + "' join 127.0.0.1:" + q +
+        " --ticks 50 --duration 2 > ticks.log 2>&1; echo $? > ticks.rc) & wait";
     ASSERT_EQ(std::system(cmd.c_str()), 0);
     PLIANT_SKIP_IF_UNBOUND(dir, "host", port);
     const std::string host_log = read(dir / "host.log");
@@ -495,6 +498,9 @@ TEST(SessionCli, StreamCoarsenFeedsAViewerAndIsRefusedInFastMode)
     EXPECT_NE(read(dir / "refused.rc"), "0\n");
     EXPECT_NE(read(dir / "refused.log").find("refused in fast coupling"), std::string::npos)
         << read(dir / "refused.log");
+    EXPECT_EQ(read(dir / "ticks.rc"), "1\n") << read(dir / "ticks.log");
+    EXPECT_NE(read(dir / "ticks.log").find("--ticks 50 is for exact sessions"), std::string::npos)
+        << read(dir / "ticks.log");
 }
 
 // The check with separate processes over ENet on 127.0.0.1: a master and 1 or 2

@@ -436,6 +436,8 @@ public:
     [[nodiscard]] double max_barrier_wait() const noexcept;
     /// Stepping ended on purpose: tick() reached this peer's SessionSettings::max_ticks.
     [[nodiscard]] bool at_max_ticks() const noexcept;
+    /// This peer's SessionSettings::max_ticks (0: it never stops stepping on its own).
+    [[nodiscard]] std::uint64_t max_ticks() const noexcept;
     [[nodiscard]] double time() const noexcept { return state_.time; }
     /// The newest session time and tick this peer shows: its own (time(), tick()) when it
     /// simulates, else (a viewer) those of the newest leaf state received.
