@@ -115,6 +115,32 @@ int main(int argc, char** argv)
     for (const auto& spec : registry)
         spec.add(app, global);
 
+    // An empty argument is never a value pliant takes, and CLI11 reads an empty option value or
+    // positional as "not given": `remesh "$MESH" -o x.pgrid` with MESH unset remeshed the bundled
+    // mesh, `--report ""` wrote no report, `replay -o ""` wrote nothing, each exiting 0. Refused
+    // here, naming the option (--passphrase keeps its own message, cli_common.cpp).
+    for (int i = 1; i < argc; ++i)
+    {
+        const std::string_view arg = argv[i];
+        const std::string_view before = i > 1 ? std::string_view(argv[i - 1]) : std::string_view();
+        const bool empty_value = arg.empty() || (arg.starts_with("--") && arg.ends_with('='));
+        if (!empty_value || before == "--passphrase" || arg == "--passphrase=")
+            continue;
+        std::string what;
+        if (!arg.empty())
+            what = "the value of " + std::string(arg.substr(0, arg.size() - 1));
+        else if (before.starts_with('-') && before.find('=') == std::string_view::npos &&
+                 !(before.size() > 1 &&
+                   (std::isdigit(static_cast<unsigned char>(before[1])) != 0 || before[1] == '.')))
+            what = "after " + std::string(before);
+        else
+            what = "a positional argument";
+        std::fprintf(stderr,
+                     "pliant: argument %d is empty (%s): an unset shell variable? Give a value, "
+                     "or leave it out\nRun with --help for more information.\n",
+                     i, what.c_str());
+        return pliant::cli::k_exit_usage;
+    }
     // The global options are flags, so the first argument that is not one names the command;
     // CLI11 alone would answer an unknown one with "A subcommand is required".
     for (int i = 1; i < argc; ++i)

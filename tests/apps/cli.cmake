@@ -129,6 +129,18 @@ if(TARGET pliant)
                       "unknown command 'nosuch'; the commands are: demo, info, remesh" nosuch)
     pliant_cli_expect(cli_usage_verbose_and_quiet 2 STDERR "--verbose excludes --quiet"
                       -v -q info ${PROJECT_SOURCE_DIR}/data/spot.obj)
+    # An empty argument is a usage error, whatever it stands for: CLI11 read it as "not given"
+    # (`remesh "$MESH"` with MESH unset remeshed the bundled mesh; `--report ""` wrote no
+    # report; `replay -o ""` wrote nothing; each exited 0).
+    add_test(NAME cli_usage_empty_positional
+             COMMAND ${CMAKE_COMMAND}
+                     "-DCOMMAND=sh;-c;'$<TARGET_FILE:pliant>' remesh '' --level 2 -o '${cli_dir}/empty.pgrid'"
+                     -DEXIT=2 "-DSTDERR_REGEX=argument 2 is empty .a positional argument."
+                     "-DABSENT=${cli_dir}/empty.pgrid"
+                     -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+    pliant_cli_expect(cli_usage_empty_option_value 2 STDERR
+                      "argument 5 is empty .the value of --report."
+                      remesh ${PROJECT_SOURCE_DIR}/data/spot.obj -o ${cli_dir}/x.pgrid --report=)
     # An empty secret would open the session to anyone (`--passphrase "$SECRET"`, SECRET unset).
     add_test(NAME cli_usage_empty_passphrase
              COMMAND ${CMAKE_COMMAND}

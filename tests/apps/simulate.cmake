@@ -285,13 +285,13 @@ if(TARGET pliant)
                      -DPRECISION=double -P ${CMAKE_CURRENT_SOURCE_DIR}/check_run_json.cmake)
     set_tests_properties(cli_simulate_clears_earlier_frames_run_json PROPERTIES
                          DEPENDS cli_simulate_clears_earlier_frames)
-    # An empty -o is a usage error, as for demo and bench (it was "cannot create : Invalid
-    # argument", exit 1).
+    # An empty -o is a usage error, as every empty argument is (it was "cannot create :
+    # Invalid argument", exit 1).
     # (through sh: a CMake list cannot carry an empty argument)
     add_test(NAME cli_simulate_empty_output
              COMMAND ${CMAKE_COMMAND}
                      "-DCOMMAND=sh;-c;'$<TARGET_FILE:pliant>' simulate --scenario '${scenarios}/partial_interval.toml' -o '' --level 3"
-                     -DEXIT=2 "-DSTDERR_REGEX=simulate: -o is empty"
+                     -DEXIT=2 "-DSTDERR_REGEX=argument 5 is empty .after -o."
                      -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
     set_tests_properties(cli_simulate_empty_output PROPERTIES TIMEOUT 60
                          ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0")
