@@ -6,7 +6,9 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <charconv>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <limits>
@@ -817,7 +819,7 @@ core::Result<ScanResult> scan_ply(std::string_view bytes, const std::string& nam
                 const std::size_t room = (size - at) / static_cast<std::size_t>(q.size);
                 if (*n > room)
                     return truncated(i);
-                if (is_ply_index_list(e, q) && !q.item_float)
+                if (is_ply_index_list(e, q))
                 {
                     const std::string where = name + ": face " + std::to_string(i) + " (byte " +
                                               std::to_string(record_at) + ")";
@@ -827,9 +829,31 @@ core::Result<ScanResult> scan_ply(std::string_view bytes, const std::string& nam
                             where + ": vertex count " + std::to_string(*n) + " is less than 3");
                     for (std::uint64_t j = 0; j < *n; ++j)
                     {
-                        const std::int64_t index =
-                            read_integer(p + at + j * static_cast<std::size_t>(q.size), q.size,
-                                         q.item_signed, big);
+                        const unsigned char* item = p + at + j * static_cast<std::size_t>(q.size);
+                        if (q.item_float)
+                        {
+                            // An index list of floats (legal PLY): each a whole number naming a
+                            // vertex; Assimp truncated 2.7 to 2, read NaN as 0 and reported 77
+                            // without the face.
+                            const auto bits =
+                                static_cast<std::uint64_t>(read_integer(item, q.size, false, big));
+                            const double index = q.size == 4
+                                                     ? static_cast<double>(std::bit_cast<float>(
+                                                           static_cast<std::uint32_t>(bits)))
+                                                     : std::bit_cast<double>(bits);
+                            // isfinite first: an ordered comparison with NaN raises FE_INVALID.
+                            if (!std::isfinite(index) || index < 0.0 ||
+                                index >= static_cast<double>(r.vertices) ||
+                                index != std::floor(index))
+                            {
+                                std::array<char, 32> text{};
+                                std::snprintf(text.data(), text.size(), "%.9g", index);
+                                return fail(ErrorCode::BadIndex,
+                                            where + ply_bad_index(text.data(), r.vertices));
+                            }
+                            continue;
+                        }
+                        const std::int64_t index = read_integer(item, q.size, q.item_signed, big);
                         if (index < 0 || static_cast<std::uint64_t>(index) >= r.vertices)
                             return fail(ErrorCode::BadIndex,
                                         where + ply_bad_index(std::to_string(index), r.vertices));

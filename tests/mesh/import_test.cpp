@@ -17,6 +17,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 #include <ostream>
 #include <random>
 #include <string>
@@ -620,6 +621,41 @@ TEST_F(BadFiles, PlyIndicesAndValuesNameTheirLineOrByte)
     EXPECT_NE(two.message.find("face 3 (byte 256): vertex count 2 is less than 3"),
               std::string::npos)
         << two.message;
+
+    // Index lists of floats are legal PLY: each index must be a whole number naming a vertex
+    // (unchecked, Assimp read NaN as 0, truncated 2.5 to 2 and said 77 without the face).
+    const auto float_indices = [](float last_index)
+    {
+        std::string b =
+            "ply\nformat binary_little_endian 1.0\nelement vertex 4\n"
+            "property float x\nproperty float y\nproperty float z\n"
+            "element face 4\nproperty list uchar float vertex_indices\nend_header\n";
+        const auto put = [&b](auto value)
+        {
+            char bytes[sizeof value];
+            std::memcpy(bytes, &value, sizeof value);
+            b.append(bytes, sizeof value);
+        };
+        for (const float x : {0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 1.f})
+            put(x);
+        const float faces[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, last_index}};
+        for (const auto& face : faces)
+        {
+            put(std::uint8_t{3});
+            for (const float v : face)
+                put(v);
+        }
+        return b;
+    };
+    test::write_bytes(dir_ / "good_float_indices.ply", float_indices(3.f));
+    EXPECT_TRUE(import_mesh(dir_ / "good_float_indices.ply"));
+    for (const float bad : {std::numeric_limits<float>::quiet_NaN(), 2.5f, 77.f, -1.f})
+    {
+        const core::Error index = error_of("float_index.ply", float_indices(bad));
+        EXPECT_EQ(index.code, ErrorCode::BadIndex) << bad << ": " << index.message;
+        EXPECT_NE(index.message.find(": face 3 (byte 258): index '"), std::string::npos)
+            << index.message;
+    }
 }
 
 // Assimp's PLY reader takes a missing x, y or z as 0 (the faces then degenerate, which was the
