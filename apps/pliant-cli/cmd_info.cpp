@@ -61,11 +61,17 @@ void print_json(const InfoOptions& opt, const mesh::ImportReport* report, const 
         error ? error->message : std::string("valid: closed, connected, genus-0 2-manifold");
     if (report != nullptr)
     {
+        // Every ImportReport field (docs/mesh.md): the scene's meshes, the file's and
+        // Assimp's counts, and what the merge changed.
         j["format"] = report->format;
+        j["meshes"] = report->meshes;
         j["file_vertices"] = report->file_vertices;
+        j["raw_vertices"] = report->raw_vertices;
+        j["raw_faces"] = report->raw_faces;
         j["welded"] = report->welded;
         j["unreferenced_dropped"] = report->unreferenced_dropped;
         j["polygons_triangulated"] = report->polygons_triangulated;
+        j["non_triangles_dropped"] = report->non_triangles_dropped;
     }
     if (s != nullptr)
     {
@@ -78,6 +84,10 @@ void print_json(const InfoOptions& opt, const mesh::ImportReport* report, const 
         j["non_manifold_edges"] = s->non_manifold_edges;
         j["non_manifold_vertices"] = s->non_manifold_vertices;
         j["degenerate_faces"] = s->degenerate_faces;
+        j["unreferenced_vertices"] = s->unreferenced_vertices;
+        j["bad_index_faces"] = s->bad_index_faces;
+        j["non_finite_vertices"] = s->non_finite_vertices;
+        j["inconsistent_edges"] = s->inconsistent_edges;
         j["euler_characteristic"] = s->euler_characteristic;
         j["genus"] = s->genus ? nlohmann::ordered_json(*s->genus) : nlohmann::ordered_json(nullptr);
         j["bbox_min"] = vec_json(s->bbox_min);

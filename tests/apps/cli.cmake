@@ -141,6 +141,13 @@ if(TARGET pliant)
     pliant_cli_expect(cli_usage_empty_option_value 2 STDERR
                       "argument 5 is empty .the value of --report."
                       remesh ${PROJECT_SOURCE_DIR}/data/spot.obj -o ${cli_dir}/x.pgrid --report=)
+    # info --json carries every statistic: the edges of an orientation failure among them (it
+    # gave the error but not the count).
+    file(WRITE ${cli_dir}/flipped.obj "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
+                                      "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 4 3\n")
+    pliant_cli_expect(cli_info_json_counts_inconsistent_edges 1 STDOUT
+                      "\"raw_faces\": 4,.*\"inconsistent_edges\": 3,"
+                      info ${cli_dir}/flipped.obj --json)
     # An empty secret would open the session to anyone (`--passphrase "$SECRET"`, SECRET unset).
     add_test(NAME cli_usage_empty_passphrase
              COMMAND ${CMAKE_COMMAND}
