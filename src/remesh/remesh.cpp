@@ -225,6 +225,8 @@ std::string to_text(const QualityReport& r)
                   "level %d: %zu vertices, %zu faces (input %zu vertices, %zu faces)\n", r.level,
                   r.output_vertices, r.output_faces, r.input_vertices, r.input_faces);
     s += buf;
+    if (r.input_flipped)
+        s += "input: its faces face inward; the output faces outward (input_flipped)\n";
     std::snprintf(buf, sizeof buf,
                   "sphere map: %s (gnomonic folds %zu), domain map: %s, inverted triangles: mesh "
                   "%zu, domain %zu\n",

@@ -375,6 +375,11 @@ TEST(Remesh, InwardFacingInputIsReoriented)
     ASSERT_TRUE(r) << r.error().message;
     EXPECT_TRUE(r->report.input_flipped);
     expect_valid_output(*r);
+    // The printed summary says so too (only the JSON did).
+    EXPECT_NE(to_text(r->report).find("input: its faces face inward"), std::string::npos);
+    auto outward = remesh(scenes::ellipsoid(), rs(4));
+    ASSERT_TRUE(outward) << outward.error().message;
+    EXPECT_EQ(to_text(outward->report).find("face inward"), std::string::npos);
 }
 
 TEST(Remesh, RefusesABadLevelAndATorus)
