@@ -236,9 +236,13 @@ std::optional<std::string> PaceWatch::add(const PaceSample& sample)
     else if (sample.coupling == Coupling::Exact && sample.barrier_wait_s >= 1.0)
         out += fmt::format(
             "it has waited {:.1f} s at one tick for peer {} to publish it (exact coupling steps "
-            "every member together; the master removes a member that publishes no step for "
-            "its --max-barrier-wait, 10 s by default)",
-            sample.barrier_wait_s, sample.barrier_peer.value);
+            "every member together; {})",
+            sample.barrier_wait_s, sample.barrier_peer.value,
+            sample.max_barrier_wait_s > 0.0
+                ? fmt::format("the master removes a member that publishes no step for {:g} s, "
+                              "this session's --max-barrier-wait",
+                              sample.max_barrier_wait_s)
+                : std::string("this session's --max-barrier-wait 0 never removes it"));
     else if (sample.coupling == Coupling::Exact)
         out += fmt::format(
             "exact coupling steps once per round of halos with the neighbours, and this peer "
@@ -336,7 +340,8 @@ core::Result<RunSummary> run_peer(Session& session, const RunOptions& options)
                 .load_average = load_average(),
                 .cores = static_cast<int>(std::thread::hardware_concurrency()),
                 .barrier_wait_s = s.barrier_wait_s,
-                .barrier_peer = s.barrier_peer};
+                .barrier_peer = s.barrier_peer,
+                .max_barrier_wait_s = session.max_barrier_wait()};
             if (auto warning = pace.add(sample))
                 spdlog::warn("{}", *warning);
         }

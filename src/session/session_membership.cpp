@@ -146,10 +146,11 @@ void Session::Impl::lose_peer(net::PeerHandle h, net::DisconnectReason reason)
         // The master removed us (exact coupling: we held the lockstep past its
         // max_barrier_wait_s). The others drop us too; taking over as master would split
         // the session.
-        refusal =
-            "the master removed this peer from the session (in exact coupling, a "
-            "peer that publishes no step for its max_barrier_wait_s, 10 s by default, "
-            "is removed: was this process stopped or far too slow?)";
+        refusal = fmt::format(
+            "the master removed this peer from the session (in exact coupling, a peer that "
+            "publishes no step for the session's max_barrier_wait_s, {:g} s here, is removed: "
+            "was this process stopped or far too slow?)",
+            settings.max_barrier_wait_s);
         close_all(net::DisconnectReason::Quit);
     }
     else

@@ -208,8 +208,19 @@ TEST(PaceWatch, NamesAMemberThatStoppedSteppingAndIgnoresAStoppedProcess)
     EXPECT_NE(w->find("it has waited 2.5 s at one tick for peer 7 to publish it"),
               std::string::npos)
         << *w;
-    EXPECT_NE(w->find("--max-barrier-wait"), std::string::npos) << *w;
+    EXPECT_NE(w->find("publishes no step for 10 s, this session's --max-barrier-wait"),
+              std::string::npos)
+        << *w;
     EXPECT_EQ(w->find("--compress"), std::string::npos) << *w;
+    // The session's own limit, not the default (it said "10 s by default" whatever it was).
+    stuck.max_barrier_wait_s = 3.0;
+    const std::optional<std::string> w3 = warning_after_slow_run(stuck);
+    ASSERT_TRUE(w3.has_value());
+    EXPECT_NE(w3->find("publishes no step for 3 s"), std::string::npos) << *w3;
+    stuck.max_barrier_wait_s = 0.0;
+    const std::optional<std::string> w0 = warning_after_slow_run(stuck);
+    ASSERT_TRUE(w0.has_value());
+    EXPECT_NE(w0->find("--max-barrier-wait 0 never removes it"), std::string::npos) << *w0;
 
     PaceWatch watch;
     const PaceSample slow{

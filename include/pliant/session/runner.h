@@ -84,6 +84,9 @@ struct PaceSample
     /// more is a member that stopped stepping, not the traffic.
     double barrier_wait_s = 0.0;
     net::PeerId barrier_peer = net::k_no_peer;
+    /// The session's limit on that wait before the master removes the member
+    /// (Session::max_barrier_wait(); 0: never), named in the message.
+    double max_barrier_wait_s = 10.0;
 };
 
 /// The machine's 1-minute load average (/proc/loadavg), or -1 where there is none.
