@@ -752,8 +752,9 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
                     // that no longer move the clock (dt_min below its resolution) end the run.
                     if (!r.reached && !(state.time > before))
                         return failed({core::ErrorCode::InvalidArgument,
-                                       opt.scenario.string() + ": the steps no longer advance "
-                                                               "the time at t = " +
+                                       opt.scenario.string() +
+                                           ": the steps no longer advance "
+                                           "the time at t = " +
                                            fmt_number(state.time) +
                                            " s (dt_min is below its resolution); raise dt_min"},
                                       frame - 1);
