@@ -90,6 +90,12 @@ core::Result<Address> resolve_address(std::string_view text)
     const std::string host(text.substr(0, colon));
     if (host.find_first_not_of("0123456789.") == std::string::npos)
         return parsed;
+    // "[::1]:7777", "::1": the resolver said "Name or service not known" of '[::1]' or ':'.
+    if (host.find_first_of("[]:") != std::string::npos)
+        return core::fail(core::ErrorCode::InvalidArgument,
+                          "address '" + std::string(text) +
+                              "' is IPv6: pliant speaks IPv4 only (ENet 1.3); give a.b.c.d, "
+                              "localhost or a host name with an IPv4 address, and a port");
     addrinfo hints{};
     hints.ai_family = AF_INET;  // ENet 1.3 speaks IPv4 only
     hints.ai_socktype = SOCK_DGRAM;

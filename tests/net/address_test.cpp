@@ -43,6 +43,13 @@ TEST(Address, ResolvesWhatParsesAndRefusesAnUnknownHostNamingIt)
               std::string::npos);
     EXPECT_NE(resolve_address("example.invalid:0").error().message.find("port 0"),
               std::string::npos);
+    // IPv6 is said to be IPv6, not looked up as a name ("cannot find ... host ':'").
+    for (const char* v6 : {"[::1]:7777", "::1:7777", "::1"})
+    {
+        const auto r = resolve_address(v6);
+        ASSERT_FALSE(r) << v6;
+        EXPECT_NE(r.error().message.find("IPv4 only"), std::string::npos) << r.error().message;
+    }
     // RFC 6761: names under .invalid never resolve.
     const auto unknown = resolve_address("no-such-host.invalid:7777");
     ASSERT_FALSE(unknown);
