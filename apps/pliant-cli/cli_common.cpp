@@ -377,9 +377,12 @@ CLI::Validator no_minus_sign()
                 // CLI11 saturates a number past 2^64 - 1 without a word.
                 std::uint64_t v = 0;
                 const char* end = text.data() + text.size();
-                if (const auto [p, ec] = std::from_chars(text.data(), end, v);
-                    ec == std::errc::result_out_of_range)
+                const auto [p, ec] = std::from_chars(text.data(), end, v);
+                if (ec == std::errc::result_out_of_range)
                     return text + " is too large; give a whole number below 2^64";
+                // CLI11 alone said "Could not convert: --ticks = 1e30".
+                if (ec != std::errc() || p != end)
+                    return text + " is not a whole number; give one >= 0 (digits only)";
                 return std::string();
             },
             "", "UNSIGNED"};

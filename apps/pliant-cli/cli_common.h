@@ -111,7 +111,8 @@ auto command_callback(const GlobalOptions& global, Body body)
 [[nodiscard]] CLI::Validator whole_number_in(long long lo, long long hi);
 [[nodiscard]] CLI::Validator number_in(double lo, double hi);
 /// For unsigned integer options: CLI11 converts "-5" to 2^64 - 5, and saturates a number past
-/// 2^64 - 1, without a word.
+/// 2^64 - 1, without a word, and says "Could not convert" of "1e30" or "abc"; these are each
+/// said as what they are.
 [[nodiscard]] CLI::Validator no_minus_sign();
 /// For --port: a whole number from `lowest` to 65535, said as such ("--port: 70000 is not a UDP
 /// port; give a whole number from 1 to 65535"; CLI11 alone said "Could not convert").

@@ -5,7 +5,7 @@
 # --help (the FLOAT ones), so an option added later without a check fails here too: CLI11's own
 # Range, PositiveNumber and NonNegativeNumber let "nan" through (`pliant host --duration nan`
 # ran until Ctrl-C). Every unsigned option (UINT) refuses a minus sign (CLI11 turned
-# `--ticks -5` into 2^64 - 5). PLIANT: the executable.
+# `--ticks -5` into 2^64 - 5) and says what else is not a whole number. PLIANT: the executable.
 execute_process(COMMAND ${PLIANT} --help RESULT_VARIABLE rc OUTPUT_VARIABLE help ERROR_VARIABLE err)
 if(NOT rc EQUAL 0)
     message(FATAL_ERROR "pliant --help exited ${rc}:\n${help}${err}")
@@ -30,7 +30,7 @@ foreach(name IN LISTS names)
     if(NOT rc EQUAL 0)
         message(FATAL_ERROR "pliant ${command} --help exited ${rc}:\n${usage}${err}")
     endif()
-    foreach(kind FLOAT UINT RANGE)
+    foreach(kind FLOAT UINT UINT_TEXT RANGE)
         if(kind STREQUAL "FLOAT")
             set(values nan -nan inf -inf 1e400)
             set(rule "is not a finite number")
@@ -38,6 +38,11 @@ foreach(name IN LISTS names)
         elseif(kind STREQUAL "UINT")
             set(values -5)
             set(rule "is negative")
+            set(shown UINT)
+        elseif(kind STREQUAL "UINT_TEXT")
+            # CLI11 said "Could not convert: --ticks = 1e30".
+            set(values 1e30 abc)
+            set(rule "is not a (whole number|UDP port)")
             set(shown UINT)
         else()
             # Whole numbers in a range (whole_number_in): CLI11's Range said "Value abc not in
