@@ -47,6 +47,18 @@ public:
         return std::nullopt;
     }
 
+    // A TOML number as a double: toml++'s value<double>() gives nothing for an integer a double
+    // cannot hold exactly (2^63 - 1 was "must be a number"); it is read as the nearest double,
+    // which the range check then judges.
+    [[nodiscard]] static std::optional<double> number_of(const toml::node& node)
+    {
+        if (const auto* i = node.as_integer())
+            return static_cast<double>(i->get());
+        if (const auto* f = node.as_floating_point())
+            return f->get();
+        return std::nullopt;
+    }
+
     // Reads an optional number into `out`, checking the range [lo, hi].
     [[nodiscard]] std::optional<core::Error> number(const std::string& key, double& out, double lo,
                                                     double hi) const
@@ -54,8 +66,8 @@ public:
         const toml::node* node = table_.get(key);
         if (node == nullptr)
             return std::nullopt;
-        const std::optional<double> v = node->value<double>();
-        if (!node->is_number() || !v)
+        const std::optional<double> v = number_of(*node);
+        if (!v)
             return scenario_error(file_, node->source(), prefix_ + key, "must be a number");
         if (!(*v >= lo && *v <= hi))
             return scenario_error(file_, node->source(), prefix_ + key,
@@ -122,8 +134,8 @@ public:
         double c[3] = {};
         for (std::size_t k = 0; k < 3; ++k)
         {
-            const std::optional<double> v = (*arr)[k].value<double>();
-            if (!(*arr)[k].is_number() || !v || !std::isfinite(*v))
+            const std::optional<double> v = number_of((*arr)[k]);
+            if (!v || !std::isfinite(*v))
                 return scenario_error(file_, node->source(), prefix_ + key,
                                       "must be an array of three finite numbers");
             c[k] = *v;

@@ -178,6 +178,9 @@ if(TARGET pliant)
         set_tests_properties(cli_simulate_linear_hold_ramps_over_the_start_step PROPERTIES
                              TIMEOUT 300)
     endif()
+    pliant_cli_expect(cli_simulate_huge_integer_is_out_of_range 1 STDERR
+                      "huge_integer.toml:3: 'duration' = 9.22337e.18 is outside .0, 1e.06."
+                      simulate --scenario ${scenarios}/huge_integer.toml -o ${CMAKE_CURRENT_BINARY_DIR}/simulate-huge-integer --level 2)
     pliant_cli_expect(cli_simulate_refuses_a_step_beyond_the_run 1 STDERR
                       "step_beyond_duration.toml:7: 'integrator.fixed_dt' = 100 s is longer than 'duration' = 0.1 s: no step fits"
                       simulate --scenario ${scenarios}/step_beyond_duration.toml -o ${CMAKE_CURRENT_BINARY_DIR}/simulate-step-beyond --level 3)
