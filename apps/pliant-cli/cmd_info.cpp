@@ -323,10 +323,18 @@ void print_grid_text(const InfoOptions& opt, const GridInfo& info,
                                 ", " + std::to_string(r.at_max_abs.y) + "))");
     if (!info.owners.empty() || info.bad_owner)
     {
+        // -1 and 65535 mean "no owner" (docs/grid-format.md): one entry after the peers, not
+        // "peer -1".
         std::string owners;
+        std::size_t unowned = 0;
         for (const auto& [id, count] : info.owners)
-            owners += (owners.empty() ? "" : ", ") + std::string("peer ") + std::to_string(id) +
-                      ": " + n(count);
+            if (id == -1 || id == 65535)
+                unowned += count;
+            else
+                owners += (owners.empty() ? "" : ", ") + std::string("peer ") + std::to_string(id) +
+                          ": " + n(count);
+        if (unowned > 0)
+            owners += (owners.empty() ? "" : ", ") + std::string("no owner: ") + n(unowned);
         if (info.bad_owner)
             owners += std::string(owners.empty() ? "" : "  ") + "(" + n(info.bad_owners) +
                       (info.bad_owners == 1 ? " vertex holds" : " vertices hold") +

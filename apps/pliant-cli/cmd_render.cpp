@@ -151,8 +151,12 @@ Owners owners_of(const core::TetraGrid& grid, const core::GridFile& file, int de
         std::string list;
         for (const std::uint16_t id : seen)
             list += (list.empty() ? "" : ", ") + std::to_string(id);
-        owners.source = "the channel \"owner\": " + std::to_string(seen.size()) + " peer" +
-                        (seen.size() == 1 ? "" : "s") + " (ids " + list + ")";
+        owners.source = seen.empty()
+                            ? std::string(
+                                  "the channel \"owner\": no node has an owner "
+                                  "(all -1 or 65535), drawn in the base colour")
+                            : "the channel \"owner\": " + std::to_string(seen.size()) + " peer" +
+                                  (seen.size() == 1 ? "" : "s") + " (ids " + list + ")";
         return owners;
     }
     const int d = std::clamp(depth, 0, grid.level());

@@ -140,6 +140,13 @@ if(TARGET pliant AND TARGET pliant_png_check)
                  COMMAND sh -c "'${PLIANT_PYTHON3}' '${CMAKE_CURRENT_SOURCE_DIR}/make_bad_grid.py' set-owner '${CMAKE_CURRENT_BINARY_DIR}/demo-quick/final.pgrid' '${_bad}' 1e300 && '${CMAKE_COMMAND}' '-DCOMMAND=$<TARGET_FILE:pliant>;render;${_bad};-o;${_r}/owner-far.png;--color;owner' -DEXIT=1 '-DSTDERR_REGEX=channel owner: node .8, 4. holds 1e.300, which is not a peer id' '-DABSENT=${_r}/owner-far.png' -P '${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake' && '${CMAKE_COMMAND}' '-DCOMMAND=$<TARGET_FILE:pliant>;info;${_bad}' -DEXIT=1 '-DSTDOUT_REGEX=1 vertex holds no peer id, e.g. 1e.300 at node .8, 4.' -P '${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake'")
         set_tests_properties(cli_render_refuses_an_owner_that_is_no_peer_id PROPERTIES TIMEOUT 60
                              FIXTURES_REQUIRED demo_quick ENVIRONMENT "${_env}")
+        # -1 (and 65535) is no owner: `info` counts it as such after the peers (it printed
+        # "peer -1: 1").
+        set(_unowned ${CMAKE_CURRENT_BINARY_DIR}/render-inputs/owner-none.pgrid)
+        add_test(NAME cli_info_counts_nodes_without_owner
+                 COMMAND sh -c "'${PLIANT_PYTHON3}' '${CMAKE_CURRENT_SOURCE_DIR}/make_bad_grid.py' set-owner '${CMAKE_CURRENT_BINARY_DIR}/demo-quick/final.pgrid' '${_unowned}' -1 && '${CMAKE_COMMAND}' '-DCOMMAND=$<TARGET_FILE:pliant>;info;${_unowned}' -DEXIT=0 '-DSTDOUT_REGEX=owner .vertices. +peer 0: [0-9]+, peer 1: [0-9]+, peer 2: [0-9]+, no owner: 1\n' -P '${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake'")
+        set_tests_properties(cli_info_counts_nodes_without_owner PROPERTIES TIMEOUT 60
+                             FIXTURES_REQUIRED demo_quick ENVIRONMENT "${_env}")
     endif()
 
     # Ctrl-C during a sequence (the 101 frames of cli_simulate_pull), once f_0003.png is
