@@ -680,7 +680,9 @@ void add_render_command(CLI::App& app, const GlobalOptions& global)
     cmd->add_option("--color-range", opt->color_range,
                     "|u| in metres shown at full colour by --color displacement (default: the "
                     "largest |u| of the file, or of every frame with --frames)")
-        ->check(positive_number());
+        // The shader takes it as a float: below about 1e-38 it became 0, and the largest |u|
+        // was used while the summary named the value given.
+        ->check(number_in(1e-30, 1e30));
     cmd->add_flag("--wireframe", opt->wireframe, "Draw the triangle edges over the surface");
     cmd->add_option("--frames", opt->frames, "Render every .pgrid in this folder (a sequence)");
     cmd->add_option("--samples", opt->samples, "Multisampling (1 = off)")

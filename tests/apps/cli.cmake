@@ -98,8 +98,13 @@ if(TARGET pliant)
     # every command refuses nan and the infinities, every UINT option a minus sign.
     pliant_cli_expect(cli_usage_negative 2 STDERR "--max-force: -2 is negative; give a number >= 0\n"
                       host --max-force -2)
-    pliant_cli_expect(cli_usage_not_positive 2 STDERR "--color-range: 0 is not positive; give a number > 0\n"
-                      render --color-range 0)
+    pliant_cli_expect(cli_usage_not_positive 2 STDERR "--tension: 0 is not positive; give a number > 0\n"
+                      host --tension 0)
+    # The shader takes --color-range as a float: 1e-50 became 0 and the largest |u| was used,
+    # the summary naming 1e-50.
+    pliant_cli_expect(cli_usage_color_range_below_a_float 2 STDERR
+                      "--color-range: 1e-50 is outside \\[1e-30, 1e\\+30\\]"
+                      render --color-range 1e-50)
     pliant_cli_expect(cli_usage_outside 2 STDERR "--fps: 200 is outside \\[1, 60\\]; give a number in it"
                       demo --fps 200)
     pliant_cli_expect(cli_usage_unsigned_too_large 2 STDERR
