@@ -449,8 +449,8 @@ int run_simulate(const SimulateOptions& opt, const GlobalOptions& global)
     // The run clears -o of an earlier run's frames (below): an input among them would go too.
     const std::vector<std::filesystem::path> stale = earlier_frames(opt.out);
     using Input = std::pair<const std::filesystem::path*, const char*>;
-    for (const auto& [input, what] :
-         std::array<Input, 2>{{{&opt.resume, "--resume"}, {&opt.grid, "GRID"}}})
+    for (const auto& [input, what] : std::array<Input, 3>{
+             {{&opt.resume, "--resume"}, {&opt.grid, "GRID"}, {&opt.scenario, "--scenario"}}})
     {
         std::error_code ec;
         for (const std::filesystem::path& f : stale)

@@ -315,6 +315,16 @@ if(TARGET pliant)
                      -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
     set_tests_properties(cli_simulate_refuses_resume_from_its_folder PROPERTIES TIMEOUT 60
                          ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0")
+    # The scenario too: a TOML named like a frame in -o was removed as "1 frame of an earlier
+    # run" before the run read it.
+    add_test(NAME cli_simulate_refuses_scenario_from_its_folder
+             COMMAND ${CMAKE_COMMAND}
+                     "-DCOMMAND=$<TARGET_FILE:pliant>;simulate;--scenario;${_here}/frame_00009.obj;-o;${_here};--level;3"
+                     -DEXIT=2 "-DSTDERR_REGEX=--scenario .*frame_00009.obj is a frame of an earlier run in -o's folder"
+                     "-DKEEP=${_here}/frame_00009.obj"
+                     -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+    set_tests_properties(cli_simulate_refuses_scenario_from_its_folder PROPERTIES TIMEOUT 60
+                         ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0")
 
     # A duration that is not a whole number of frame intervals: the last frame comes after a
     # shorter interval, at the duration (0.25 s at 10 frames per second: frame 3 at 0.25 s; 0.5 s
