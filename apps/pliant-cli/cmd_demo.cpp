@@ -390,6 +390,10 @@ int run_demo(const DemoOptions& opt_in, const GlobalOptions& global, LiveLink* l
     if (ec)
         return report({core::ErrorCode::IoError,
                        "demo: cannot create " + opt.out.string() + ": " + ec.message()});
+    // A folder that exists but cannot be written (/proc/self, read-only) fails now, not after
+    // the remeshing (nothing is created by the check).
+    if (auto ok = check_writable(opt.out / "summary.md", "demo: --out"); !ok)
+        return report(ok.error());
     spdlog::info("demo: {} ({} vertices, {} faces) is a closed genus-0 surface",
                  mesh_path.filename().string(), mesh->vertex_count(), mesh->face_count());
     ProgressBar progress(global);

@@ -274,6 +274,10 @@ if(TARGET pliant)
                       join 127.0.0.1:9 --duration 1 --key-file ${out_dir}/open.key)
     # demo: level 3 has two quad-tree leaves, too few for its three simulating peers (it spun
     # until --wall-limit); --screenshot without --view is a usage error. bench: an unknown suite.
+    # An --out that exists but cannot be written fails before the remeshing (it failed after).
+    pliant_cli_expect(cli_demo_unwritable_out_fails_first 1 STDERR
+                      "demo: --out: cannot write '/proc/self/summary.md'"
+                      demo --quick --out /proc/self)
     pliant_cli_expect(cli_demo_level_3_is_refused 2 STDERR "--level: 3 is not in 4 to 8"
                       demo --quick --level 3 --out ${out_dir}/demo-l3)
     pliant_cli_expect(cli_demo_screenshot_needs_view 2 STDERR
