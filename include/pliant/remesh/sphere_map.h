@@ -98,8 +98,10 @@ struct SphereMap
     std::size_t gnomonic_folds = 0;    ///< inverted faces after central projection
     std::size_t spring_folds = 0;      ///< inverted faces after the spring embedder (if run)
     std::size_t forced_collapses = 0;  ///< simplification steps that ignored the normal test
-    double rms_stretch = 0.0;          ///< Sander's L2 stretch, normalised (1 = area-uniform)
-    double stretch_efficiency = 0.0;   ///< surface area / domain area / rms stretch^2, <= 1
+    /// Sander's L2 stretch, normalised by the area ratio (1: a uniform scaling; any shear,
+    /// equal-area or not, gives more), and its efficiency 1 / rms_stretch^2 (<= 1).
+    double rms_stretch = 0.0;
+    double stretch_efficiency = 0.0;
 };
 
 /// Maps `mesh` onto the unit sphere without folds.
@@ -124,8 +126,10 @@ core::Result<SphereMap> map_to_sphere(const mesh::TriMesh& mesh,
                                          std::span<const core::Vec3> sphere) noexcept;
 
 /// L2 stretch of a spherical map measured on the chord triangles (Sander et al. 2001; Praun &
-/// Hoppe 2003): `rms_stretch` normalised so that an area-uniform map gives 1, and
-/// `efficiency` = surface area / domain area / rms^2 (REMESH-NOTES.md §1).
+/// Hoppe 2003): `rms_stretch`^2 = (sum A s^2 / sum A) (sum A' / sum A) over the surface areas A
+/// and chord areas A', so that a uniform scaling gives 1 and any shear more, and `efficiency` =
+/// 1 / rms_stretch^2 (the unnormalised form: surface area / domain area / rms^2;
+/// docs/remesh.md §4).
 struct StretchStats
 {
     double rms_stretch = 0.0;

@@ -78,13 +78,15 @@ struct UntangleSettings
 
 struct UntangleStats
 {
-    std::size_t folded_sampled = 0;         ///< folded output triangles as sampled
-    std::size_t intersections_sampled = 0;  ///< intersecting non-adjacent pairs as sampled
-    std::size_t folded = 0;                 ///< after untangling
-    std::size_t intersections = 0;          ///< after untangling
-    std::size_t moved_nodes = 0;            ///< unique vertices whose sample point moved
-    int rounds = 0;                         ///< rounds of smoothing run
-    int patch_passes = 0;                   ///< patch passes kept (see UntangleSettings)
+    std::size_t folded_sampled = 0;  ///< folded output triangles as sampled
+    /// Intersecting pairs as sampled: pairs sharing no edge (one sharing a vertex counts,
+    /// docs/remesh.md §3.2).
+    std::size_t intersections_sampled = 0;
+    std::size_t folded = 0;         ///< after untangling
+    std::size_t intersections = 0;  ///< after untangling
+    std::size_t moved_nodes = 0;    ///< unique vertices whose sample point moved
+    int rounds = 0;                 ///< rounds of smoothing run
+    int patch_passes = 0;           ///< patch passes kept (see UntangleSettings)
 };
 
 /// Input face under each unique vertex's sample point `points` (one unit vector per grid node,
