@@ -172,6 +172,7 @@ core::Result<ScanResult> scan_obj(std::string_view bytes, const std::string& nam
     std::optional<core::Error> error;
     std::size_t max_index = 0;
     std::size_t max_index_line = 0;
+    std::vector<std::size_t> forward;  // 0-based indices of records not read yet at their face
     const auto refuse = [&](ErrorCode code, std::string what)
     {
         error = core::Error{code, name + ":" + std::to_string(lines) + ": " + std::move(what)};
@@ -233,6 +234,8 @@ core::Result<ScanResult> scan_obj(std::string_view bytes, const std::string& nam
                     const long long k = *index < 0 ? n + *index : *index - 1;
                     if (k < n)
                         used[static_cast<std::size_t>(k)] = true;
+                    else  // a `v` record further down, marked once all are counted
+                        forward.push_back(static_cast<std::size_t>(k));
                 }
             }
             return true;
@@ -244,6 +247,8 @@ core::Result<ScanResult> scan_obj(std::string_view bytes, const std::string& nam
                                              ": face refers to vertex " +
                                              std::to_string(max_index) + " but the file has " +
                                              plural(r.vertices, "vertex"));
+    for (const std::size_t k : forward)  // every k < r.vertices: checked above
+        used[k] = true;
     r.unreferenced = static_cast<std::size_t>(std::count(used.begin(), used.end(), false));
     r.faces_known = true;
     if (r.faces == 0)

@@ -126,6 +126,21 @@ TEST(Import, OpenBunnyDropsUnreferencedAndReportsItsHoles)
         << verdict.error().message;
 }
 
+// Faces may name `v` records further down the file: those vertices are used, not dropped (the
+// count said "unreferenced dropped 4" of a tetrahedron whose faces came first).
+TEST(Import, FacesBeforeTheirVerticesLeaveNoneUnreferenced)
+{
+    const auto dir = test::scratch_dir("mesh_forward_references");
+    test::write_bytes(dir / "faces_first.obj",
+                      "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
+                      "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv 5 5 5\n");
+    ImportReport report;
+    auto mesh = import_mesh(dir / "faces_first.obj", &report);
+    ASSERT_TRUE(mesh) << mesh.error().message;
+    EXPECT_EQ(mesh->vertex_count(), 4U);
+    EXPECT_EQ(report.unreferenced_dropped, 1U);  // only the fifth record
+}
+
 TEST(Import, GenusOneMessageSaysGenusOne)
 {
     auto mesh = import_mesh(data("negative/bob_small_genus1.ply"));
