@@ -244,14 +244,32 @@ core::Result<MembraneModel> MembraneModel::create(const core::TetraGrid& grid,
             }
             const Vec3 n = ((cr[0] + cr[3]) + (cr[1] + cr[4])) + (cr[2] + cr[5]);
             const double len = core::norm(n);
-            if (!(len > 0.0))
+            if (!(len > 0.0) || !std::isfinite(len))
             {
-                // Name the surface vertex (a ghost position stands for a node inside).
+                // Name the surface vertex (a ghost position stands for a node inside), and why:
+                // products of edges that overflow or underflow are the scale's fault, not the
+                // shape's (a unit sphere scaled by 1e300 or 1e-300 said "span no area").
                 const core::GridCoord node = grid.fold(x, y);
+                double edge = 0.0;  // the largest edge component (no square to overflow)
+                for (const auto& d : k_dir)
+                {
+                    const Vec3 e = at(m.P_, x + d[0], y + d[1]) - c;
+                    edge = std::max({edge, std::abs(e.x), std::abs(e.y), std::abs(e.z)});
+                }
+                const std::string where = "the rest surface has no normal at node (" +
+                                          std::to_string(node.x) + ", " + std::to_string(node.y) +
+                                          "): ";
+                char size[32];
+                std::snprintf(size, sizeof size, "%.3g", edge);
+                if (!std::isfinite(len) || (edge > 0.0 && edge < 1e-150))
+                    return core::fail(core::ErrorCode::DegenerateFace,
+                                      where + "its edges (" + size + " m) are too " +
+                                          (std::isfinite(len) ? "small" : "large") +
+                                          " for their products to be computed in double "
+                                          "precision; scale the object (pliant works in metres)");
                 return core::fail(core::ErrorCode::DegenerateFace,
-                                  "the rest surface has no normal at node (" +
-                                      std::to_string(node.x) + ", " + std::to_string(node.y) +
-                                      "): its neighbours' positions span no area (all equal, "
+                                  where +
+                                      "its neighbours' positions span no area (all equal, "
                                       "or on one line)");
             }
             m.N_[0].at(x, y) = sign * n.x / len;

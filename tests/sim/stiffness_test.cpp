@@ -16,6 +16,7 @@
 
 #include "sim/stencil_internal.h"
 #include "sim_test_util.h"
+#include "support/fp_traps.h"
 
 #include <random>
 
@@ -218,6 +219,26 @@ TEST(Stiffness, RejectsBadSettingsAndDegenerateGeometry)
     EXPECT_EQ(overflow.error().code, core::ErrorCode::DegenerateFace);
     EXPECT_NE(overflow.error().message.find("at node ("), std::string::npos)
         << overflow.error().message;
+
+    // A whole sphere scaled so far that the normals' products overflow or underflow: said as
+    // the scale's fault ("span no area" sent the user looking at the shape).
+    EXPECT_NE(degenerate.error().message.find("span no area"), std::string::npos)
+        << degenerate.error().message;
+    for (const double scale : {1e300, 1e-300})
+    {
+        pliant::test::FpTrapsOff traps_off;  // the products overflow and underflow, as said
+        auto scaled = scenes::sphere_grid(grid, 1.0);
+        for (auto& f : scaled)
+            for (int y = 0; y < grid.ny(); ++y)
+                for (int x = 0; x < grid.nx(); ++x)
+                    f.at(x, y) *= scale;
+        auto r = MembraneModel::create(grid, scaled, MembraneSettings{});
+        ASSERT_FALSE(r.has_value()) << scale;
+        EXPECT_EQ(r.error().code, core::ErrorCode::DegenerateFace);
+        EXPECT_NE(r.error().message.find(scale > 1.0 ? "too large" : "too small"),
+                  std::string::npos)
+            << r.error().message;
+    }
 }
 
 }  // namespace
