@@ -376,7 +376,8 @@ std::string join_failure_message(const std::string& master, const session::JoinF
                (secured ? ": it has another --passphrase or --key-file (or PLIANT_PASSPHRASE)"
                         : ": it may need a --passphrase or --key-file (or PLIANT_PASSPHRASE)") +
                ", or it is a peer of the session but not its master (join the master's address;"
-               " after a failover, the lowest-id participant's)";
+               " after a failover, the lowest-id participant's), or no pliant session listens"
+               " there (another program answers that port)";
     case net::DisconnectReason::TooManyBadDatagrams:
         return head + "and this peer could not read each other's datagrams" + why +
                (secured ? ": this peer has a secret and the master seemingly none; give both"

@@ -261,6 +261,13 @@ if(TARGET pliant)
                       -q refine ${out_dir}/spot3.pgrid --levels 1 -o ${out_dir}/q.obj)
     # join: --duration ending before any answer says "never answered"; key files that are empty
     # or readable by others are told as that (nobody listens on 127.0.0.1:9).
+    # Addresses that cannot be a master: 0.0.0.0 (a listening address: "never answered") and
+    # this peer's own --port ("refused ... may need a --passphrase").
+    pliant_cli_expect(cli_join_any_address_is_refused 2 STDERR
+                      "join: 0.0.0.0:47998 is the 'any' address" join 0.0.0.0:47998 --duration 1)
+    pliant_cli_expect(cli_join_own_port_is_refused 2 STDERR
+                      "join: 127.0.0.1:47998 is this peer's own --port 47998"
+                      join 127.0.0.1:47998 --port 47998 --duration 1)
     pliant_cli_expect(cli_join_never_answers_within_duration 3 STDERR
                       "127.0.0.1:9 never answered within --duration 1 s: check the address and port"
                       join 127.0.0.1:9 --duration 1)
