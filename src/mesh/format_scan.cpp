@@ -1207,6 +1207,20 @@ private:
 
 }  // namespace
 
+std::optional<std::string> unreadable_file(const std::filesystem::path& path)
+{
+    std::error_code ec;
+    const auto status = std::filesystem::status(path, ec);
+    if (ec || !std::filesystem::exists(status))
+        return "no such file";
+    if (std::filesystem::is_directory(status))
+        return "it is a directory";
+    // A FIFO blocks the reader for ever, a device has no end (/dev/zero).
+    if (!std::filesystem::is_regular_file(status))
+        return "not a regular file (a device, FIFO or socket)";
+    return std::nullopt;
+}
+
 core::Result<void> check_gltf_buffers(std::string_view json, const std::filesystem::path& folder,
                                       const std::string& name)
 {
@@ -1222,16 +1236,9 @@ core::Result<void> check_gltf_buffers(std::string_view json, const std::filesyst
         // refuses to write a name that would need one).
         const std::string& file = *b.uri;
         const std::string what = name + ": buffer " + std::to_string(i) + "'s file '" + file + "'";
+        if (const auto why = unreadable_file(folder / file))
+            return fail(ErrorCode::IoError, what + ": " + *why);
         std::error_code ec;
-        const auto status = std::filesystem::status(folder / file, ec);
-        if (ec || !std::filesystem::exists(status))
-            return fail(ErrorCode::IoError, what + " (beside it): no such file");
-        if (std::filesystem::is_directory(status))
-            return fail(ErrorCode::IoError, what + ": it is a directory");
-        // A FIFO blocks the reader for ever, a device has no end (/dev/zero).
-        if (!std::filesystem::is_regular_file(status))
-            return fail(ErrorCode::IoError,
-                        what + ": not a regular file (a device, FIFO or socket)");
         const std::uintmax_t size = std::filesystem::file_size(folder / file, ec);
         if (!ec && b.byte_length && size < *b.byte_length)
             return fail(ErrorCode::ParseError, what + " holds " + plural(size, "byte") +

@@ -21,6 +21,7 @@
 
 #include <cstddef>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -69,6 +70,11 @@ struct ScanResult
 /// parse), UnsupportedFormat (unknown extension, a PLY encoding pliant does not read).
 [[nodiscard]] core::Result<ScanResult> scan_format(std::string_view bytes, std::string_view ext,
                                                    const std::string& name);
+
+/// Why `path` cannot be read whole as a file, or nothing: "no such file", "it is a directory",
+/// "not a regular file (a device, FIFO or socket)" (a FIFO blocks the reader for ever, a device
+/// such as /dev/zero has no end).
+[[nodiscard]] std::optional<std::string> unreadable_file(const std::filesystem::path& path);
 
 /// The external buffers a glTF JSON (`json`, known to parse) names, in `folder`: each must be
 /// a regular file (a FIFO hung the reader, a device has no end) of at least its byteLength.

@@ -76,16 +76,8 @@ std::string fmt_point(const core::Vec3& p)
 
 core::Result<std::string> read_bytes(const std::filesystem::path& path, const std::string& name)
 {
-    std::error_code ec;
-    const auto status = std::filesystem::status(path, ec);
-    if (ec || !std::filesystem::exists(status))
-        return fail(ErrorCode::IoError, name + ": cannot open: no such file");
-    if (std::filesystem::is_directory(status))
-        return fail(ErrorCode::IoError, name + ": cannot open: it is a directory");
-    // A device, FIFO or socket has no end to read to (/dev/zero) or blocks (a FIFO).
-    if (!std::filesystem::is_regular_file(status))
-        return fail(ErrorCode::IoError,
-                    name + ": cannot open: not a regular file (a device, FIFO or socket)");
+    if (const auto why = detail::unreadable_file(path))
+        return fail(ErrorCode::IoError, name + ": cannot open: " + *why);
     std::ifstream in(path, std::ios::binary);
     if (!in)
         return fail(ErrorCode::IoError, name + ": cannot open for reading");
