@@ -160,10 +160,13 @@ int run_host(const HostOptions& opt, const GlobalOptions& global)
     if (!s)
         return report(in_grid_file(opt.grid, s.error()));
     const double limit = (*s)->model()->settings().max_force;
-    spdlog::info("hosting level {} ({} mode, point clearance {}, force limit {}) on port {}",
-                 grid.level(), opt.mode,
-                 (*s)->point_clearance() == session::PointClearance::Inside ? "inside" : "grown",
-                 limit > 0.0 ? fmt::format("{:.3g} N", limit) : std::string("none"), bound->port);
+    spdlog::info(
+        "hosting level {} ({} mode, point clearance {}, force limit {}) on port {}, session id "
+        "{:#010x}",
+        grid.level(), opt.mode,
+        (*s)->point_clearance() == session::PointClearance::Inside ? "inside" : "grown",
+        limit > 0.0 ? fmt::format("{:.3g} N", limit) : std::string("none"), bound->port,
+        (*s)->session_id());
     if (!global.quiet)  // -q: errors only
     {
         std::printf("hosting on port %u\n", static_cast<unsigned>(bound->port));

@@ -22,6 +22,7 @@
 #include <cstdio>
 #include <cstring>
 #include <limits>
+#include <random>
 #include <set>
 
 namespace pliant::session
@@ -29,6 +30,18 @@ namespace pliant::session
 
 namespace
 {
+
+/// A session id for a master whose settings name none: random, so that two sessions (a host
+/// restarted on the same port, another session's peer) tell each other apart (reason 6), and
+/// never 0, which only a Hello may carry.
+std::uint32_t draw_session_id()
+{
+    std::random_device entropy;
+    std::uint32_t id = 0;
+    for (int tries = 0; id == 0 && tries < 64; ++tries)
+        id = static_cast<std::uint32_t>(entropy());
+    return id != 0 ? id : draw_session_id();
+}
 
 /// The settings' own ranges: host and join refuse others with InvalidArgument, naming the
 /// setting, its value and the rule.
@@ -706,7 +719,7 @@ core::Result<std::unique_ptr<Session>> Session::host(net::Transport& transport,
     s->id_ = net::PeerId{0};
     s->coupling_ = settings.coupling;
     s->clearance_ = settings.point_clearance;
-    im.session_id = settings.session_id != 0 ? settings.session_id : 0x5E55u;
+    im.session_id = settings.session_id != 0 ? settings.session_id : draw_session_id();
     im.messenger.set_session(im.session_id);
     im.master_id = s->id_;
     im.welcomed = true;
@@ -915,6 +928,11 @@ std::span<const double> Session::view_time() const noexcept
 net::PeerId Session::master() const noexcept
 {
     return impl_->master_id;
+}
+
+std::uint32_t Session::session_id() const noexcept
+{
+    return impl_->session_id;
 }
 
 std::uint32_t Session::epoch() const noexcept

@@ -938,6 +938,22 @@ bool master_and_participant(Harness& h, std::uint32_t session,
     return pump_until_partitioned(h, 2);
 }
 
+// A master whose settings name no session id draws a random non-zero one, so that two sessions
+// (a host restarted on the same port, a peer of another session) tell each other apart; its
+// joiners take it from the welcome.
+TEST(SessionJoin, AMasterWithoutASessionIdDrawsOneWhichItsJoinersTake)
+{
+    Harness first;
+    Harness second;
+    ASSERT_TRUE(master_and_participant(first, 0));
+    second.host(3, settings_for(Coupling::Exact, "m"));
+    const std::uint32_t id = first.peers[0]->session_id();
+    EXPECT_NE(id, 0U);
+    EXPECT_EQ(first.peers[1]->session_id(), id);
+    // Two draws agree once in 2^32.
+    EXPECT_NE(second.peers[0]->session_id(), id);
+}
+
 /// A Halo from `sender` in session `session` for `tick`, of `stage`, carrying u 0.25 and v -0.5
 /// at `node` only: what a forger on a member's connection sends.
 net::Message forged_halo(std::uint32_t session, net::PeerId sender, std::uint64_t tick,

@@ -196,7 +196,7 @@ struct SessionSettings
     double pause_s = 4.0;
     std::string name = "peer";      ///< 1..32 printable ASCII
     std::uint16_t listen_port = 0;  ///< announced in Hello; 0: the port the master sees
-    std::uint32_t session_id = 0;   ///< master only; 0 picks a fixed non-zero id
+    std::uint32_t session_id = 0;   ///< master only; 0 draws a random non-zero id
     std::uint64_t max_ticks = 0;    ///< stop stepping at this tick (0: never), for tests
     int threads = 1;                ///< OpenMP threads of a step
 };
@@ -445,6 +445,8 @@ public:
     [[nodiscard]] std::uint64_t shown_tick() const;
     /// The newest partition known (epoch 0: none).
     [[nodiscard]] std::uint32_t epoch() const noexcept;
+    /// The session id every datagram of this session carries (0: a joiner not yet welcomed).
+    [[nodiscard]] std::uint32_t session_id() const noexcept;
     /// Owner of every leaf under the newest partition (empty: none).
     [[nodiscard]] std::vector<net::PeerId> owners() const;
     /// Owner of every leaf under the partition state() was stepped with: in exact coupling,
