@@ -5,35 +5,39 @@
 # bench/ folder is configured after tests/, so the option, not the target, is checked). Never
 # asserts on timings.
 if(TARGET pliant)
-    add_test(NAME cli_bench_unknown_suite
-             COMMAND pliant bench subdiv nosuch --out ${CMAKE_CURRENT_BINARY_DIR}/bench-unknown)
-    set_tests_properties(cli_bench_unknown_suite PROPERTIES
-        PASS_REGULAR_EXPRESSION "unknown suite 'nosuch' \\(suites: subdiv net sim mixed session")
-    add_test(NAME cli_bench_missing_program
-             COMMAND pliant bench net --bench-dir ${CMAKE_CURRENT_BINARY_DIR}/no-such-bench-dir
-                     --out ${CMAKE_CURRENT_BINARY_DIR}/bench-missing)
-    set_tests_properties(cli_bench_missing_program PROPERTIES
-        PASS_REGULAR_EXPRESSION "bench_net is missing: build the benchmark programs with the release preset")
+    pliant_cli_expect(cli_bench_unknown_suite 2 STDERR
+                      "unknown suite 'nosuch' \\(suites: subdiv net sim mixed session"
+                      bench subdiv nosuch --out ${CMAKE_CURRENT_BINARY_DIR}/bench-unknown)
+    pliant_cli_expect(cli_bench_missing_program 1 STDERR
+                      "bench_net is missing: build the benchmark programs with the release preset"
+                      bench net --bench-dir ${CMAKE_CURRENT_BINARY_DIR}/no-such-bench-dir
+                      --out ${CMAKE_CURRENT_BINARY_DIR}/bench-missing)
     if(PLIANT_BUILD_BENCH)
+        # From empty folders, so that the checks never see an earlier run's files.
+        set(_quick ${CMAKE_CURRENT_BINARY_DIR}/bench-quick)
         add_test(NAME cli_bench_net_quick
-                 COMMAND pliant bench net --quick --out ${CMAKE_CURRENT_BINARY_DIR}/bench-quick)
+                 COMMAND sh -c "rm -rf '${_quick}' && exec '$<TARGET_FILE:pliant>' bench net --quick --out '${_quick}'")
         set_tests_properties(cli_bench_net_quick PROPERTIES TIMEOUT 120)
         add_test(NAME cli_bench_net_quick_outputs
                  COMMAND ${CMAKE_COMMAND} -DDIR=${CMAKE_CURRENT_BINARY_DIR}/bench-quick -DSUITE=net
                          -P ${PROJECT_SOURCE_DIR}/apps/pliant-cli/bench/check_bench_outputs.cmake)
+        set_property(TEST cli_bench_net_quick APPEND PROPERTY
+                     FIXTURES_SETUP cli_bench_net_quick_done)
         set_tests_properties(cli_bench_net_quick_outputs PROPERTIES
-            DEPENDS cli_bench_net_quick)
+                             FIXTURES_REQUIRED cli_bench_net_quick_done)
         # A suite that is a mode of a program (pliant_bench_session --latency, level 6).
+        set(_latency ${CMAKE_CURRENT_BINARY_DIR}/bench-latency)
         add_test(NAME cli_bench_latency_quick
-                 COMMAND pliant bench latency --quick --no-plots
-                         --out ${CMAKE_CURRENT_BINARY_DIR}/bench-latency)
+                 COMMAND sh -c "rm -rf '${_latency}' && exec '$<TARGET_FILE:pliant>' bench latency --quick --no-plots --out '${_latency}'")
         set_tests_properties(cli_bench_latency_quick PROPERTIES TIMEOUT 120)
         add_test(NAME cli_bench_latency_quick_outputs
                  COMMAND ${CMAKE_COMMAND} -DDIR=${CMAKE_CURRENT_BINARY_DIR}/bench-latency
                          -DSUITE=latency
                          -P ${PROJECT_SOURCE_DIR}/apps/pliant-cli/bench/check_bench_outputs.cmake)
+        set_property(TEST cli_bench_latency_quick APPEND PROPERTY
+                     FIXTURES_SETUP cli_bench_latency_quick_done)
         set_tests_properties(cli_bench_latency_quick_outputs PROPERTIES
-            DEPENDS cli_bench_latency_quick)
+                             FIXTURES_REQUIRED cli_bench_latency_quick_done)
         # Ctrl-C once the second suite has started (its log file is created when it is
         # spawned): it is stopped, and results.json is written with the first, which completed;
         # the stopped suite's earlier results (KEEP: sim.csv) stay as they were.

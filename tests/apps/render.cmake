@@ -73,15 +73,15 @@ if(TARGET pliant AND TARGET pliant_png_check)
         "6 frames from .*; displacement colours full at \\|u\\| = [0-9.]+e-0[1-3] m \\(the largest \\|u\\| over the 6 frames\\)"
         "--frames;${_r}/frames;-o;${_r}/seq/f.png;--size;240x180;--color;displacement;--camera;0,30"
         "${_r}/seq/f_0000.png,--size,240x180,--cover,0.05,0.9,--saturated,0,0.01"
-        "${_r}/seq/f_0001.png,--saturated,0,0.2"
-        "${_r}/seq/f_0005.png,--saturated,0.01,0.6")
+        "${_r}/seq/f_0001.png,--size,240x180,--cover,0.05,0.9,--saturated,0,0.2"
+        "${_r}/seq/f_0005.png,--size,240x180,--cover,0.05,0.9,--saturated,0.01,0.6")
     # --color-range sets the range by hand: 1 mm saturates the bump of frame 5 over more of the
     # surface than the automatic range does.
     pliant_add_render_test(cli_render_frames_color_range render_frames
         "6 frames from .*; displacement colours full at \\|u\\| = 1\\.000e-03 m \\(--color-range\\)"
         "--frames;${_r}/frames;-o;${_r}/seq-range/f.png;--size;240x180;--color;displacement;--camera;0,30;--color-range;1e-3"
-        "${_r}/seq-range/f_0000.png,--saturated,0,0.01"
-        "${_r}/seq-range/f_0005.png,--saturated,0.3,1")
+        "${_r}/seq-range/f_0000.png,--size,240x180,--cover,0.05,0.9,--saturated,0,0.01"
+        "${_r}/seq-range/f_0005.png,--size,240x180,--cover,0.05,0.9,--saturated,0.3,1")
 
     # An earlier, longer sequence under the same name: its frames go before the new ones are
     # written (f_0007.png of an earlier run was left beside the 6 new frames).
