@@ -229,6 +229,13 @@ if(TARGET pliant AND PLIANT_HAVE_VIEWER AND PLIANT_XVFB)
         set_tests_properties(cli_view_export_${_ext} PROPERTIES FIXTURES_REQUIRED viewer_export
                              ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0")
     endforeach()
+elseif(TARGET pliant AND "$ENV{CI}" STREQUAL "true")
+    # CI installs GLFW, Dear ImGui and Xvfb (scripts/install-deps.sh): a missing one must not
+    # leave the viewer untested with the run green.
+    message(FATAL_ERROR "CI: the viewer's tests need the viewer (PLIANT_HAVE_VIEWER: "
+                        "'${PLIANT_HAVE_VIEWER}') and Xvfb (found: '${PLIANT_XVFB}')")
+elseif(TARGET pliant)
+    message(STATUS "pliant view is not tested: it needs the viewer (GLFW, Dear ImGui) and Xvfb")
 endif()
 # The viewer's window-free parts (picking, input scripts, the grab's spring) as unit tests.
 if(TARGET pliant_render AND TARGET pliant_test_support)
