@@ -137,7 +137,15 @@ TEST(ViewerPicking, PickFindsTheNearSideOfASphereGrid)
         const auto hit = pick(ray, positions, faces);
         ASSERT_TRUE(hit.has_value()) << i;
         EXPECT_NEAR(hit->t, t_near, 5.0 * sag / std::sqrt(disc) + 1e-9) << i;
-        EXPECT_LT(faces.size(), std::size_t{1} << 20);
+        // The face and weights it reports give back its point: it lies in that face.
+        ASSERT_LT(hit->face, faces.size());
+        const auto& f = faces[hit->face];
+        EXPECT_GE(hit->b1, -1e-12);
+        EXPECT_GE(hit->b2, -1e-12);
+        EXPECT_LE(hit->b1 + hit->b2, 1.0 + 1e-12);
+        const core::Vec3 on_face = positions[f[0]] * (1.0 - hit->b1 - hit->b2) +
+                                   positions[f[1]] * hit->b1 + positions[f[2]] * hit->b2;
+        EXPECT_LT(core::norm(on_face - hit->point), 1e-12) << i;
         EXPECT_LE(core::norm(hit->point), 1.0 + 1e-12);
         EXPECT_GE(core::norm(hit->point), 1.0 - sag);
     }

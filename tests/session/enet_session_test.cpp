@@ -96,6 +96,7 @@ void run_over_loopback(int participants)
         const LeafGraph* g = p->leaf_graph();
         const Diff d = compare(grid, p->state().u, ref.u,
                                [&](core::NodeIndex n) { return owners[g->leaf_of(n)] == p->id(); });
+        EXPECT_GT(d.compared, 0U) << "peer " << p->id().value << " owns no node";
         EXPECT_EQ(d.max_abs, 0.0);
         EXPECT_LE(d.relative(), 1e-12);
         EXPECT_GT(d.max_ref, 1e-4);

@@ -730,6 +730,7 @@ TEST(SessionLoss, ExactLockstepUnderLossAndLatencyStaysEqualToASingleProcess)
         const Diff d =
             compare(grid, p.state().u, ref.u,
                     [&](core::NodeIndex n) { return owners[graph.leaf_of(n)] == p.id(); });
+        EXPECT_GT(d.compared, 0U) << "peer " << k << " owns no node";
         EXPECT_LE(d.relative(), 1e-12) << "peer " << k;
     }
     const Diff dv = compare(grid, viewer.view_u(), ref.u, {});

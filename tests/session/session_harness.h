@@ -114,7 +114,8 @@ inline sim::MembraneState reference_run(int level, std::uint64_t ticks,
 struct Diff
 {
     double max_abs = 0.0;
-    double max_ref = 0.0;
+    double max_ref = 0.0;       ///< over every node
+    std::size_t compared = 0;  ///< nodes `use` took (0: the comparison checked nothing)
     [[nodiscard]] double relative() const { return max_ref > 0.0 ? max_abs / max_ref : max_abs; }
 };
 
@@ -127,7 +128,10 @@ inline Diff compare(const core::TetraGrid& g, const core::Field<double>& a,
         const core::GridCoord c = g.coord(n);
         d.max_ref = std::max(d.max_ref, std::fabs(b.at(c.x, c.y)));
         if (!use || use(n))
+        {
             d.max_abs = std::max(d.max_abs, std::fabs(a.at(c.x, c.y) - b.at(c.x, c.y)));
+            ++d.compared;
+        }
     }
     return d;
 }

@@ -92,6 +92,7 @@ void run_exact_threads(int participants)
         const auto mine = [&](core::NodeIndex n) { return owners[graph->leaf_of(n)] == p.id(); };
         const Diff du = compare(g, p.state().u, ref.u, mine);
         const Diff dv = compare(g, p.state().v, ref.v, mine);
+        EXPECT_GT(du.compared, 0U) << "peer " << k << " owns no node";
         EXPECT_GT(du.max_ref, 1e-4) << "the forces did something";
         EXPECT_LE(du.relative(), 1e-12) << "peer " << k;
         EXPECT_LE(dv.relative(), 1e-12) << "peer " << k;
