@@ -354,9 +354,12 @@ TEST(SessionExact, TurnedSlabsWithACapsShareEqualSingleProcess)
 }
 
 // Fast coupling over whatever shapes random points give (grown, rebalanced, and with clearance
-// Inside the bands): every member keeps stepping, its state stays finite and within the
-// coupling's error of one process. Layouts from a fixed seed; PLIANT_RANDOM_LAYOUTS for more.
-TEST(SessionFast, RandomPointsStayFiniteAndNearOneProcess)
+// Inside the bands): every member keeps stepping, its state stays finite and within the worst
+// error measured over 200 layouts (0.43, docs/session.md §4.2; the 4 default layouts give 0.20).
+// A check of stability, not accuracy: an unstable coupling grows without bound, while fast
+// coupling's accuracy is held to 1e-3 by SessionFast.TwoPeersStayWithinTheDocumentedError.
+// Layouts from a fixed seed; PLIANT_RANDOM_LAYOUTS for more.
+TEST(SessionFast, RandomPointsStayStableAndWithinTheMeasuredWorstError)
 {
     std::mt19937 rng(777);
     const char* more = std::getenv("PLIANT_RANDOM_LAYOUTS");
