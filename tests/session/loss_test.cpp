@@ -103,6 +103,14 @@ TEST(SessionLoss, FastSessionUnderLossAndLatencyStaysBoundedAndViewsStayWithinTh
     double max_ref = 0.0;
 
     const int total = static_cast<int>(seconds * 60.0);
+    // How old a view may be, from the links alone rather than from the receivers' own
+    // view_time(): the one-way latency with its jitter and a reordering's delay, the playout
+    // margin of two stream periods (SessionView.ThePlayoutMarginIsTwoOfTheSendersPeriods), and
+    // up to five states of one leaf lost in a row (5 % loss: about one leaf state in 3 million).
+    const net::SimulatedNetworkSettings links = internet();
+    const double period = 1.0 / set.stream_rate_hz;
+    const double max_age = links.link.latency_s + links.link.jitter_s +
+                           links.link.reorder_delay_s + 2.0 * period + 5.0 * period;
     std::deque<double> recent_v;  // per frame: max |v| over every owner's owned nodes
     double worst = 0.0;           // max over checks of |view - owner| / allowed
     double worst_rel = 0.0;       // max |view - owner| / max |u| (what a user sees)
@@ -173,7 +181,7 @@ TEST(SessionLoss, FastSessionUnderLossAndLatencyStaysBoundedAndViewsStayWithinTh
                 const Session* o = owner_of(h, owners[l]);
                 const core::GridCoord c = grid.coord(n);
                 const double age = o->time() - p.view_time()[l];
-                ASSERT_LE(age, 1.0) << "peer " << k << " leaf " << l;
+                ASSERT_LE(age, max_age) << "peer " << k << " leaf " << l;
                 max_view_age = std::max(max_view_age, age);
                 const double err = std::fabs(p.view_u().at(c.x, c.y) - o->state().u.at(c.x, c.y));
                 const double allowed = V * std::max(age, 0.0) + 1e-9;
