@@ -109,8 +109,8 @@ TEST(SessionLoss, FastSessionUnderLossAndLatencyStaysBoundedAndViewsStayWithinTh
     // up to five states of one leaf lost in a row (5 % loss: about one leaf state in 3 million).
     const net::SimulatedNetworkSettings links = internet();
     const double period = 1.0 / set.stream_rate_hz;
-    const double max_age = links.link.latency_s + links.link.jitter_s +
-                           links.link.reorder_delay_s + 2.0 * period + 5.0 * period;
+    const double max_age = links.link.latency_s + links.link.jitter_s + links.link.reorder_delay_s +
+                           2.0 * period + 5.0 * period;
     std::deque<double> recent_v;  // per frame: max |v| over every owner's owned nodes
     double worst = 0.0;           // max over checks of |view - owner| / allowed
     double worst_rel = 0.0;       // max |view - owner| / max |u| (what a user sees)
