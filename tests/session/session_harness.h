@@ -114,7 +114,7 @@ inline sim::MembraneState reference_run(int level, std::uint64_t ticks,
 struct Diff
 {
     double max_abs = 0.0;
-    double max_ref = 0.0;       ///< over every node
+    double max_ref = 0.0;      ///< over every node
     std::size_t compared = 0;  ///< nodes `use` took (0: the comparison checked nothing)
     [[nodiscard]] double relative() const { return max_ref > 0.0 ? max_abs / max_ref : max_abs; }
 };
