@@ -101,6 +101,11 @@ void viewer_script(std::string_view text)
                                        [](unsigned char c) { return c < 0x20 || c == 0x7f; }),
                           k_target, "an export file name with a control byte");
         }
+        if (e.kind == viewer::ScriptEvent::Kind::Load)
+            fuzz::require(!e.file.empty() &&
+                              std::none_of(e.file.begin(), e.file.end(),
+                                           [](unsigned char c) { return c < 0x20 || c == 0x7f; }),
+                          k_target, "a load without a file or with a control byte");
     }
 }
 

@@ -92,7 +92,7 @@ int run_view(const ViewOptions& opt)
     if (!opt.resume.empty())
     {
         // Checked before any window opens: INPUT must be the rest grid the state belongs to.
-        if (std::filesystem::path(opt.input).extension() != ".pgrid")
+        if (lower_extension(opt.input) != ".pgrid")
             return report(
                 {core::ErrorCode::InvalidArgument,
                  "view: --resume needs INPUT to be the rest grid (.pgrid) the state "
@@ -150,12 +150,14 @@ void add_view_command(CLI::App& app, const GlobalOptions& global)
         "view", "Interactive viewer: simulate, drag the surface, join or host a session.");
     cmd->footer(
         "INPUT is a .pgrid grid, a mesh (remeshed at --level on a worker thread), or HOST:PORT\n"
-        "of a session's master, HOST being a.b.c.d or localhost (joins as a viewer, or with\n"
+        "of a session's master, HOST a.b.c.d or a host name (joins as a viewer, or with\n"
         "--participant; when the master does not answer, the window says so in red and a run\n"
         "with --exit-after exits with status 1). Without INPUT the bundled spot.obj is\n"
         "remeshed. Left drag on the surface pulls it; on the background it orbits; the wheel\n"
-        "zooms; P or F12 saves a screenshot (the first free pliant-view-NNNN.png); W wireframe;\n"
-        "C colouring; Space pause; R rest; H hides the panels. --script, --screenshot and\n"
+        "zooms; P or F12 saves a screenshot (the first free pliant-view-NNNN.png); E exports the\n"
+        "surface (pliant-view-NNNN.obj, or the Export panel's format); W wireframe; C colouring;\n"
+        "Space pause; R rest; H hides the panels; Esc quits. Loading another surface needs the\n"
+        "session left first. --script, --screenshot and\n"
         "--exit-after make a headless run for tests (docs/viewer.md); their clocks start when\n"
         "the object shows. Ctrl-C in the terminal closes the viewer as its window does (a\n"
         "session left with its hand-over, --screenshot written), exit status 130. A session\n"

@@ -39,6 +39,27 @@ if(TARGET pliant AND PLIANT_HAVE_VIEWER AND PLIANT_XVFB)
         FIXTURES_SETUP "viewer_png;viewer_export"
         FIXTURES_REQUIRED viewer_export_clean
         ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0;LIBGL_ALWAYS_SOFTWARE=1;OMP_NUM_THREADS=1")
+    # A surface loaded while a pull is held (`load` in the script, as the Load panel): the grab
+    # lets go, and the new surface (a level-3 grid of another mesh) stays at rest, where the
+    # grab went on pulling it through the old surface's face and rest point (a read past the
+    # new surface's faces; the pull landed elsewhere, up to 1,200 % of the radius). The exit
+    # summary speaks of the surface shown last.
+    set(_load_dir ${CMAKE_CURRENT_BINARY_DIR}/viewer-load)
+    add_test(NAME cli_view_load_grid
+             COMMAND sh -c "rm -rf '${_load_dir}' && mkdir -p '${_load_dir}' && exec '$<TARGET_FILE:pliant>' -q remesh '${PROJECT_SOURCE_DIR}/tests/data/meshes/cube_minus_sphere.obj' --level 3 -o '${_load_dir}/viewer-load.pgrid'")
+    set_tests_properties(cli_view_load_grid PROPERTIES TIMEOUT 120 FIXTURES_SETUP viewer_load_grid
+                         ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0")
+    add_test(NAME cli_view_load_during_a_drag_lets_go
+             COMMAND ${CMAKE_COMMAND}
+                     "-DCOMMAND=${_xvfb};$<TARGET_FILE:pliant>;view;${PROJECT_SOURCE_DIR}/data/spot.obj;--level;4;--size;640x480;--script;${CMAKE_CURRENT_SOURCE_DIR}/viewer_load_during_drag.txt;--exit-after;5"
+                     -DEXIT=0 "-DSTDOUT_REGEX=largest \\|u\\| reached 0\\.0000e\\+00 m"
+                     "-DSTDERR_REGEX=viewer-load\\.pgrid \\(level 3 grid\\)" -DTIMEOUT=110
+                     -P ${CMAKE_CURRENT_SOURCE_DIR}/expect_exit.cmake)
+    set_tests_properties(cli_view_load_during_a_drag_lets_go PROPERTIES
+        TIMEOUT 120
+        WORKING_DIRECTORY ${_load_dir}
+        FIXTURES_REQUIRED viewer_load_grid
+        ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0;LIBGL_ALWAYS_SOFTWARE=1;OMP_NUM_THREADS=1")
     add_test(NAME cli_view_screenshot_png
              COMMAND ${CMAKE_COMMAND} -DPNG=${_viewer_png} -DMIN_BYTES=8000
                      -P ${CMAKE_CURRENT_SOURCE_DIR}/viewer_check_png.cmake)

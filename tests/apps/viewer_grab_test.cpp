@@ -67,5 +67,30 @@ TEST(ViewerGrab, SlowFramesHoldTheSpringNoLongerThanItIsStable)
     EXPECT_GT(largest_u(0.25, 0.1, 40), 100.0 * held);
 }
 
+// Another surface at the same level (a load, a session's model) brings its own rest positions:
+// the view took them only when the levels changed, so a grab on the new surface was placed
+// through the old one's and pulled somewhere else.
+TEST(ViewerSurface, AnotherSurfaceAtTheSameLevelBringsItsRestPositions)
+{
+    const core::TetraGrid grid = core::TetraGrid::create(4).value();
+    const sim::MembraneSettings material = default_material(4);
+    auto small = LocalSim::create(grid, scenes::sphere_grid(grid, 1.0), material).value();
+    core::Vec3Field<double> moved = scenes::sphere_grid(grid, 10.0);
+    for (double& y : moved[1].padded())
+        y += 20.0;
+    auto large = LocalSim::create(grid, moved, material).value();
+    SurfaceView view;
+    view.update(small.model(), small.state().u, 1);
+    view.update(large.model(), large.state().u, 1);
+    const auto nodes = grid.node_of_unique();
+    ASSERT_EQ(view.rest_positions().size(), nodes.size());
+    for (std::size_t i = 0; i < nodes.size(); ++i)
+    {
+        const core::Vec3 expected{moved[0][nodes[i]], moved[1][nodes[i]], moved[2][nodes[i]]};
+        ASSERT_EQ(view.rest_positions()[i], expected) << "unique vertex " << i;
+        ASSERT_EQ(view.positions()[i], expected) << "unique vertex " << i << " (at rest)";
+    }
+}
+
 }  // namespace
 }  // namespace pliant::viewer

@@ -171,7 +171,31 @@ struct Recorder final : InputSink
         log.push_back("wheel " + std::to_string(static_cast<int>(clicks)));
     }
     void key(std::string_view name) override { log.push_back("key " + std::string(name)); }
+    void export_file(std::string_view file) override
+    {
+        log.push_back("export " + std::string(file));
+    }
+    void load_file(std::string_view file) override { log.push_back("load " + std::string(file)); }
 };
+
+TEST(ViewerScript, LoadAndExportArePlayedWithTheirFiles)
+{
+    auto events = parse_input_script("0.3 export out.GLB\n0.2 load other.pgrid\n");
+    ASSERT_TRUE(events.has_value()) << events.error().message;
+    ScriptPlayer player(std::move(*events));
+    Recorder r;
+    player.play(1.0, r);
+    const std::vector<std::string> expected{"load other.pgrid", "export out.GLB"};
+    EXPECT_EQ(r.log, expected);
+    // A load needs its file; an export its format.
+    EXPECT_FALSE(parse_input_script("0.2 load\n").has_value());
+    EXPECT_FALSE(parse_input_script("0.2 export out.txt\n").has_value());
+    auto control = parse_input_script("0.2 load a\x01.pgrid\n", "s.txt");
+    ASSERT_FALSE(control.has_value());
+    EXPECT_EQ(control.error().message.rfind("s.txt:1: load file name has a control byte (0x01)", 0),
+              0U)
+        << control.error().message;
+}
 
 TEST(ViewerScript, ParsesAndPlaysInOrder)
 {

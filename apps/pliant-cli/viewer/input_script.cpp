@@ -99,11 +99,11 @@ core::Result<std::vector<ScriptEvent>> parse_input_script(std::string_view text,
                                    "unknown key `" + e.key +
                                        "` (expected p, f12, e, w, c, h, r, space or escape)");
         }
-        else if (command == "export")
+        else if (command == "export" || command == "load")
         {
-            e.kind = ScriptEvent::Kind::Export;
+            e.kind = command == "export" ? ScriptEvent::Kind::Export : ScriptEvent::Kind::Load;
             if (!(in >> e.file))
-                return parse_error(source, number, "expected `TIME export FILE`");
+                return parse_error(source, number, "expected `TIME " + command + " FILE`");
             // A NUL would end the name the system sees early (another file would be written),
             // and other control bytes are no one's file name.
             if (const auto bad =
@@ -111,14 +111,15 @@ core::Result<std::vector<ScriptEvent>> parse_input_script(std::string_view text,
                                  [](unsigned char c) { return c < 0x20 || c == 0x7f; });
                 bad != e.file.end())
                 return parse_error(source, number,
-                                   "export file name has a control byte (0x" +
+                                   command + " file name has a control byte (0x" +
                                        hex_byte(static_cast<unsigned char>(*bad)) +
                                        ") at character " +
                                        std::to_string(bad - e.file.begin() + 1));
             std::string ext = std::filesystem::path(e.file).extension().string();
             std::transform(ext.begin(), ext.end(), ext.begin(),
                            [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-            if (ext != ".obj" && ext != ".ply" && ext != ".gltf" && ext != ".glb")
+            if (e.kind == ScriptEvent::Kind::Export && ext != ".obj" && ext != ".ply" &&
+                ext != ".gltf" && ext != ".glb")
                 return parse_error(
                     source, number,
                     "export file `" + e.file + "` must end in .obj, .ply, .gltf or .glb");
@@ -126,7 +127,7 @@ core::Result<std::vector<ScriptEvent>> parse_input_script(std::string_view text,
         else
             return parse_error(
                 source, number,
-                "unknown command `" + command + "` (expected drag, wheel, key or export)");
+                "unknown command `" + command + "` (expected drag, wheel, key, export or load)");
         std::string extra;
         if (in >> extra)
             return parse_error(source, number, "unexpected `" + extra + "` at the end");
@@ -196,6 +197,7 @@ void ScriptPlayer::play(double t, InputSink& sink)
         case ScriptEvent::Kind::Wheel: sink.wheel(e.x0, e.y0, e.clicks); break;
         case ScriptEvent::Kind::Key: sink.key(e.key); break;
         case ScriptEvent::Kind::Export: sink.export_file(e.file); break;
+        case ScriptEvent::Kind::Load: sink.load_file(e.file); break;
         }
     }
 }

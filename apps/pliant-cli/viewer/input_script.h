@@ -14,6 +14,8 @@
 //                                           # c, h, r, space, escape (k_script_keys)
 //     2.8  export out.glb                    # export the surface to a file (.obj .ply .gltf
 //                                           # .glb; relative to the working folder)
+//     3.0  load other.pgrid                  # load another surface, as the Load panel does
+//                                           # (a grid or a mesh; remeshed in the background)
 //
 // Events may overlap in time only if they are not both drags.
 
@@ -37,6 +39,7 @@ struct ScriptEvent
         Wheel,
         Key,
         Export,
+        Load,
     };
     Kind kind = Kind::Drag;
     double time = 0.0;      ///< s
@@ -45,7 +48,7 @@ struct ScriptEvent
     double x1 = 0.0, y1 = 0.0;  ///< end point (drag)
     double clicks = 0.0;        ///< wheel
     std::string key;            ///< key name (lower case)
-    std::string file;           ///< export: the file to write (one word, no spaces)
+    std::string file;           ///< export: the file to write; load: to read (one word)
     std::size_t line = 0;       ///< line of the script it came from (1-based)
 };
 
@@ -56,8 +59,8 @@ inline constexpr std::array<std::string_view, 9> k_script_keys{"p", "f12", "e", 
 
 /// Parses a script; `source` (the file name) starts every message, `SOURCE:LINE: ...`.
 /// \return ParseError naming the line for an unknown command or key, a missing or non-finite
-/// number, a negative time or duration, overlapping drags, or an export file whose extension is
-/// not .obj, .ply, .gltf or .glb.
+/// number, a negative time or duration, overlapping drags, an export file whose extension is
+/// not .obj, .ply, .gltf or .glb, or a file name with a control byte.
 core::Result<std::vector<ScriptEvent>> parse_input_script(std::string_view text,
                                                           std::string_view source = "script");
 /// Reads and parses a script file. \return IoError or parse_input_script's errors.
@@ -74,6 +77,8 @@ public:
     virtual void key(std::string_view name) = 0;
     /// `TIME export FILE`: write the current surface to FILE (default: ignored).
     virtual void export_file(std::string_view /*file*/) {}
+    /// `TIME load FILE`: load FILE in place of the surface shown (default: ignored).
+    virtual void load_file(std::string_view /*file*/) {}
 };
 
 /// Plays a script against a clock: `play(t)` sends every event due by time t, and for a drag in

@@ -7,6 +7,7 @@
 #include <pliant/mesh/validate.h>
 #include <pliant/remesh/remesh.h>
 
+#include <cctype>
 #include <chrono>
 #include <cstdio>
 #include <new>
@@ -94,7 +95,10 @@ void LoadJob::load()
         done_.store(true, std::memory_order_release);
     };
     const std::string name = path_.filename().string();
-    if (path_.extension() == ".pgrid")
+    std::string extension = path_.extension().string();  // as the CLI reads it: any case
+    for (char& c : extension)
+        c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (extension == ".pgrid")
     {
         Sink(*this).update("reading " + name, 0.0);
         auto file = core::load_grid(path_);

@@ -101,12 +101,15 @@ void SurfaceView::update(const sim::MembraneModel& model, const core::Field<doub
         faces_ = grid.triangles();
         unique_.assign(grid.unique_count(), core::Vec3{});
         rest_.assign(grid.unique_count(), core::Vec3{});
+    }
+    // The rest positions at every update, not only when the levels change: another surface
+    // (a load, a session's model) at the same level has other ones, and a grab on it is
+    // placed through them.
+    {
         const auto& P = model.rest_positions();
+        const auto nodes = grid.node_of_unique();
         for (std::size_t i = 0; i < rest_.size(); ++i)
-        {
-            const core::NodeIndex n = grid.node_of_unique()[i];
-            rest_[i] = {P[0][n], P[1][n], P[2][n]};
-        }
+            rest_[i] = {P[0][nodes[i]], P[1][nodes[i]], P[2][nodes[i]]};
     }
     // p = P + u N at the sim level (twins equal because P, N and u have equal twins).
     const auto& P = model.rest_positions();

@@ -272,6 +272,15 @@ void Viewer::start_load(const std::filesystem::path& path)
         set_status("already loading " + load_->path().filename().string(), true);
         return;
     }
+    // A new surface replaces the session's: the master's load would end the session for every
+    // peer. Leave (or end) it first, on purpose.
+    if (session_)
+    {
+        set_status(
+            "leave the session before loading another surface (" + path.filename().string() + ")",
+            true);
+        return;
+    }
     load_ = std::make_unique<LoadJob>(path, options_.level);
     set_status("loading " + path.string(), false);
 }
@@ -291,9 +300,26 @@ void Viewer::finish_load()
             set_status(result.error().message, true);
         return;
     }
-    if (session_)
+    if (session_)  // not reached: joining or hosting cancels a load
         leave_session();
+    max_u_reached_ = 0.0;  // the exit summary speaks of the object shown last
     start_local(std::move(*result));
+}
+
+void Viewer::cancel_load(const std::string& why)
+{
+    if (!load_)
+        return;
+    const std::string name = load_->path().filename().string();
+    load_.reset();  // cancels the worker and joins it
+    spdlog::info("view: loading {} cancelled: {}", name, why);
+}
+
+void Viewer::drop_grab() noexcept
+{
+    grab_.reset();
+    if (drag_ == Drag::Grab)
+        drag_ = Drag::None;
 }
 
 void Viewer::start_local(LoadedSurface surface)
@@ -319,6 +345,7 @@ void Viewer::start_local(LoadedSurface surface)
         return;
     }
     material_ = material;
+    drop_grab();
     local_.emplace(std::move(**sim));
     surface_name_ = surface.description;
     set_status(surface.description, false);
@@ -363,6 +390,7 @@ bool Viewer::join_session(const std::string& address, bool participant)
         return false;
     }
     leave_session();
+    drop_grab();
     transport_ = cli::secure_or_plain(net::make_enet_transport(), options_.secret);
     auto bound = transport_->open(net::Address{{0, 0, 0, 0}, options_.port});
     if (!bound)
@@ -385,6 +413,8 @@ bool Viewer::join_session(const std::string& address, bool participant)
     session_ = std::move(*s);
     session_address_ = address;
     hosting_ = false;
+    cancel_load("joined " + address);
+    max_u_reached_ = 0.0;
     // The Session panel's field shows the address tried, so a retry is one click.
     std::snprintf(join_address_.data(), join_address_.size(), "%s", address.c_str());
     joined_ = false;
@@ -408,6 +438,7 @@ bool Viewer::host_session(std::uint16_t port, bool exact)
         return false;
     }
     leave_session();
+    drop_grab();
     transport_ = cli::secure_or_plain(net::make_enet_transport(), options_.secret);
     auto bound = transport_->open(net::Address{{0, 0, 0, 0}, port});
     if (!bound)
@@ -420,6 +451,19 @@ bool Viewer::host_session(std::uint16_t port, bool exact)
     // panel's fields.
     sim::MembraneSettings material = local_ ? local_->model().settings() : material_;
     material.fixed_step = exact;
+    if (exact)
+    {
+        // Lockstep has no error control: the step `pliant host` takes, 1 ms or 0.9 of the
+        // grid's stable step where that is shorter (docs/physics.md §5).
+        auto probe = sim::MembraneModel::create(surface_->grid, surface_->positions, material);
+        if (!probe)
+        {
+            set_status(probe.error().message, true);
+            transport_.reset();
+            return false;
+        }
+        material.fixed_dt = std::min(1e-3, 0.9 * sim::stable_fixed_step(*probe));
+    }
     session::SessionSettings settings;
     settings.coupling = exact ? session::Coupling::Exact : session::Coupling::Fast;
     settings.name = options_.name;
@@ -434,6 +478,7 @@ bool Viewer::host_session(std::uint16_t port, bool exact)
     }
     session_ = std::move(*s);
     session_address_ = "port " + std::to_string(bound->port);
+    cancel_load("hosting on port " + std::to_string(bound->port));
     joined_ = true;
     hosting_ = true;
     open_session_panel_ = true;
@@ -812,6 +857,11 @@ void Viewer::export_file(std::string_view file)
         script_failed_ = true;
 }
 
+void Viewer::load_file(std::string_view file)
+{
+    start_load(std::filesystem::path(file));
+}
+
 bool Viewer::export_surface(std::optional<std::filesystem::path> path)
 {
     if (!object_shown())
@@ -1039,6 +1089,8 @@ int Viewer::run()
     int fb_w = 0;
     int fb_h = 0;
     glfwGetFramebufferSize(window_, &fb_w, &fb_h);
+    fb_w = std::max(fb_w, 1);  // a minimised window may report 0 x 0, as in the loop
+    fb_h = std::max(fb_h, 1);
     bool shot_ok = true;
     if (!options_.screenshot.empty() && object_shown())
     {

@@ -71,6 +71,7 @@ public:
     void wheel(double x, double y, double clicks) override;
     void key(std::string_view name) override;
     void export_file(std::string_view file) override;
+    void load_file(std::string_view file) override;
 
     // Panels (viewer_panels.cpp).
     void draw_panels();
@@ -152,6 +153,11 @@ public:
     void start_load(const std::filesystem::path& path);
     void finish_load();
     void start_local(LoadedSurface surface);
+    /// Lets go of a grab: the surface it holds (its face, rest point, radius) is about to be
+    /// replaced, or the session it pulls in changes.
+    void drop_grab() noexcept;
+    /// Stops a remeshing in progress, saying so in the status line with `why`.
+    void cancel_load(const std::string& why);
     /// The display level for a surface simulated at `sim_level`: --display-level clamped to
     /// sim_level .. max_display_level (with a warning above), else sim level + 1 up to 8.
     [[nodiscard]] int initial_display_level(int sim_level) const;

@@ -90,11 +90,14 @@ void Viewer::draw_panels()
     if (ImGui::CollapsingHeader("Load"))
     {
         ImGui::InputText("file", load_path_.data(), load_path_.size());
-        ImGui::SliderInt("remesh level", &options_.level, 3, 9);
-        ImGui::BeginDisabled(load_ != nullptr || load_path_[0] == '\0');
+        ImGui::SliderInt("remesh level", &options_.level, 1, core::k_max_level);  // as --level
+        // A load replaces the surface, and with it the session's: leave it first.
+        ImGui::BeginDisabled(load_ != nullptr || load_path_[0] == '\0' || session_ != nullptr);
         if (ImGui::Button("Load mesh or .pgrid"))
             start_load(load_path_.data());
         ImGui::EndDisabled();
+        if (session_)
+            ImGui::TextDisabled("leave the session to load another surface");
     }
 
     const sim::MembraneModel* m = model();
