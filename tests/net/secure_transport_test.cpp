@@ -25,6 +25,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <cstring>
 #include <deque>
 #include <fstream>
@@ -253,6 +254,33 @@ struct SimPair
         return out;
     }
 };
+
+/// The 32 bytes written as hex.
+std::string hex_of(const SecretKey& key)
+{
+    std::string out;
+    for (const std::uint8_t b : key.bytes)
+    {
+        char two[3];
+        std::snprintf(two, sizeof two, "%02x", static_cast<unsigned>(b));
+        out += two;
+    }
+    return out;
+}
+
+// The key every peer derives, against answers computed without pliant or libsodium: Python's
+// BLAKE2b for the salt and the Argon2 reference implementation for the key
+// (tests/net/kdf_known_answer.py), with the protocol's limits and the tests' cheapest.
+TEST(SecureKey, MatchesTheArgon2ReferenceImplementation)
+{
+    EXPECT_EQ(
+        hex_of(derive_key("open sesame", k_default_key_context, KdfLimits::protocol()).value()),
+        "a9245243197e74b084c201a0503b1a3c354040a6248a1ba701146598fb73d49b");
+    EXPECT_EQ(
+        hex_of(derive_key("open sesame", k_default_key_context, KdfLimits::cheapest_for_tests())
+                   .value()),
+        "92637d0c74369b8ce72f5f477b342b860feba415e77be78544240b15d0c1dc96");
+}
 
 TEST(SecureKey, DerivationIsDeterministicAndSeparatesPassphrasesAndContexts)
 {
