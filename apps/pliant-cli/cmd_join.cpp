@@ -47,22 +47,9 @@ int run_join(const JoinOptions& opt, const GlobalOptions& global)
     auto master = net::resolve_address(opt.master);
     if (!master)
         return report(master.error());
-    // 0.0.0.0 is "every address" to listen on, not one to dial (ENet matched no reply to it:
-    // "never answered"); this machine's own --port is this peer itself.
-    if (master->ipv4 == std::array<std::uint8_t, 4>{0, 0, 0, 0})
+    if (const auto why = undialable(*master, opt.master, opt.port))
     {
-        spdlog::error(
-            "join: {} is the 'any' address, which a peer listens on but cannot dial; "
-            "give 127.0.0.1:{} for a master on this machine",
-            opt.master, master->port);
-        return k_exit_usage;
-    }
-    if (master->ipv4[0] == 127 && opt.port == master->port)
-    {
-        spdlog::error(
-            "join: {} is this peer's own --port {}: give the master's port, or "
-            "another --port",
-            opt.master, opt.port);
+        spdlog::error("join: {}", *why);
         return k_exit_usage;
     }
     session::RunOptions run;

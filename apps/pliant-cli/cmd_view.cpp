@@ -66,12 +66,20 @@ int run_view(const ViewOptions& opt)
     // INPUT is checked before any window opens: a misspelt file is bad input, whether or not a
     // display is at hand (it was reported as "no display" first).
     if (!opt.input.empty() && !std::filesystem::exists(opt.input, ec))
-        if (auto address = net::resolve_address(opt.input); !address)
+    {
+        auto address = net::resolve_address(opt.input);
+        if (!address)
             return report({core::ErrorCode::IoError,
                            "view: " + opt.input +
                                " is neither an existing file nor a HOST:PORT to join "
                                "(a.b.c.d:port, localhost:port or hostname:port): " +
                                address.error().message});
+        if (const auto why = undialable(*address, opt.input, opt.port))
+        {
+            spdlog::error("view: {}", *why);
+            return k_exit_usage;
+        }
+    }
     if (opt.level_given && lower_extension(opt.input) == ".pgrid")
         spdlog::warn("view: --level is the remeshing level of a mesh; {} keeps its own level",
                      opt.input);

@@ -71,6 +71,19 @@ core::Result<void> save_peer_state(const session::Session& peer, const std::file
     return core::save_grid(path, file);
 }
 
+std::optional<std::string> undialable(const net::Address& master, const std::string& text,
+                                      std::uint16_t own_port)
+{
+    if (master.ipv4 == std::array<std::uint8_t, 4>{0, 0, 0, 0})
+        return text +
+               " is the 'any' address, which a peer listens on but cannot dial; give 127.0.0.1:" +
+               std::to_string(master.port) + " for a master on this machine";
+    if (master.ipv4[0] == 127 && own_port == master.port)
+        return text + " is this peer's own --port " + std::to_string(own_port) +
+               ": give the master's port, or another --port";
+    return std::nullopt;
+}
+
 std::optional<int> check_peer_outputs(const std::string& command, std::span<const NamedFile> inputs,
                                       const std::string& stats, const std::string& record,
                                       const std::string& save)

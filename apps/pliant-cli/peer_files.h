@@ -43,6 +43,14 @@ core::Result<void> save_peer_state(const session::Session& peer, const std::file
                                                     const std::string& record,
                                                     const std::string& save);
 
+/// Why `master` (given as `text`) cannot be dialled by a peer listening on `own_port` (0: any),
+/// or nothing: 0.0.0.0 is the address a peer listens on, not one to dial (ENet matched no reply
+/// to it: "never answered"), and a loopback address at `own_port` is this peer itself. For
+/// join, view HOST:PORT and the viewer's Session panel alike.
+[[nodiscard]] std::optional<std::string> undialable(const net::Address& master,
+                                                    const std::string& text,
+                                                    std::uint16_t own_port);
+
 /// The exit status of a peer whose run is over: 0; k_exit_failure with an error naming
 /// `command` and the tick when the peer's state diverged (Session::diverged; what it holds and
 /// saves is the last finite state); else k_exit_bad_input when its stats file could not be

@@ -268,6 +268,12 @@ if(TARGET pliant)
     pliant_cli_expect(cli_join_own_port_is_refused 2 STDERR
                       "join: 127.0.0.1:47998 is this peer's own --port 47998"
                       join 127.0.0.1:47998 --port 47998 --duration 1)
+    # The same for `view HOST:PORT`, before any window opens (it waited for an answer).
+    pliant_cli_expect(cli_view_any_address_is_refused 2 STDERR
+                      "view: 0.0.0.0:47998 is the 'any' address" view 0.0.0.0:47998 --exit-after 1)
+    pliant_cli_expect(cli_view_own_port_is_refused 2 STDERR
+                      "view: 127.0.0.1:47998 is this peer's own --port 47998"
+                      view 127.0.0.1:47998 --port 47998 --exit-after 1)
     pliant_cli_expect(cli_join_never_answers_within_duration 3 STDERR
                       "127.0.0.1:9 never answered within --duration 1 s: check the address and port"
                       join 127.0.0.1:9 --duration 1)

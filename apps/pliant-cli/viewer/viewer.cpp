@@ -389,6 +389,11 @@ bool Viewer::join_session(const std::string& address, bool participant)
         set_status(master.error().message, true);
         return false;
     }
+    if (const auto why = cli::undialable(*master, address, options_.port))
+    {
+        set_status("join: " + *why, true);
+        return false;
+    }
     leave_session();
     drop_grab();
     transport_ = cli::secure_or_plain(net::make_enet_transport(), options_.secret);
