@@ -42,9 +42,28 @@ void configure_logging(const GlobalOptions& options)
                                         : spdlog::level::info);
 }
 
+std::string printable(std::string_view text)
+{
+    std::string out;
+    out.reserve(text.size());
+    for (const char c : text)
+    {
+        const auto b = static_cast<unsigned char>(c);
+        if ((b < 0x20 && b != '\n') || b == 0x7f)
+        {
+            char hex[5];
+            std::snprintf(hex, sizeof hex, "\\x%02x", static_cast<unsigned>(b));
+            out += hex;
+        }
+        else
+            out += c;
+    }
+    return out;
+}
+
 int report(const core::Error& error)
 {
-    spdlog::error("{} [{}]", error.message, core::to_string(error.code));
+    spdlog::error("{} [{}]", printable(error.message), core::to_string(error.code));
     switch (error.code)
     {
     case core::ErrorCode::NotConverged:

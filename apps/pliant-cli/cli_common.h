@@ -168,6 +168,11 @@ struct NamedFile
 /// source tree.
 std::filesystem::path bundled_mesh();
 
+/// `text` for a terminal: each control byte (below 0x20 but a newline, and 0x7f) as `\xNN`, so
+/// that a file name holding an escape sequence cannot recolour or rewrite the terminal; other
+/// bytes (UTF-8 names) as they are.
+std::string printable(std::string_view text);
+
 /// The extension of `p` in lower case, with its dot (".ply"), or "" when it has none.
 std::string lower_extension(const std::filesystem::path& p);
 

@@ -105,7 +105,7 @@ void print_text(const InfoOptions& opt, const mesh::ImportReport& r, const mesh:
     const auto row = [](const char* key, const std::string& value)
     { std::printf("  %-22s %s\n", key, value.c_str()); };
     const auto n = [](std::size_t v) { return std::to_string(v); };
-    std::printf("%s (%s)\n", opt.mesh.string().c_str(), r.format.c_str());
+    std::printf("%s (%s)\n", printable(opt.mesh.string()).c_str(), r.format.c_str());
     row("vertices", n(s.vertices) + "  (file " + n(r.file_vertices) + ", " + n(r.welded) +
                         " reader vertices welded" + ", unreferenced dropped " +
                         n(r.unreferenced_dropped) + ")");
@@ -306,7 +306,7 @@ void print_grid_text(const InfoOptions& opt, const GridInfo& info,
         return std::string(text);
     };
     const core::TetraGrid& g = *info.grid;
-    std::printf("%s (pliant grid, level %d)\n", opt.mesh.string().c_str(), g.level());
+    std::printf("%s (pliant grid, level %d)\n", printable(opt.mesh.string()).c_str(), g.level());
     row("nodes", std::to_string(g.nx()) + " x " + std::to_string(g.ny()) + " = " +
                      n(static_cast<std::size_t>(g.nx()) * static_cast<std::size_t>(g.ny())) +
                      "  (" + n(g.unique_count()) + " surface vertices, " + n(g.face_count()) +
@@ -468,7 +468,7 @@ void print_recording_text(const InfoOptions& opt, const RecordingInfo& info,
         return std::string(text);
     };
     const session::Recording& r = *info.recording;
-    std::printf("%s (pliant recording)\n", opt.mesh.string().c_str());
+    std::printf("%s (pliant recording)\n", printable(opt.mesh.string()).c_str());
     if (info.model)
     {
         const sim::MembraneModel& m = info.model->model;

@@ -268,6 +268,12 @@ if(TARGET pliant)
     pliant_cli_expect(cli_join_own_port_is_refused 2 STDERR
                       "join: 127.0.0.1:47998 is this peer's own --port 47998"
                       join 127.0.0.1:47998 --port 47998 --duration 1)
+    # A file name holding an escape sequence (ESC [31m) is printed with the control byte as \x1b,
+    # in info's heading and in an error: it recoloured the terminal.
+    add_test(NAME cli_control_bytes_in_names_are_escaped
+             COMMAND sh -c "d='${out_dir}/escape' && rm -rf \"$d\" && mkdir -p \"$d\" && f=\"$d/a$(printf '\\033')[31m.obj\" && cp '${PROJECT_SOURCE_DIR}/data/spot.obj' \"$f\" && '$<TARGET_FILE:pliant>' info \"$f\" | grep -F 'a\\x1b[31m.obj (obj)' && '$<TARGET_FILE:pliant>' info \"$d/b$(printf '\\033').obj\" 2>&1 | grep -F 'b\\x1b.obj: cannot open: no such file'")
+    set_tests_properties(cli_control_bytes_in_names_are_escaped PROPERTIES
+                         ENVIRONMENT "ASAN_OPTIONS=detect_leaks=0")
     # The same for `view HOST:PORT`, before any window opens (it waited for an answer).
     pliant_cli_expect(cli_view_any_address_is_refused 2 STDERR
                       "view: 0.0.0.0:47998 is the 'any' address" view 0.0.0.0:47998 --exit-after 1)
