@@ -733,10 +733,34 @@ void Session::Impl::on_halo(std::uint16_t from, const net::Message& m, const net
                "a Halo that is not the accepted step's u and v in f64");
         return;
     }
+    // Only exact coupling's members exchange halos (send_halos).
+    if (s.coupling_ != Coupling::Exact || s.role_ == SessionRole::Viewer)
+    {
+        reject(counters.halo_rejects, from,
+               s.coupling_ != Coupling::Exact ? "a Halo in fast coupling" : "a Halo to a viewer");
+        return;
+    }
     const core::TetraGrid& g = s.model_->grid();
     for (const net::NodeRange& r : h.ranges)
         if (r.count > 0 && (r.first >= g.node_count() || r.count > g.node_count() - r.first))
             return;  // not our grid: ignore the whole message
+    const std::uint64_t tick = m.header.tick;
+    if (tick < s.state_.tick)
+        return;  // of a tick stepped already: apply_halos would drop it unread
+    if (tick - s.state_.tick > k_max_halo_lead)
+    {
+        reject(counters.halo_rejects, from, "a Halo for a tick far ahead of this peer's");
+        return;
+    }
+    std::size_t held_values = h.u.size();
+    for (const HaloBuffer& b : halos)
+        if (b.sender.value == from)
+            held_values += b.u.size();
+    if (held_values > k_max_held_halo_grids * g.node_count())
+    {
+        reject(counters.halo_rejects, from, "more halo values than a lockstep holds");
+        return;
+    }
     // A buffer of an applied tick, with its capacity: no allocation per halo.
     HaloBuffer buf;
     if (!spare_halos.empty())
@@ -744,7 +768,7 @@ void Session::Impl::on_halo(std::uint16_t from, const net::Message& m, const net
         buf = std::move(spare_halos.back());
         spare_halos.pop_back();
     }
-    buf.tick = m.header.tick;
+    buf.tick = tick;
     buf.sender = m.header.sender;
     buf.time = h.time;
     buf.ranges.assign(h.ranges.begin(), h.ranges.end());

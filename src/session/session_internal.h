@@ -84,6 +84,12 @@ inline constexpr std::uint32_t k_successor_epoch_gap = 16;
 inline constexpr std::uint16_t k_successor_id_gap = 16;
 /// Partitions kept aside per peer that is not (yet) our master (failover, docs/session.md §6).
 inline constexpr std::size_t k_max_foreign_partitions = 8;
+/// Halos held ahead of this peer's tick: an honest member is at most a tick or two ahead (the
+/// lockstep's barrier), so a halo further ahead than this, or one that would make a sender's
+/// held values exceed k_max_held_halo_grids × the grid's nodes, is a peer's bug or a forger's
+/// flood, dropped and counted rather than kept (memory would grow without bound).
+inline constexpr std::uint64_t k_max_halo_lead = 64;
+inline constexpr std::size_t k_max_held_halo_grids = 4;
 /// How far a leaf state's epoch may run ahead of the newest partition held: a successor's gap
 /// and a few re-partitions in flight; further is no epoch any master will issue soon.
 inline constexpr std::uint32_t k_max_epoch_lead = 2 * k_successor_epoch_gap;

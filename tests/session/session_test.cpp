@@ -1074,6 +1074,66 @@ TEST(SessionExact, AHaloOfAnotherStageAndAMembersRejectAreDropped)
     }
 }
 
+// Halos are held only as far as a lockstep needs them: one for a tick far ahead, the values of a
+// flood beyond a few grids' worth, and any halo in fast coupling (which exchanges none) are
+// dropped and counted, where they were kept until their tick came, if ever (memory grew without
+// bound). The forged values are the rest state's, so those within the bound change nothing.
+TEST(SessionExact, HalosBeyondWhatALockstepHoldsAreDroppedNotKept)
+{
+    Harness h;
+    ASSERT_TRUE(master_and_participant(h, 4545));
+    ASSERT_TRUE(h.pump_until([&] { return all_at(h, 40); }, 20000));
+    const Session& m = *h.peers[0];
+    const Session& part = *h.peers[1];
+    const core::TetraGrid& g = m.model()->grid();
+    const auto theirs = owned_by(part);
+    core::NodeIndex target{0};
+    for (const core::NodeIndex n : g.node_of_unique())
+        if (theirs(n))
+            target = n;
+    ASSERT_TRUE(theirs(target));
+    net::Transport& wire = *h.transports[1];
+    ASSERT_EQ(wire.peers().size(), 1U);
+    net::Message forged = forged_halo(4545, part.id(), m.tick() + 1000, m.epoch(), 6, target);
+    auto& halo = std::get<net::Halo>(forged.body);
+    halo.u = {0.0};
+    halo.v = {0.0};
+    ASSERT_TRUE(send_raw(wire, wire.peers()[0], forged, net::Delivery::Reliable));
+    const std::uint64_t near = m.tick() + 20;
+    ASSERT_TRUE(h.pump_until([&] { return all_at(h, near - 15); }, 20000));
+    EXPECT_EQ(m.stats().halo_rejects, 1U) << "1000 ticks ahead";
+
+    forged.header.tick = near;
+    const std::size_t flood = 4 * g.node_count() + 50;  // 4: session::k_max_held_halo_grids
+    for (std::size_t k = 0; k < flood; ++k)
+        ASSERT_TRUE(send_raw(wire, wire.peers()[0], forged, net::Delivery::Reliable));
+    ASSERT_TRUE(h.pump_until([&] { return all_at(h, near + 20); }, 20000));
+    // At least the 50 beyond the bound (more where the participant's own halos were held then).
+    EXPECT_GE(m.stats().halo_rejects, 51U);
+    EXPECT_LE(m.stats().halo_rejects, 51U + g.node_count());
+    EXPECT_EQ(part.stats().halo_rejects, 0U);
+    for (const auto& p : h.peers)
+    {
+        EXPECT_FALSE(p->left());
+        const Diff du = compare(g, p->state().u, core::Field<double>(g), owned_by(*p));
+        EXPECT_EQ(du.max_abs, 0.0) << "peer " << p->id().value;  // no forces: at rest
+    }
+
+    Harness fast;
+    fast.host(3, settings_for(Coupling::Fast, "m"));
+    fast.join(net::Role::Participant, settings_for(Coupling::Fast, "p"));
+    ASSERT_TRUE(pump_until_partitioned(fast, 2));
+    net::Transport& fast_wire = *fast.transports[1];
+    ASSERT_EQ(fast_wire.peers().size(), 1U);
+    net::Message in_fast = forged_halo(fast.peers[0]->session_id(), fast.peers[1]->id(),
+                                       fast.peers[0]->tick() + 2, fast.peers[0]->epoch(), 6,
+                                       target);
+    ASSERT_TRUE(send_raw(fast_wire, fast_wire.peers()[0], in_fast, net::Delivery::Reliable));
+    for (int k = 0; k < 200; ++k)
+        fast.pump_once(0.0005);
+    EXPECT_EQ(fast.peers[0]->stats().halo_rejects, 1U) << "fast coupling exchanges no halos";
+}
+
 // A leaf's state counts only from its owner under the partition it names: a participant that
 // sends a viewer a state of the master's leaf (a far newer tick) in the current epoch, or in an
 // epoch no master will issue, is dropped and counted; one of the next epoch is kept aside (its
