@@ -1125,9 +1125,9 @@ TEST(SessionExact, HalosBeyondWhatALockstepHoldsAreDroppedNotKept)
     ASSERT_TRUE(pump_until_partitioned(fast, 2));
     net::Transport& fast_wire = *fast.transports[1];
     ASSERT_EQ(fast_wire.peers().size(), 1U);
-    net::Message in_fast = forged_halo(fast.peers[0]->session_id(), fast.peers[1]->id(),
-                                       fast.peers[0]->tick() + 2, fast.peers[0]->epoch(), 6,
-                                       target);
+    net::Message in_fast =
+        forged_halo(fast.peers[0]->session_id(), fast.peers[1]->id(), fast.peers[0]->tick() + 2,
+                    fast.peers[0]->epoch(), 6, target);
     ASSERT_TRUE(send_raw(fast_wire, fast_wire.peers()[0], in_fast, net::Delivery::Reliable));
     for (int k = 0; k < 200; ++k)
         fast.pump_once(0.0005);
