@@ -495,6 +495,14 @@ void Session::Impl::handle(net::PeerHandle h, const net::Message& m)
             reject(counters.viewer_forces, from, "forces, though it joined as a viewer");
             return;
         }
+        if (std::count_if(p.forces.begin(), p.forces.end(),
+                          [this](const ForceEntry& e) { return e.apply_tick > s.state_.tick; }) >=
+            static_cast<std::ptrdiff_t>(k_max_forces_ahead))
+        {
+            reject(counters.force_floods, from,
+                   "more force lists ahead of this peer's tick than an honest peer sends");
+            return;
+        }
         p.forces.push_back(ForceEntry{m.header.tick, std::get<net::Force>(m.body).forces});
         count_limited(p.forces.back().forces, from, p.warned_force_limit);
         // A list from after its forces ended never applies, so the replay must not see it.

@@ -86,6 +86,12 @@ void Session::Impl::count_limited(std::span<const net::UserForce> list, std::uin
 /// the one being published, so every peer has it before it steps that tick).
 void Session::Impl::flush_forces(std::uint64_t earliest)
 {
+    if (pending_forces.empty())
+    {
+        if (my_forces.size() > 1)
+            trim(my_forces);
+        return;
+    }
     for (ForceEntry& e : pending_forces)
     {
         e.apply_tick = std::max(e.apply_tick, earliest);
@@ -107,13 +113,18 @@ void Session::Impl::trim(std::vector<ForceEntry>& table) const
     const ForceEntry* cur = active(table, s.state_.tick > 2 ? s.state_.tick - 2 : 0);
     if (cur == nullptr)
         return;
+    // In place: no allocation per call (flush_forces runs every tick).
     const std::uint64_t base = cur->apply_tick;
-    const ForceEntry* keep = cur;
-    std::vector<ForceEntry> out;
-    for (const ForceEntry& e : table)
-        if (&e == keep || e.apply_tick > base)
-            out.push_back(e);
-    table = std::move(out);
+    const auto keep = static_cast<std::size_t>(cur - table.data());
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < table.size(); ++i)
+        if (i == keep || table[i].apply_tick > base)
+        {
+            if (kept != i)
+                table[kept] = std::move(table[i]);
+            ++kept;
+        }
+    table.resize(kept);
 }
 
 void Session::Impl::send_halos(std::uint64_t t)

@@ -1134,6 +1134,42 @@ TEST(SessionExact, HalosBeyondWhatALockstepHoldsAreDroppedNotKept)
     EXPECT_EQ(fast.peers[0]->stats().halo_rejects, 1U) << "fast coupling exchanges no halos";
 }
 
+// Force lists are held until their tick comes: a flood of lists for ticks far ahead (a peer's bug
+// or a forger on a member's connection) is held up to 256 per peer, the rest dropped and counted,
+// where each was kept (memory grew without bound). The forged lists release nothing and come
+// after the run's end, so both sides stay at rest.
+TEST(SessionExact, AFloodOfForceListsAheadIsDroppedBeyondTheBound)
+{
+    Harness h;
+    ASSERT_TRUE(master_and_participant(h, 4646));
+    ASSERT_TRUE(h.pump_until([&] { return all_at(h, 40); }, 20000));
+    const Session& m = *h.peers[0];
+    net::Transport& wire = *h.transports[1];
+    ASSERT_EQ(wire.peers().size(), 1U);
+    net::Message forged;
+    forged.header.session = 4646;
+    forged.header.sender = h.peers[1]->id();
+    forged.body = net::Force{};
+    const std::uint64_t start = m.tick();
+    for (std::uint64_t k = 0; k < 300; ++k)
+    {
+        forged.header.sequence = static_cast<std::uint16_t>(50000 + k);
+        forged.header.tick = start + 100000 + k;
+        ASSERT_TRUE(send_raw(wire, wire.peers()[0], forged, net::Delivery::Reliable));
+    }
+    ASSERT_TRUE(h.pump_until([&] { return all_at(h, start + 40); }, 20000));
+    EXPECT_EQ(m.stats().force_floods, 300U - 256U);
+    EXPECT_EQ(m.stats().rejected_messages(), 300U - 256U);
+    EXPECT_EQ(h.peers[1]->stats().force_floods, 0U);
+    const core::TetraGrid& g = m.model()->grid();
+    for (const auto& p : h.peers)
+    {
+        EXPECT_FALSE(p->left());
+        const Diff du = compare(g, p->state().u, core::Field<double>(g), owned_by(*p));
+        EXPECT_EQ(du.max_abs, 0.0) << "peer " << p->id().value;
+    }
+}
+
 // A leaf's state counts only from its owner under the partition it names: a participant that
 // sends a viewer a state of the master's leaf (a far newer tick) in the current epoch, or in an
 // epoch no master will issue, is dropped and counted; one of the next epoch is kept aside (its

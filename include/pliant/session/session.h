@@ -280,6 +280,10 @@ struct SessionStats
     std::uint64_t limited_forces = 0;
     /// Force lists from a viewer (which only watches): dropped, never applied or recorded.
     std::uint64_t viewer_forces = 0;
+    /// Force lists from a peer that already has 256 not yet in effect here (an honest peer sends
+    /// about one per frame, applying a few ticks ahead): dropped, never applied or recorded
+    /// (each was kept until its tick came, and memory grew without bound).
+    std::uint64_t force_floods = 0;
     /// Master: times a participant's new points of interest waited before re-partitioning,
     /// because its previous ones had done so less than 0.1 s before (docs/session.md §3).
     std::uint64_t points_waits = 0;
@@ -297,12 +301,12 @@ struct SessionStats
     std::uint64_t foreign_blobs = 0;
     /// The sum of the counters above that only a faulty or hostile peer makes grow
     /// (state_rejects, halo_rejects, foreign_states, peer_claim_rejects, foreign_blobs,
-    /// viewer_forces): the --stats column `rejected`. Each peer's share is in PeerStatus, and
-    /// its first such message is logged.
+    /// viewer_forces, force_floods): the --stats column `rejected`. Each peer's share is in
+    /// PeerStatus, and its first such message is logged.
     [[nodiscard]] std::uint64_t rejected_messages() const noexcept
     {
         return state_rejects + halo_rejects + foreign_states + peer_claim_rejects + foreign_blobs +
-               viewer_forces;
+               viewer_forces + force_floods;
     }
     /// Exact mode: how long this peer has waited at its current tick for the other members'
     /// Heartbeats, s (0: not waiting), and the lowest id among those it waits for (k_no_peer:
