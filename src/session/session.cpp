@@ -402,6 +402,15 @@ void Session::Impl::handle(net::PeerHandle h, const net::Message& m)
     }
     if (!s.model_)
     {
+        // A Halo has nothing to apply to yet (a joiner is no member before its Ready).
+        if (m.type() == net::MessageType::Halo)
+            return;
+        if (early.size() >= k_max_early_messages)
+        {
+            reject(counters.early_floods, from,
+                   "more messages before the model than an honest peer sends");
+            return;
+        }
         early.emplace_back(h, m);
         return;
     }

@@ -92,6 +92,8 @@ inline constexpr std::uint64_t k_max_halo_lead = 64;
 inline constexpr std::size_t k_max_held_halo_grids = 4;
 /// Force lists held per peer that are not in effect yet (SessionStats::force_floods).
 inline constexpr std::size_t k_max_forces_ahead = 256;
+/// Messages a joiner keeps for when it has the model (SessionStats::early_floods).
+inline constexpr std::size_t k_max_early_messages = 4096;
 /// How far a leaf state's epoch may run ahead of the newest partition held: a successor's gap
 /// and a few re-partitions in flight; further is no epoch any master will issue soon.
 inline constexpr std::uint32_t k_max_epoch_lead = 2 * k_successor_epoch_gap;

@@ -941,6 +941,52 @@ bool master_and_participant(Harness& h, std::uint32_t session,
     return pump_until_partitioned(h, 2);
 }
 
+// A joiner keeps the messages that come before its model for when it has it (partitions, force
+// lists...), up to 4,096; a flood beyond (here Force lists from a hand-made master that holds
+// back the state blob) is dropped and counted, where each was kept. The joiner then installs the
+// model and state as usual.
+TEST(SessionJoin, AFloodBeforeTheModelIsDroppedBeyondTheBound)
+{
+    net::SimulatedNetwork net;
+    auto master = net.create_endpoint();
+    const net::Address master_address = master->open({}).value();
+    auto end = net.create_endpoint();
+    ASSERT_TRUE(end->open({}));
+    auto joiner = Session::join(*end, master_address, net::Role::Participant,
+                                settings_for(Coupling::Exact, "j"));
+    ASSERT_TRUE(joiner) << joiner.error().message;
+    const HandMadeMaster hand;
+    std::optional<net::PeerHandle> to_joiner;
+    constexpr std::size_t flood = 4096 + 100;
+    bool state_sent = false;
+    for (int k = 0; k < 3000 && !(*joiner)->ready() && (*joiner)->refusal().empty(); ++k)
+    {
+        while (auto ev = master->poll(0))
+        {
+            if (ev->kind != net::TransportEvent::Kind::Received || to_joiner)
+                continue;
+            to_joiner = ev->peer;
+            const auto w =
+                hand.welcome({{net::PeerId{0}, net::Role::Participant, {127, 0, 0, 1}, 7000, "m"},
+                              {net::PeerId{1}, net::Role::Participant, {127, 0, 0, 1}, 7001, "j"}});
+            ASSERT_TRUE(hand.send(*master, ev->peer, 0, w));
+            ASSERT_TRUE(hand.send(*master, ev->peer, 0,
+                                  HandMadeMaster::whole(net::BlobKind::Model, hand.model)));
+            for (std::size_t i = 0; i < flood; ++i)
+                ASSERT_TRUE(hand.send(*master, ev->peer, 0, net::Force{}));
+        }
+        if (to_joiner && !state_sent && k == 200)
+            state_sent = hand.send(*master, *to_joiner, 0,
+                                   HandMadeMaster::whole(net::BlobKind::State, hand.state));
+        (*joiner)->poll();
+        (*joiner)->advance(1e-3 * k);
+        net.advance(1e-3);
+    }
+    ASSERT_TRUE(state_sent);
+    EXPECT_TRUE((*joiner)->ready()) << (*joiner)->refusal();
+    EXPECT_EQ((*joiner)->stats().early_floods, flood - 4096);
+}
+
 // A master whose settings name no session id draws a random non-zero one, so that two sessions
 // (a host restarted on the same port, a peer of another session) tell each other apart; its
 // joiners take it from the welcome.

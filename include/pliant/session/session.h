@@ -249,6 +249,9 @@ struct SessionStats
     /// Leaf states that arrived before this joiner had the model: dropped, since the next
     /// stream period resends every leaf it has not acknowledged.
     std::uint64_t early_states_dropped = 0;
+    /// Other messages that arrived before this joiner had the model beyond the 4,096 it keeps
+    /// for then (an honest peer sends a few: partitions, force lists, points): dropped.
+    std::uint64_t early_floods = 0;
     /// Exact mode: leaves taken over from a lost peer, started from their last streamed state.
     std::uint64_t adopted_leaves = 0;
     std::uint64_t promotions = 0;  ///< times this peer became master after the master was lost
@@ -301,12 +304,12 @@ struct SessionStats
     std::uint64_t foreign_blobs = 0;
     /// The sum of the counters above that only a faulty or hostile peer makes grow
     /// (state_rejects, halo_rejects, foreign_states, peer_claim_rejects, foreign_blobs,
-    /// viewer_forces, force_floods): the --stats column `rejected`. Each peer's share is in
-    /// PeerStatus, and its first such message is logged.
+    /// viewer_forces, force_floods, early_floods): the --stats column `rejected`. Each peer's share
+    /// is in PeerStatus, and its first such message is logged.
     [[nodiscard]] std::uint64_t rejected_messages() const noexcept
     {
         return state_rejects + halo_rejects + foreign_states + peer_claim_rejects + foreign_blobs +
-               viewer_forces + force_floods;
+               viewer_forces + force_floods + early_floods;
     }
     /// Exact mode: how long this peer has waited at its current tick for the other members'
     /// Heartbeats, s (0: not waiting), and the lowest id among those it waits for (k_no_peer:
