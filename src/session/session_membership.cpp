@@ -136,6 +136,13 @@ void Session::Impl::lose_peer(net::PeerHandle h, net::DisconnectReason reason)
     RemotePeer& p = peers[id];
     p.handle.reset();
     p.departed = true;
+    // Its entry stays (ids are never reused; its forces end by the partitions), but not what
+    // only a connected peer needs: partitions it sent aside, its acks, its stream budget. Else
+    // every connection that ever claimed an id would hold them for the session's life.
+    foreign_partitions.erase(id);
+    acked.erase(id);
+    priority.erase(id);
+    budget.erase(id);
     spdlog::debug("session: peer {} disconnected ({})", id, net::to_string(reason));
     if (net::PeerId{id} == master_id && s.role_ != SessionRole::Master &&
         reason == net::DisconnectReason::Shutdown)
