@@ -221,6 +221,7 @@ void Session::Impl::install_model(sim::MembraneModel model)
     const core::TetraGrid& g = s.model_->grid();
     s.graph_ = std::make_unique<LeafGraph>(g, leaf_depth_for(g, net::ValueEncoding::F64));
     ws = std::make_unique<sim::Rkf45Workspace>(*s.model_, settings.threads);
+    forces_in_ws_valid = false;
     s.state_ = sim::MembraneState::at_rest(g);
     s.display_u_ = core::Field<double>(g, 1);
     s.display_v_ = core::Field<double>(g, 1);

@@ -38,10 +38,11 @@ const ForceEntry* Session::Impl::active(const std::vector<ForceEntry>& table, st
     return best;
 }
 
-std::vector<sim::Force> Session::Impl::forces_at(std::uint64_t tick) const
+const std::vector<sim::Force>& Session::Impl::forces_at(std::uint64_t tick)
 {
     // Order: by sender id (the master, id 0, first), then each sender's list order.
-    std::vector<std::pair<std::uint16_t, const ForceEntry*>> entries;
+    auto& entries = force_entries;
+    entries.clear();
     entries.emplace_back(s.id_.value, active(my_forces, tick));
     for (const auto& [id, p] : peers)
         // A departed peer's grab ends with it in fast coupling; in exact coupling at the
@@ -52,11 +53,25 @@ std::vector<sim::Force> Session::Impl::forces_at(std::uint64_t tick) const
             entries.emplace_back(id, active(p.forces, tick));
     std::sort(entries.begin(), entries.end(),
               [](const auto& a, const auto& b) { return a.first < b.first; });
-    std::vector<sim::Force> out;
+    forces_now.clear();
     for (const auto& [id, e] : entries)
         if (e != nullptr)
-            (void)append_valid_forces(*s.model_, e->forces, out);
-    return out;
+            (void)append_valid_forces(*s.model_, e->forces, forces_now);
+    return forces_now;
+}
+
+void Session::Impl::prepare_forces()
+{
+    const auto same = [](const sim::Force& a, const sim::Force& b) {
+        return a.face == b.face && a.point == b.point && a.radius == b.radius &&
+               a.vector == b.vector;
+    };
+    if (forces_in_ws_valid && std::equal(forces_now.begin(), forces_now.end(), forces_in_ws.begin(),
+                                         forces_in_ws.end(), same))
+        return;
+    sim::set_forces(*s.model_, *ws, forces_now);
+    forces_in_ws = forces_now;
+    forces_in_ws_valid = true;
 }
 
 /// Counts the forces of `list` above the session's limit (they act scaled down to it) and
@@ -164,22 +179,20 @@ void Session::Impl::send_halos(std::uint64_t t)
 }
 
 /// Peers whose Heartbeat(t) this peer needs before stepping from t.
-std::vector<std::uint16_t> Session::Impl::barrier_set(std::uint64_t t) const
+void Session::Impl::barrier_set(std::uint64_t t, std::vector<std::uint16_t>& out) const
 {
-    std::set<std::uint16_t> ids;
+    out.clear();  // its capacity kept: no allocation per tick
     for (const PartitionEntry* p : {t > 0 ? partition_at(t - 1) : nullptr, partition_at(t)})
         if (p != nullptr)
             for (const net::PeerId m : p->members)
-                ids.insert(m.value);
-    ids.erase(s.id_.value);
-    std::vector<std::uint16_t> out;
-    for (const std::uint16_t id : ids)
-    {
-        auto it = peers.find(id);
-        if (it != peers.end() && !it->second.departed)
-            out.push_back(id);
-    }
-    return out;
+                if (m != s.id_)
+                {
+                    auto it = peers.find(m.value);
+                    if (it != peers.end() && !it->second.departed)
+                        out.push_back(m.value);
+                }
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
 }
 
 void Session::Impl::publish(std::uint64_t t)
@@ -196,13 +209,16 @@ void Session::Impl::publish(std::uint64_t t)
     // To the members we know of, and to every ready participant: after a lost master, a peer
     // may count as a member one of us does not know of yet (a Partition only some received),
     // and must not wait for us forever (docs/session.md §6).
-    const std::vector<std::uint16_t> members = barrier_set(t);
-    std::set<std::uint16_t> to(members.begin(), members.end());
+    std::vector<std::uint16_t>& to = heartbeat_to;
+    barrier_set(t, to);
     for (const auto& [id, p] : peers)
         if (!p.departed && p.ready && p.info.role == net::Role::Participant)
-            to.insert(id);
+            to.push_back(id);
+    std::sort(to.begin(), to.end());
+    to.erase(std::unique(to.begin(), to.end()), to.end());
+    const net::Message beat = make(hb, t);
     for (const std::uint16_t id : to)
-        send_to(id, make(hb, t), net::SendMode::Reliable);
+        send_to(id, beat, net::SendMode::Reliable);
     published = true;
 }
 
@@ -210,8 +226,9 @@ void Session::Impl::publish(std::uint64_t t)
 /// tick t is passed).
 std::vector<std::uint16_t> Session::Impl::barrier_missing(std::uint64_t t) const
 {
-    std::vector<std::uint16_t> out;
-    for (const std::uint16_t id : barrier_set(t))
+    std::vector<std::uint16_t> out;  // empty, and so not allocated, once the barrier is passed
+    barrier_set(t, barrier_scratch);
+    for (const std::uint16_t id : barrier_scratch)
     {
         const RemotePeer& p = peers.at(id);
         if (!p.has_heartbeat || p.heartbeat < t)
@@ -234,16 +251,21 @@ void Session::Impl::wait_at_barrier(std::uint64_t t, const std::vector<std::uint
         return;
     }
     const double waited = last_now - barrier_since;
-    std::string names;
-    for (const std::uint16_t id : missing)
-        names += (names.empty() ? "" : ", ") + describe_peer(id);
+    // Named only when a warning says them (this runs on every call while waiting).
+    const auto names = [this](const std::vector<std::uint16_t>& ids)
+    {
+        std::string out;
+        for (const std::uint16_t id : ids)
+            out += (out.empty() ? "" : ", ") + describe_peer(id);
+        return out;
+    };
     if (waited >= k_barrier_warn_s && !barrier_warned)
     {
         barrier_warned = true;
         spdlog::warn(
             "session: waited {:.1f} s at tick {} for {} to publish it (exact coupling steps "
             "every member together){}",
-            waited, t, names,
+            waited, t, names(missing),
             s.role_ == SessionRole::Master && settings.max_barrier_wait_s > 0.0
                 ? fmt::format("; removed from the session after {:g} s",
                               settings.max_barrier_wait_s)
@@ -273,16 +295,10 @@ void Session::Impl::wait_at_barrier(std::uint64_t t, const std::vector<std::uint
     }
     if (culprits.empty())
         culprits = missing;
-    else if (culprits.size() < missing.size())
-    {
-        names.clear();
-        for (const std::uint16_t id : culprits)
-            names += (names.empty() ? "" : ", ") + describe_peer(id);
-    }
     spdlog::warn(
         "session: removing {} from the session: not one step published for {:.1f} s "
         "(tick {}); its leaves go on from their last streamed state",
-        names, waited, t);
+        names(culprits), waited, t);
     for (const std::uint16_t id : culprits)
     {
         RemotePeer& p = peers.at(id);
@@ -435,14 +451,14 @@ void Session::Impl::exact_advance()
         apply_halos(t);
         const PartitionEntry* prev = t > exact_from ? partition_at(t - 1) : partition_at(t);
         refresh_exact_sets(prev, partition_at(t));
-        const auto forces = forces_at(t);
-        counters.active_forces = forces.size();
+        counters.active_forces = forces_at(t).size();
+        prepare_forces();
         sim::StepOptions opt;
         opt.owned = integrate_runs;
         opt.needed = own_runs;     // each stage pair only where the own nodes read it
         opt.keep_outside = false;  // the halos and the display rewrite the nodes beyond
         const auto t0 = std::chrono::steady_clock::now();
-        const sim::StepReport r = sim::step(*s.model_, s.state_, *ws, forces, opt);
+        const sim::StepReport r = sim::step_prepared(*s.model_, s.state_, *ws, opt);
         counters.step_seconds += seconds_since(t0);
         if (sim::has_flag(r.status, sim::StepStatus::NonFinite))
         {
@@ -702,9 +718,8 @@ void Session::Impl::fast_advance()
         opt.keep_outside = false;  // every node not owned is rewritten before each frame
         const auto t0 = std::chrono::steady_clock::now();
         // sim::advance_to's loop, with the interface damping after every accepted step.
-        const auto forces = forces_at(s.state_.tick);
-        counters.active_forces = forces.size();
-        sim::set_forces(*s.model_, *ws, forces);
+        counters.active_forces = forces_at(s.state_.tick).size();
+        prepare_forces();
         const sim::MembraneSettings& ms = s.model_->settings();
         const double slack = 1e-12 * std::max(1.0, std::fabs(target));
         for (int k = 0; k < 100000 && !s.diverged_tick_; ++k)

@@ -274,6 +274,14 @@ struct Session::Impl
 
     // Simulation.
     std::unique_ptr<sim::Rkf45Workspace> ws;
+    // forces_at's result and scratch, reused tick after tick; the list last written into ws
+    // (set_forces places each force anew, a whole-grid search for a point force that reaches
+    // no node: done only when the list changes).
+    std::vector<std::pair<std::uint16_t, const ForceEntry*>> force_entries;
+    std::vector<sim::Force> forces_now, forces_in_ws;
+    bool forces_in_ws_valid = false;
+    mutable std::vector<std::uint16_t> barrier_scratch;  // barrier_set's, in barrier_missing
+    std::vector<std::uint16_t> heartbeat_to;             // publish's recipients
     std::vector<PartitionEntry> partitions;
     std::vector<ForceEntry> my_forces;
     std::vector<ForceEntry> pending_forces;  // apply_tick = the earliest tick asked for
@@ -607,12 +615,16 @@ struct Session::Impl
     // --- session_coupling.cpp: forces; exact (halos, barrier) and fast (Dirichlet) coupling
     void end_forces(std::uint16_t id, std::uint64_t tick);
     static const ForceEntry* active(const std::vector<ForceEntry>& table, std::uint64_t tick);
-    std::vector<sim::Force> forces_at(std::uint64_t tick) const;
+    /// The forces of every peer at `tick` (forces_now, rebuilt in place).
+    const std::vector<sim::Force>& forces_at(std::uint64_t tick);
+    /// Writes forces_now into ws unless it holds them already.
+    void prepare_forces();
     void count_limited(std::span<const net::UserForce> list, std::uint16_t from, bool& warned);
     void flush_forces(std::uint64_t earliest);
     void trim(std::vector<ForceEntry>& table) const;
     void send_halos(std::uint64_t t);
-    std::vector<std::uint16_t> barrier_set(std::uint64_t t) const;
+    /// The members whose Heartbeat(t) this peer needs, by increasing id, into `out`.
+    void barrier_set(std::uint64_t t, std::vector<std::uint16_t>& out) const;
     void publish(std::uint64_t t);
     std::vector<std::uint16_t> barrier_missing(std::uint64_t t) const;
 
