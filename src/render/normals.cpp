@@ -22,8 +22,10 @@ void mesh_normals(std::span<const core::Vec3> positions,
     std::fill(sum.begin(), sum.end(), core::Vec3{});
     for (const auto& f : faces)
     {
-        PLIANT_ASSERT(f[0] < positions.size() && f[1] < positions.size() && f[2] < positions.size(),
-                      "mesh_normals: face index out of range");
+        // Per face, in a per-frame loop, over faces the library built: checked in debug builds.
+        PLIANT_DEBUG_ASSERT(
+            f[0] < positions.size() && f[1] < positions.size() && f[2] < positions.size(),
+            "mesh_normals: face index out of range");
         const core::Vec3& a = positions[f[0]];
         const core::Vec3 n = core::cross(positions[f[1]] - a, positions[f[2]] - a);
         for (const std::uint32_t v : f)
