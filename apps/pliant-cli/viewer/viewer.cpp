@@ -455,6 +455,7 @@ bool Viewer::host_session(std::uint16_t port, bool exact)
     // What the local simulation runs with (the Material panel's edits once applied), not the
     // panel's fields.
     sim::MembraneSettings material = local_ ? local_->model().settings() : material_;
+    const sim::MembraneSettings before = material;
     material.fixed_step = exact;
     if (exact)
     {
@@ -482,6 +483,7 @@ bool Viewer::host_session(std::uint16_t port, bool exact)
         return false;
     }
     session_ = std::move(*s);
+    material_before_host_ = before;
     session_address_ = "port " + std::to_string(bound->port);
     cancel_load("hosting on port " + std::to_string(bound->port));
     joined_ = true;
@@ -528,7 +530,13 @@ void Viewer::leave_session(const std::string& message, bool error)
     {
         LoadedSurface copy{surface_->grid, surface_->positions, surface_->description};
         start_local(std::move(copy));
+        // A host goes on with the material it hosted with (the Material panel's applied
+        // edits), not the level's default.
+        if (hosting_ && material_before_host_ && local_ &&
+            local_->set_settings(*material_before_host_))
+            material_ = *material_before_host_;
     }
+    material_before_host_.reset();
     set_status(message, error);
 }
 

@@ -120,8 +120,11 @@ public:
     std::string session_address_;      ///< the master's HOST:PORT (hosting: "port N")
     bool joined_ = false;              ///< the status line said the join completed
     bool hosting_ = false;             ///< the session was started here (its surface is ours)
-    bool resume_applied_ = false;      ///< ViewerOptions::resume_state went to a simulation
-    bool session_failed_ = false;      ///< a session ended on its own (a headless run fails)
+    /// The material the local simulation ran with when this viewer began hosting: it goes on
+    /// with it after the session ends (start_local would take the level's default).
+    std::optional<sim::MembraneSettings> material_before_host_;
+    bool resume_applied_ = false;  ///< ViewerOptions::resume_state went to a simulation
+    bool session_failed_ = false;  ///< a session ended on its own (a headless run fails)
 
     // Input.
     enum class Drag : std::uint8_t
