@@ -40,7 +40,7 @@ std::uint32_t draw_session_id()
     std::uint32_t id = 0;
     for (int tries = 0; id == 0 && tries < 64; ++tries)
         id = static_cast<std::uint32_t>(entropy());
-    return id != 0 ? id : draw_session_id();
+    return id != 0 ? id : 0x5E55u;
 }
 
 /// The settings' own ranges: host and join refuse others with InvalidArgument, naming the
