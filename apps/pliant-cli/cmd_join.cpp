@@ -46,7 +46,12 @@ int run_join(const JoinOptions& opt, const GlobalOptions& global)
 {
     auto master = net::resolve_address(opt.master);
     if (!master)
-        return report(master.error());
+    {
+        // A malformed MASTER is a usage error (2); a host name that does not resolve is the
+        // network's failure (3, NetworkError).
+        const int status = report(master.error());
+        return master.error().code == core::ErrorCode::InvalidArgument ? k_exit_usage : status;
+    }
     if (const auto why = undialable(*master, opt.master, opt.port))
     {
         spdlog::error("join: {}", *why);

@@ -102,7 +102,7 @@ core::Result<Address> resolve_address(std::string_view text)
     addrinfo* found = nullptr;
     const int rc = ::getaddrinfo(host.c_str(), nullptr, &hints, &found);
     if (rc != 0 || found == nullptr)
-        return core::fail(core::ErrorCode::InvalidArgument,
+        return core::fail(core::ErrorCode::NetworkError,
                           "cannot find an IPv4 address for host '" + host + "' (" +
                               ::gai_strerror(rc) +
                               "); give HOST:PORT with a host name, a.b.c.d or localhost");

@@ -403,13 +403,12 @@ public:
             ++it->second.stats.bad_datagrams;
     }
 
-    std::vector<PeerHandle> peers() const override
+    void live_peers(std::vector<PeerHandle>& out) const override
     {
-        std::vector<PeerHandle> out;
+        out.clear();
         for (const auto& [h, c] : connections_)
             if (c.connected)
                 out.push_back(PeerHandle{h});
-        return out;
     }
 
     [[nodiscard]] EnetCounters counters() const noexcept { return counters_; }
@@ -446,7 +445,13 @@ private:
         if (settings_.connect_rate_per_source > 0.0)
         {
             constexpr std::size_t k_max_sources = 4096;
-            if (sources_.size() >= k_max_sources)
+            // A full table is swept at most every 100 ms: a flood of CONNECTs from spoofed
+            // sources keeps it full, and sweeping it for each one cost 4,096 refills a datagram.
+            // Until the next sweep a new source gets no bucket (the total limit still applies).
+            if (sources_.size() >= k_max_sources &&
+                now - last_sweep_ >= std::chrono::milliseconds(100))
+            {
+                last_sweep_ = now;
                 for (auto it = sources_.begin(); it != sources_.end();)
                 {
                     // A bucket that refilled completely holds no information: forget it.
@@ -457,6 +462,7 @@ private:
                     else
                         ++it;
                 }
+            }
             auto it = sources_.find(from.host);
             if (it == sources_.end() && sources_.size() < k_max_sources)
                 it = sources_.emplace(from.host, Bucket{settings_.connect_burst_per_source, now})
@@ -641,6 +647,7 @@ private:
     std::map<const ENetPeer*, HalfOpen> half_open_;
     std::map<const ENetPeer*, enet_uint32> answered_;  // half-open, the dialer answered: connect id
     Clock::time_point last_scan_{};
+    Clock::time_point last_sweep_{};  ///< of sources_, when full (admit)
     Clock::time_point last_warning_{};
     Clock::time_point last_full_warning_{};
     EnetCounters counters_;

@@ -688,13 +688,12 @@ void SecureTransport::report_bad_datagram(PeerHandle peer) noexcept
     impl_->inner->report_bad_datagram(peer);
 }
 
-std::vector<PeerHandle> SecureTransport::peers() const
+void SecureTransport::live_peers(std::vector<PeerHandle>& out) const
 {
-    std::vector<PeerHandle> out;
+    out.clear();
     for (const auto& [h, c] : impl_->conns)
         if (c.ready)
             out.push_back(PeerHandle{h});
-    return out;
 }
 
 std::optional<SecureStats> SecureTransport::secure_stats(PeerHandle peer) const noexcept

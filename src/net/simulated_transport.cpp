@@ -581,14 +581,13 @@ public:
             ++it->second.stats.bad_datagrams;
     }
 
-    std::vector<PeerHandle> peers() const override
+    void live_peers(std::vector<PeerHandle>& out) const override
     {
         const std::lock_guard lock(net_.mutex);
-        std::vector<PeerHandle> out;
+        out.clear();
         for (const auto& [h, c] : net_.endpoints[static_cast<std::size_t>(id_)].connections)
             if (c.connected)
                 out.push_back(PeerHandle{h});
-        return out;
     }
 
 private:

@@ -17,6 +17,13 @@ void Transport::wait(double max_s) noexcept
         std::this_thread::sleep_for(std::chrono::duration<double>(max_s));
 }
 
+std::vector<PeerHandle> Transport::peers() const
+{
+    std::vector<PeerHandle> out;
+    live_peers(out);
+    return out;
+}
+
 std::size_t Transport::queued_bytes(PeerHandle /*peer*/) const noexcept
 {
     return 0;

@@ -310,14 +310,25 @@ std::string Session::Impl::describe_peer(std::uint16_t id) const
 /// with what was wrong, so the user can tell who.
 void Session::Impl::reject(std::uint64_t& counter, std::uint16_t from, std::string_view what)
 {
+    if (count_reject(counter, from))
+        warn_rejected(from, what);
+}
+
+bool Session::Impl::count_reject(std::uint64_t& counter, std::uint16_t from)
+{
     ++counter;
     auto it = peers.find(from);
     if (it == peers.end())
-        return;
+        return false;
     ++it->second.rejected;
     if (it->second.warned_rejected)
-        return;
+        return false;
     it->second.warned_rejected = true;
+    return true;
+}
+
+void Session::Impl::warn_rejected(std::uint16_t from, std::string_view what) const
+{
     spdlog::warn(
         "session: {} sent {}: dropped (an honest peer never does; further drops "
         "are counted in the --stats column 'rejected')",
@@ -328,10 +339,21 @@ void Session::Impl::reject(std::uint64_t& counter, std::uint16_t from, std::stri
 /// a second.
 void Session::Impl::reject(std::uint64_t& counter, net::PeerHandle h, std::string_view what)
 {
+    if (count_reject(counter, h))
+        warn_rejected(h, what);
+}
+
+bool Session::Impl::count_reject(std::uint64_t& counter, net::PeerHandle /*h*/)
+{
     ++counter;
     if (last_now < next_unbound_warning)
-        return;
+        return false;
     next_unbound_warning = last_now + 1.0;
+    return true;
+}
+
+void Session::Impl::warn_rejected(net::PeerHandle h, std::string_view what) const
+{
     const auto address = transport.remote_address(h);
     spdlog::warn(
         "session: the connection from {} sent {}: dropped (an honest peer never "
@@ -591,7 +613,8 @@ void Session::Impl::poll()
     }
     record_history();
     feed_blobs();
-    for (const net::PeerHandle h : transport.peers())
+    transport.live_peers(live_handles);
+    for (const net::PeerHandle h : live_handles)
         if (auto st = transport.stats(h))
             last_stats[h] = *st;
 }

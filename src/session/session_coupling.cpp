@@ -334,8 +334,9 @@ void Session::Impl::apply_halos(std::uint64_t t)
             continue;
         if (!owns_every_node(part, h))
         {
-            reject(counters.halo_rejects, h.sender.value,
-                   "halo values for nodes it did not own at tick " + std::to_string(t));
+            if (count_reject(counters.halo_rejects, h.sender.value))
+                warn_rejected(h.sender.value,
+                              "halo values for nodes it did not own at tick " + std::to_string(t));
             continue;
         }
         std::size_t k = 0;

@@ -264,6 +264,7 @@ struct Session::Impl
     bool advanced = false;  // advance() has been called: last_now is the caller's clock
     std::map<net::PeerHandle, std::uint16_t> dialing;  // joiner -> listed peers
     std::map<net::PeerHandle, net::PeerStats> last_stats;
+    std::vector<net::PeerHandle> live_handles;  ///< poll()'s scratch: the live connections
     net::PeerStats closed_stats;
 
     // Blobs being received (joiner).
@@ -566,6 +567,13 @@ struct Session::Impl
     std::string describe_peer(std::uint16_t id) const;
     void reject(std::uint64_t& counter, std::uint16_t from, std::string_view what);
     void reject(std::uint64_t& counter, net::PeerHandle h, std::string_view what);
+    /// reject()'s counting alone. \return whether the drop is to be logged (warn_rejected): a
+    /// caller whose message needs formatting formats it only then, not for every drop of a
+    /// flood.
+    [[nodiscard]] bool count_reject(std::uint64_t& counter, std::uint16_t from);
+    [[nodiscard]] bool count_reject(std::uint64_t& counter, net::PeerHandle h);
+    void warn_rejected(std::uint16_t from, std::string_view what) const;
+    void warn_rejected(net::PeerHandle h, std::string_view what) const;
     void handle(net::PeerHandle h, const net::Message& m);
     void poll();
     void apply_waiting_points();

@@ -74,9 +74,10 @@ void Session::Impl::on_hello(net::PeerHandle h, const net::Message& m, const net
     if (const auto known = peers.find(m.header.sender.value);
         known != peers.end() && (known->second.handle || known->second.departed))
     {
-        reject(counters.peer_claim_rejects, h,
-               "a Hello claiming the id of peer " + std::to_string(m.header.sender.value) +
-                   ", already connected or departed");
+        if (count_reject(counters.peer_claim_rejects, h))
+            warn_rejected(h, "a Hello claiming the id of peer " +
+                                 std::to_string(m.header.sender.value) +
+                                 ", already connected or departed");
         transport.disconnect(h, net::DisconnectReason::Refused);
         return;
     }

@@ -170,9 +170,9 @@ void Session::Impl::on_leaf_state(std::uint16_t from, const net::Message& m,
     }
     else if (named->owners[l] != net::PeerId{from})
     {
-        reject(counters.foreign_states, from,
-               "a state of leaf " + std::to_string(l) + ", which it does not own in epoch " +
-                   std::to_string(ls.epoch));
+        if (count_reject(counters.foreign_states, from))
+            warn_rejected(from, "a state of leaf " + std::to_string(l) +
+                                    ", which it does not own in epoch " + std::to_string(ls.epoch));
         return;
     }
     const core::TetraGrid& g = s.model_->grid();
@@ -378,9 +378,10 @@ bool Session::Impl::settle_leaf(std::uint32_t l, std::uint32_t last)
     }
     if (named->owners[l] != net::PeerId{h.sender})
     {
-        reject(counters.foreign_states, h.sender,
-               "a state of leaf " + std::to_string(l) + ", which it does not own in epoch " +
-                   std::to_string(h.epoch));
+        if (count_reject(counters.foreign_states, h.sender))
+            warn_rejected(h.sender, "a state of leaf " + std::to_string(l) +
+                                        ", which it does not own in epoch " +
+                                        std::to_string(h.epoch));
         return false;
     }
     const bool mine = std::find(my_leaves.begin(), my_leaves.end(), l) != my_leaves.end() &&

@@ -268,6 +268,14 @@ if(TARGET pliant)
     pliant_cli_expect(cli_join_own_port_is_refused 2 STDERR
                       "join: 127.0.0.1:47998 is this peer's own --port 47998"
                       join 127.0.0.1:47998 --port 47998 --duration 1)
+    # A malformed MASTER is a usage error (2); a host name that does not resolve (RFC 6761:
+    # nothing under .invalid does) is the network's failure (3), as is a master that never
+    # answers.
+    pliant_cli_expect(cli_join_malformed_address_is_a_usage_error 2 STDERR
+                      "address '127.0.0.1:99999' has a bad port" join 127.0.0.1:99999 --duration 1)
+    pliant_cli_expect(cli_join_unknown_host_is_a_network_failure 3 STDERR
+                      "cannot find an IPv4 address for host 'no-such-host.invalid'"
+                      join no-such-host.invalid:7777 --duration 1)
     # A file name holding an escape sequence (ESC [31m) is printed with the control byte as \x1b,
     # in info's heading and in an error: it recoloured the terminal.
     add_test(NAME cli_control_bytes_in_names_are_escaped

@@ -53,6 +53,9 @@ TEST(Address, ResolvesWhatParsesAndRefusesAnUnknownHostNamingIt)
     // RFC 6761: names under .invalid never resolve.
     const auto unknown = resolve_address("no-such-host.invalid:7777");
     ASSERT_FALSE(unknown);
+    // Not the address's fault: a name lookup that fails is a network error (`pliant join` exits
+    // 1 for it and 2 for a malformed address).
+    EXPECT_EQ(unknown.error().code, core::ErrorCode::NetworkError);
     EXPECT_NE(unknown.error().message.find("'no-such-host.invalid'"), std::string::npos)
         << unknown.error().message;
 }

@@ -140,7 +140,7 @@ public:
     {
         inner_->report_bad_datagram(peer);
     }
-    std::vector<PeerHandle> peers() const override { return inner_->peers(); }
+    void live_peers(std::vector<PeerHandle>& out) const override { inner_->live_peers(out); }
 
 private:
     std::unique_ptr<Transport> inner_;

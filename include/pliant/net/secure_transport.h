@@ -145,7 +145,7 @@ public:
     [[nodiscard]] std::size_t queued_bytes(PeerHandle peer) const noexcept override;
     void report_bad_datagram(PeerHandle peer) noexcept override;
     /// Authenticated connections only.
-    [[nodiscard]] std::vector<PeerHandle> peers() const override;
+    void live_peers(std::vector<PeerHandle>& out) const override;
 
     /// This layer's drop counters of a live connection (authenticated or not).
     [[nodiscard]] std::optional<SecureStats> secure_stats(PeerHandle peer) const noexcept;

@@ -51,7 +51,8 @@ struct Address
 [[nodiscard]] core::Result<Address> parse_address(std::string_view text);
 /// As parse_address, and "hostname:port" through the system's resolver (IPv4, the first address
 /// found). Blocks on the look-up: for the command line, before a session starts. \return
-/// ErrorCode::InvalidArgument naming the host when it cannot be resolved.
+/// ErrorCode::InvalidArgument if malformed (as parse_address, or an IPv6 address), and
+/// ErrorCode::NetworkError naming the host when the look-up finds no IPv4 address.
 [[nodiscard]] core::Result<Address> resolve_address(std::string_view text);
 
 /// A connection as one Transport instance sees it. Handles are never reused by an instance, so
@@ -154,8 +155,11 @@ public:
     /// Counts one bad datagram received from `peer` (called by whoever decodes).
     virtual void report_bad_datagram(PeerHandle peer) noexcept = 0;
 
-    /// Handles of the live connections, in increasing order.
-    [[nodiscard]] virtual std::vector<PeerHandle> peers() const = 0;
+    /// Handles of the live connections, in increasing order, into `out` (cleared first; its
+    /// capacity is kept, for callers that ask on every poll).
+    virtual void live_peers(std::vector<PeerHandle>& out) const = 0;
+    /// As live_peers, returned.
+    [[nodiscard]] std::vector<PeerHandle> peers() const;
 
     /// Bytes queued to `peer` and not yet sent, or sent reliably and not yet acknowledged: what
     /// a sender that feeds a large transfer (the Welcome's blobs) keeps bounded. 0 for an
