@@ -21,13 +21,14 @@ ALLOWED = {
     "render": {"core"},
 }
 # Third-party headers a module may not use (only the viewer, apps/pliant-cli/viewer/, links GLFW/ImGui, only render GL,
-# only net's ENet adapter includes ENet, only net's secure layer includes libsodium, only net's
-# quantised-value packing includes zstd).
+# only net's ENet adapter includes ENet, only net's secure layer and mesh's glTF index check (its
+# base64 decoder) include libsodium, only net's quantised-value packing includes zstd).
 FORBIDDEN_THIRD_PARTY = {
     "GLFW/": lambda path: path.parts[:3] == ("apps", "pliant-cli", "viewer"),
     "imgui": lambda path: path.parts[:3] == ("apps", "pliant-cli", "viewer"),
     "enet/": lambda path: path.as_posix() == "src/net/enet_transport.cpp",
-    "sodium": lambda path: path.as_posix() == "src/net/secure_transport.cpp",
+    "sodium": lambda path: path.as_posix()
+    in ("src/net/secure_transport.cpp", "src/mesh/gltf_indices.cpp"),
     "zstd": lambda path: path.as_posix() == "src/net/quantised.cpp",
 }
 PLIANT_INCLUDE = re.compile(r'^\s*#\s*include\s*[<"]pliant/([a-z_]+)/')

@@ -1121,6 +1121,15 @@ core::Result<ScanResult> scan_glb(std::string_view bytes, const std::string& nam
             result.json_offset = offset;
             result.json_size = json.size();
         }
+        // Assimp reads buffer 0 from the chunk after the JSON one, at the JSON's length rounded
+        // up to 4 (the chunks' own walk uses the length as it is: they agree when it is a
+        // multiple of 4, as glTF requires).
+        constexpr std::uint32_t k_bin_chunk = 0x004E4942;  // "BIN\0"
+        if (chunk == 1 && type == k_bin_chunk && result.json_size % 4 == 0)
+        {
+            result.bin_offset = static_cast<std::size_t>(at) + 8;
+            result.bin_size = static_cast<std::size_t>(size);
+        }
         at += 8 + size;
     }
     if (chunk == 0)

@@ -60,6 +60,11 @@ struct ScanResult
     /// glTF and GLB: where the JSON lies in the bytes (the whole `.gltf`; a GLB's JSON chunk).
     std::size_t json_offset = 0;
     std::size_t json_size = 0;
+    /// GLB: where the BIN chunk's bytes lie (chunk 1, type "BIN"), the bytes of buffer 0 for
+    /// Assimp. Only where Assimp looks for it (right after the JSON chunk, whose length is then a
+    /// multiple of 4); 0 and 0 otherwise.
+    std::size_t bin_offset = 0;
+    std::size_t bin_size = 0;
 };
 
 /// Checks `bytes` (the whole file) against the structure of the format its lower-case extension
@@ -81,6 +86,21 @@ struct ScanResult
 /// Data URIs and a GLB's own chunk are not files. \return IoError (missing, a directory, not a
 /// regular file) or ParseError (shorter than its byteLength), naming the buffer and the file.
 [[nodiscard]] core::Result<void> check_gltf_buffers(std::string_view json,
+                                                    const std::filesystem::path& folder,
+                                                    const std::string& name);
+
+/// Every index of a glTF 2.0 primitive that makes triangles (mode TRIANGLES, TRIANGLE_STRIP or
+/// TRIANGLE_FAN) must name a vertex of its POSITION accessor: Assimp 5.2 drops a face with an
+/// index past the vertex count, saying so only to its logger, and the hole then read as "not a
+/// closed surface". `bytes` is the whole file, `scan` its scan (the JSON, known to parse; a GLB's
+/// BIN chunk), `folder` where its buffer files lie (check_gltf_buffers checked them). Checks the
+/// primitives of the meshes the default scene's node tree reaches (the ones import reads) whose
+/// indices accessor is plain (SCALAR, unsigned byte, short or int, in a bufferView, not sparse)
+/// and lies in a buffer it can read: a GLB's BIN chunk, a base64 `data:` URI, a file in
+/// `folder`. Anything else (a missing or ill-typed field, data past its view or buffer, a buffer
+/// that cannot be read or decoded) leaves that primitive to Assimp unchecked, as before.
+/// \return BadIndex naming the mesh, the primitive, the index, its element and the vertex count.
+[[nodiscard]] core::Result<void> check_gltf_indices(std::string_view bytes, const ScanResult& scan,
                                                     const std::filesystem::path& folder,
                                                     const std::string& name);
 

@@ -266,11 +266,15 @@ core::Result<TriMesh> import_mesh(const std::filesystem::path& path, ImportRepor
     if (!scan)
         return scan.error();
     if (scan->format == detail::Format::Gltf || scan->format == detail::Format::Glb)
+    {
         if (auto ok = detail::check_gltf_buffers(
                 std::string_view(*bytes).substr(scan->json_offset, scan->json_size),
                 path.parent_path(), name);
             !ok)
             return ok.error();
+        if (auto ok = detail::check_gltf_indices(*bytes, *scan, path.parent_path(), name); !ok)
+            return ok.error();  // Assimp drops a face with such an index, saying nothing
+    }
     rep.format = std::string(detail::format_name(scan->format));
     rep.file_vertices = scan->vertices;
 

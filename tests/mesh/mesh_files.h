@@ -136,8 +136,10 @@ inline std::string base64(const std::string& in)
     return out;
 }
 
-/// glTF 2.0 with one node, one triangle primitive, an embedded (data URI) buffer.
-inline std::string to_gltf(const mesh::TriMesh& m)
+/// glTF 2.0 with one node, one triangle primitive, an embedded (data URI) buffer; indices of
+/// `index_bytes` bytes each: 4 (UNSIGNED_INT, 5125), 2 (UNSIGNED_SHORT, 5123) or 1
+/// (UNSIGNED_BYTE, 5121).
+inline std::string to_gltf(const mesh::TriMesh& m, int index_bytes = 4)
 {
     std::string buffer;
     float lo[3] = {1e30F, 1e30F, 1e30F};
@@ -156,7 +158,15 @@ inline std::string to_gltf(const mesh::TriMesh& m)
     const std::size_t pos_bytes = buffer.size();
     for (const auto& f : m.faces)
         for (const auto v : f)
-            append_le(buffer, v);
+        {
+            if (index_bytes == 1)
+                append_le(buffer, static_cast<std::uint8_t>(v));
+            else if (index_bytes == 2)
+                append_le(buffer, static_cast<std::uint16_t>(v));
+            else
+                append_le(buffer, v);
+        }
+    const int component = index_bytes == 1 ? 5121 : index_bytes == 2 ? 5123 : 5125;
     const auto num = [](double v) { return fmt_double(v); };
     std::string s = R"({"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],)";
     s += R"("nodes":[{"mesh":0}],"meshes":[{"primitives":[{"attributes":{"POSITION":0},)";
@@ -168,8 +178,8 @@ inline std::string to_gltf(const mesh::TriMesh& m)
     s += R"("accessors":[{"bufferView":0,"componentType":5126,"count":)" +
          std::to_string(m.positions.size()) + R"(,"type":"VEC3","min":[)" + num(lo[0]) + "," +
          num(lo[1]) + "," + num(lo[2]) + R"(],"max":[)" + num(hi[0]) + "," + num(hi[1]) + "," +
-         num(hi[2]) + R"(]},{"bufferView":1,"componentType":5125,"count":)" +
-         std::to_string(3 * m.faces.size()) + R"(,"type":"SCALAR"}]})";
+         num(hi[2]) + R"(]},{"bufferView":1,"componentType":)" + std::to_string(component) +
+         R"(,"count":)" + std::to_string(3 * m.faces.size()) + R"(,"type":"SCALAR"}]})";
     return s;
 }
 
