@@ -684,7 +684,7 @@ void Session::Impl::advance(double now)
         close_all(net::DisconnectReason::Quit);
     if (leaving && !lockstep && s.coupling_ == Coupling::Exact)
         finish_leave_soon();
-    if (!pending_acks.empty() && now >= next_ack && !s.left_)
+    if (acks_pending && now >= next_ack && !s.left_)
     {
         send_acks();
         next_ack =

@@ -227,6 +227,58 @@ struct QuantisedLeaf
     std::vector<std::int32_t> qu, qv;
 };
 
+/// The last k_baseline_window quantised states of one leaf, oldest first (docs/session.md §5.1):
+/// a ring over a fixed array whose entries keep their vectors when they leave it, so storing a
+/// state (every stream period per leaf sent, every leaf state received) reuses the oldest
+/// entry's storage instead of allocating (a deque allocated blocks and two vectors per state).
+class BaselineRing
+{
+public:
+    [[nodiscard]] std::size_t size() const noexcept { return count_; }
+    [[nodiscard]] bool empty() const noexcept { return count_ == 0; }
+    /// Entry i, 0 the oldest.
+    [[nodiscard]] const QuantisedLeaf& operator[](std::size_t i) const noexcept
+    {
+        return entries_[(first_ + i) % k_baseline_window];
+    }
+    [[nodiscard]] const QuantisedLeaf& back() const noexcept { return (*this)[count_ - 1]; }
+    void clear() noexcept { first_ = count_ = 0; }
+    void pop_front() noexcept
+    {
+        first_ = (first_ + 1) % k_baseline_window;
+        --count_;
+    }
+    void pop_back() noexcept { --count_; }
+    /// Appends an entry, the oldest's if full (its vectors keep their capacity): the caller fills
+    /// every field.
+    QuantisedLeaf& push_back() noexcept
+    {
+        if (count_ == k_baseline_window)
+            pop_front();
+        ++count_;
+        return entries_[(first_ + count_ - 1) % k_baseline_window];
+    }
+
+private:
+    std::array<QuantisedLeaf, k_baseline_window> entries_;
+    std::size_t first_ = 0;
+    std::size_t count_ = 0;
+};
+
+/// Stores leaf state (qu, qv: the first n of each) in `e`, reusing its vectors.
+inline void store_quantised(QuantisedLeaf& e, std::uint16_t sender, std::uint64_t tick, double time,
+                            int u_exponent, int v_exponent, const std::vector<std::int32_t>& qu,
+                            const std::vector<std::int32_t>& qv, std::size_t n)
+{
+    e.sender = sender;
+    e.tick = tick;
+    e.time = time;
+    e.u_exponent = u_exponent;
+    e.v_exponent = v_exponent;
+    e.qu.assign(qu.begin(), qu.begin() + static_cast<std::ptrdiff_t>(n));
+    e.qv.assign(qv.begin(), qv.begin() + static_cast<std::ptrdiff_t>(n));
+}
+
 struct HaloBuffer
 {
     std::uint64_t tick = 0;
@@ -380,17 +432,40 @@ struct Session::Impl
     std::vector<double> view_time;
 
     // Quantised streaming (docs/protocol.md §5.5).
-    std::vector<std::deque<QuantisedLeaf>> sent;  // per leaf: our last states sent, newest last
-    std::vector<std::deque<QuantisedLeaf>> held;  // per leaf: last states received, newest last
+    std::vector<BaselineRing> sent;  // per leaf: our last states sent, newest last
+    std::vector<BaselineRing> held;  // per leaf: last states received, newest last
     std::map<std::uint16_t, std::vector<std::uint64_t>> acked;  // peer -> per leaf: tick + 1
-    std::map<std::uint16_t, std::map<std::uint32_t, std::uint64_t>> pending_acks;  // to send
+    // Acks to send, per peer: the newest tick + 1 per leaf and the leaves listed. Kept across
+    // ack periods (cleared, not freed), so scheduling an ack allocates nothing.
+    struct PendingAcks
+    {
+        std::vector<std::uint64_t> tick_plus_one;  // per leaf, valid where listed
+        std::vector<char> listed;                  // per leaf
+        std::vector<std::uint32_t> leaves;         // listed leaves, in arrival order
+    };
+    std::map<std::uint16_t, PendingAcks> pending_acks;
+    bool acks_pending = false;  // some PendingAcks lists a leaf
+    net::Message ack_msg;       // send_acks(): the Ack being filled, reused
     double next_ack = 0.0;
     // Bandwidth cap (settings.bandwidth_cap_mbit_s): per peer, a byte budget and leaf priorities.
     std::map<std::uint16_t, double> budget;
     std::map<std::uint16_t, std::vector<double>> priority;
     // Batched streaming (settings.batch_leaves): per peer, the LeafBatch (quantised leaves) or
-    // ValueBatch (coarse leaves) being filled this period.
-    std::map<std::uint16_t, net::Message> batch;
+    // ValueBatch (coarse leaves) being filled this period. The messages stay when sent (`open`
+    // false), and their leaves' vectors go to the spares, so a period allocates nothing once
+    // they have grown.
+    struct OutBatch
+    {
+        net::Message message;
+        bool open = false;
+    };
+    std::map<std::uint16_t, OutBatch> batch;
+    std::vector<net::QuantisedDelta> spare_deltas;  // of LeafBatch leaves sent
+    std::vector<net::ValueLeaf> spare_values;       // of ValueBatch leaves sent
+    net::BatchLeaf coded;                           // code_leaf()'s output for one receiver
+    net::ValueLeaf coded_values;                    // batch_values(): the leaf being added
+    net::Message quantised_msg;  // stream_quantised(): a leaf state sent alone (not batched)
+    net::LeafState batch_state;  // on_leaf_batch / on_value_batch: the leaf as a LeafState
     std::vector<core::Vec3> leaf_centre;  // rest positions, m
     std::vector<double> leaf_radius;      // m
     std::vector<char> near_interest;      // per leaf, refreshed each stream
@@ -687,12 +762,13 @@ struct Session::Impl
     const PartitionEntry* stream_partition() const;
     bool extrapolate(const QuantisedLeaf& base, double time, std::size_t n);
     const QuantisedLeaf* acked_baseline(std::uint16_t peer, std::uint32_t l) const;
-    bool code_leaf(net::LeafState& m, std::size_t n, const QuantisedLeaf* base);
-    std::size_t batch_leaf(std::uint16_t pid, net::LeafState&& m, std::uint64_t tick);
+    bool code_leaf(net::QuantisedDelta& q, std::size_t n, const QuantisedLeaf* base);
+    std::size_t batch_leaf(std::uint16_t pid, std::uint32_t epoch, std::uint64_t tick);
     void batch_values(std::uint16_t pid, const net::LeafState& m, std::uint64_t tick);
+    void send_batch(std::uint16_t pid, OutBatch& b);
     void flush_batches();
-    [[nodiscard]] bool shows_now(const std::deque<QuantisedLeaf>& entries,
-                                 const QuantisedLeaf& base, std::size_t n) const;
+    [[nodiscard]] bool shows_now(const BaselineRing& entries, const QuantisedLeaf& base,
+                                 std::size_t n) const;
     bool stream_quantised(const PartitionEntry* p, std::uint32_t l);
 
     [[nodiscard]] bool capped() const noexcept
@@ -709,7 +785,7 @@ struct Session::Impl
     void hold_quantised(std::uint16_t from, std::uint64_t tick, double time, std::size_t l,
                         const net::QuantisedDelta& q, std::size_t n);
     void send_acks();
-    void send_ack(std::uint16_t to, const net::Ack& ack);
+    void send_ack(std::uint16_t to);
     void on_ack(std::uint16_t from, const net::Ack& ack);
     void on_leaf_state(std::uint16_t from, const net::Message& m, const net::LeafState& ls);
     void mark_shown(std::size_t l, std::uint32_t epoch, std::uint64_t tick, double time,

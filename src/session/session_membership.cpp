@@ -137,12 +137,15 @@ void Session::Impl::lose_peer(net::PeerHandle h, net::DisconnectReason reason)
     p.handle.reset();
     p.departed = true;
     // Its entry stays (ids are never reused; its forces end by the partitions), but not what
-    // only a connected peer needs: partitions it sent aside, its acks, its stream budget. Else
-    // every connection that ever claimed an id would hold them for the session's life.
+    // only a connected peer needs: partitions it sent aside, its acks (received and to send),
+    // its stream budget and batch. Else every connection that ever claimed an id would hold
+    // them for the session's life.
     foreign_partitions.erase(id);
     acked.erase(id);
+    pending_acks.erase(id);
     priority.erase(id);
     budget.erase(id);
+    batch.erase(id);
     spdlog::debug("session: peer {} disconnected ({})", id, net::to_string(reason));
     if (net::PeerId{id} == master_id && s.role_ != SessionRole::Master &&
         reason == net::DisconnectReason::Shutdown)

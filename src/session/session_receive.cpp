@@ -29,10 +29,14 @@ bool Session::Impl::rebuild_quantised(std::uint16_t from, std::uint64_t tick, do
     if (q.baseline != 0)
     {
         const std::uint64_t want = tick >= q.baseline ? tick - q.baseline : tick;
-        for (const QuantisedLeaf& h : held[l])
+        const BaselineRing& ring = held[l];
+        for (std::size_t i = 0; i < ring.size(); ++i)
+        {
+            const QuantisedLeaf& h = ring[i];
             if (h.sender == from && h.tick == want && want != tick &&
                 h.u_exponent == q.u_exponent && h.v_exponent == q.v_exponent)
                 base = &h;
+        }
         if (base == nullptr)
         {
             ++counters.baseline_misses;
@@ -65,58 +69,72 @@ bool Session::Impl::rebuild_quantised(std::uint16_t from, std::uint64_t tick, do
 void Session::Impl::hold_quantised(std::uint16_t from, std::uint64_t tick, double time,
                                    std::size_t l, const net::QuantisedDelta& q, std::size_t n)
 {
-    std::deque<QuantisedLeaf>& h = held[l];
+    BaselineRing& h = held[l];
     bool duplicate = false;
-    for (const QuantisedLeaf& e : h)
+    for (std::size_t i = 0; i < h.size(); ++i)
     {
+        const QuantisedLeaf& e = h[i];
         if (e.sender == from && e.tick > tick)
             return;
         duplicate = duplicate || (e.sender == from && e.tick == tick);
     }
     if (!duplicate)
+        store_quantised(h.push_back(), from, tick, time, q.u_exponent, q.v_exponent, qu, qv, n);
+    PendingAcks& pending = pending_acks[from];
+    if (pending.listed.size() != held.size())
     {
-        if (h.size() >= k_baseline_window)
-            h.pop_front();
-        const auto end_u = qu.begin() + static_cast<std::ptrdiff_t>(n);
-        const auto end_v = qv.begin() + static_cast<std::ptrdiff_t>(n);
-        h.push_back(QuantisedLeaf{from, tick, time, q.u_exponent, q.v_exponent,
-                                  std::vector<std::int32_t>(qu.begin(), end_u),
-                                  std::vector<std::int32_t>(qv.begin(), end_v)});
+        pending.listed.assign(held.size(), 0);
+        pending.tick_plus_one.assign(held.size(), 0);
+        pending.leaves.clear();
     }
-    std::uint64_t& pending = pending_acks[from][static_cast<std::uint32_t>(l)];
-    pending = std::max(pending, tick + 1);
+    if (pending.listed[l] == 0)
+    {
+        pending.listed[l] = 1;
+        pending.tick_plus_one[l] = 0;
+        pending.leaves.push_back(static_cast<std::uint32_t>(l));
+    }
+    pending.tick_plus_one[l] = std::max(pending.tick_plus_one[l], tick + 1);
+    acks_pending = true;
 }
 
 void Session::Impl::send_acks()
 {
     const LeafGraph& graph = *s.graph_;
-    for (auto& [to, leaves] : pending_acks)
+    if (!std::holds_alternative<net::Ack>(ack_msg.body))
+        ack_msg.body = net::Ack{};
+    auto& acks = std::get<net::Ack>(ack_msg.body).acks;
+    for (auto& [to, pending] : pending_acks)
     {
-        net::Ack ack;
-        for (const auto& [l, tick_plus_one] : leaves)
+        // By leaf index, as they were listed in a map before.
+        std::sort(pending.leaves.begin(), pending.leaves.end());
+        acks.clear();
+        for (const std::uint32_t l : pending.leaves)
         {
             const core::LeafId id = graph.leaves()[l];
-            ack.acks.push_back(net::LeafAck{net::WireLeafId{id.square, id.depth, id.ix, id.iy},
-                                            tick_plus_one - 1});
-            if (ack.acks.size() == net::k_max_acks)
+            acks.push_back(net::LeafAck{net::WireLeafId{id.square, id.depth, id.ix, id.iy},
+                                        pending.tick_plus_one[l] - 1});
+            pending.listed[l] = 0;
+            if (acks.size() == net::k_max_acks)
             {
-                send_ack(to, ack);
-                ack.acks.clear();
+                send_ack(to);
+                acks.clear();
             }
         }
-        if (!ack.acks.empty())
-            send_ack(to, ack);
+        if (!acks.empty())
+            send_ack(to);
+        pending.leaves.clear();
     }
-    pending_acks.clear();
+    acks_pending = false;
 }
 
-/// Acks count against the bandwidth cap towards that peer, like leaf states.
-void Session::Impl::send_ack(std::uint16_t to, const net::Ack& ack)
+/// Sends ack_msg's Ack to `to`. Acks count against the bandwidth cap towards that peer, like
+/// leaf states.
+void Session::Impl::send_ack(std::uint16_t to)
 {
-    const net::Message m = make(ack, s.state_.tick);
+    ack_msg.header = net::Header{session_id, s.id_, 0, s.state_.tick};
     if (capped())
-        budget[to] -= static_cast<double>(net::encoded_size(m));
-    send_to(to, m);
+        budget[to] -= static_cast<double>(net::encoded_size(ack_msg));
+    send_to(to, ack_msg);
 }
 
 void Session::Impl::on_ack(std::uint16_t from, const net::Ack& ack)
@@ -313,10 +331,15 @@ void Session::Impl::set_aside(std::size_t l, std::uint16_t from, std::uint64_t t
 void Session::Impl::on_leaf_batch(std::uint16_t from, const net::Message& m,
                                   const net::LeafBatch& b)
 {
-    net::LeafState ls;
+    // One LeafState for every leaf of every batch: copying into it reuses its vectors.
+    net::LeafState& ls = batch_state;
     ls.epoch = b.epoch;
     ls.encoding = net::ValueEncoding::QuantisedDelta;
+    ls.coarsen = 0;
+    ls.node_offset = 0;
     ls.time = b.time;
+    ls.u.clear();
+    ls.v.clear();
     for (const net::BatchLeaf& leaf : b.leaves)
     {
         ls.leaf = leaf.leaf;
@@ -329,11 +352,15 @@ void Session::Impl::on_leaf_batch(std::uint16_t from, const net::Message& m,
 void Session::Impl::on_value_batch(std::uint16_t from, const net::Message& m,
                                    const net::ValueBatch& b)
 {
-    net::LeafState ls;
+    net::LeafState& ls = batch_state;
     ls.epoch = b.epoch;
     ls.encoding = b.encoding;
     ls.coarsen = b.coarsen;
+    ls.node_offset = 0;
     ls.time = b.time;
+    ls.quantised.du.clear();
+    ls.quantised.dv.clear();
+    ls.quantised.packed.clear();
     for (const net::ValueLeaf& leaf : b.leaves)
     {
         ls.leaf = leaf.leaf;

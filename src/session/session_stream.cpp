@@ -230,22 +230,22 @@ const QuantisedLeaf* Session::Impl::acked_baseline(std::uint16_t peer, std::uint
     if (it == acked.end() || it->second[l] == 0)
         return nullptr;
     const std::uint64_t tick = it->second[l] - 1;
-    for (const QuantisedLeaf& q : sent[l])
-        if (q.tick == tick && q.u_exponent == settings.u_step_exponent &&
-            q.v_exponent == settings.v_step_exponent)
-            return &q;
+    const BaselineRing& h = sent[l];
+    for (std::size_t i = 0; i < h.size(); ++i)
+        if (h[i].tick == tick && h[i].u_exponent == settings.u_step_exponent &&
+            h[i].v_exponent == settings.v_step_exponent)
+            return &h[i];
     return nullptr;
 }
 
-/// Codes qu, qv (n nodes) against `base` (null: a key state) into `m`. \return false if the
-/// packed residuals do not fit one datagram.
-bool Session::Impl::code_leaf(net::LeafState& m, std::size_t n, const QuantisedLeaf* base)
+/// Codes qu, qv (n nodes) against `base` (null: a key state) into `q` (every field; its vectors
+/// keep their capacity). \return false if the packed residuals do not fit one datagram.
+bool Session::Impl::code_leaf(net::QuantisedDelta& q, std::size_t n, const QuantisedLeaf* base)
 {
     const auto cu = std::span<const std::int32_t>(qu.data(), n);
     const auto cv = std::span<const std::int32_t>(qv.data(), n);
     auto bu = base != nullptr ? std::span<const std::int32_t>(base->qu) : cu.first(0);
     const auto bv = base != nullptr ? std::span<const std::int32_t>(base->qv) : cv.first(0);
-    net::QuantisedDelta& q = m.quantised;
     q.baseline = base != nullptr ? static_cast<std::uint32_t>(s.state_.tick - base->tick) : 0;
     // Temporal prediction of u from the baseline's u and v where it pays.
     q.extrapolated = false;
@@ -278,72 +278,113 @@ bool Session::Impl::code_leaf(net::LeafState& m, std::size_t n, const QuantisedL
                : net::pack_residuals(q.du, q.dv, net::k_max_packed_residuals, q.packed);
 }
 
-/// Adds quantised leaf state `m` to the LeafBatch being filled for `pid`, first sending that
-/// batch if `m` would take it over one datagram. \return the bytes this adds to the stream
-/// to `pid` (the leaf's record, plus a header and the batch's fixed part when it opens one).
-std::size_t Session::Impl::batch_leaf(std::uint16_t pid, net::LeafState&& m, std::uint64_t tick)
+/// Adds the leaf just coded (`coded`: its id and residuals) to the LeafBatch being filled for
+/// `pid`, first sending that batch if the leaf would take it over one datagram. `coded` gets
+/// spare vectors back, so neither this nor the next code_leaf allocates once the spares have
+/// grown. \return the bytes this adds to the stream to `pid` (the leaf's record, plus a header
+/// and the batch's fixed part when it opens one).
+std::size_t Session::Impl::batch_leaf(std::uint16_t pid, std::uint32_t epoch, std::uint64_t tick)
 {
-    net::BatchLeaf leaf{m.leaf, std::move(m.quantised)};
-    const std::size_t record = net::batch_leaf_size(leaf);
-    auto it = batch.find(pid);
-    if (it != batch.end())
+    const std::size_t record = net::batch_leaf_size(coded);
+    OutBatch& ob = batch[pid];
+    std::size_t bytes = record;
+    if (ob.open)
     {
-        auto& b = std::get<net::LeafBatch>(it->second.body);
-        if (b.leaves.size() < net::k_max_batch_leaves &&
-            net::encoded_size(it->second) + record <= net::k_header_size + net::k_max_state_payload)
-        {
-            b.leaves.push_back(std::move(leaf));
-            return record;
-        }
-        send_to(pid, it->second, net::SendMode::Unsequenced);
-        batch.erase(it);
+        const auto* b = std::get_if<net::LeafBatch>(&ob.message.body);
+        if (b == nullptr || b->leaves.size() >= net::k_max_batch_leaves ||
+            net::encoded_size(ob.message) + record > net::k_header_size + net::k_max_state_payload)
+            send_batch(pid, ob);
     }
-    net::LeafBatch b;
-    b.epoch = m.epoch;
-    b.time = m.time;
-    b.u_exponent = static_cast<std::int8_t>(settings.u_step_exponent);
-    b.v_exponent = static_cast<std::int8_t>(settings.v_step_exponent);
-    b.leaves.push_back(std::move(leaf));
-    batch.emplace(pid, make(b, tick));
-    return net::k_header_size + net::k_leaf_batch_fixed + record;
+    if (!ob.open)
+    {
+        if (!std::holds_alternative<net::LeafBatch>(ob.message.body))
+            ob.message.body = net::LeafBatch{};
+        ob.message.header = net::Header{session_id, s.id_, 0, tick};
+        auto& b = std::get<net::LeafBatch>(ob.message.body);
+        b.epoch = epoch;
+        b.time = s.state_.time;
+        b.u_exponent = static_cast<std::int8_t>(settings.u_step_exponent);
+        b.v_exponent = static_cast<std::int8_t>(settings.v_step_exponent);
+        ob.open = true;
+        bytes += net::k_header_size + net::k_leaf_batch_fixed;
+    }
+    auto& b = std::get<net::LeafBatch>(ob.message.body);
+    net::BatchLeaf& leaf = b.leaves.emplace_back();
+    leaf.leaf = coded.leaf;
+    std::swap(leaf.quantised, coded.quantised);
+    if (!spare_deltas.empty())
+    {
+        coded.quantised = std::move(spare_deltas.back());
+        spare_deltas.pop_back();
+    }
+    return bytes;
 }
 
 /// Adds f32 / f64 leaf state `m` (whole leaf) to the ValueBatch being filled for `pid`,
 /// first sending that batch if `m` would take it over one datagram.
 void Session::Impl::batch_values(std::uint16_t pid, const net::LeafState& m, std::uint64_t tick)
 {
-    net::ValueLeaf leaf{m.leaf, m.u, m.v};
-    const std::size_t record = net::value_leaf_size(leaf, m.encoding);
-    auto it = batch.find(pid);
-    if (it != batch.end())
+    coded_values.leaf = m.leaf;
+    coded_values.u.assign(m.u.begin(), m.u.end());
+    coded_values.v.assign(m.v.begin(), m.v.end());
+    const std::size_t record = net::value_leaf_size(coded_values, m.encoding);
+    OutBatch& ob = batch[pid];
+    if (ob.open)
     {
-        auto* b = std::get_if<net::ValueBatch>(&it->second.body);
-        if (b != nullptr && b->encoding == m.encoding && b->coarsen == m.coarsen &&
-            b->leaves.front().leaf.depth == leaf.leaf.depth &&
-            b->leaves.size() < net::k_max_batch_leaves &&
-            net::encoded_size(it->second) + record <= net::k_header_size + net::k_max_state_payload)
-        {
-            b->leaves.push_back(std::move(leaf));
-            return;
-        }
-        send_to(pid, it->second, net::SendMode::Unsequenced);
-        batch.erase(it);
+        const auto* b = std::get_if<net::ValueBatch>(&ob.message.body);
+        if (b == nullptr || b->encoding != m.encoding || b->coarsen != m.coarsen ||
+            b->leaves.front().leaf.depth != m.leaf.depth ||
+            b->leaves.size() >= net::k_max_batch_leaves ||
+            net::encoded_size(ob.message) + record > net::k_header_size + net::k_max_state_payload)
+            send_batch(pid, ob);
     }
-    net::ValueBatch b;
-    b.epoch = m.epoch;
-    b.time = m.time;
-    b.encoding = m.encoding;
-    b.coarsen = m.coarsen;
-    b.leaves.push_back(std::move(leaf));
-    batch.emplace(pid, make(b, tick));
+    if (!ob.open)
+    {
+        if (!std::holds_alternative<net::ValueBatch>(ob.message.body))
+            ob.message.body = net::ValueBatch{};
+        ob.message.header = net::Header{session_id, s.id_, 0, tick};
+        auto& b = std::get<net::ValueBatch>(ob.message.body);
+        b.epoch = m.epoch;
+        b.time = m.time;
+        b.encoding = m.encoding;
+        b.coarsen = m.coarsen;
+        ob.open = true;
+    }
+    auto& b = std::get<net::ValueBatch>(ob.message.body);
+    std::swap(b.leaves.emplace_back(), coded_values);
+    if (!spare_values.empty())
+    {
+        coded_values = std::move(spare_values.back());
+        spare_values.pop_back();
+    }
+}
+
+/// Sends the batch being filled for `pid` and closes it, keeping the message and moving its
+/// leaves' vectors to the spares.
+void Session::Impl::send_batch(std::uint16_t pid, OutBatch& b)
+{
+    send_to(pid, b.message, net::SendMode::Unsequenced);
+    if (auto* lb = std::get_if<net::LeafBatch>(&b.message.body))
+    {
+        for (net::BatchLeaf& leaf : lb->leaves)
+            spare_deltas.push_back(std::move(leaf.quantised));
+        lb->leaves.clear();
+    }
+    else if (auto* vb = std::get_if<net::ValueBatch>(&b.message.body))
+    {
+        for (net::ValueLeaf& leaf : vb->leaves)
+            spare_values.push_back(std::move(leaf));
+        vb->leaves.clear();
+    }
+    b.open = false;
 }
 
 /// Sends every LeafBatch or ValueBatch being filled (the end of a stream period).
 void Session::Impl::flush_batches()
 {
-    for (const auto& [pid, m] : batch)
-        send_to(pid, m, net::SendMode::Unsequenced);
-    batch.clear();
+    for (auto& [pid, b] : batch)
+        if (b.open)
+            send_batch(pid, b);
 }
 
 /// Whether a receiver that acknowledged `base` (an entry of `entries`) shows exactly the
@@ -352,7 +393,7 @@ void Session::Impl::flush_batches()
 /// not entries: with two receivers acknowledging different entries of a leaf at rest, each
 /// all-zero delta sent to one added an entry the other had not acknowledged, and the leaf
 /// went out every stream period, to each in turn.
-bool Session::Impl::shows_now(const std::deque<QuantisedLeaf>& entries, const QuantisedLeaf& base,
+bool Session::Impl::shows_now(const BaselineRing& entries, const QuantisedLeaf& base,
                               std::size_t n) const
 {
     const auto same = [&](const QuantisedLeaf& e)
@@ -361,11 +402,11 @@ bool Session::Impl::shows_now(const std::deque<QuantisedLeaf>& entries, const Qu
                std::equal(e.qu.begin(), e.qu.end(), qu.begin()) &&
                std::equal(e.qv.begin(), e.qv.end(), qv.begin());
     };
-    for (auto it = entries.rbegin(); it != entries.rend(); ++it)
+    for (std::size_t i = entries.size(); i-- > 0;)
     {
-        if (!same(*it))
+        if (!same(entries[i]))
             return false;
-        if (&*it == &base)
+        if (&entries[i] == &base)
             return true;
     }
     return false;  // not in the history (cannot be: acked_baseline returns one of it)
@@ -411,35 +452,23 @@ bool Session::Impl::stream_quantised(const PartitionEntry* p, std::uint32_t l)
         }
         if (base != nullptr && base->tick >= tick)
             base = nullptr;
-        net::LeafState m;
-        m.epoch = p->epoch;
-        m.leaf = net::WireLeafId{id.square, id.depth, id.ix, id.iy};
-        m.encoding = net::ValueEncoding::QuantisedDelta;
-        m.time = s.state_.time;
-        bool coded = code_leaf(m, n, base);
-        if (!coded && base != nullptr)
+        coded.leaf = net::WireLeafId{id.square, id.depth, id.ix, id.iy};
+        bool ok = code_leaf(coded.quantised, n, base);
+        if (!ok && base != nullptr)
         {
             base = nullptr;
-            coded = code_leaf(m, n, nullptr);
+            ok = code_leaf(coded.quantised, n, nullptr);
         }
-        if (!coded)
-        {
-            // Incompressible: the same dequantised bits as f64, outside the baseline chain.
-            m.encoding = net::ValueEncoding::F64;
-            m.quantised = {};
-            m.u.assign(xu.begin(), xu.begin() + static_cast<std::ptrdiff_t>(n));
-            m.v.assign(xv.begin(), xv.begin() + static_cast<std::ptrdiff_t>(n));
-        }
-        else
+        if (ok)
         {
             any = true;
             if (base == nullptr)
                 ++counters.key_states_sent;
         }
         ++counters.leaf_states_sent;
-        if (coded && settings.batch_leaves)
+        if (ok && settings.batch_leaves)
         {
-            const std::size_t bytes = batch_leaf(pid, std::move(m), tick);
+            const std::size_t bytes = batch_leaf(pid, p->epoch, tick);
             if (prio != nullptr)
             {
                 budget[pid] -= static_cast<double>(bytes);
@@ -448,26 +477,49 @@ bool Session::Impl::stream_quantised(const PartitionEntry* p, std::uint32_t l)
             leaf_sent_time[l] = s.state_.time;
             continue;
         }
-        const net::Message msg = make(m, tick);
+        // One LeafState alone, in a message reused for every such send: its `quantised` is
+        // default between sends (encode requires it with F64), the coded residuals only swapped
+        // in for one.
+        if (!std::holds_alternative<net::LeafState>(quantised_msg.body))
+            quantised_msg.body = net::LeafState{};
+        quantised_msg.header = net::Header{session_id, s.id_, 0, tick};
+        net::LeafState& m = std::get<net::LeafState>(quantised_msg.body);
+        m.epoch = p->epoch;
+        m.leaf = coded.leaf;
+        m.time = s.state_.time;
+        m.coarsen = 0;
+        m.node_offset = 0;
+        if (ok)
+        {
+            m.encoding = net::ValueEncoding::QuantisedDelta;
+            m.u.clear();
+            m.v.clear();
+            std::swap(m.quantised, coded.quantised);
+        }
+        else
+        {
+            // Incompressible: the same dequantised bits as f64, outside the baseline chain.
+            m.encoding = net::ValueEncoding::F64;
+            m.u.assign(xu.begin(), xu.begin() + static_cast<std::ptrdiff_t>(n));
+            m.v.assign(xv.begin(), xv.begin() + static_cast<std::ptrdiff_t>(n));
+        }
         if (prio != nullptr)
         {
-            budget[pid] -= static_cast<double>(net::encoded_size(msg));
+            budget[pid] -= static_cast<double>(net::encoded_size(quantised_msg));
             (*prio)[l] = 0.0;
         }
-        send_to(pid, msg, net::SendMode::Unsequenced);
+        send_to(pid, quantised_msg, net::SendMode::Unsequenced);
+        if (ok)
+            std::swap(m.quantised, coded.quantised);
         leaf_sent_time[l] = s.state_.time;
     }
     if (any)
     {
-        std::deque<QuantisedLeaf>& h = sent[l];
+        BaselineRing& h = sent[l];
         if (!h.empty() && h.back().tick == tick)
             h.pop_back();
-        if (h.size() >= k_baseline_window)
-            h.pop_front();
-        h.push_back(QuantisedLeaf{
-            s.id_.value, tick, s.state_.time, settings.u_step_exponent, settings.v_step_exponent,
-            std::vector<std::int32_t>(qu.begin(), qu.begin() + static_cast<std::ptrdiff_t>(n)),
-            std::vector<std::int32_t>(qv.begin(), qv.begin() + static_cast<std::ptrdiff_t>(n))});
+        store_quantised(h.push_back(), s.id_.value, tick, s.state_.time, settings.u_step_exponent,
+                        settings.v_step_exponent, qu, qv, n);
     }
     return true;
 }
