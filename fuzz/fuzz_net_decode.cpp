@@ -7,6 +7,10 @@
 // - odd: build -> encode -> corrupt one byte -> decode. Bytes 1..4 pick a sample message (every
 //   type), a byte offset and an XOR mask; the sample must round-trip unmodified, and the corrupted
 //   datagram is either rejected or re-encodes to itself.
+// In both modes decode_into() into one message reused across inputs (holding the previous
+// input's message, or what a failed decode left) must give what decode() gives: the same error,
+// or an equal message (no field left from before; in odd mode the sample is decoded into it
+// first, so the corrupted datagram often meets a message of its own type).
 // Built with libFuzzer under clang, or as a corpus replayer otherwise (fuzz/CMakeLists.txt).
 
 #include <pliant/net/codec.h>
@@ -35,11 +39,23 @@ void require(bool ok, const char* what)
     }
 }
 
+Message& reused()
+{
+    static Message message;
+    return message;
+}
+
 void check_canonical(std::span<const std::byte> datagram)
 {
     auto decoded = decode(datagram);
+    const auto error = decode_into(datagram, reused());
+    require(decoded.has_value() == !error.has_value(), "decode_into and decode disagree");
     if (!decoded)
+    {
+        require(*error == decoded.error(), "decode_into reports another error");
         return;
+    }
+    require(reused() == *decoded, "decode_into into a reused message differs from decode");
     static std::vector<std::byte> buffer(k_max_datagram_size);
     auto size = encode(*decoded, buffer);
     require(size.has_value(), "a decoded message does not encode");
@@ -67,6 +83,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     require(encode(m, encoded).has_value(), "a sample does not encode");
     auto back = decode(encoded);
     require(back.has_value() && *back == m, "a sample does not round-trip");
+    require(!decode_into(encoded, reused()).has_value() && reused() == m,
+            "a sample does not round-trip through decode_into");
     const std::size_t at = (std::size_t{data[2]} | (std::size_t{data[3]} << 8)) % encoded.size();
     const auto mask = static_cast<std::byte>(data[4] == 0 ? 1 : data[4]);
     encoded[at] ^= mask;

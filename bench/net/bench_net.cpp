@@ -45,7 +45,8 @@ Message sample(MessageType type, std::size_t nth = 0)
     return samples::all().front();
 }
 
-// args: 0 LeafState f64 x 73, 1 LeafState f32 x 147, 2 Halo f64 u+v, 3 Welcome, 4 Partition d=2
+// args: 0 LeafState f64 x 73, 1 LeafState f32 x 147, 2 Halo f64 u+v, 3 Welcome, 4 Partition d=2,
+// 5 LeafBatch of 5 leaves x 72 nodes (zstd-packed quantised residuals)
 Message case_message(std::int64_t which)
 {
     switch (which)
@@ -54,6 +55,7 @@ Message case_message(std::int64_t which)
     case 1: return sample(MessageType::LeafState, 1);
     case 2: return sample(MessageType::Halo, 1);
     case 3: return sample(MessageType::Welcome);
+    case 5: return sample(MessageType::LeafBatch, 1);
     default: return sample(MessageType::Partition);
     }
 }
@@ -78,7 +80,7 @@ void BM_Encode(benchmark::State& state)
     }
     label(state, m, bytes);
 }
-BENCHMARK(BM_Encode)->DenseRange(0, 4);
+BENCHMARK(BM_Encode)->DenseRange(0, 5);
 
 void BM_Decode(benchmark::State& state)
 {
@@ -92,7 +94,25 @@ void BM_Decode(benchmark::State& state)
     }
     label(state, m, buf.size());
 }
-BENCHMARK(BM_Decode)->DenseRange(0, 4);
+BENCHMARK(BM_Decode)->DenseRange(0, 5);
+
+// decode_into() into one reused message, as Messenger::next() does: no allocation once the
+// message's vectors have grown.
+void BM_DecodeInto(benchmark::State& state)
+{
+    const Message m = case_message(state.range(0));
+    std::vector<std::byte> buf(encoded_size(m));
+    (void)encode(m, buf);
+    Message out;
+    for (auto _ : state)
+    {
+        auto err = decode_into(buf, out);
+        benchmark::DoNotOptimize(err);
+        benchmark::DoNotOptimize(out);
+    }
+    label(state, m, buf.size());
+}
+BENCHMARK(BM_DecodeInto)->DenseRange(0, 5);
 
 // One Ping from a to b and the Pong back, over ENet on loopback, both hosts serviced by this
 // thread. Skips (with an error) if no socket binds.
@@ -279,7 +299,9 @@ int main(int argc, char** argv)
             {
                 const double items = pliant::bench::counter(r, "items_per_second");
                 const double bytes = pliant::bench::counter(r, "bytes_per_second");
-                const std::string op = name.rfind("BM_Encode", 0) == 0 ? "encode " : "decode ";
+                const std::string op = name.rfind("BM_Encode", 0) == 0       ? "encode "
+                                       : name.rfind("BM_DecodeInto", 0) == 0 ? "decode_into "
+                                                                             : "decode ";
                 report.add(op + r.report_label, -1, 0.0, "", "messages_per_s", items, "1/s");
                 report.add(op + r.report_label, -1, 0.0, "", "bytes_per_s", bytes, "B/s");
             }

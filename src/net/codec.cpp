@@ -1110,6 +1110,20 @@ Err read_packed(ByteReader& r, std::uint16_t word, std::size_t n, QuantisedDelta
     return unpack_residuals(q.packing, q.packed, q.du, q.dv);
 }
 
+/// A default-constructed QuantisedDelta's values, keeping the vectors' storage.
+void clear(QuantisedDelta& q) noexcept
+{
+    q.baseline = 0;
+    q.u_exponent = 0;
+    q.v_exponent = 0;
+    q.predicted = false;
+    q.extrapolated = false;
+    q.du.clear();
+    q.dv.clear();
+    q.packing = Packing::Zstd;
+    q.packed.clear();
+}
+
 Err read_body(ByteReader& r, LeafState& m) noexcept
 {
     m.epoch = r.u32();
@@ -1131,6 +1145,9 @@ Err read_body(ByteReader& r, LeafState& m) noexcept
         return DecodeError::BadCount;
     if (m.encoding == ValueEncoding::QuantisedDelta)
     {
+        // A reused message: the other encoding's fields as a fresh one has them.
+        m.u.clear();
+        m.v.clear();
         QuantisedDelta& q = m.quantised;
         q.baseline = r.u32();
         q.u_exponent = static_cast<std::int8_t>(r.u8());
@@ -1140,6 +1157,7 @@ Err read_body(ByteReader& r, LeafState& m) noexcept
             return {};
         return read_packed(r, packed, n, q);
     }
+    clear(m.quantised);
     if (2 * std::size_t{n} * value_size(m.encoding) > r.remaining())
     {
         r.skip(r.remaining() + 1);
@@ -1382,16 +1400,22 @@ Err read_body(ByteReader& r, Ack& m) noexcept
     return newest_named ? Err{} : DecodeError::BadRange;
 }
 
-/// Default-constructs the body alternative for wire type `type` (1..19).
+/// Makes `body` hold the alternative of index `index` (wire type - 1): a default-constructed one,
+/// unless it holds that alternative already, which is kept with its vectors' storage (every
+/// read_body then sets each of its fields).
 template <std::size_t I = 0>
-Body make_body(std::size_t index) noexcept
+void prepare_body(Body& body, std::size_t index) noexcept
 {
     if constexpr (I + 1 < std::variant_size_v<Body>)
     {
         if (index != I)
-            return make_body<I + 1>(index);
+        {
+            prepare_body<I + 1>(body, index);
+            return;
+        }
     }
-    return Body{std::in_place_index<I>};
+    if (body.index() != I)
+        body.emplace<I>();
 }
 
 }  // namespace
@@ -1459,38 +1483,42 @@ Expected<std::size_t, EncodeError> encode(const Message& message, std::span<std:
     return w.size();
 }
 
-Expected<Message, DecodeError> decode(std::span<const std::byte> datagram) noexcept
+std::optional<DecodeError> decode_into(std::span<const std::byte> datagram, Message& out) noexcept
 {
     if (datagram.size() < k_header_size)
-        return Unexpected{DecodeError::TooShort};
+        return DecodeError::TooShort;
     if (datagram.size() > k_max_datagram_size)
-        return Unexpected{DecodeError::TooLarge};
+        return DecodeError::TooLarge;
     ByteReader r(datagram);
     if (r.u32() != k_protocol_magic)
-        return Unexpected{DecodeError::BadMagic};
+        return DecodeError::BadMagic;
     if (r.u8() != k_protocol_version)
-        return Unexpected{DecodeError::BadVersion};
+        return DecodeError::BadVersion;
     const std::uint8_t type = r.u8();
     if (type == 0 || type > k_message_type_count)
-        return Unexpected{DecodeError::UnknownType};
+        return DecodeError::UnknownType;
     if (r.u8() != 0)
-        return Unexpected{DecodeError::BadFlags};
+        return DecodeError::BadFlags;
     if (r.u8() != 0)
-        return Unexpected{DecodeError::BadReserved};
-    Message message{.header = {}, .body = make_body(type - 1u)};
-    message.header.session = r.u32();
-    message.header.sender = PeerId{r.u16()};
-    message.header.sequence = r.u16();
-    message.header.tick = r.u64();
-    if (auto err = check_header(message.header, message.type()))
-        return Unexpected{*err};
-    const Err structural =
-        std::visit([&r](auto& body) { return read_body(r, body); }, message.body);
-    if (structural)
-        return Unexpected{*structural};
+        return DecodeError::BadReserved;
+    prepare_body(out.body, type - 1u);
+    out.header.session = r.u32();
+    out.header.sender = PeerId{r.u16()};
+    out.header.sequence = r.u16();
+    out.header.tick = r.u64();
+    if (auto err = check_header(out.header, out.type()))
+        return err;
+    if (auto err = std::visit([&r](auto& body) { return read_body(r, body); }, out.body))
+        return err;
     if (r.short_read() || r.remaining() != 0)
-        return Unexpected{DecodeError::BadLength};
-    if (auto err = std::visit([](const auto& body) { return check(body); }, message.body))
+        return DecodeError::BadLength;
+    return std::visit([](const auto& body) { return check(body); }, out.body);
+}
+
+Expected<Message, DecodeError> decode(std::span<const std::byte> datagram) noexcept
+{
+    Message message;
+    if (auto err = decode_into(datagram, message))
         return Unexpected{*err};
     return message;
 }

@@ -214,13 +214,28 @@ public:
 
     std::optional<TransportEvent> poll(int timeout_ms) noexcept override
     {
-        if (!pending_.empty())
-            return pop_pending();
-        if (host_ == nullptr)
+        TransportEvent out;
+        if (!poll_into(out, timeout_ms))
             return std::nullopt;
+        return out;
+    }
+
+    /// Fills every field of `out` (a Received datagram into `out.data`'s storage).
+    bool poll_into(TransportEvent& out, int timeout_ms) noexcept override
+    {
+        if (!pending_.empty())
+        {
+            out = pop_pending();
+            return true;
+        }
+        if (host_ == nullptr)
+            return false;
         expire_connect_attempts();
         if (!pending_.empty())
-            return pop_pending();
+        {
+            out = pop_pending();
+            return true;
+        }
         ENetEvent ev{};
         t_servicing = this;
         const int r = enet_host_service(host_, &ev,
@@ -228,7 +243,7 @@ public:
         t_servicing = nullptr;
         reset_half_open();
         if (r <= 0)
-            return std::nullopt;
+            return false;
         switch (ev.type)
         {
         case ENET_EVENT_TYPE_CONNECT:
@@ -244,7 +259,7 @@ public:
                              from_source >= settings_.max_peers_per_source))
                 {
                     refuse(connections_.at(handle.value), full);
-                    return std::nullopt;
+                    return false;
                 }
             }
             Connection& c = connections_.at(handle.value);
@@ -253,25 +268,28 @@ public:
                               settings_.timeout_max_ms);
             if (!settings_.throttle_unreliable)  // the throttle starts at its scale: keep it
                 enet_peer_throttle_configure(ev.peer, ENET_PEER_PACKET_THROTTLE_INTERVAL, 0, 0);
-            TransportEvent out;
             out.kind = TransportEvent::Kind::Connected;
             out.peer = handle;
-            return out;
+            out.channel = Channel::Control;
+            out.reason = DisconnectReason::None;
+            out.data.clear();
+            return true;
         }
         case ENET_EVENT_TYPE_DISCONNECT:
         {
             const PeerHandle handle = handle_of(ev.peer);
             if (handle.value == 0)
-                return std::nullopt;
+                return false;
             if (connections_.at(handle.value).hidden)
             {
                 ev.peer->data = nullptr;
                 connections_.erase(handle.value);
-                return std::nullopt;
+                return false;
             }
-            TransportEvent out;
             out.kind = TransportEvent::Kind::Disconnected;
             out.peer = handle;
+            out.channel = Channel::Control;
+            out.data.clear();
             const Connection& c = connections_.at(handle.value);
             if (c.local_reason != DisconnectReason::None)
                 out.reason = c.local_reason;
@@ -281,28 +299,31 @@ public:
                 out.reason = DisconnectReason::TimedOut;
             ev.peer->data = nullptr;
             connections_.erase(handle.value);
-            return out;
+            return true;
         }
         case ENET_EVENT_TYPE_RECEIVE:
         {
             const PeerHandle handle = handle_of(ev.peer);
             auto it = connections_.find(handle.value);
-            TransportEvent out;
+            if (it == connections_.end())
+            {
+                enet_packet_destroy(ev.packet);
+                return false;
+            }
             out.kind = TransportEvent::Kind::Received;
             out.peer = handle;
             out.channel = ev.channelID == 0 ? Channel::Control : Channel::State;
+            out.reason = DisconnectReason::None;
             const auto* bytes = reinterpret_cast<const std::byte*>(ev.packet->data);
             out.data.assign(bytes, bytes + ev.packet->dataLength);
             enet_packet_destroy(ev.packet);
-            if (it == connections_.end())
-                return std::nullopt;
             it->second.stats.bytes_received += out.data.size();
             ++it->second.stats.packets_received;
-            return out;
+            return true;
         }
         case ENET_EVENT_TYPE_NONE: break;
         }
-        return std::nullopt;
+        return false;
     }
 
     void flush() noexcept override

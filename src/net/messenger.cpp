@@ -31,21 +31,28 @@ Unexpected<Drop> Peer::drop(DropReason reason, DecodeError error) noexcept
     return Unexpected{Drop{reason, error}};
 }
 
+std::optional<Drop> Peer::accept_into(Channel channel, std::span<const std::byte> datagram,
+                                      Message& out) noexcept
+{
+    if (auto err = decode_into(datagram, out))
+        return drop(DropReason::Undecodable, *err).error;
+    if (!allowed_on(out.type(), channel))
+        return drop(DropReason::WrongChannel).error;
+    const bool hello = out.type() == MessageType::Hello;
+    if (session_ != 0 && out.header.session != session_ && !(hello && out.header.session == 0))
+        return drop(DropReason::WrongSession).error;
+    if (id_ != k_no_peer && out.header.sender != id_)
+        return drop(DropReason::WrongSender).error;
+    ++good_;
+    return std::nullopt;
+}
+
 Expected<Message, Drop> Peer::accept(Channel channel, std::span<const std::byte> datagram) noexcept
 {
-    auto decoded = decode(datagram);
-    if (!decoded)
-        return drop(DropReason::Undecodable, decoded.error());
-    const Message& m = *decoded;
-    if (!allowed_on(m.type(), channel))
-        return drop(DropReason::WrongChannel);
-    const bool hello = m.type() == MessageType::Hello;
-    if (session_ != 0 && m.header.session != session_ && !(hello && m.header.session == 0))
-        return drop(DropReason::WrongSession);
-    if (id_ != k_no_peer && m.header.sender != id_)
-        return drop(DropReason::WrongSender);
-    ++good_;
-    return std::move(decoded).value();
+    Message m;
+    if (auto dropped = accept_into(channel, datagram, m))
+        return Unexpected{*dropped};
+    return m;
 }
 
 Messenger::Messenger(Transport& transport, const MessengerSettings& settings)
@@ -118,6 +125,25 @@ core::Result<void> Messenger::broadcast(const Message& message, SendMode mode) n
 
 std::optional<MessengerEvent> Messenger::poll(int timeout_ms) noexcept
 {
+    MessengerEvent* ev = next_event(timeout_ms);
+    if (ev == nullptr)
+        return std::nullopt;
+    if (ev->kind != MessengerEvent::Kind::Received)
+        return MessengerEvent{.kind = ev->kind,
+                              .peer = ev->peer,
+                              .channel = ev->channel,
+                              .reason = ev->reason,
+                              .message = {}};
+    return std::move(*ev);
+}
+
+const MessengerEvent* Messenger::next(int timeout_ms) noexcept
+{
+    return next_event(timeout_ms);
+}
+
+MessengerEvent* Messenger::next_event(int timeout_ms) noexcept
+{
     // A flood of bad datagrams must not keep this call from returning: stop after this many
     // dropped ones; the caller polls again on its next iteration.
     constexpr int k_max_drops_per_poll = 256;
@@ -125,26 +151,26 @@ std::optional<MessengerEvent> Messenger::poll(int timeout_ms) noexcept
     int drops = 0;
     while (drops < k_max_drops_per_poll)
     {
-        auto ev = transport_.poll(wait);
-        if (!ev)
+        if (!transport_.poll_into(datagram_, wait))
             break;
+        const TransportEvent* ev = &datagram_;
         wait = 0;
         switch (ev->kind)
         {
         case TransportEvent::Kind::Connected:
             peers_.insert_or_assign(ev->peer, Peer(ev->peer, session_));
-            return MessengerEvent{.kind = MessengerEvent::Kind::Connected,
-                                  .peer = ev->peer,
-                                  .channel = Channel::Control,
-                                  .reason = DisconnectReason::None,
-                                  .message = {}};
+            events_[0].kind = MessengerEvent::Kind::Connected;
+            events_[0].peer = ev->peer;
+            events_[0].channel = Channel::Control;
+            events_[0].reason = DisconnectReason::None;
+            return &events_[0];
         case TransportEvent::Kind::Disconnected:
             peers_.erase(ev->peer);
-            return MessengerEvent{.kind = MessengerEvent::Kind::Disconnected,
-                                  .peer = ev->peer,
-                                  .channel = Channel::Control,
-                                  .reason = ev->reason,
-                                  .message = {}};
+            events_[0].kind = MessengerEvent::Kind::Disconnected;
+            events_[0].peer = ev->peer;
+            events_[0].channel = Channel::Control;
+            events_[0].reason = ev->reason;
+            return &events_[0];
         case TransportEvent::Kind::Received: break;
         }
         auto it = peers_.find(ev->peer);
@@ -153,19 +179,24 @@ std::optional<MessengerEvent> Messenger::poll(int timeout_ms) noexcept
         Peer& p = it->second;
         if (p.cut() || p.bad_datagrams() > settings_.bad_datagram_limit)
             continue;  // being disconnected: ignore the rest
-        auto m = p.accept(ev->channel, ev->data);
-        if (!m)
+        // The wire type (header byte 5) picks the event, so each event's message keeps one
+        // type's alternative; a datagram that names no type fails to decode before its body.
+        const std::size_t type =
+            ev->data.size() >= k_header_size ? std::to_integer<std::size_t>(ev->data[5]) : 0;
+        MessengerEvent& event = events_[type <= k_message_type_count ? type : 0];
+        const std::optional<Drop> m = p.accept_into(ev->channel, ev->data, event.message);
+        if (m)
         {
             ++drops;
             ++dropped_;
             transport_.report_bad_datagram(ev->peer);
             spdlog::debug("net: dropped a datagram from peer {} ({} bytes): {}", ev->peer.value,
-                          ev->data.size(), describe(m.error()));
+                          ev->data.size(), describe(*m));
             // Our magic and another version (byte 4): a pliant of another version, which would
             // never be understood. Cut at once with reason 5, so that it can say so; it waited
             // for a timeout before, and was told nothing.
-            if (m.error().reason == DropReason::Undecodable &&
-                m.error().error == DecodeError::BadVersion && ev->data.size() > 4)
+            if (m->reason == DropReason::Undecodable && m->error == DecodeError::BadVersion &&
+                ev->data.size() > 4)
             {
                 const auto address = transport_.remote_address(ev->peer);
                 spdlog::warn("net: disconnected {}: it speaks protocol version {}, this build {}",
@@ -180,24 +211,24 @@ std::optional<MessengerEvent> Messenger::poll(int timeout_ms) noexcept
             {
                 // A connection that ends on another session's datagram is told so (reason 6):
                 // it belongs to another session (programs that set distinct session ids).
-                const DisconnectReason why = m.error().reason == DropReason::WrongSession
+                const DisconnectReason why = m->reason == DropReason::WrongSession
                                                  ? DisconnectReason::WrongSession
                                                  : DisconnectReason::TooManyBadDatagrams;
                 const auto address = transport_.remote_address(ev->peer);
                 spdlog::warn("net: disconnected {}: {} bad datagrams (the last: {}, {} bytes)",
                              address ? to_string(*address) : std::string("a peer"),
-                             p.bad_datagrams(), describe(m.error()), ev->data.size());
+                             p.bad_datagrams(), describe(*m), ev->data.size());
                 transport_.disconnect(ev->peer, why);
             }
             continue;
         }
-        return MessengerEvent{.kind = MessengerEvent::Kind::Received,
-                              .peer = ev->peer,
-                              .channel = ev->channel,
-                              .reason = DisconnectReason::None,
-                              .message = std::move(m).value()};
+        event.kind = MessengerEvent::Kind::Received;
+        event.peer = ev->peer;
+        event.channel = ev->channel;
+        event.reason = DisconnectReason::None;
+        return &event;
     }
-    return std::nullopt;
+    return nullptr;
 }
 
 void Messenger::set_session(std::uint32_t session) noexcept

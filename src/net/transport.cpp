@@ -11,6 +11,15 @@
 namespace pliant::net
 {
 
+bool Transport::poll_into(TransportEvent& out, int timeout_ms) noexcept
+{
+    auto ev = poll(timeout_ms);
+    if (!ev)
+        return false;
+    out = std::move(*ev);
+    return true;
+}
+
 void Transport::wait(double max_s) noexcept
 {
     if (max_s > 0.0)

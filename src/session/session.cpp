@@ -593,8 +593,10 @@ void Session::Impl::poll()
 {
     for (int guard = 0; guard < 100000; ++guard)
     {
-        auto ev = messenger.poll(0);
-        if (!ev)
+        // The Messenger's reused event: its message is decoded in place (no allocation once its
+        // vectors have grown) and valid until the next call; handle() copies what it keeps.
+        const net::MessengerEvent* ev = messenger.next(0);
+        if (ev == nullptr)
             break;
         switch (ev->kind)
         {

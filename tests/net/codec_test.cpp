@@ -592,6 +592,49 @@ TEST(Codec, F32EncodingRoundsToNearest)
     EXPECT_EQ(u[2], static_cast<double>(static_cast<float>(1e-40)));  // a subnormal f32
 }
 
+/// One datagram of RandomAndCorruptedDatagramsAreRejectedOrCanonical's mix (iteration `i`):
+/// random bytes, a valid header before a random body, an encoded sample with 1 to 4 corrupted
+/// bytes, or one truncated or extended.
+std::vector<std::byte> random_datagram(std::mt19937_64& rng,
+                                       const std::vector<std::vector<std::byte>>& encoded, int i)
+{
+    std::vector<std::byte> d;
+    const auto& base = encoded[rng() % encoded.size()];
+    switch (i % 4)
+    {
+    case 0:  // random bytes
+        d.resize(rng() % 200);
+        for (auto& b : d)
+            b = static_cast<std::byte>(rng());
+        break;
+    case 1:  // a valid header, a random body
+        d.assign(base.begin(), base.begin() + k_header_size);
+        d.resize(k_header_size + rng() % 300);
+        for (std::size_t k = k_header_size; k < d.size(); ++k)
+            d[k] = static_cast<std::byte>(rng());
+        break;
+    case 2:  // 1 to 4 corrupted bytes (bit flips or random values)
+    {
+        d = base;
+        const int n = 1 + static_cast<int>(rng() % 4);
+        for (int k = 0; k < n; ++k)
+        {
+            const std::size_t at = rng() % d.size();
+            if (rng() % 2 == 0)
+                d[at] ^= static_cast<std::byte>(1u << (rng() % 8));
+            else
+                d[at] = static_cast<std::byte>(rng());
+        }
+        break;
+    }
+    default:  // truncated or extended
+        d = base;
+        d.resize(rng() % (base.size() + 8));
+        break;
+    }
+    return d;
+}
+
 // 100,000 datagrams: random bytes, random bodies behind a valid header, valid messages with
 // random bytes corrupted, random truncations. None may crash (ASan+UBSan in CI); every one that
 // decodes must re-encode to exactly the same bytes, so the decoder accepts only canonical
@@ -609,40 +652,7 @@ TEST(Codec, RandomAndCorruptedDatagramsAreRejectedOrCanonical)
     constexpr int k_iterations = 100000;
     for (int i = 0; i < k_iterations; ++i)
     {
-        std::vector<std::byte> d;
-        const auto& base = encoded[rng() % encoded.size()];
-        switch (i % 4)
-        {
-        case 0:  // random bytes
-            d.resize(rng() % 200);
-            for (auto& b : d)
-                b = static_cast<std::byte>(rng());
-            break;
-        case 1:  // a valid header, a random body
-            d.assign(base.begin(), base.begin() + k_header_size);
-            d.resize(k_header_size + rng() % 300);
-            for (std::size_t k = k_header_size; k < d.size(); ++k)
-                d[k] = static_cast<std::byte>(rng());
-            break;
-        case 2:  // 1 to 4 corrupted bytes (bit flips or random values)
-        {
-            d = base;
-            const int n = 1 + static_cast<int>(rng() % 4);
-            for (int k = 0; k < n; ++k)
-            {
-                const std::size_t at = rng() % d.size();
-                if (rng() % 2 == 0)
-                    d[at] ^= static_cast<std::byte>(1u << (rng() % 8));
-                else
-                    d[at] = static_cast<std::byte>(rng());
-            }
-            break;
-        }
-        default:  // truncated or extended
-            d = base;
-            d.resize(rng() % (base.size() + 8));
-            break;
-        }
+        const std::vector<std::byte> d = random_datagram(rng, encoded, i);
         auto r = decode(d);
         if (!r)
         {
@@ -658,6 +668,87 @@ TEST(Codec, RandomAndCorruptedDatagramsAreRejectedOrCanonical)
     // Not vacuous: corruptions of value bytes decode, and most error kinds occur.
     EXPECT_GT(accepted, std::size_t{1000});
     EXPECT_GE(seen.size(), std::size_t{12});
+}
+
+// decode_into() into a message that held another one: every sample after every sample (the same
+// type with more nodes, leaves, ranges, peers or optional parts, and every other type) gives what
+// decode() gives, so no read_body leaves a field of the message before.
+TEST(Codec, DecodeIntoAReusedMessageMatchesAFreshDecode)
+{
+    const auto messages = samples::all();
+    std::vector<std::vector<std::byte>> encoded;
+    for (const Message& m : messages)
+        encoded.push_back(encode_vec(m));
+    int same_type = 0;
+    for (std::size_t a = 0; a < messages.size(); ++a)
+        for (std::size_t b = 0; b < messages.size(); ++b)
+        {
+            Message reused;
+            ASSERT_FALSE(decode_into(encoded[a], reused).has_value());
+            ASSERT_EQ(reused, messages[a]) << to_string(messages[a].type());
+            const auto err = decode_into(encoded[b], reused);
+            ASSERT_FALSE(err.has_value()) << to_string(*err);
+            ASSERT_EQ(reused, messages[b]) << to_string(messages[a].type()) << " #" << a << " then "
+                                           << to_string(messages[b].type()) << " #" << b;
+            ASSERT_EQ(encode_vec(reused), encoded[b]);
+            same_type += messages[a].type() == messages[b].type() && a != b ? 1 : 0;
+        }
+    EXPECT_GE(same_type, 40);  // pairs of samples of one type, both orders
+
+    // Per-leaf vectors of a batch of fewer leaves, and a LeafState of the other encodings.
+    const LeafBatch big = samples::leaf_batch(9, 7, 20);
+    const LeafBatch small = samples::leaf_batch(2, 7, 3);
+    Message reused;
+    ASSERT_FALSE(decode_into(encode_vec(Message{samples::header(), big}), reused).has_value());
+    const auto small_bytes = encode_vec(Message{samples::header(), small});
+    ASSERT_FALSE(decode_into(small_bytes, reused).has_value());
+    EXPECT_EQ(reused, decode(small_bytes).value());
+    EXPECT_EQ(std::get<LeafBatch>(reused.body), small);
+}
+
+// Random and corrupted datagrams (RandomAndCorruptedDatagramsAreRejectedOrCanonical's mix)
+// decoded into one reused message, which holds the previous datagram's message or whatever a
+// failed decode left, or a valid sample of the datagram's type: the same value or error as
+// decode().
+TEST(Codec, DecodeIntoAReusedMessageMatchesDecodeOnCorruptedDatagrams)
+{
+    const auto messages = samples::all();
+    std::vector<std::vector<std::byte>> encoded;
+    for (const Message& m : messages)
+        encoded.push_back(encode_vec(m));
+    std::mt19937_64 rng(20261207);
+    Message reused;
+    std::size_t accepted = 0;
+    constexpr int k_iterations = 40000;
+    for (int i = 0; i < k_iterations; ++i)
+    {
+        const std::vector<std::byte> d = random_datagram(rng, encoded, i);
+        if (rng() % 2 == 0)
+        {
+            // A valid message of the datagram's type (if it names one) first.
+            const std::size_t pick = rng() % encoded.size();
+            for (std::size_t k = 0; k < encoded.size(); ++k)
+            {
+                const auto& e = encoded[(pick + k) % encoded.size()];
+                if (d.size() > 5 && e[5] == d[5])
+                {
+                    ASSERT_FALSE(decode_into(e, reused).has_value());
+                    break;
+                }
+            }
+        }
+        const auto fresh = decode(d);
+        const auto err = decode_into(d, reused);
+        ASSERT_EQ(fresh.has_value(), !err.has_value()) << "iteration " << i;
+        if (err)
+        {
+            ASSERT_EQ(fresh.error(), *err) << "iteration " << i;
+            continue;
+        }
+        ++accepted;
+        ASSERT_EQ(reused, *fresh) << "iteration " << i;
+    }
+    EXPECT_GT(accepted, std::size_t{400});
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include "net/sample_messages.h"
 
 #include <algorithm>
+#include <map>
 #include <optional>
 #include <utility>
 #include <vector>
@@ -191,6 +192,51 @@ TEST(Messenger, DeliversTypedMessagesOnTheirChannels)
     Message bad = ping();
     bad.header.session = 0;
     EXPECT_FALSE(n.a.send(n.a_to_b, bad));
+}
+
+// next() delivers what poll() does from one reused event per message type: every sample, then every
+// sample again in reverse order (so each type's messages come larger then smaller into the same
+// message), with a bad datagram between, dropped.
+TEST(Messenger, NextDeliversFromAReusedEventWhatPollDoes)
+{
+    Net n;
+    auto all = samples::all();
+    std::vector<Message> sent = all;
+    sent.insert(sent.end(), all.rbegin(), all.rend());
+    for (std::size_t k = 0; k < sent.size(); ++k)
+    {
+        ASSERT_TRUE(n.a.send(n.a_to_b, sent[k])) << to_string(sent[k].type());
+        if (k == all.size())
+        {
+            std::vector<std::byte> junk = encode_vec(ping());
+            junk[0] = std::byte{0};
+            ASSERT_TRUE(n.ta->send(n.a_to_b, Channel::State, junk, Delivery::Unreliable));
+        }
+    }
+    std::vector<Message> control;
+    std::vector<Message> state;
+    std::map<MessageType, const MessengerEvent*> event_of;
+    for (int i = 0; i < 50; ++i)
+    {
+        n.net.advance(0.001);
+        while (const MessengerEvent* ev = n.b.next())
+        {
+            const auto it = event_of.emplace(ev->message.type(), ev).first;
+            EXPECT_EQ(ev, it->second) << "one event per type, reused";
+            ASSERT_EQ(ev->kind, MessengerEvent::Kind::Received);
+            EXPECT_EQ(ev->channel, default_channel(ev->message.type()));
+            (ev->channel == Channel::Control ? control : state).push_back(ev->message);
+        }
+    }
+    std::vector<Message> expected_control;
+    std::vector<Message> expected_state;
+    for (const Message& m : sent)
+        (default_channel(m.type()) == Channel::Control ? expected_control : expected_state)
+            .push_back(m);
+    EXPECT_EQ(control, expected_control);
+    EXPECT_EQ(state, expected_state);
+    EXPECT_EQ(n.b.dropped(), 1u);
+    EXPECT_EQ(event_of.size(), std::size_t{k_message_type_count});
 }
 
 TEST(Messenger, BadDatagramsAreDroppedCountedAndTheSenderCutOff)

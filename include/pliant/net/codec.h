@@ -4,7 +4,8 @@
 
 /// \file
 /// The pure codec: `Message` <-> datagram bytes, exactly as docs/protocol.md specifies. No
-/// transport types, no allocation on the encode side, no exceptions, no logging; safe on hostile
+/// transport types, no allocation on the encode side (nor on the decode side with decode_into() and
+/// a reused message, once its vectors have grown), no exceptions, no logging; safe on hostile
 /// input (the fuzz target `fuzz/fuzz_net_decode.cpp` and tests/net/codec_test.cpp check that).
 ///
 /// Design: one validation routine per body struct (`validate`) holds the semantic rules; the
@@ -87,5 +88,14 @@ enum class EncodeError : std::uint8_t
 /// depths), then the body's length, then the values' rules (leaf ids, levels, ranges, finite
 /// values, ids in lists); docs/protocol.md §4.
 [[nodiscard]] Expected<Message, DecodeError> decode(std::span<const std::byte> datagram) noexcept;
+
+/// decode() into a caller's message, for a receive loop that allocates nothing in the steady
+/// state: `out.body` keeps its alternative when the datagram is of the same type, and its vectors
+/// (those of a LeafBatch's or ValueBatch's leaves included) are refilled in place, keeping their
+/// storage. On success `out` equals what decode() returns, whatever it held before; no field keeps
+/// a previous message's value. \return the error decode() would report, or nothing; on error
+/// `out` holds unspecified (valid) contents.
+[[nodiscard]] std::optional<DecodeError> decode_into(std::span<const std::byte> datagram,
+                                                     Message& out) noexcept;
 
 }  // namespace pliant::net

@@ -7,8 +7,9 @@
 ///
 /// Design: a `Message` is a header plus a `std::variant` of body structs, one per message type, in
 /// type-number order (variant index + 1 is the wire type). Bodies own their variable parts
-/// (`std::vector`, `std::string`), so a decoded message outlives the datagram; decoding allocates
-/// once or twice per datagram, which is per packet, never per node. Values are `double` in memory
+/// (`std::vector`, `std::string`), so a decoded message outlives the datagram; decode() allocates
+/// a few times per datagram (per packet, never per node), decode_into() into a reused message
+/// only when a vector must grow. Values are `double` in memory
 /// whatever the wire encoding, so the session never sees `f32` arithmetic; with
 /// `ValueEncoding::F32` the encoder rounds to nearest. Rejected alternative: views into the
 /// datagram buffer (zero-copy) would tie a message's lifetime to the transport's packet and make

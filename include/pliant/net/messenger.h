@@ -64,6 +64,12 @@ public:
     /// bad_datagrams(). A Hello may carry session 0 before the session is known to the sender.
     [[nodiscard]] Expected<Message, Drop> accept(Channel channel,
                                                  std::span<const std::byte> datagram) noexcept;
+    /// accept() into a reused message (decode_into(): no allocation once its vectors have grown).
+    /// \return the drop, or nothing when `out` holds the accepted message; after a drop `out`
+    /// holds unspecified contents.
+    [[nodiscard]] std::optional<Drop> accept_into(Channel channel,
+                                                  std::span<const std::byte> datagram,
+                                                  Message& out) noexcept;
 
     /// From now on datagrams must carry `session` (Hello may still carry 0).
     void set_session(std::uint32_t session) noexcept { session_ = session; }
@@ -160,6 +166,13 @@ public:
     /// first transport poll waits, at most `timeout_ms`.
     std::optional<MessengerEvent> poll(int timeout_ms = 0) noexcept;
 
+    /// poll() without a copy: the next event, in an event this Messenger owns and reuses, valid
+    /// until the next call of next() or poll(); nullptr when there is none. A datagram is decoded
+    /// in place (decode_into()) into an event kept for its message type, so that a type's vectors
+    /// keep their storage while other types come between: no allocation once they have grown.
+    /// `message` is meaningful for Received only. The receive loop of a session uses this.
+    [[nodiscard]] const MessengerEvent* next(int timeout_ms = 0) noexcept;
+
     void set_session(std::uint32_t session) noexcept;
     /// Binds a connection to the peer id it announced (Hello/Welcome); later datagrams with
     /// another sender id are dropped as spoofed.
@@ -171,6 +184,7 @@ public:
     [[nodiscard]] std::uint64_t dropped() const noexcept { return dropped_; }
 
 private:
+    MessengerEvent* next_event(int timeout_ms) noexcept;
     core::Result<void> send_encoded(PeerHandle peer, MessageType type, std::size_t size,
                                     SendMode mode) noexcept;
 
@@ -179,6 +193,10 @@ private:
     std::uint32_t session_ = 0;
     std::map<PeerHandle, Peer> peers_;
     std::vector<std::byte> buffer_;
+    TransportEvent datagram_;  ///< next()'s transport event, reused (Transport::poll_into)
+    /// next()'s events, reused: [0] for connection events and datagrams that name no type, [t]
+    /// for datagrams of wire type t (their messages keep the type's alternative and vectors).
+    std::array<MessengerEvent, k_message_type_count + 1> events_;
     std::uint64_t dropped_ = 0;
 };
 

@@ -131,6 +131,13 @@ public:
     /// waiting for anything: ENet times out a peer whose host is not serviced for seconds.
     virtual std::optional<TransportEvent> poll(int timeout_ms = 0) noexcept = 0;
 
+    /// poll() into a caller's event, for a receive loop that allocates nothing per datagram:
+    /// EnetTransport copies a datagram into `out.data`'s storage. \return whether an event came
+    /// (`out` then equals what poll() would have returned; otherwise its contents are
+    /// unspecified). The default moves poll()'s event into `out` (SimulatedTransport and
+    /// SecureTransport hand over a vector made per datagram when it was sent or decrypted).
+    virtual bool poll_into(TransportEvent& out, int timeout_ms = 0) noexcept;
+
     /// Sends queued packets now (poll() also does).
     virtual void flush() noexcept = 0;
 
