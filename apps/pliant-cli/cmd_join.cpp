@@ -159,11 +159,11 @@ void add_join_command(CLI::App& app, const GlobalOptions& global)
         "session is unencrypted; with a different one the master refuses the connection.\n"
         "Ctrl-C (or SIGTERM) leaves cleanly: a participant hands its leaves over first.\n\n"
         "Exit codes: 0 the peer ran its --duration, left or saw the session end; 1 bad input (a\n"
-        "MASTER that is malformed, IPv6 or not found, a script line, a --stats/--save path, a\n"
-        "key file, --ticks in a fast session; --stats unwritable mid-run); 2 usage error (two\n"
-        "outputs naming one file among them); 3 the master never answered (given up after about 5 "
-        "s, or at --duration),\n"
-        "refused this peer, or the simulation diverged.");
+        "script line, a --stats/--save path, a key file, --ticks in a fast session; --stats\n"
+        "unwritable mid-run); 2 usage error (a MASTER that is malformed or IPv6, 0.0.0.0 or this\n"
+        "peer's own --port; two outputs naming one file); 3 the master's host name is not found,\n"
+        "the master never answered (given up after about 5 s, or at --duration), refused this\n"
+        "peer, or the simulation diverged.");
     cmd->add_option("MASTER", opt->master,
                     "The master's address HOST:PORT: a.b.c.d, localhost or a host name (IPv4)")
         ->required();
