@@ -12,7 +12,9 @@
 #include <cmath>
 #include <exception>
 #include <limits>
+#include <optional>
 #include <span>
+#include <vector>
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -298,6 +300,341 @@ bool faces_intersect(const mesh::TriMesh& mesh, std::uint32_t f, std::uint32_t g
 namespace
 {
 
+constexpr double k_two_pi = 6.283185307179586;
+
+/// A vertex whose fan is a simple star (vertex_fan_is_star), with what the pairs' search needs.
+struct Star
+{
+    std::uint32_t v = 0;
+    Vec3 d, u, w;                      ///< the projection's direction; u, w, d right-handed
+    std::vector<std::uint32_t> faces;  ///< the fan's faces (mesh ids) in turning order
+    /// theta[i] .. theta[i + 1]: the angles of face i's image about v's in (u, w), within
+    /// 1e-10 rad; non-decreasing, theta[n] = theta[0] + 2 pi. Empty where some edge from v is
+    /// within 1e-6 of d (its image's angle is then ill-conditioned): every face is a candidate.
+    std::vector<double> theta;
+    /// |(x - v) . d| <= height_per_radius |image of x - v| on every face of the fan (+inf
+    /// where no bound is known): a point nearer the axis than that is in none of them.
+    double height_per_radius = std::numeric_limits<double>::infinity();
+};
+
+/// The angle of e's image in (u, w), or NaN when the image lies within 1e-6 |e| of the origin
+/// (its angle would be uncertain by more than 1e-10 rad).
+double image_angle(const Star& s, const Vec3& e) noexcept
+{
+    const double a = core::dot(e, s.u), b = core::dot(e, s.w);
+    if (!(std::hypot(a, b) >= 1e-6 * core::norm(e)) || !(a != 0.0 || b != 0.0))
+        return std::numeric_limits<double>::quiet_NaN();
+    return std::atan2(b, a);
+}
+
+std::optional<Star> certify_star(const mesh::TriMesh& mesh, std::uint32_t v,
+                                 std::span<const std::uint32_t> around)
+{
+    const std::size_t n = around.size();
+    if (n < 3)
+        return std::nullopt;
+    // Each face as (v, a, b) in its own orientation; a cycle when every a is the b of exactly
+    // one other face, followed from the first.
+    struct Wedge
+    {
+        std::uint32_t a, b, face;
+    };
+    std::vector<Wedge> fan(n);
+    for (std::size_t i = 0; i < n; ++i)
+    {
+        const auto& t = mesh.faces[around[i]];
+        const int k = t[0] == v ? 0 : (t[1] == v ? 1 : (t[2] == v ? 2 : -1));
+        if (k < 0)
+            return std::nullopt;
+        const std::uint32_t a = t[static_cast<std::size_t>((k + 1) % 3)];
+        const std::uint32_t b = t[static_cast<std::size_t>((k + 2) % 3)];
+        if (a == v || b == v || a == b)
+            return std::nullopt;
+        fan[i] = {a, b, around[i]};
+    }
+    std::sort(fan.begin(), fan.end(), [](const Wedge& x, const Wedge& y) { return x.a < y.a; });
+    for (std::size_t i = 1; i < n; ++i)
+        if (fan[i].a == fan[i - 1].a)
+            return std::nullopt;  // two faces leave v along one edge on the same side
+    // The successor of a face is the face whose a is its b. Returning to the first face after
+    // exactly n steps, and not before, visits every face once (a path that repeated another
+    // face would circle without it).
+    const auto next = [&](std::size_t i) -> std::size_t
+    {
+        const auto it = std::lower_bound(fan.begin(), fan.end(), fan[i].b,
+                                         [](const Wedge& x, std::uint32_t a) { return x.a < a; });
+        return it != fan.end() && it->a == fan[i].b ? static_cast<std::size_t>(it - fan.begin())
+                                                    : n;
+    };
+    Star star;
+    star.v = v;
+    star.faces.reserve(n);
+    std::vector<std::uint32_t> link;  // a of each face in turning order
+    link.reserve(n);
+    std::size_t at = 0;
+    for (std::size_t step = 1; step <= n; ++step)
+    {
+        star.faces.push_back(fan[at].face);
+        link.push_back(fan[at].a);
+        at = next(at);
+        if (at == n || (at == 0) != (step == n))
+            return std::nullopt;
+    }
+    // The direction to project along: the faces' summed normal.
+    const Vec3& p = mesh.positions[v];
+    Vec3 d{0.0, 0.0, 0.0};
+    for (std::size_t i = 0; i < n; ++i)
+        d += core::cross(mesh.positions[link[i]] - p, mesh.positions[link[(i + 1) % n]] - p);
+    const double dn = core::norm(d);
+    if (!(dn > 0.0) || !std::isfinite(dn))
+        return std::nullopt;
+    d = d / dn;
+    // Every face's image turns the same way about v's, by far more than rounding can blur
+    // (each difference is rounded once, so the computed s is within about 1e-15 |e1| |e2| of
+    // the true one), and the images' angles make one full turn: then they tile the plane
+    // around v's image once, and non-neighbours' images meet only there.
+    constexpr double k_margin = 1e-10;
+    double turn = 0.0;
+    for (std::size_t i = 0; i < n; ++i)
+    {
+        const Vec3 e1 = mesh.positions[link[i]] - p, e2 = mesh.positions[link[(i + 1) % n]] - p;
+        const double s = core::dot(d, core::cross(e1, e2));
+        if (!(s > k_margin * core::norm(e1) * core::norm(e2)))
+            return std::nullopt;
+        const Vec3 q1 = e1 - d * core::dot(e1, d), q2 = e2 - d * core::dot(e2, d);
+        turn += std::atan2(s, core::dot(q1, q2));
+    }
+    if (!(std::abs(turn - k_two_pi) < 1.0))
+        return std::nullopt;
+    star.d = d;
+    star.u = core::normalized(
+        core::cross(d, std::abs(d.x) <= std::abs(d.y) && std::abs(d.x) <= std::abs(d.z)
+                           ? Vec3{1, 0, 0}
+                           : (std::abs(d.y) <= std::abs(d.z) ? Vec3{0, 1, 0} : Vec3{0, 0, 1})));
+    star.w = core::cross(d, star.u);
+    // The wedges' angles, unwrapped: each true step is in (0, pi), so a computed drop of more
+    // than pi is a wrap. Each theta is a direct atan2 (errors do not add up along the fan).
+    std::vector<double> theta(n + 1);
+    int wraps = 0;
+    for (std::size_t i = 0; i <= n; ++i)
+    {
+        const double a = image_angle(star, mesh.positions[link[i % n]] - p);
+        if (std::isnan(a))
+            return star;  // no angular search
+        theta[i] = a + k_two_pi * wraps;
+        if (i > 0 && theta[i] < theta[i - 1] - 3.14159265358979)
+        {
+            ++wraps;
+            theta[i] += k_two_pi;
+        }
+        if (i > 0)
+            theta[i] = std::max(theta[i], theta[i - 1]);
+    }
+    if (wraps == 1 && theta[n] == theta[0] + k_two_pi)
+        star.theta = std::move(theta);
+    // On face (v, v + e1, v + e2) a point s e1 + t e2 from v (s, t >= 0, s + t <= 1) has height
+    // at most (s + t) max |h_i| and image radius at least (s + t) times the distance from the
+    // origin to the segment between the corners' images. Rounding: relative 1e-6 at worst (the
+    // margin above keeps every segment clear of the origin); the bound is widened by 1e-4.
+    double k = 0.0;
+    for (std::size_t i = 0; i < n; ++i)
+    {
+        const Vec3 e1 = mesh.positions[link[i]] - p, e2 = mesh.positions[link[(i + 1) % n]] - p;
+        const double x1 = core::dot(e1, star.u), y1 = core::dot(e1, star.w);
+        const double x2 = core::dot(e2, star.u), y2 = core::dot(e2, star.w);
+        const double dx = x2 - x1, dy = y2 - y1;
+        const double along = -(x1 * dx + y1 * dy) / (dx * dx + dy * dy);
+        const double dist = along <= 0.0   ? std::hypot(x1, y1)
+                            : along >= 1.0 ? std::hypot(x2, y2)
+                                           : std::abs(x1 * y2 - y1 * x2) / std::hypot(dx, dy);
+        k = std::max(k, std::max(std::abs(core::dot(e1, d)), std::abs(core::dot(e2, d))) / dist);
+    }
+    if (std::isfinite(k))
+        star.height_per_radius = k * (1.0 + 1e-4);
+    return star;
+}
+
+}  // namespace
+
+bool vertex_fan_is_star(const mesh::TriMesh& mesh, std::uint32_t v,
+                        std::span<const std::uint32_t> around)
+{
+    return certify_star(mesh, v, around).has_value();
+}
+
+namespace
+{
+
+/// Whether the plane of face f passes clear of the box (lo, hi) by more than rounding could
+/// hide: then f has no point in the box. Any common point of two faces lies in the overlap of
+/// their boxes and on both planes, so long slivers whose boxes overlap widely (a cylinder's
+/// sides beside a fan-split cap) are told apart here, before the narrow phase. The computed
+/// distance and radius are within about 1e-15 (|n| + |e1| |e2|) (|c - a| + |half|) of the true
+/// ones; the margin is a thousand times that. A degenerate face (n = 0) never misses.
+bool plane_misses_box(const mesh::TriMesh& mesh, std::uint32_t f,
+                      const std::array<Vec3, 2>& box) noexcept
+{
+    const auto& t = mesh.faces[f];
+    const Vec3& a = mesh.positions[t[0]];
+    const Vec3 e1 = mesh.positions[t[1]] - a, e2 = mesh.positions[t[2]] - a;
+    const Vec3 n = core::cross(e1, e2);
+    const Vec3 centre = (box[0] + box[1]) * 0.5, half = (box[1] - box[0]) * 0.5;
+    const Vec3 to = centre - a;
+    const double dist = std::abs(core::dot(n, to));
+    const double radius = std::abs(n.x) * half.x + std::abs(n.y) * half.y + std::abs(n.z) * half.z;
+    const auto l1 = [](const Vec3& x) { return std::abs(x.x) + std::abs(x.y) + std::abs(x.z); };
+    constexpr double k_margin = 1e-12;
+    const double slack = k_margin * (l1(n) + l1(e1) * l1(e2)) * (l1(to) + l1(half));
+    return dist > radius + slack;
+}
+
+/// The stars (certify_star), by ascending vertex, among the vertices of at least
+/// k_star_valence faces of `subset` (empty: every face; `nf` its size). A fan is judged whole,
+/// from every face of the mesh around the vertex.
+std::vector<Star> find_stars(const mesh::TriMesh& mesh, std::span<const std::uint32_t> subset,
+                             std::size_t nf)
+{
+    // Below this the fan's pairs cost less than finding it.
+    constexpr std::uint32_t k_star_valence = 16;
+    std::vector<Star> stars;
+    if (nf < k_star_valence)
+        return stars;
+    std::vector<std::uint32_t> count(mesh.positions.size(), 0);
+    for (std::size_t i = 0; i < nf; ++i)
+        for (const std::uint32_t x : mesh.faces[subset.empty() ? i : subset[i]])
+            ++count[x];
+    std::vector<std::uint32_t> candidates;
+    for (std::size_t x = 0; x < count.size(); ++x)
+    {
+        const bool many = count[x] >= k_star_valence;
+        // from here on: 1 + the candidate's slot, or 0
+        count[x] = many ? static_cast<std::uint32_t>(candidates.size()) + 1 : 0;
+        if (many)
+            candidates.push_back(static_cast<std::uint32_t>(x));
+    }
+    if (candidates.empty())
+        return stars;
+    std::vector<std::vector<std::uint32_t>> around(candidates.size());
+    for (std::size_t f = 0; f < mesh.faces.size(); ++f)
+    {
+        const auto& t = mesh.faces[f];
+        for (std::size_t k = 0; k < 3; ++k)
+            // a face holding a vertex twice is listed once (and refused by the check)
+            if (count[t[k]] != 0 && (k == 0 || t[k] != t[0]) && (k < 2 || t[2] != t[1]))
+                around[count[t[k]] - 1].push_back(static_cast<std::uint32_t>(f));
+    }
+    for (std::size_t c = 0; c < candidates.size(); ++c)
+        if (auto star = certify_star(mesh, candidates[c], around[c]))
+            stars.push_back(std::move(*star));
+    return stars;
+}
+
+/// Calls take(k) for every face k (index into s.faces) whose image's angular range about v's
+/// can share a direction with the image of the triangle (v + e[0], v + e[1], v + e[2]); every
+/// k where the angles cannot tell (an image near v's, or around it).
+template <typename Take>
+void star_candidates(const Star& s, const std::array<Vec3, 3>& e, Take&& take)
+{
+    const std::size_t n = s.faces.size();
+    const auto every = [&]
+    {
+        for (std::size_t k = 0; k < n; ++k)
+            take(k);
+    };
+    if (s.theta.empty())
+        return every();
+    constexpr double k_half_turn = 3.14159265358979;
+    constexpr double k_slack = 1e-8;  // a hundred times the angles' errors
+    std::array<double, 3> a{};
+    int near = -1;  // the corner whose image lies near the origin (its angle uncertain)
+    for (std::size_t k = 0; k < 3; ++k)
+    {
+        a[k] = image_angle(s, e[k]);
+        if (std::isnan(a[k]))
+        {
+            if (near >= 0)
+                return every();
+            near = static_cast<int>(k);
+        }
+    }
+    double lo = 0.0, span = 0.0;
+    if (near < 0)
+    {
+        std::sort(a.begin(), a.end());
+        // The image's directions: the arc its corners span, the complement of the largest gap
+        // between their angles, when that gap exceeds a half turn (else the image may hold
+        // v's).
+        const std::array<double, 3> gap{a[1] - a[0], a[2] - a[1], a[0] + k_two_pi - a[2]};
+        const std::size_t g = gap[0] >= gap[1] && gap[0] >= gap[2] ? 0 : (gap[1] >= gap[2] ? 1 : 2);
+        if (!(gap[g] > k_half_turn + 2.0 * k_slack))
+            return every();
+        lo = a[(g + 1) % 3] - k_slack;
+        span = k_two_pi - gap[g] + 2.0 * k_slack;
+    }
+    else
+    {
+        // One corner on (or near) the axis through v, as a cap's centre below a cone's apex.
+        // If the triangle keeps a height of at least H from v's plane, its points with image
+        // radius under rho = H / height_per_radius are in none of the fan's faces; its image
+        // lies within eps (that corner's radius) of the cone over the other two corners, so
+        // every image point beyond rho lies within asin(eps / rho) < (pi / 2) eps / rho of
+        // their arc.
+        const auto c = static_cast<std::size_t>(near);
+        const std::size_t c1 = (c + 1) % 3, c2 = (c + 2) % 3;
+        const double h0 = core::dot(e[0], s.d), h1 = core::dot(e[1], s.d),
+                     h2 = core::dot(e[2], s.d);
+        if (!((h0 > 0.0 && h1 > 0.0 && h2 > 0.0) || (h0 < 0.0 && h1 < 0.0 && h2 < 0.0)))
+            return every();
+        const double height = std::min({std::abs(h0), std::abs(h1), std::abs(h2)}) * (1.0 - 1e-9);
+        const double rho = height / s.height_per_radius;
+        const double eps =
+            std::hypot(core::dot(e[c], s.u), core::dot(e[c], s.w)) + 1e-15 * core::norm(e[c]);
+        if (!(eps < 0.5 * rho))
+            return every();
+        double from = a[c1], to = a[c2];
+        double arc = to - from;
+        arc -= k_two_pi * std::floor(arc / k_two_pi);  // into [0, 2 pi)
+        if (arc > k_half_turn)
+        {
+            std::swap(from, to);
+            arc = k_two_pi - arc;
+        }
+        const double widen = 1.5707963267948966 * eps / rho + k_slack;
+        if (!(arc + 2.0 * widen < k_half_turn))
+            return every();
+        lo = from - widen;
+        span = arc + 2.0 * widen;
+    }
+    const double t0 = s.theta.front();
+    lo = t0 + (lo - t0) - k_two_pi * std::floor((lo - t0) / k_two_pi);  // into [t0, t0 + 2 pi)
+    const auto wedges = [&](double from, double to)
+    {
+        // wedges k with theta[k + 1] >= from and theta[k] <= to
+        const auto first = static_cast<std::size_t>(
+            std::lower_bound(s.theta.begin() + 1, s.theta.end(), from) - (s.theta.begin() + 1));
+        const auto last = static_cast<std::size_t>(
+            std::upper_bound(s.theta.begin(), s.theta.begin() + static_cast<std::ptrdiff_t>(n),
+                             to) -
+            s.theta.begin());
+        for (std::size_t k = first; k < last; ++k)
+            take(k);
+    };
+    const double hi = lo + span;
+    if (hi <= t0 + k_two_pi)
+        return wedges(lo, hi);
+    // across the seam: the part before it, then the part after it (disjoint wedges unless the
+    // two parts meet in one, which the first part ends before)
+    const std::size_t before = static_cast<std::size_t>(
+        std::upper_bound(s.theta.begin(), s.theta.begin() + static_cast<std::ptrdiff_t>(n),
+                         hi - k_two_pi) -
+        s.theta.begin());
+    wedges(lo, t0 + k_two_pi);
+    const auto first = static_cast<std::size_t>(
+        std::lower_bound(s.theta.begin() + 1, s.theta.end(), lo) - (s.theta.begin() + 1));
+    for (std::size_t k = 0; k < std::min(before, first); ++k)
+        take(k);
+}
+
 /// The pairs of intersecting_pairs among the faces `subset` (ascending face ids; empty: every
 /// face) with at least one face marked in `touched` (empty: all), sorted. The broad phase finds
 /// every pair whose boxes overlap whatever the grid, so the result depends on the subset and
@@ -362,6 +699,32 @@ std::vector<std::array<std::uint32_t, 2>> pairs_among(const mesh::TriMesh& mesh,
 
     if (asked())
         return pairs;
+    // Stars (certify_star): around a vertex of high valence every pair of faces passes the
+    // broad phase (their boxes share the vertex), none of them meets, and long slivers around
+    // it (a cone's sides, a fan-split cap) overlap the boxes of much of the mesh. A face's
+    // group is its lowest star vertex. Pairs with a grouped face are found per star, by angle
+    // about the star's vertex (star_candidates), not by the grid: the pass over the grid pairs
+    // ungrouped faces only.
+    constexpr std::uint32_t k_no_star = std::numeric_limits<std::uint32_t>::max();
+    const std::vector<Star> stars = find_stars(mesh, subset, nf);
+    std::vector<std::uint32_t> group;  // per subset face: index into stars, or k_no_star
+    if (!stars.empty())
+    {
+        group.assign(nf, k_no_star);
+        for (std::size_t f = 0; f < nf; ++f)
+            for (const std::uint32_t x : mesh.faces[face_at(f)])
+            {
+                const auto it =
+                    std::lower_bound(stars.begin(), stars.end(), x,
+                                     [](const Star& s, std::uint32_t y) { return s.v < y; });
+                if (it != stars.end() && it->v == x)
+                    group[f] = std::min(group[f], static_cast<std::uint32_t>(it - stars.begin()));
+            }
+    }
+    const auto group_of = [&](std::size_t f) { return group.empty() ? k_no_star : group[f]; };
+
+    if (asked())
+        return pairs;
     std::vector<Cell> cells;
     cells.reserve(nf * 4);
     for (std::size_t f = 0; f < nf; ++f)
@@ -388,6 +751,68 @@ std::vector<std::array<std::uint32_t, 2>> pairs_among(const mesh::TriMesh& mesh,
             runs.push_back(i);
     runs.push_back(cells.size());
 
+    // Per star s: the faces g whose boxes overlap the box of s's faces, neither in s's group
+    // nor in a lower star's (that star pairs them), from the grid's cells over that box; and
+    // where each of s's faces lies in the subset.
+    struct StarWork
+    {
+        std::vector<std::uint32_t> others;  // subset indices
+        std::vector<std::uint32_t> slot;    // per face of the star: subset index or k_no_star
+    };
+    std::vector<StarWork> work(stars.size());
+    if (!stars.empty())
+    {
+        std::vector<std::uint32_t> seen(nf, k_no_star);
+        for (std::size_t s = 0; s < stars.size(); ++s)
+        {
+            const Star& star = stars[s];
+            StarWork& sw = work[s];
+            Vec3 sl = mesh.positions[star.v], sh = sl;
+            sw.slot.assign(star.faces.size(), k_no_star);
+            for (std::size_t k = 0; k < star.faces.size(); ++k)
+            {
+                const std::uint32_t f = star.faces[k];
+                for (const std::uint32_t x : mesh.faces[f])
+                {
+                    const Vec3& q = mesh.positions[x];
+                    sl = {std::min(sl.x, q.x), std::min(sl.y, q.y), std::min(sl.z, q.z)};
+                    sh = {std::max(sh.x, q.x), std::max(sh.y, q.y), std::max(sh.z, q.z)};
+                }
+                if (subset.empty())
+                    sw.slot[k] = f;
+                else if (const auto it = std::lower_bound(subset.begin(), subset.end(), f);
+                         it != subset.end() && *it == f)
+                    sw.slot[k] = static_cast<std::uint32_t>(it - subset.begin());
+            }
+            const std::uint64_t i0 = cell_of(sl.x, lo.x, nx), i1 = cell_of(sh.x, lo.x, nx);
+            const std::uint64_t j0 = cell_of(sl.y, lo.y, ny), j1 = cell_of(sh.y, lo.y, ny);
+            const std::uint64_t k0 = cell_of(sl.z, lo.z, nz), k1 = cell_of(sh.z, lo.z, nz);
+            for (std::uint64_t i = i0; i <= i1; ++i)
+                for (std::uint64_t j = j0; j <= j1; ++j)
+                {
+                    // keys k0..k1 of column (i, j) are consecutive
+                    auto c = std::lower_bound(cells.begin(), cells.end(), key_of(i, j, k0),
+                                              [](const Cell& x, std::uint64_t key)
+                                              { return x.key < key; });
+                    for (; c != cells.end() && c->key <= key_of(i, j, k1); ++c)
+                    {
+                        const std::uint32_t g = c->face;
+                        const std::uint32_t gg = group_of(g);
+                        if (seen[g] == s || (gg != k_no_star && gg <= s))
+                            continue;
+                        seen[g] = static_cast<std::uint32_t>(s);
+                        const auto& bg = box[g];
+                        if (bg[1].x < sl.x || sh.x < bg[0].x || bg[1].y < sl.y || sh.y < bg[0].y ||
+                            bg[1].z < sl.z || sh.z < bg[0].z)
+                            continue;
+                        sw.others.push_back(g);
+                    }
+                }
+            if (asked())
+                return pairs;
+        }
+    }
+
     const auto nruns = static_cast<std::int64_t>(runs.size()) - 1;
     // A stop asked of `stop` (polled by thread 0 only: a sink need not be thread-safe) ends
     // every thread's work at its next cell or face.
@@ -413,6 +838,38 @@ std::vector<std::array<std::uint32_t, 2>> pairs_among(const mesh::TriMesh& mesh,
             failure = std::current_exception();
         halt.store(true, std::memory_order_relaxed);
     };
+    // The narrow phase of subset faces f and g whose boxes overlap.
+    const auto test =
+        [&](std::uint32_t f, std::uint32_t g, std::vector<std::array<std::uint32_t, 2>>& local)
+    {
+        const std::uint32_t mf = face_at(f), mg = face_at(g);
+        if (!touched.empty() && touched[mf] == 0 && touched[mg] == 0)
+            return;
+        const auto& bf = box[f];
+        const auto& bg = box[g];
+        const std::array<Vec3, 2> overlap{
+            Vec3{std::max(bf[0].x, bg[0].x), std::max(bf[0].y, bg[0].y),
+                 std::max(bf[0].z, bg[0].z)},
+            Vec3{std::min(bf[1].x, bg[1].x), std::min(bf[1].y, bg[1].y),
+                 std::min(bf[1].z, bg[1].z)}};
+        // (faces sharing a vertex: it lies in the overlap and on both planes)
+        const auto& tf = mesh.faces[mf];
+        const auto& tg = mesh.faces[mg];
+        const bool apart =
+            std::none_of(tf.begin(), tf.end(),
+                         [&](std::uint32_t x) { return x == tg[0] || x == tg[1] || x == tg[2]; });
+        if (apart && (plane_misses_box(mesh, mf, overlap) || plane_misses_box(mesh, mg, overlap)))
+            return;
+        if (faces_meet<true>(mesh, mf, mg))
+            local.push_back({std::min(mf, mg), std::max(mf, mg)});
+    };
+    const auto boxes_apart = [&](std::uint32_t f, std::uint32_t g)
+    {
+        const auto& bf = box[f];
+        const auto& bg = box[g];
+        return bf[1].x < bg[0].x || bg[1].x < bf[0].x || bf[1].y < bg[0].y || bg[1].y < bf[0].y ||
+               bf[1].z < bg[0].z || bg[1].z < bf[0].z;
+    };
 #pragma omp parallel
     {
         std::vector<std::array<std::uint32_t, 2>> local;
@@ -425,32 +882,64 @@ std::vector<std::array<std::uint32_t, 2>> pairs_among(const mesh::TriMesh& mesh,
             {
                 const auto r0 = runs[static_cast<std::size_t>(r)];
                 const auto r1 = runs[static_cast<std::size_t>(r) + 1];
+                const std::uint64_t key = cells[r0].key;
+                // f ungrouped, g any: test each pair once, in the cell of the low corner of the
+                // boxes' overlap
+                const auto pair_up = [&](std::uint32_t f, std::uint32_t g)
+                {
+                    if (group_of(g) != k_no_star || boxes_apart(f, g))
+                        return;
+                    const auto& bf = box[f];
+                    const auto& bg = box[g];
+                    const std::uint64_t own = key_of(cell_of(std::max(bf[0].x, bg[0].x), lo.x, nx),
+                                                     cell_of(std::max(bf[0].y, bg[0].y), lo.y, ny),
+                                                     cell_of(std::max(bf[0].z, bg[0].z), lo.z, nz));
+                    if (own == key)
+                        test(f, g, local);
+                };
                 for (std::size_t i = r0; i < r1 && !halted(((i - r0) & 255U) == 255U); ++i)
-                    for (std::size_t j = i + 1; j < r1; ++j)
-                    {
-                        const std::uint32_t f = cells[i].face, g = cells[j].face;
-                        const auto& bf = box[f];
-                        const auto& bg = box[g];
-                        if (bf[1].x < bg[0].x || bg[1].x < bf[0].x || bf[1].y < bg[0].y ||
-                            bg[1].y < bf[0].y || bf[1].z < bg[0].z || bg[1].z < bf[0].z)
-                            continue;
-                        // test each pair once: in the cell of the low corner of the boxes' overlap
-                        const std::uint64_t own =
-                            key_of(cell_of(std::max(bf[0].x, bg[0].x), lo.x, nx),
-                                   cell_of(std::max(bf[0].y, bg[0].y), lo.y, ny),
-                                   cell_of(std::max(bf[0].z, bg[0].z), lo.z, nz));
-                        if (own != cells[i].key)
-                            continue;
-                        const std::uint32_t mf = face_at(f), mg = face_at(g);
-                        if (!touched.empty() && touched[mf] == 0 && touched[mg] == 0)
-                            continue;
-                        if (faces_meet<true>(mesh, mf, mg))
-                            local.push_back({std::min(mf, mg), std::max(mf, mg)});
-                    }
+                    if (group_of(cells[i].face) == k_no_star)
+                        for (std::size_t j = i + 1; j < r1; ++j)
+                            pair_up(cells[i].face, cells[j].face);
             }
             catch (...)
             {
                 fail();
+            }
+        }
+        // Each star's faces against the others it gathered: only the faces whose wedges
+        // share a direction with the other's image can meet it (certify_star).
+        for (std::size_t s = 0; s < stars.size(); ++s)
+        {
+            const Star& star = stars[s];
+            const StarWork& sw = work[s];
+            const auto nothers = static_cast<std::int64_t>(sw.others.size());
+#pragma omp for schedule(dynamic, 64) nowait
+            for (std::int64_t o = 0; o < nothers; ++o)
+            {
+                if (halted((o & 63) == 0))
+                    continue;
+                try
+                {
+                    const std::uint32_t g = sw.others[static_cast<std::size_t>(o)];
+                    const auto& tg = mesh.faces[face_at(g)];
+                    const Vec3& p = mesh.positions[star.v];
+                    const std::array<Vec3, 3> e{mesh.positions[tg[0]] - p,
+                                                mesh.positions[tg[1]] - p,
+                                                mesh.positions[tg[2]] - p};
+                    star_candidates(
+                        star, e,
+                        [&](std::size_t k)
+                        {
+                            const std::uint32_t f = sw.slot[k];
+                            if (f != k_no_star && group_of(f) == s && !boxes_apart(f, g))
+                                test(f, g, local);
+                        });
+                }
+                catch (...)
+                {
+                    fail();
+                }
             }
         }
 #pragma omp critical(pliant_remesh_intersections)

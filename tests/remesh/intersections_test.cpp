@@ -36,6 +36,7 @@
 #include <string>
 #include <string_view>
 #include <thread>
+#include <utility>
 #include <vector>
 
 namespace pliant::remesh
@@ -401,6 +402,215 @@ TEST(SelfIntersections, FlatFansInAxisPlanesCountOverlappingSectorsOnly)
         EXPECT_EQ(count_self_intersections(m), 1U) << "axis " << axis;
         EXPECT_EQ(brute_force_pairs(m), 1U) << "axis " << axis;
     }
+}
+
+// ---------------------------------------------------------------------------------------------
+// stars: faces around a vertex of high valence, paired by angle about it
+
+/// Every intersecting pair by brute force over all pairs (no grid, no stars, no plane test).
+std::vector<std::array<std::uint32_t, 2>> brute_force_pair_list(const mesh::TriMesh& m)
+{
+    std::vector<std::array<std::uint32_t, 2>> out;
+    for (std::uint32_t i = 0; i < m.faces.size(); ++i)
+        for (std::uint32_t j = i + 1; j < m.faces.size(); ++j)
+        {
+            const auto& a = m.faces[i];
+            const auto& b = m.faces[j];
+            const Tri ta{m.positions[a[0]], m.positions[a[1]], m.positions[a[2]]};
+            const Tri tb{m.positions[b[0]], m.positions[b[1]], m.positions[b[2]]};
+            std::vector<std::array<std::size_t, 2>> shared;
+            for (std::size_t k = 0; k < 3; ++k)
+                for (std::size_t l = 0; l < 3; ++l)
+                    if (a[k] == b[l])
+                        shared.push_back({k, l});
+            bool meet = false;
+            if (shared.empty())
+                meet = triangles_intersect(ta, tb);
+            else if (shared.size() == 1)
+            {
+                const auto [k, l] = shared[0];
+                meet = edge_meets_triangle(ta[(k + 1) % 3], ta[(k + 2) % 3], tb) ||
+                       edge_meets_triangle(tb[(l + 1) % 3], tb[(l + 2) % 3], ta);
+            }
+            if (meet)
+                out.push_back({i, j});
+        }
+    return out;
+}
+
+/// A closed cone of `sides` sides: apex 0 at (0, 0, apex_z), the cap's centre 1 at
+/// (0, 0, cap_z), ring vertices 2.. on the unit circle at z = 0; outward faces when
+/// apex_z > 0 >= cap_z.
+mesh::TriMesh cone(std::uint32_t sides, double apex_z = 1.0, double cap_z = -0.2)
+{
+    mesh::TriMesh m;
+    m.positions = {Vec3{0, 0, apex_z}, Vec3{0, 0, cap_z}};
+    for (std::uint32_t k = 0; k < sides; ++k)
+    {
+        const double a = 2.0 * 3.14159265358979323846 * k / sides;
+        m.positions.push_back(Vec3{std::cos(a), std::sin(a), 0.0});
+    }
+    for (std::uint32_t k = 0; k < sides; ++k)
+    {
+        const std::uint32_t b = 2 + k, c = 2 + (k + 1) % sides;
+        m.faces.push_back({0, b, c});
+        m.faces.push_back({1, c, b});
+    }
+    return m;
+}
+
+std::vector<std::uint32_t> faces_around(const mesh::TriMesh& m, std::uint32_t v)
+{
+    std::vector<std::uint32_t> out;
+    for (std::uint32_t f = 0; f < m.faces.size(); ++f)
+        if (std::find(m.faces[f].begin(), m.faces[f].end(), v) != m.faces[f].end())
+            out.push_back(f);
+    return out;
+}
+
+TEST(VertexFanIsStar, CertifiesConesAndFlatCapsAndRefusesFoldsTwistsAndPinches)
+{
+    const mesh::TriMesh c = cone(40);
+    EXPECT_TRUE(vertex_fan_is_star(c, 0, faces_around(c, 0)));  // the apex
+    EXPECT_TRUE(vertex_fan_is_star(c, 1, faces_around(c, 1)));  // the shallow cap's centre
+    const mesh::TriMesh flat = cone(40, 1.0, 0.0);
+    EXPECT_TRUE(vertex_fan_is_star(flat, 1, faces_around(flat, 1)));  // a flat fan
+    // a ring vertex whose only faces are its two neighbours' on each side: valence 4, a star
+    // too, and a part of the fan is not one
+    EXPECT_TRUE(vertex_fan_is_star(c, 5, faces_around(c, 5)));
+    auto part = faces_around(c, 0);
+    part.pop_back();
+    EXPECT_FALSE(vertex_fan_is_star(c, 0, part));
+    // one ring vertex moved across its neighbour: the images of two faces fold over
+    mesh::TriMesh folded = c;
+    folded.positions[10] = Vec3{std::cos(0.5), std::sin(0.5), 0.0};  // between ring 12 and 13
+    EXPECT_FALSE(vertex_fan_is_star(folded, 0, faces_around(folded, 0)));
+    // a face turned over
+    mesh::TriMesh flipped = c;
+    std::swap(flipped.faces[6][1], flipped.faces[6][2]);
+    EXPECT_FALSE(vertex_fan_is_star(flipped, 0, faces_around(flipped, 0)));
+    // a fan winding twice around its vertex: every face turns the same way, the angles make two
+    // turns
+    mesh::TriMesh twice;
+    twice.positions.push_back(Vec3{0, 0, 0});
+    constexpr std::uint32_t k_link = 30;
+    for (std::uint32_t k = 0; k < k_link; ++k)
+    {
+        const double a = 4.0 * 3.14159265358979323846 * k / k_link;
+        twice.positions.push_back(Vec3{std::cos(a) * (1.0 + 0.01 * k), std::sin(a), -0.1});
+    }
+    for (std::uint32_t k = 0; k < k_link; ++k)
+        twice.faces.push_back({0, 1 + k, 1 + (k + 1) % k_link});
+    EXPECT_FALSE(vertex_fan_is_star(twice, 0, faces_around(twice, 0)));
+    EXPECT_GT(brute_force_pair_list(twice).size(), 0U);
+    // two cones' apexes at one vertex (a pinch): two cycles
+    mesh::TriMesh pinch = c;
+    const auto base = static_cast<std::uint32_t>(pinch.positions.size());
+    for (const Vec3& p : c.positions)
+        pinch.positions.push_back(Vec3{p.x, p.y, 2.0 - p.z});
+    for (const auto& f : c.faces)
+    {
+        const auto at = [&](std::uint32_t x) { return x == 0 ? 0U : x + base; };
+        pinch.faces.push_back({at(f[0]), at(f[2]), at(f[1])});
+    }
+    EXPECT_FALSE(vertex_fan_is_star(pinch, 0, faces_around(pinch, 0)));
+    // a face of no area, seen edge-on from every direction: a flat fan with a ring vertex moved
+    // onto the spoke to the one before it
+    mesh::TriMesh edge_on = flat;
+    edge_on.positions[7] = edge_on.positions[6] * 0.5;
+    EXPECT_FALSE(vertex_fan_is_star(edge_on, 1, faces_around(edge_on, 1)));
+}
+
+// The pairs of meshes with stars (cones of 40 sides, their apex or cap pushed through, a ring
+// vertex pushed inside, triangles through them with a corner on the axis, random jitter)
+// against brute force over all pairs, from intersecting_pairs and from
+// intersecting_pairs_touching with random flags.
+TEST(SelfIntersections, StarsPairLikeBruteForce)
+{
+    std::vector<std::pair<std::string, mesh::TriMesh>> cases;
+    cases.emplace_back("cone", cone(40));
+    cases.emplace_back("flat cap", cone(40, 1.0, 0.0));
+    cases.emplace_back("apex through the cap", cone(40, -0.5, -0.2));
+    cases.emplace_back("cap's centre above the apex", cone(40, 1.0, 1.5));
+    cases.emplace_back("cap's centre on the apex's side", cone(40, 1.0, 0.4));
+    {
+        mesh::TriMesh m = cone(40);
+        m.positions[2 + 13] = Vec3{-0.6, -0.1, 0.2};  // a ring vertex through the far side
+        cases.emplace_back("ring vertex through", std::move(m));
+    }
+    // triangles with a corner on the axis (the apex's image of it is the origin) crossing the
+    // sides, touching them, passing beside them, and one through the apex's own position
+    const auto with_triangle = [&](std::string name, const Tri& t, double cap_z)
+    {
+        mesh::TriMesh m = cone(40, 1.0, cap_z);
+        const auto base = static_cast<std::uint32_t>(m.positions.size());
+        m.positions.insert(m.positions.end(), t.begin(), t.end());
+        m.faces.push_back({base, base + 1, base + 2});
+        cases.emplace_back(std::move(name), std::move(m));
+    };
+    with_triangle("axis corner, crossing", {Vec3{0, 0, 0.5}, Vec3{2, 0.3, 0.5}, Vec3{2, 0.6, 0.5}},
+                  -0.2);
+    with_triangle("axis corner, tilted through",
+                  {Vec3{0, 0, 0.3}, Vec3{2, -0.2, 0.7}, Vec3{1.8, 0.4, 0.6}}, -0.2);
+    with_triangle("axis corner, outside", {Vec3{0, 0, 1.5}, Vec3{2, 0.3, 1.2}, Vec3{2, 0.6, 1.3}},
+                  -0.2);
+    with_triangle("axis corner, touching the apex",
+                  {Vec3{0, 0, 1.0}, Vec3{2, 0.3, 1.0}, Vec3{2, 0.6, 1.0}}, -0.2);
+    with_triangle("through the apex's point", {Vec3{-1, -1, 1}, Vec3{1, -1, 1}, Vec3{0, 2, 1}},
+                  -0.2);
+    with_triangle("in the flat cap's plane", {Vec3{0, 0, 0}, Vec3{2, 0.3, 0}, Vec3{2, 0.6, 0}},
+                  0.0);
+    std::mt19937 rng(11);
+    // small triangles scattered about the sides and the cap, many crossing a face or two there
+    // (no corner on the axis: their images' arcs pick the wedges)
+    for (int k = 0; k < 4; ++k)
+    {
+        mesh::TriMesh m = cone(40, 1.0, k % 2 == 0 ? -0.2 : 0.0);
+        std::uniform_real_distribution<double> unit(0.0, 1.0), spread(-1.0, 1.0);
+        for (int t = 0; t < 60; ++t)
+        {
+            const double a = 6.283185307179586 * unit(rng), r = unit(rng);
+            const bool side = t % 3 != 0;
+            const Vec3 at = side ? Vec3{r * std::cos(a), r * std::sin(a), 1.0 - r}
+                                 : Vec3{r * std::cos(a), r * std::sin(a), 0.0};
+            const double size = 0.02 + 0.3 * unit(rng);
+            const auto base = static_cast<std::uint32_t>(m.positions.size());
+            for (int c = 0; c < 3; ++c)
+                m.positions.push_back(at + Vec3{spread(rng), spread(rng), spread(rng)} * size);
+            m.faces.push_back({base, base + 1, base + 2});
+        }
+        cases.emplace_back("scattered triangles #" + std::to_string(k), std::move(m));
+    }
+    for (const double size : {0.01, 0.05, 0.2, 0.6})
+        for (int k = 0; k < 6; ++k)
+        {
+            std::uniform_real_distribution<double> jitter(-size, size);
+            mesh::TriMesh m = cone(40, k % 2 == 0 ? 1.0 : 0.3, k % 3 == 0 ? 0.0 : -0.2);
+            for (Vec3& p : m.positions)
+                if (rng() % 3 == 0)
+                    p += Vec3{jitter(rng), jitter(rng), jitter(rng)};
+            cases.emplace_back("jitter " + std::to_string(size) + " #" + std::to_string(k),
+                               std::move(m));
+        }
+    std::size_t meeting = 0, starred = 0;
+    for (const auto& [name, m] : cases)
+    {
+        const auto brute = brute_force_pair_list(m);
+        meeting += brute.empty() ? 0 : 1;
+        starred += vertex_fan_is_star(m, 0, faces_around(m, 0)) ? 1 : 0;
+        EXPECT_EQ(intersecting_pairs(m), brute) << name;
+        std::vector<std::uint8_t> touched(m.faces.size(), 0);
+        for (auto& t : touched)
+            t = rng() % 5 == 0 ? 1 : 0;
+        std::vector<std::array<std::uint32_t, 2>> expected;
+        for (const auto& pr : brute)
+            if (touched[pr[0]] != 0 || touched[pr[1]] != 0)
+                expected.push_back(pr);
+        EXPECT_EQ(intersecting_pairs_touching(m, touched), expected) << name;
+    }
+    // the cases exercise both answers and the stars
+    EXPECT_GE(meeting, 12U);
+    EXPECT_GE(starred, 20U);
 }
 
 /// `k` horizontal triangles (planes z = const) and `k` vertical ones (x = const), each

@@ -10,13 +10,18 @@
 /// shared vertex (touching counts). A fold shows up as faces around one vertex overlapping, so
 /// pairs sharing one vertex count too. Broad phase: the faces' bounding boxes in a uniform grid
 /// (cell about twice the mean box extent), sorted by cell, each pair tested once, in the cell
-/// holding the low corner of the two boxes' overlap. Narrow phase: two non-coplanar triangles meet
-/// iff an edge of one meets the other (their common segment ends on edges), decided by orientation
-/// signs; the coplanar case by edge crossings and containment in the plane the normal's dominant
-/// axis leaves. Orientations are evaluated in double with Shewchuk's static error bound and, where
-/// that cannot decide the sign, again in 113-bit floating point (`__float128`, long double where
-/// the compiler lacks it): not exact arithmetic, but the sign is wrong only for configurations
-/// within about 1e-33 (relative) of degenerate.
+/// holding the low corner of the two boxes' overlap; two faces sharing no vertex are dropped there
+/// when the plane of either passes clear of that overlap (by more than rounding). The faces around
+/// a vertex of valence 16 or more whose fan vertex_fan_is_star certifies (a cone's apex, a
+/// fan-split cap) are paired apart from the grid: with each other never, with another face only
+/// where its image seen along the fan's axis shares a direction with theirs (a binary search over
+/// the fan's angles), so such a vertex costs its valence, not its square. Narrow phase: two
+/// non-coplanar triangles meet iff an edge of one meets the other (their common segment ends on
+/// edges), decided by orientation signs; the coplanar case by edge crossings and containment in the
+/// plane the normal's dominant axis leaves. Orientations are evaluated in double with Shewchuk's
+/// static error bound and, where that cannot decide the sign, again in 113-bit floating point
+/// (`__float128`, long double where the compiler lacks it): not exact arithmetic, but the sign is
+/// wrong only for configurations within about 1e-33 (relative) of degenerate.
 ///
 /// Alternatives rejected: a BVH (the grid is simpler and the remesher's triangles are nearly
 /// uniform in size); exact expansion arithmetic (Shewchuk's adaptive predicates; more code for
@@ -58,7 +63,9 @@ namespace pliant::remesh
 /// sharing one vertex meet elsewhere iff the edge of either opposite the shared vertex meets
 /// the other (the overlap is convex and contains the vertex, so its far side lies on such an
 /// edge). O(n log n) for meshes of even triangle sizes; parallel (OpenMP), and the
-/// result does not depend on the thread count.
+/// result does not depend on the thread count. The faces around a vertex of 16 or more, which
+/// all pass the broad phase together, are not paired with each other where vertex_fan_is_star
+/// certifies the fan (a cone's apex, a fan-split cap): linear, not quadratic, in the valence.
 /// `stop`: its stop_requested() is polled from the calling thread only (OpenMP's thread 0; not
 /// from within an enclosing parallel region): between the serial stages, at each chunk of 64
 /// grid cells that thread takes, and every 256 faces within a cell; once it answers true the
@@ -75,6 +82,18 @@ namespace pliant::remesh
 [[nodiscard]] std::vector<std::array<std::uint32_t, 2>> intersecting_pairs_touching(
     const mesh::TriMesh& mesh, std::span<const std::uint8_t> touched,
     const core::ProgressSink* stop = nullptr);
+
+/// Whether the faces `around` vertex v (every face of `mesh` that holds it, in any order) form a
+/// simple star, so that no two of them meet except at v or along an edge they share: they are
+/// one consistently oriented cycle (each face's edge leaving v is the previous face's edge
+/// arriving at it), and projected along their summed normal every face keeps its orientation,
+/// by a margin of 1e-10 relative (far above rounding), and their angles at v's image make one
+/// full turn. The images then tile the plane around v's once, so two faces that are not
+/// neighbours have images meeting only at v's; the projection is one-to-one on each face, so
+/// the faces meet only at v. A fold, a flipped face, a fan winding twice, a pinched (non-manifold)
+/// vertex or a face within 1e-10 of edge-on: false (not certified; not proof of a crossing).
+[[nodiscard]] bool vertex_fan_is_star(const mesh::TriMesh& mesh, std::uint32_t v,
+                                      std::span<const std::uint32_t> around);
 
 /// intersecting_pairs(mesh, stop).size().
 [[nodiscard]] std::size_t count_self_intersections(const mesh::TriMesh& mesh,
