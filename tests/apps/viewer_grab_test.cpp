@@ -12,6 +12,8 @@
 #include "../../scenes/grid_shapes.h"
 
 #include <algorithm>
+#include <cstdint>
+#include <optional>
 #include <vector>
 
 namespace pliant::viewer
@@ -30,9 +32,7 @@ double largest_u(double frame_s, double hold_s, int frames)
     SurfaceView view;
     view.update(local.model(), local.state().u, 0);
     Grab grab;
-    grab.face = 300;
-    grab.b1 = 1.0 / 3.0;
-    grab.b2 = 1.0 / 3.0;
+    grab.at = {22.0 + 2.0 / 3.0, 2.0 + 1.0 / 3.0};  // the centre of face 300
     grab.radius = 0.08;
     grab.stiffness = default_grab_stiffness(material, grab.radius);
     grab.target = grab.current(view) * 1.3;  // pulled out by 30 % of the radius
@@ -90,6 +90,61 @@ TEST(ViewerSurface, AnotherSurfaceAtTheSameLevelBringsItsRestPositions)
         ASSERT_EQ(view.rest_positions()[i], expected) << "unique vertex " << i;
         ASSERT_EQ(view.positions()[i], expected) << "unique vertex " << i << " (at rest)";
     }
+}
+
+// The viewer picks what it draws: the surface refined to the display level. Against a brute-force
+// cast over that surface's triangle soup (picking.h's `pick`), for rays on a grid across a coarse
+// sphere (level 2, drawn at level 5): the same hits at the same points, the grid point of each
+// placed back on the drawn surface where the ray met it, and some rays near the silhouette that
+// meet the drawn surface but miss the simulation level's coarse chords (the cast before this
+// view's picker missed them). At the grid's nodes the point is the node at every level.
+TEST(ViewerSurface, PicksTheDrawnSurfaceAndPlacesItsPointOnEveryLevel)
+{
+    const core::TetraGrid grid = core::TetraGrid::create(2).value();
+    auto local =
+        LocalSim::create(grid, scenes::sphere_grid(grid, 1.0), default_material(2)).value();
+    SurfaceView view;
+    view.update(local.model(), local.state().u, 3);
+    const core::TetraGrid& fine = view.display_grid();
+    ASSERT_EQ(fine.level(), 5);
+    std::vector<core::Vec3> soup(fine.node_count());
+    const auto& p = view.display_positions();
+    for (std::uint32_t n = 0; n < soup.size(); ++n)
+        soup[n] = {p[0][core::NodeIndex{n}], p[1][core::NodeIndex{n}], p[2][core::NodeIndex{n}]};
+    const auto soup_faces = fine.node_triangles();
+    const auto coarse_faces = grid.triangles();
+    int hits = 0, drawn_only = 0;
+    constexpr int k_rays = 61;
+    for (int i = 0; i < k_rays; ++i)
+        for (int j = 0; j < k_rays; ++j)
+        {
+            const double x = -1.05 + 2.1 * i / (k_rays - 1), y = -1.05 + 2.1 * j / (k_rays - 1);
+            const Ray ray{core::Vec3{x, y, 3.0}, core::Vec3{0.0, 0.0, -1.0}};
+            const std::optional<Hit> expected = pick(ray, soup, soup_faces);
+            const auto got = view.pick(ray);
+            ASSERT_EQ(got.has_value(), expected.has_value()) << x << ", " << y;
+            if (!got)
+                continue;
+            ++hits;
+            EXPECT_LT(core::norm(got->second - expected->point), 1e-12) << x << ", " << y;
+            EXPECT_LT(core::norm(view.display_point(got->first) - got->second), 1e-12)
+                << x << ", " << y;
+            if (!pick(ray, view.positions(), coarse_faces))
+                ++drawn_only;
+        }
+    EXPECT_GT(hits, 1500);
+    EXPECT_GT(drawn_only, 0);
+    // nodes of the simulation level: the same point on the drawn and the rest surface (at rest,
+    // refinement keeps the nodes bit for bit)
+    const auto& rest = local.model().rest_positions();
+    for (int y = 0; y <= grid.w(); ++y)
+        for (int x = 0; x <= 2 * grid.w(); ++x)
+        {
+            const core::Vec3 node{rest[0].at(x, y), rest[1].at(x, y), rest[2].at(x, y)};
+            const SurfacePoint at{static_cast<double>(x), static_cast<double>(y)};
+            EXPECT_EQ(view.display_point(at), node) << x << ", " << y;
+            EXPECT_EQ(view.rest_point(at), node) << x << ", " << y;
+        }
 }
 
 }  // namespace

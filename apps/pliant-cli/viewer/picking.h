@@ -3,11 +3,10 @@
 #pragma once
 
 // Picking for the viewer: a ray through a window pixel (from the camera the renderer draws
-// with) and a CPU ray cast against the simulation-level triangles. Brute force over every
-// triangle with the Moller-Trumbore test: at level 8 (262K triangles) one cast takes about a
-// millisecond, and a cast happens only on a mouse press, so a BVH (rebuilt every frame as the
-// surface moves) would cost more than it saves. The picked face and its barycentric
-// coordinates map the hit back onto the rest surface, where sim::Force expects its point.
+// with) and a CPU ray cast against triangles (SurfaceView::pick casts against the display
+// surface with `intersect`). Brute force over every triangle with the Moller-Trumbore test: 262K
+// triangles take a few milliseconds, and a cast happens only on a mouse press, so a BVH
+// (rebuilt every frame as the surface moves) would cost more than it saves.
 
 #include <pliant/core/vec3.h>
 #include <pliant/render/camera.h>

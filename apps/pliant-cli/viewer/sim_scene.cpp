@@ -141,18 +141,110 @@ void SurfaceView::update(const sim::MembraneModel& model, const core::Field<doub
     }
 }
 
+namespace
+{
+
+/// Where grid point (x, y) (in cells of a grid of `w`) lies: cell (cx, cy), its triangle t as
+/// TetraGrid::node_triangles() orders them (0: (cx, cy), (cx + 1, cy), (cx + 1, cy + 1); 1:
+/// (cx, cy), (cx + 1, cy + 1), (cx, cy + 1)) and the weights of that triangle's second and third
+/// corner. Points outside the rectangle are clamped onto it.
+struct InCell
+{
+    int cx = 0, cy = 0, t = 0;
+    double b1 = 0.0, b2 = 0.0;
+};
+
+InCell locate(double x, double y, int w) noexcept
+{
+    InCell c;
+    c.cx = std::clamp(static_cast<int>(std::floor(x)), 0, 2 * w - 1);
+    c.cy = std::clamp(static_cast<int>(std::floor(y)), 0, w - 1);
+    const double fx = std::clamp(x - c.cx, 0.0, 1.0), fy = std::clamp(y - c.cy, 0.0, 1.0);
+    if (fy <= fx)
+        c = {c.cx, c.cy, 0, fx - fy, fy};
+    else
+        c = {c.cx, c.cy, 1, fx, fy - fx};
+    return c;
+}
+
+/// The grid nodes (x, y) of the corners of the triangle `c` names.
+std::array<std::array<int, 2>, 3> corners(const InCell& c) noexcept
+{
+    if (c.t == 0)
+        return {{{c.cx, c.cy}, {c.cx + 1, c.cy}, {c.cx + 1, c.cy + 1}}};
+    return {{{c.cx, c.cy}, {c.cx + 1, c.cy + 1}, {c.cx, c.cy + 1}}};
+}
+
+}  // namespace
+
+std::optional<std::pair<SurfacePoint, core::Vec3>> SurfaceView::pick(const Ray& ray) const noexcept
+{
+    const core::TetraGrid& g = display_grid();
+    const core::Vec3Field<double>& p = display_positions();
+    const auto at = [&](int x, int y) {
+        return core::Vec3{p[0].at(x, y), p[1].at(x, y), p[2].at(x, y)};
+    };
+    std::optional<Hit> best;
+    InCell where;
+    for (int cy = 0; cy < g.w(); ++cy)
+        for (int cx = 0; cx < 2 * g.w(); ++cx)
+        {
+            const core::Vec3 n00 = at(cx, cy), n10 = at(cx + 1, cy), n11 = at(cx + 1, cy + 1),
+                             n01 = at(cx, cy + 1);
+            for (int t = 0; t < 2; ++t)
+            {
+                const std::optional<Hit> hit =
+                    t == 0 ? intersect(ray, n00, n10, n11) : intersect(ray, n00, n11, n01);
+                if (hit && (!best || hit->t < best->t))
+                {
+                    best = hit;
+                    where = {cx, cy, t, hit->b1, hit->b2};
+                }
+            }
+        }
+    if (!best)
+        return std::nullopt;
+    // the corners' grid positions weighted as the hit, in cells of the simulation level
+    const auto c = corners(where);
+    const double scale = 1.0 / static_cast<double>(1 << display_levels_);
+    const double w0 = 1.0 - where.b1 - where.b2;
+    const SurfacePoint sp{(w0 * c[0][0] + where.b1 * c[1][0] + where.b2 * c[2][0]) * scale,
+                          (w0 * c[0][1] + where.b1 * c[1][1] + where.b2 * c[2][1]) * scale};
+    return std::pair{sp, best->point};
+}
+
+core::Vec3 SurfaceView::display_point(SurfacePoint at) const noexcept
+{
+    const double scale = static_cast<double>(1 << display_levels_);
+    const core::TetraGrid& g = display_grid();
+    const core::Vec3Field<double>& p = display_positions();
+    const InCell c = locate(at.x * scale, at.y * scale, g.w());
+    const auto n = corners(c);
+    const std::array<double, 3> w{1.0 - c.b1 - c.b2, c.b1, c.b2};
+    core::Vec3 sum{};
+    for (std::size_t k = 0; k < 3; ++k)
+        sum += core::Vec3{p[0].at(n[k][0], n[k][1]), p[1].at(n[k][0], n[k][1]),
+                          p[2].at(n[k][0], n[k][1])} *
+               w[k];
+    return sum;
+}
+
+core::Vec3 SurfaceView::rest_point(SurfacePoint at) const noexcept
+{
+    const int w = grid_->w();
+    const InCell c = locate(at.x, at.y, w);
+    const auto& f = faces_[static_cast<std::size_t>((c.cy * 2 * w + c.cx) * 2 + c.t)];
+    return rest_[f[0]] * (1.0 - c.b1 - c.b2) + rest_[f[1]] * c.b1 + rest_[f[2]] * c.b2;
+}
+
 core::Vec3 Grab::current(const SurfaceView& view) const noexcept
 {
-    const auto& f = view.faces()[face];
-    const auto& p = view.positions();
-    return p[f[0]] * (1.0 - b1 - b2) + p[f[1]] * b1 + p[f[2]] * b2;
+    return view.display_point(at);
 }
 
 core::Vec3 Grab::rest(const SurfaceView& view) const noexcept
 {
-    const auto& f = view.faces()[face];
-    const auto& p = view.rest_positions();
-    return p[f[0]] * (1.0 - b1 - b2) + p[f[1]] * b1 + p[f[2]] * b2;
+    return view.rest_point(at);
 }
 
 sim::Force Grab::force(const SurfaceView& view) const noexcept

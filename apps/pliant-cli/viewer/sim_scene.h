@@ -10,9 +10,10 @@
 //   state) at the simulation level, as a triangle soup over unique vertices for picking, and
 //   refined by modified butterfly to the display level for the renderer. All planes are made
 //   once per (level, display level) and reused every frame.
-// - `Grab`: a mouse drag turned into a sim::Force: the picked face and barycentric weights fix a
-//   point of the surface; the force is a spring from that point's current deformed position to
-//   where the mouse has dragged it, applied as a point force (radius around the rest point).
+// - `Grab`: a mouse drag turned into a sim::Force: the picked point of the drawn surface, kept
+//   as where it lies on the grid (`SurfacePoint`); the force is a spring from that point's
+//   current position on the drawn surface to where the mouse has dragged it, applied as a point
+//   force (radius around the same grid point on the simulation-level rest surface).
 
 #include <pliant/core/field.h>
 #include <pliant/core/result.h>
@@ -21,6 +22,8 @@
 #include <pliant/sim/membrane.h>
 #include <pliant/sim/rkf45.h>
 #include <pliant/subdiv/convolution_plan.h>
+
+#include "picking.h"
 
 #include <array>
 #include <cstdint>
@@ -70,6 +73,16 @@ private:
     double last_step_s_ = 0.0;
 };
 
+/// A point of the surface by where it lies on the grid: x, y in cells of the simulation level
+/// (0 <= x <= 2W, 0 <= y <= W). It names the same point of the object at every level, since
+/// refinement keeps each level's nodes and splits each grid triangle into four with the same
+/// diagonal; within a triangle the point is placed linearly.
+struct SurfacePoint
+{
+    double x = 0.0;
+    double y = 0.0;
+};
+
 class SurfaceView
 {
 public:
@@ -94,8 +107,18 @@ public:
     {
         return faces_;
     }
-    /// Rest position per unique vertex (for mapping a pick back onto the rest surface).
+    /// Rest position per unique vertex.
     [[nodiscard]] const std::vector<core::Vec3>& rest_positions() const noexcept { return rest_; }
+    /// The nearest point where `ray` meets the display surface (the refined one the renderer
+    /// draws, not the simulation level's), and where it lies; nullopt for a miss. Brute force
+    /// over the display triangles (4^k times the simulation level's; about 6 ms for 262K
+    /// triangles here), so made on a mouse press only. \pre !empty().
+    [[nodiscard]] std::optional<std::pair<SurfacePoint, core::Vec3>> pick(
+        const Ray& ray) const noexcept;
+    /// The point `at` on the display surface. \pre !empty().
+    [[nodiscard]] core::Vec3 display_point(SurfacePoint at) const noexcept;
+    /// The point `at` on the simulation level's rest surface. \pre !empty().
+    [[nodiscard]] core::Vec3 rest_point(SurfacePoint at) const noexcept;
     /// Largest |u| over the nodes at the sim level, this update.
     [[nodiscard]] double max_abs_u() const noexcept { return max_abs_u_; }
     [[nodiscard]] bool empty() const noexcept { return faces_.empty(); }
@@ -121,14 +144,12 @@ private:
 /// A drag in progress on the surface.
 struct Grab
 {
-    std::uint32_t face = 0;  ///< picked face (TetraGrid::triangles() index)
-    double b1 = 0.0;         ///< barycentric weights of the face's second and third vertex
-    double b2 = 0.0;
+    SurfacePoint at;         ///< the grabbed point
     core::Vec3 target{};     ///< where the mouse holds the grabbed point (world)
     double radius = 0.0;     ///< support radius of the force [m]
     double stiffness = 0.0;  ///< spring constant [N/m]
 
-    /// The grabbed point on the current surface.
+    /// The grabbed point on the current display surface (what the mouse holds).
     [[nodiscard]] core::Vec3 current(const SurfaceView& view) const noexcept;
     /// The grabbed point on the rest surface.
     [[nodiscard]] core::Vec3 rest(const SurfaceView& view) const noexcept;

@@ -787,19 +787,19 @@ void Viewer::mouse_button(bool down, double x, double y)
     glfwGetWindowSize(window_, &w, &h);
     const render::CameraMatrices cam = camera_matrices();
     const Ray ray = pixel_ray(cam, x, y, std::max(w, 1), std::max(h, 1));
-    const std::optional<Hit> hit = pick(ray, view_.positions(), view_.faces());
+    // on the surface as drawn (refined to the display level), so the point grabbed is the one
+    // under the cursor, at a silhouette too
+    const auto hit = view_.pick(ray);
     if (!hit || !can_push)
         return;
     const sim::MembraneSettings& material = model()->settings();
     Grab g;
-    g.face = hit->face;
-    g.b1 = hit->b1;
-    g.b2 = hit->b2;
-    g.target = hit->point;
+    g.at = hit->first;
+    g.target = hit->second;
     g.radius = grab_radius_factor_ * object_radius_;
     g.stiffness = grab_stiffness_scale_ * default_grab_stiffness(material, g.radius);
     grab_ = g;
-    grab_plane_normal_ = core::normalized(hit->point - cam.eye);
+    grab_plane_normal_ = core::normalized(hit->second - cam.eye);
     drag_ = Drag::Grab;
 }
 
