@@ -170,6 +170,71 @@ bool coplanar_meet(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b) n
     return in_triangle<Exact>(pb, pa[0]) || in_triangle<Exact>(pa, pb[0]);
 }
 
+/// Whether a, b and c lie on one line (or coincide): every axis-plane projection collinear.
+template <bool Exact>
+bool collinear(const Vec3& a, const Vec3& b, const Vec3& c) noexcept
+{
+    for (int drop = 0; drop < 3; ++drop)
+        if (orient2d<Exact>(project(a, drop), project(b, drop), project(c, drop)) != 0)
+            return false;
+    return true;
+}
+
+/// The two ends of the collinear points t: their least and greatest along the axis they spread
+/// most on (exact comparisons).
+std::array<Vec3, 2> ends(const std::array<Vec3, 3>& t) noexcept
+{
+    double Vec3::*axis = &Vec3::x;
+    double spread = -1.0;
+    for (double Vec3::*c : {&Vec3::x, &Vec3::y, &Vec3::z})
+    {
+        const double s =
+            std::max({t[0].*c, t[1].*c, t[2].*c}) - std::min({t[0].*c, t[1].*c, t[2].*c});
+        if (s > spread)
+        {
+            spread = s;
+            axis = c;
+        }
+    }
+    const auto by = [axis](const Vec3& u, const Vec3& v) { return u.*axis < v.*axis; };
+    return {*std::min_element(t.begin(), t.end(), by), *std::max_element(t.begin(), t.end(), by)};
+}
+
+/// Closed segments pq and rs of space (either may be a point) share a point.
+template <bool Exact>
+bool segments_meet_in_space(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3& s) noexcept
+{
+    if (orient3d<Exact>(p, q, r, s) != 0)
+        return false;  // not in one plane
+    if (collinear<Exact>(p, q, r) && collinear<Exact>(p, q, s) && collinear<Exact>(r, s, p) &&
+        collinear<Exact>(r, s, q))
+    {
+        // on one line (or points): overlap along the axis the four spread most on
+        const std::array<Vec3, 2> e = ends({p, q, r});
+        const std::array<Vec3, 2> f = ends({e[0], e[1], s});
+        double Vec3::*axis = &Vec3::x;
+        double spread = -1.0;
+        for (double Vec3::*c : {&Vec3::x, &Vec3::y, &Vec3::z})
+            if (std::abs(f[1].*c - f[0].*c) > spread)
+            {
+                spread = std::abs(f[1].*c - f[0].*c);
+                axis = c;
+            }
+        return std::max(std::min(p.*axis, q.*axis), std::min(r.*axis, s.*axis)) <=
+               std::min(std::max(p.*axis, q.*axis), std::max(r.*axis, s.*axis));
+    }
+    // In one plane, not on one line: project along the axis its normal leans on most (the
+    // best-conditioned of the normals the four points give).
+    Vec3 n{};
+    for (const Vec3& m : {core::cross(q - p, r - p), core::cross(q - p, s - p),
+                          core::cross(s - r, p - r), core::cross(s - r, q - r)})
+        if (core::dot(m, m) > core::dot(n, n))
+            n = m;
+    const int drop = dominant_axis(n);
+    return segments_meet<Exact>(project(p, drop), project(q, drop), project(r, drop),
+                                project(s, drop));
+}
+
 /// Closed segment pq meets closed triangle t, knowing the signs of p and q against t's plane.
 template <bool Exact>
 bool segment_meets_triangle(const Vec3& p, const Vec3& q, int sp, int sq,
@@ -178,6 +243,14 @@ bool segment_meets_triangle(const Vec3& p, const Vec3& q, int sp, int sq,
     if (sp * sq > 0)
         return false;
 
+    // A degenerate t (its points on one line, every sign 0) is a segment of space: the two
+    // need not lie in one plane, which coplanar_meet assumes.
+    if constexpr (Exact)
+        if (sp == 0 && sq == 0 && collinear<Exact>(t[0], t[1], t[2]))
+        {
+            const std::array<Vec3, 2> e = ends(t);
+            return segments_meet_in_space<Exact>(p, q, e[0], e[1]);
+        }
     if (sp == 0 && sq == 0)
         return coplanar_meet<Exact>({p, q, q}, t);
     const int o0 = orient3d<Exact>(p, q, t[0], t[1]), o1 = orient3d<Exact>(p, q, t[1], t[2]),
@@ -237,9 +310,18 @@ bool triangles_meet(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b) 
     if (flat_a || flat_b)
     {
         // a lies in b's plane (or b in a's): if the other is not degenerate they are coplanar;
-        // a degenerate one is a segment, which the edge tests below handle as well
+        // a degenerate one is a segment, which the edge tests below handle as well (each
+        // edge against a degenerate face as two segments of space, segment_meets_triangle)
         if (flat_a && flat_b)
+        {
+            if constexpr (Exact)
+                if (collinear<Exact>(a[0], a[1], a[2]) && collinear<Exact>(b[0], b[1], b[2]))
+                {
+                    const std::array<Vec3, 2> ea = ends(a), eb = ends(b);
+                    return segments_meet_in_space<Exact>(ea[0], ea[1], eb[0], eb[1]);
+                }
             return coplanar_meet<Exact>(a, b);
+        }
     }
     for (std::size_t k = 0; k < 3; ++k)
     {
@@ -478,8 +560,11 @@ bool plane_misses_box(const mesh::TriMesh& mesh, std::uint32_t f,
     const Vec3& a = mesh.positions[t[0]];
     const Vec3 e1 = mesh.positions[t[1]] - a, e2 = mesh.positions[t[2]] - a;
     const Vec3 n = core::cross(e1, e2);
-    const Vec3 centre = (box[0] + box[1]) * 0.5, half = (box[1] - box[0]) * 0.5;
-    const Vec3 to = centre - a;
+    // The box from a, before halving: each difference is then rounded once, relative to its
+    // own size (a centre taken first is rounded relative to the coordinates, which can exceed
+    // a thin overlap's size: touching faces far from the origin were dropped).
+    const Vec3 from = box[0] - a, till = box[1] - a;
+    const Vec3 to = (from + till) * 0.5, half = (till - from) * 0.5;
     const double dist = std::abs(core::dot(n, to));
     const double radius = std::abs(n.x) * half.x + std::abs(n.y) * half.y + std::abs(n.z) * half.z;
     const auto l1 = [](const Vec3& x) { return std::abs(x.x) + std::abs(x.y) + std::abs(x.z); };

@@ -84,6 +84,71 @@ TEST(TrianglesIntersect, HandMadePairs)
     EXPECT_FALSE(triangles_intersect(xy, {Vec3{3, 0, 0}, Vec3{5, 0, 0}, Vec3{4, 0, 1}}));
 }
 
+// A degenerate triangle (its corners on one line) is a segment of space, which need not lie in
+// the other's plane: projecting the two onto an arbitrary plane made skew segments "cross".
+TEST(TrianglesIntersect, DegenerateTrianglesAreSegmentsOfSpace)
+{
+    const Tri xy{Vec3{0, 0, 0}, Vec3{1, 0, 0}, Vec3{0, 1, 0}};
+    // a segment passing beside the triangle (it crosses z = 0 at (0.25, -0.375), outside)
+    const Tri beside{Vec3{0.2, -0.5, -0.1}, Vec3{0.8, 0.5, 1.9}, Vec3{0.8, 0.5, 1.9}};
+    EXPECT_FALSE(triangles_intersect(xy, beside));
+    EXPECT_FALSE(triangles_intersect(beside, xy));
+    // one through it (three distinct collinear corners)
+    const Tri through{Vec3{0.2, 0.2, -1}, Vec3{0.2, 0.2, 0.5}, Vec3{0.2, 0.2, 1}};
+    EXPECT_TRUE(triangles_intersect(xy, through));
+    EXPECT_TRUE(triangles_intersect(through, xy));
+    // two segments of space: skew, crossing, collinear apart, collinear overlapping, a point on
+    // one
+    const Tri s1{Vec3{0, 0, 0}, Vec3{2, 0, 0}, Vec3{1, 0, 0}};
+    EXPECT_FALSE(triangles_intersect(s1, {Vec3{1, -1, 1}, Vec3{1, 1, 1}, Vec3{1, 1, 1}}));
+    EXPECT_TRUE(triangles_intersect(s1, {Vec3{1, -1, 1}, Vec3{1, 1, -1}, Vec3{1, 0, 0}}));
+    EXPECT_FALSE(triangles_intersect(s1, {Vec3{3, 0, 0}, Vec3{4, 0, 0}, Vec3{5, 0, 0}}));
+    EXPECT_TRUE(triangles_intersect(s1, {Vec3{1.5, 0, 0}, Vec3{4, 0, 0}, Vec3{3, 0, 0}}));
+    EXPECT_TRUE(triangles_intersect(s1, {Vec3{0.5, 0, 0}, Vec3{0.5, 0, 0}, Vec3{0.5, 0, 0}}));
+    EXPECT_FALSE(
+        triangles_intersect(s1, {Vec3{0.5, 0, 1e-9}, Vec3{0.5, 0, 1e-9}, Vec3{0.5, 0, 1e-9}}));
+    // an edge against a degenerate face (the test for faces sharing one vertex)
+    EXPECT_FALSE(edge_meets_triangle(Vec3{0.2, -0.5, -0.1}, Vec3{0.8, 0.5, 1.9},
+                                     {Vec3{0, 0.5, 0}, Vec3{1, 0.5, 0}, Vec3{2, 0.5, 0}}));
+    EXPECT_TRUE(edge_meets_triangle(Vec3{0.5, 0.5, -1}, Vec3{0.5, 0.5, 1},
+                                    {Vec3{0, 0.5, 0}, Vec3{1, 0.5, 0}, Vec3{2, 0.5, 0}}));
+}
+
+// Two faces touching at a position they both hold (an unwelded mesh) far from the origin: the
+// plane test took the centre of their boxes' overlap first, rounded relative to the coordinates
+// (7 here), and found the touching face's plane clear of it.
+TEST(SelfIntersections, FacesTouchingAtACopiedPositionFarFromTheOriginCount)
+{
+    mesh::TriMesh m;
+    m.positions = {Vec3{-7.1799558486053137, -7.2671855173039699, -6.7051058493694633},
+                   Vec3{-7.8818287729231828, -7.7593082873636661, -6.5391713023866069},
+                   Vec3{-7.3020245259028265, -7.2715076476861, -6.274009093114211},
+                   Vec3{-7.1799558486053137, -7.2671855173039699, -6.7051058493694633},
+                   Vec3{-6.5296356384587444, -7.1088324598873731, -6.7092277139123944},
+                   Vec3{-7.1799693678196723, -6.3134651632575185, -6.779437274946698}};
+    m.faces = {{0, 1, 2}, {3, 4, 5}};
+    const Tri a{m.positions[0], m.positions[1], m.positions[2]};
+    const Tri b{m.positions[3], m.positions[4], m.positions[5]};
+    ASSERT_TRUE(triangles_intersect(a, b));
+    EXPECT_EQ(intersecting_pairs(m), (std::vector<std::array<std::uint32_t, 2>>{{0, 1}}));
+    // and the same pair shifted far off: every copy of a sphere's faces touching another's
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> offset(-1e4, 1e4);
+    for (int k = 0; k < 20; ++k)
+    {
+        const Vec3 shift{offset(rng), offset(rng), offset(rng)};
+        mesh::TriMesh far = m;
+        for (Vec3& p : far.positions)
+            p += shift;
+        const Tri fa{far.positions[0], far.positions[1], far.positions[2]};
+        const Tri fb{far.positions[3], far.positions[4], far.positions[5]};
+        if (triangles_intersect(fa, fb))
+        {
+            EXPECT_EQ(intersecting_pairs(far).size(), 1U) << k;
+        }
+    }
+}
+
 /// Independent reference for generic pairs: Möller–Trumbore for each of the six edges.
 bool edge_hits(const Vec3& p, const Vec3& q, const Tri& t)
 {

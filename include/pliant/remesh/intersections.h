@@ -41,7 +41,8 @@ namespace pliant::remesh
 {
 
 /// Whether triangles (a0, a1, a2) and (b0, b1, b2) have a point in common (touching included).
-/// Degenerate triangles are handled (a segment or point is tested as such).
+/// Degenerate triangles are handled (a segment or point of space is tested as such, whether or
+/// not it lies in the other's plane).
 [[nodiscard]] bool triangles_intersect(const std::array<core::Vec3, 3>& a,
                                        const std::array<core::Vec3, 3>& b) noexcept;
 
