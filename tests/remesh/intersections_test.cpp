@@ -230,11 +230,12 @@ TEST(EdgeMeetsTriangle, BoxesTouchingAtOneCoordinateStillMeet)
 // ---------------------------------------------------------------------------------------------
 // the broad phase against brute force
 
-std::size_t brute_force_pairs(const mesh::TriMesh& m)
+/// Every intersecting pair by brute force over all pairs (no grid, no stars, no plane test).
+std::vector<std::array<std::uint32_t, 2>> brute_force_pair_list(const mesh::TriMesh& m)
 {
-    std::size_t n = 0;
-    for (std::size_t i = 0; i < m.faces.size(); ++i)
-        for (std::size_t j = i + 1; j < m.faces.size(); ++j)
+    std::vector<std::array<std::uint32_t, 2>> out;
+    for (std::uint32_t i = 0; i < m.faces.size(); ++i)
+        for (std::uint32_t j = i + 1; j < m.faces.size(); ++j)
         {
             const auto& a = m.faces[i];
             const auto& b = m.faces[j];
@@ -245,18 +246,24 @@ std::size_t brute_force_pairs(const mesh::TriMesh& m)
                 for (std::size_t l = 0; l < 3; ++l)
                     if (a[k] == b[l])
                         shared.push_back({k, l});
+            bool meet = false;
             if (shared.empty())
-                n += triangles_intersect(ta, tb) ? 1 : 0;
+                meet = triangles_intersect(ta, tb);
             else if (shared.size() == 1)
             {
                 const auto [k, l] = shared[0];
-                n += edge_meets_triangle(ta[(k + 1) % 3], ta[(k + 2) % 3], tb) ||
-                             edge_meets_triangle(tb[(l + 1) % 3], tb[(l + 2) % 3], ta)
-                         ? 1
-                         : 0;
+                meet = edge_meets_triangle(ta[(k + 1) % 3], ta[(k + 2) % 3], tb) ||
+                       edge_meets_triangle(tb[(l + 1) % 3], tb[(l + 2) % 3], ta);
             }
+            if (meet)
+                out.push_back({i, j});
         }
-    return n;
+    return out;
+}
+
+std::size_t brute_force_pairs(const mesh::TriMesh& m)
+{
+    return brute_force_pair_list(m).size();
 }
 
 /// Two overlapping spheres of different sizes in one mesh (icospheres of `big` and `small`
@@ -471,37 +478,6 @@ TEST(SelfIntersections, FlatFansInAxisPlanesCountOverlappingSectorsOnly)
 
 // ---------------------------------------------------------------------------------------------
 // stars: faces around a vertex of high valence, paired by angle about it
-
-/// Every intersecting pair by brute force over all pairs (no grid, no stars, no plane test).
-std::vector<std::array<std::uint32_t, 2>> brute_force_pair_list(const mesh::TriMesh& m)
-{
-    std::vector<std::array<std::uint32_t, 2>> out;
-    for (std::uint32_t i = 0; i < m.faces.size(); ++i)
-        for (std::uint32_t j = i + 1; j < m.faces.size(); ++j)
-        {
-            const auto& a = m.faces[i];
-            const auto& b = m.faces[j];
-            const Tri ta{m.positions[a[0]], m.positions[a[1]], m.positions[a[2]]};
-            const Tri tb{m.positions[b[0]], m.positions[b[1]], m.positions[b[2]]};
-            std::vector<std::array<std::size_t, 2>> shared;
-            for (std::size_t k = 0; k < 3; ++k)
-                for (std::size_t l = 0; l < 3; ++l)
-                    if (a[k] == b[l])
-                        shared.push_back({k, l});
-            bool meet = false;
-            if (shared.empty())
-                meet = triangles_intersect(ta, tb);
-            else if (shared.size() == 1)
-            {
-                const auto [k, l] = shared[0];
-                meet = edge_meets_triangle(ta[(k + 1) % 3], ta[(k + 2) % 3], tb) ||
-                       edge_meets_triangle(tb[(l + 1) % 3], tb[(l + 2) % 3], ta);
-            }
-            if (meet)
-                out.push_back({i, j});
-        }
-    return out;
-}
 
 /// A closed cone of `sides` sides: apex 0 at (0, 0, apex_z), the cap's centre 1 at
 /// (0, 0, cap_z), ring vertices 2.. on the unit circle at z = 0; outward faces when
