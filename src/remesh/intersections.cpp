@@ -7,6 +7,9 @@
 #include <pliant/core/assert.h>
 #include <pliant/remesh/intersections.h>
 
+#include "remesh/intersections_internal.h"
+#include "remesh/obb_tree.h"
+
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -727,7 +730,9 @@ void star_candidates(const Star& s, const std::array<Vec3, 3>& e, Take&& take)
 std::vector<std::array<std::uint32_t, 2>> pairs_among(const mesh::TriMesh& mesh,
                                                       std::span<const std::uint32_t> subset,
                                                       std::span<const std::uint8_t> touched,
-                                                      const core::ProgressSink* stop)
+                                                      const core::ProgressSink* stop,
+                                                      std::size_t crowded_cell,
+                                                      std::size_t* crowded_faces = nullptr)
 {
     const std::size_t nf = subset.empty() ? mesh.faces.size() : subset.size();
     const auto face_at = [&](std::size_t i)
@@ -835,6 +840,61 @@ std::vector<std::array<std::uint32_t, 2>> pairs_among(const mesh::TriMesh& mesh,
         if (i == 0 || cells[i].key != cells[i - 1].key)
             runs.push_back(i);
     runs.push_back(cells.size());
+    const auto nruns = static_cast<std::int64_t>(runs.size()) - 1;
+
+    // Crowded cells: more than `crowded_cell` ungrouped faces. Long slanted slivers side by side
+    // (a finely divided cylinder) make the cells as large as they are long, and each close pair
+    // of them shares every cell along them in any finer grid, so a cell's pairs grow as the
+    // square of their density. The faces of crowded cells are paired with each other by a tree
+    // of boxes oriented along them (obb_tree.h) instead; the grid pairs the rest, skipping the
+    // crowded cells (every ungrouped face there is crowded) and any pair of two crowded faces.
+    std::vector<std::uint8_t> crowded;  // per subset face
+    std::vector<std::uint32_t> crowd;   // the crowded subset faces, ascending
+    std::vector<std::uint8_t> run_crowded(runs.size(), 0);
+    for (std::int64_t r = 0; r < nruns; ++r)
+    {
+        const auto r0 = runs[static_cast<std::size_t>(r)];
+        const auto r1 = runs[static_cast<std::size_t>(r) + 1];
+        std::size_t ungrouped = 0;
+        for (std::size_t i = r0; i < r1; ++i)
+            ungrouped += group_of(cells[i].face) == k_no_star ? 1 : 0;
+        if (ungrouped <= crowded_cell || ungrouped == 0)
+            continue;
+        run_crowded[static_cast<std::size_t>(r)] = 1;
+        if (crowded.empty())
+            crowded.assign(nf, 0);
+        for (std::size_t i = r0; i < r1; ++i)
+            if (group_of(cells[i].face) == k_no_star)
+                crowded[cells[i].face] = 1;
+    }
+    std::optional<detail::ObbTree> tree;
+    std::vector<detail::ObbTree::Job> tree_jobs;
+    if (!crowded.empty())
+    {
+        std::vector<std::uint32_t> crowd_faces;
+        std::vector<std::uint8_t> crowd_touched;
+        for (std::size_t f = 0; f < nf; ++f)
+            if (crowded[f] != 0)
+            {
+                crowd.push_back(static_cast<std::uint32_t>(f));
+                crowd_faces.push_back(face_at(f));
+                if (!touched.empty())
+                    crowd_touched.push_back(touched[face_at(f)]);
+            }
+        tree.emplace(mesh, crowd_faces, crowd_touched);
+#ifdef _OPENMP
+        const auto threads = static_cast<std::size_t>(omp_get_max_threads());
+#else
+        const std::size_t threads = 1;
+#endif
+        tree_jobs = tree->jobs(64 * threads);
+    }
+    if (crowded_faces != nullptr)
+        *crowded_faces = crowd.size();
+    const auto both_crowded = [&](std::uint32_t f, std::uint32_t g)
+    { return !crowded.empty() && crowded[f] != 0 && crowded[g] != 0; };
+    if (asked())
+        return pairs;
 
     // Per star s: the faces g whose boxes overlap the box of s's faces, neither in s's group
     // nor in a lower star's (that star pairs them), from the grid's cells over that box; and
@@ -898,9 +958,9 @@ std::vector<std::array<std::uint32_t, 2>> pairs_among(const mesh::TriMesh& mesh,
         }
     }
 
-    const auto nruns = static_cast<std::int64_t>(runs.size()) - 1;
     // A stop asked of `stop` (polled by thread 0 only: a sink need not be thread-safe) ends
-    // every thread's work at its next cell or face.
+    // every thread's work at its next cell, face or tree node (thread 0 polls at each of the
+    // tree's jobs and every 1,024 nodes it visits).
     std::atomic<bool> halt{false};
     const auto halted = [&](bool poll)
     {
@@ -961,7 +1021,7 @@ std::vector<std::array<std::uint32_t, 2>> pairs_among(const mesh::TriMesh& mesh,
 #pragma omp for schedule(dynamic, 64) nowait
         for (std::int64_t r = 0; r < nruns; ++r)
         {
-            if (halted((r & 63) == 0))
+            if (halted((r & 63) == 0) || run_crowded[static_cast<std::size_t>(r)] != 0)
                 continue;
             try
             {
@@ -972,7 +1032,7 @@ std::vector<std::array<std::uint32_t, 2>> pairs_among(const mesh::TriMesh& mesh,
                 // boxes' overlap
                 const auto pair_up = [&](std::uint32_t f, std::uint32_t g)
                 {
-                    if (group_of(g) != k_no_star || boxes_apart(f, g))
+                    if (group_of(g) != k_no_star || both_crowded(f, g) || boxes_apart(f, g))
                         return;
                     const auto& bf = box[f];
                     const auto& bg = box[g];
@@ -986,6 +1046,32 @@ std::vector<std::array<std::uint32_t, 2>> pairs_among(const mesh::TriMesh& mesh,
                     if (group_of(cells[i].face) == k_no_star)
                         for (std::size_t j = i + 1; j < r1; ++j)
                             pair_up(cells[i].face, cells[j].face);
+            }
+            catch (...)
+            {
+                fail();
+            }
+        }
+        // The crowded faces with each other, by the tree.
+        const auto njobs = static_cast<std::int64_t>(tree_jobs.size());
+#pragma omp for schedule(dynamic, 1) nowait
+        for (std::int64_t q = 0; q < njobs; ++q)
+        {
+            if (halted(true))
+                continue;
+            try
+            {
+                tree->visit(
+                    tree_jobs[static_cast<std::size_t>(q)],
+                    [&](std::uint32_t i, std::uint32_t j)
+                    {
+                        const std::uint32_t f = crowd[i];
+                        const std::uint32_t g = crowd[j];
+                        if (!boxes_apart(f, g))
+                            test(f, g, local);
+                    },
+                    [&, visits = std::uint32_t{0}]() mutable
+                    { return halted((++visits & 1023U) == 0); });
             }
             catch (...)
             {
@@ -1048,12 +1134,17 @@ std::vector<std::array<std::uint32_t, 2>> pairs_among(const mesh::TriMesh& mesh,
 std::vector<std::array<std::uint32_t, 2>> intersecting_pairs(const mesh::TriMesh& mesh,
                                                              const core::ProgressSink* stop)
 {
-    return pairs_among(mesh, {}, {}, stop);
+    return pairs_among(mesh, {}, {}, stop, detail::k_crowded_cell);
 }
 
-std::vector<std::array<std::uint32_t, 2>> intersecting_pairs_touching(
-    const mesh::TriMesh& mesh, std::span<const std::uint8_t> touched,
-    const core::ProgressSink* stop)
+namespace
+{
+
+std::vector<std::array<std::uint32_t, 2>> pairs_touching(const mesh::TriMesh& mesh,
+                                                         std::span<const std::uint8_t> touched,
+                                                         const core::ProgressSink* stop,
+                                                         std::size_t crowded_cell,
+                                                         std::size_t* crowded_faces = nullptr)
 {
     PLIANT_ASSERT(touched.size() == mesh.faces.size(),
                   "intersecting_pairs_touching: one flag per face");
@@ -1091,7 +1182,27 @@ std::vector<std::array<std::uint32_t, 2>> intersecting_pairs_touching(
         }
         subset.push_back(static_cast<std::uint32_t>(f));
     }
-    return pairs_among(mesh, subset, touched, stop);
+    return pairs_among(mesh, subset, touched, stop, crowded_cell, crowded_faces);
+}
+
+}  // namespace
+
+std::vector<std::array<std::uint32_t, 2>> intersecting_pairs_touching(
+    const mesh::TriMesh& mesh, std::span<const std::uint8_t> touched,
+    const core::ProgressSink* stop)
+{
+    return pairs_touching(mesh, touched, stop, detail::k_crowded_cell);
+}
+
+detail::PairsWith detail::intersecting_pairs_with(const mesh::TriMesh& mesh,
+                                                  std::span<const std::uint8_t> touched,
+                                                  std::size_t crowded_cell,
+                                                  const core::ProgressSink* stop)
+{
+    PairsWith out;
+    out.pairs = touched.empty() ? pairs_among(mesh, {}, {}, stop, crowded_cell, &out.crowded)
+                                : pairs_touching(mesh, touched, stop, crowded_cell, &out.crowded);
+    return out;
 }
 
 std::size_t count_self_intersections(const mesh::TriMesh& mesh, const core::ProgressSink* stop)

@@ -16,6 +16,8 @@
 #include <gtest/gtest.h>
 #include <omp.h>
 
+#include "remesh/intersections_internal.h"
+#include "remesh/obb_tree.h"
 #include "shapes.h"
 #include "support/address_space.h"
 #include "support/fp_traps.h"
@@ -670,6 +672,274 @@ mesh::TriMesh crossing_stacks(std::uint32_t k)
         m.faces.push_back({v + 3, v + 4, v + 5});
     }
     return m;
+}
+
+// ---------------------------------------------------------------------------------------------
+// crowded cells: the oriented-box tree
+
+/// A frustum of `sides` sides: rings of radius 1 at z = 0 and `top` at z = 1, the top one turned
+/// by `twist` radians, and fan caps (stars). Its sides are long slanted slivers side by side.
+mesh::TriMesh frustum(std::uint32_t sides, double top = 0.5, double twist = 0.3)
+{
+    mesh::TriMesh m;
+    m.positions = {Vec3{0, 0, 0}, Vec3{0, 0, 1}};
+    for (std::uint32_t k = 0; k < sides; ++k)
+    {
+        const double a = 2.0 * 3.14159265358979323846 * k / sides;
+        m.positions.push_back(Vec3{std::cos(a), std::sin(a), 0.0});
+    }
+    for (std::uint32_t k = 0; k < sides; ++k)
+    {
+        const double a = 2.0 * 3.14159265358979323846 * k / sides + twist;
+        m.positions.push_back(Vec3{top * std::cos(a), top * std::sin(a), 1.0});
+    }
+    for (std::uint32_t k = 0; k < sides; ++k)
+    {
+        const std::uint32_t b0 = 2 + k, b1 = 2 + (k + 1) % sides;
+        const std::uint32_t t0 = b0 + sides, t1 = b1 + sides;
+        m.faces.push_back({0, b1, b0});
+        m.faces.push_back({1, t0, t1});
+        m.faces.push_back({b0, b1, t1});
+        m.faces.push_back({b0, t1, t0});
+    }
+    return m;
+}
+
+/// `b`'s faces appended to `a`'s, its positions mapped by `f`.
+template <typename Map>
+mesh::TriMesh joined(mesh::TriMesh a, const mesh::TriMesh& b, Map f)
+{
+    const auto base = static_cast<std::uint32_t>(a.positions.size());
+    for (const Vec3& p : b.positions)
+        a.positions.push_back(f(p));
+    for (const auto& t : b.faces)
+        a.faces.push_back({t[0] + base, t[1] + base, t[2] + base});
+    return a;
+}
+
+// Boxes that share a point are never reported apart, and boxes on either side of a plane are:
+// against points sampled in one box and tested in the other, and against boxes built apart.
+TEST(OrientedBoxes, SharingAPointIsNeverApartAndAGapAcrossAPlaneIs)
+{
+    std::mt19937_64 rng(31);
+    std::uniform_real_distribution<double> unit(-1.0, 1.0), size(0.0, 1.0);
+    const auto frame = [&]
+    {
+        Vec3 a{unit(rng), unit(rng), unit(rng)};
+        Vec3 b{unit(rng), unit(rng), unit(rng)};
+        a = core::normalized(a);
+        b = core::normalized(b - a * core::dot(a, b));
+        return std::array<Vec3, 3>{a, b, core::cross(a, b)};
+    };
+    const auto box = [&](const Vec3& centre)
+    {
+        detail::Obb o;
+        o.centre = centre;
+        o.axis = frame();
+        // thin, flat and long boxes as well as fat ones
+        for (double& h : o.half)
+            h = size(rng) < 0.3 ? 1e-9 * size(rng) : size(rng);
+        return o;
+    };
+    const auto inside = [](const detail::Obb& o, const Vec3& p)
+    {
+        for (int k = 0; k < 3; ++k)
+            if (std::fabs(core::dot(p - o.centre, o.axis[k])) > o.half[k])
+                return false;
+        return true;
+    };
+    std::size_t sharing = 0, apart = 0;
+    for (int trial = 0; trial < 4000; ++trial)
+    {
+        const detail::Obb a = box(Vec3{unit(rng), unit(rng), unit(rng)});
+        const detail::Obb b = box(Vec3{unit(rng), unit(rng), unit(rng)});
+        const bool may = detail::obbs_may_overlap(a, b);
+        EXPECT_EQ(may, detail::obbs_may_overlap(b, a)) << trial;
+        for (int s = 0; s < 200; ++s)
+        {
+            Vec3 p = a.centre;
+            for (int k = 0; k < 3; ++k)
+                p += a.axis[k] * (a.half[k] * (s < 8 ? ((s >> k) & 1 ? 1.0 : -1.0) : unit(rng)));
+            if (inside(b, p))
+            {
+                ++sharing;
+                EXPECT_TRUE(may) << trial;
+                break;
+            }
+        }
+        // b moved along a random direction n until its lowest point clears a's highest by 1e-6
+        const Vec3 n = core::normalized(Vec3{unit(rng), unit(rng), unit(rng)});
+        const auto reach = [&](const detail::Obb& o)
+        {
+            return o.half[0] * std::fabs(core::dot(o.axis[0], n)) +
+                   o.half[1] * std::fabs(core::dot(o.axis[1], n)) +
+                   o.half[2] * std::fabs(core::dot(o.axis[2], n));
+        };
+        detail::Obb c = b;
+        c.centre = b.centre + n * (core::dot(a.centre - b.centre, n) + reach(a) + reach(b) + 1e-6);
+        EXPECT_FALSE(detail::obbs_may_overlap(a, c)) << trial;
+        EXPECT_FALSE(detail::obbs_may_overlap(c, a)) << trial;
+        ++apart;
+        // and touching: c's lowest corner along n on a's highest
+        const auto corner = [&](const detail::Obb& o, double side)
+        {
+            Vec3 p = o.centre;
+            for (int k = 0; k < 3; ++k)
+                p += o.axis[k] * (core::dot(o.axis[k], n) * side >= 0.0 ? o.half[k] : -o.half[k]);
+            return p;
+        };
+        c.centre = b.centre + (corner(a, 1.0) - corner(b, -1.0));
+        EXPECT_TRUE(detail::obbs_may_overlap(a, c)) << trial;
+        EXPECT_TRUE(detail::obbs_may_overlap(c, a)) << trial;
+    }
+    EXPECT_GT(sharing, 300U);
+    EXPECT_EQ(apart, 4000U);
+}
+
+// The faces of crowded cells are paired by the oriented-box tree, the others by the grid, and
+// the pairs are brute force's whatever the crowd threshold: every face by the tree (0), most
+// (2, 8), or as in a count (the default) on meshes with and without crowded cells.
+TEST(SelfIntersections, TheOrientedBoxTreePairsLikeBruteForce)
+{
+    std::vector<std::pair<std::string, mesh::TriMesh>> cases;
+    cases.emplace_back("frustum", frustum(48));
+    {
+        mesh::TriMesh m = frustum(48);
+        m.positions[2 + 5] = Vec3{-0.4, 0.1, 0.6};        // a ring vertex through the far side
+        m.positions[2 + 48 + 30] = Vec3{0.2, 0.2, -0.3};  // and one through the bottom cap
+        cases.emplace_back("dented frustum", std::move(m));
+    }
+    // slivers crossing slivers: a second frustum turned on its side through the first
+    cases.emplace_back("crossed frustums", joined(frustum(40), frustum(40, 0.3, -0.4),
+                                                  [](const Vec3& p) {
+                                                      return Vec3{p.z - 0.5, p.y * 0.8, p.x + 0.4};
+                                                  }));
+    // touching: the second frustum's bottom ring laid on the first's top cap
+    cases.emplace_back("stacked frustums", joined(frustum(40, 0.5, 0.0), frustum(40, 0.5, 0.2),
+                                                  [](const Vec3& p) {
+                                                      return Vec3{p.x * 0.5, p.y * 0.5, p.z + 1.0};
+                                                  }));
+    cases.emplace_back("frustum through a sphere", joined(frustum(48), scenes::icosphere(2),
+                                                          [](const Vec3& p) {
+                                                              return p * 0.6 + Vec3{0.5, 0.1, 0.7};
+                                                          }));
+    cases.emplace_back("two spheres", two_spheres(2, 2));
+    cases.emplace_back("crossing stacks", crossing_stacks(12));
+    {
+        // a touching pair far from the origin, copied around a frustum
+        mesh::TriMesh m = frustum(24);
+        std::mt19937 rng(3);
+        std::uniform_real_distribution<double> offset(-1e4, 1e4);
+        for (int k = 0; k < 12; ++k)
+        {
+            const Vec3 shift{offset(rng), offset(rng), offset(rng)};
+            mesh::TriMesh pair;
+            pair.positions = {Vec3{-7.1799558486053137, -7.2671855173039699, -6.7051058493694633},
+                              Vec3{-7.8818287729231828, -7.7593082873636661, -6.5391713023866069},
+                              Vec3{-7.3020245259028265, -7.2715076476861, -6.274009093114211},
+                              Vec3{-7.1799558486053137, -7.2671855173039699, -6.7051058493694633},
+                              Vec3{-6.5296356384587444, -7.1088324598873731, -6.7092277139123944},
+                              Vec3{-7.1799693678196723, -6.3134651632575185, -6.779437274946698}};
+            pair.faces = {{0, 1, 2}, {3, 4, 5}};
+            m = joined(std::move(m), pair, [&](const Vec3& p) { return p + shift; });
+        }
+        cases.emplace_back("touching pairs far off", std::move(m));
+    }
+    std::mt19937 rng(13);
+    for (int k = 0; k < 6; ++k)
+    {
+        // jittered frustums: slivers folding into their neighbours
+        mesh::TriMesh m = frustum(32 + 8 * static_cast<std::uint32_t>(k), 0.3 + 0.1 * k, 0.2 * k);
+        std::uniform_real_distribution<double> jitter(-0.05, 0.05);
+        for (Vec3& p : m.positions)
+            if (rng() % 4 == 0)
+                p += Vec3{jitter(rng), jitter(rng), jitter(rng)};
+        cases.emplace_back("jittered frustum #" + std::to_string(k), std::move(m));
+    }
+    std::size_t meeting = 0, mixed = 0;
+    for (const auto& [name, m] : cases)
+    {
+        const auto brute = brute_force_pair_list(m);
+        meeting += brute.empty() ? 0 : 1;
+        std::vector<std::uint8_t> touched(m.faces.size(), 0);
+        for (auto& t : touched)
+            t = rng() % 7 == 0 ? 1 : 0;
+        std::vector<std::array<std::uint32_t, 2>> expected;
+        for (const auto& pr : brute)
+            if (touched[pr[0]] != 0 || touched[pr[1]] != 0)
+                expected.push_back(pr);
+        for (const std::size_t threshold : {std::size_t{0}, std::size_t{16}, std::size_t{32},
+                                            std::size_t{64}, detail::k_crowded_cell})
+        {
+            const auto whole = detail::intersecting_pairs_with(m, {}, threshold);
+            EXPECT_EQ(whole.pairs, brute) << name << ", threshold " << threshold;
+            if (threshold == 0)
+            {
+                EXPECT_GT(whole.crowded, m.faces.size() / 3) << name;
+            }
+            else if (whole.crowded > 0 && whole.crowded < m.faces.size() / 2)
+            {
+                ++mixed;  // tree and grid both pairing
+            }
+            EXPECT_EQ(detail::intersecting_pairs_with(m, touched, threshold).pairs, expected)
+                << name << ", threshold " << threshold << ", touching";
+        }
+    }
+    EXPECT_GE(meeting, 8U);
+    EXPECT_GE(mixed, 8U);
+}
+
+// The tree's pairing stops when asked too: polled at each job and every 1,024 nodes, from the
+// calling thread only, it gives part of the pairs, more the later the stop.
+TEST(SelfIntersections, TheTreeEndsEarlyWhenAskedToStop)
+{
+    const mesh::TriMesh two = two_spheres(4, 3);
+    const auto full = detail::intersecting_pairs_with(two, {}, 0).pairs;
+    ASSERT_GT(full.size(), 200U);
+    StopAfter never(std::numeric_limits<std::size_t>::max());
+    EXPECT_EQ(detail::intersecting_pairs_with(two, {}, 0, &never).pairs, full);
+    EXPECT_FALSE(never.polled_from_another_thread());
+    StopAfter counted(std::numeric_limits<std::size_t>::max());
+    EXPECT_EQ(
+        on_one_thread([&] { return detail::intersecting_pairs_with(two, {}, 0, &counted); }).pairs,
+        full);
+    const std::size_t polls = counted.polls();
+    ASSERT_GT(polls, 20U);
+    std::size_t previous = 0;
+    for (const std::size_t k : {polls / 4, polls * 3 / 8, polls / 2})
+    {
+        StopAfter at(k);
+        const auto part =
+            on_one_thread([&] { return detail::intersecting_pairs_with(two, {}, 0, &at); }).pairs;
+        EXPECT_LT(part.size(), full.size()) << "polls " << k;
+        EXPECT_GE(part.size(), previous) << "polls " << k;
+        EXPECT_TRUE(std::includes(full.begin(), full.end(), part.begin(), part.end()));
+        EXPECT_EQ(at.polls(), k + 1) << "polls " << k;
+        previous = part.size();
+    }
+    EXPECT_GT(previous, 0U);
+}
+
+// At the default threshold, the long slivers of a finely divided frustum (1,600 side faces)
+// crowd their cells and the tree pairs them: the same pairs as brute force, with and without
+// faces pushed through.
+TEST(SelfIntersections, SlantedSliversSideBySideArePairedByTheTree)
+{
+    for (const bool dented : {false, true})
+    {
+        mesh::TriMesh m = frustum(800, 0.5, 0.4);
+        if (dented)
+        {
+            m.positions[2 + 100] = Vec3{-0.5, -0.2, 0.5};
+            m.positions[2 + 800 + 500] = Vec3{0.1, 0.3, -0.2};
+        }
+        const auto brute = brute_force_pair_list(m);
+        EXPECT_EQ(brute.empty(), !dented);
+        const auto counted = detail::intersecting_pairs_with(m, {}, detail::k_crowded_cell);
+        EXPECT_GT(counted.crowded, 800U);
+        EXPECT_EQ(counted.pairs, brute);
+        EXPECT_EQ(intersecting_pairs(m), brute);
+    }
 }
 
 // Running out of memory while the pairs are gathered (on the OpenMP threads) is a
