@@ -17,8 +17,12 @@
 // for Confirm. Keys are per connection and direction, so (key, nonce) never repeats: a sender
 // increments the counter of a stream for every datagram and a connection's keys die with it.
 //
-// Costs: one AEAD per datagram each way; the replay window is a 1024-bit ring per stream; no
-// allocation per datagram once the send buffer has grown. Nothing is logged per datagram.
+// Costs: one AEAD per datagram each way; the replay window is a 1024-bit ring per stream.
+// Nothing is logged per datagram, and nothing is allocated per datagram once the buffers have
+// grown: a datagram is sealed into one send buffer, received from the inner transport with
+// poll_into() into one reused event, opened in place and queued in a vector taken from a free
+// list, which poll_into() swaps into the caller's event (the caller's previous vector goes back on
+// the list). poll() hands its vector over, so the list then runs dry and vectors are made anew.
 
 #include <pliant/core/assert.h>
 #include <pliant/net/secure_transport.h>
@@ -29,7 +33,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cstring>
-#include <deque>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -37,6 +40,7 @@
 #include <optional>
 #include <string>
 #include <system_error>
+#include <vector>
 
 namespace pliant::net
 {
@@ -284,10 +288,62 @@ struct SecureTransport::Impl
     Key hello_key{};
     Key datagram_key{};
     std::map<std::uint32_t, Conn> conns;
-    std::deque<TransportEvent> pending;
+    // Events for the caller, read from `pending_head`; cleared (storage kept) once all are read.
+    // poll() fills it only when empty, so it holds one or two (a Connected and the first data).
+    std::vector<TransportEvent> pending;
+    std::size_t pending_head = 0;
+    TransportEvent incoming;  // the inner transport's event, reused (Transport::poll_into)
+    std::vector<std::vector<std::byte>> spare_buffers;  // empty, with capacity: see the top
     std::vector<std::uint8_t> buffer;
     SecureStats totals;
     std::int64_t last_refusal_warning_us = -1;  // when refuse() last warned (-1: never)
+
+    [[nodiscard]] bool nothing_pending() const noexcept { return pending_head == pending.size(); }
+
+    // The next pending event is read: its slot must be left without storage (moved from).
+    void pop_pending() noexcept
+    {
+        if (++pending_head == pending.size())
+        {
+            pending.clear();
+            pending_head = 0;
+        }
+    }
+
+    // Keeps `b`'s storage for a later datagram; `b` is left empty.
+    void recycle(std::vector<std::byte>& b)
+    {
+        if (b.capacity() == 0)
+            return;
+        b.clear();
+        spare_buffers.push_back(std::move(b));
+        b = {};
+    }
+
+    // Handshakes, then events from the inner transport until one is for the caller. \return
+    // whether one is pending.
+    bool fill_pending(int timeout_ms) noexcept
+    {
+        if (!nothing_pending())
+            return true;
+        service_handshakes();
+        // Bounded, like Messenger::poll: a flood of bad datagrams cannot hold the caller.
+        constexpr int k_max_inner_events = 256;
+        int wait = timeout_ms;
+        for (int k = 0; k < k_max_inner_events && nothing_pending(); ++k)
+        {
+            if (!inner->poll_into(incoming, wait))
+                break;
+            wait = 0;
+            switch (incoming.kind)
+            {
+            case TransportEvent::Kind::Connected: on_connected(incoming.peer); break;
+            case TransportEvent::Kind::Disconnected: on_disconnected(incoming); break;
+            case TransportEvent::Kind::Received: on_received(incoming); break;
+            }
+        }
+        return !nothing_pending();
+    }
 
     [[nodiscard]] std::int64_t now_us() const
     {
@@ -533,6 +589,12 @@ struct SecureTransport::Impl
         ev.data.erase(ev.data.begin(), ev.data.begin() + static_cast<std::ptrdiff_t>(k_head_size));
         ev.data.resize(static_cast<std::size_t>(plain_size));
         pending.push_back(std::move(ev));
+        // `ev` is the reused inner event: it receives the next datagram into a spare buffer.
+        if (!spare_buffers.empty())
+        {
+            ev.data = std::move(spare_buffers.back());
+            spare_buffers.pop_back();
+        }
     }
 
     // Drops handshakes past their timeout and repeats the Hello of the others that are due.
@@ -618,31 +680,27 @@ core::Result<void> SecureTransport::send(PeerHandle peer, Channel channel,
 std::optional<TransportEvent> SecureTransport::poll(int timeout_ms) noexcept
 {
     Impl& s = *impl_;
-    if (s.pending.empty())
-    {
-        s.service_handshakes();
-        // Bounded, like Messenger::poll: a flood of bad datagrams cannot hold the caller.
-        constexpr int k_max_inner_events = 256;
-        int wait = timeout_ms;
-        for (int k = 0; k < k_max_inner_events && s.pending.empty(); ++k)
-        {
-            auto ev = s.inner->poll(wait);
-            wait = 0;
-            if (!ev)
-                break;
-            switch (ev->kind)
-            {
-            case TransportEvent::Kind::Connected: s.on_connected(ev->peer); break;
-            case TransportEvent::Kind::Disconnected: s.on_disconnected(*ev); break;
-            case TransportEvent::Kind::Received: s.on_received(*ev); break;
-            }
-        }
-    }
-    if (s.pending.empty())
+    if (!s.fill_pending(timeout_ms))
         return std::nullopt;
-    TransportEvent out = std::move(s.pending.front());
-    s.pending.pop_front();
+    TransportEvent out = std::move(s.pending[s.pending_head]);
+    s.pop_pending();
     return out;
+}
+
+bool SecureTransport::poll_into(TransportEvent& out, int timeout_ms) noexcept
+{
+    Impl& s = *impl_;
+    if (!s.fill_pending(timeout_ms))
+        return false;
+    TransportEvent& ev = s.pending[s.pending_head];
+    out.kind = ev.kind;
+    out.peer = ev.peer;
+    out.channel = ev.channel;
+    out.reason = ev.reason;
+    out.data.swap(ev.data);
+    s.recycle(ev.data);
+    s.pop_pending();
+    return true;
 }
 
 void SecureTransport::flush() noexcept
@@ -652,7 +710,7 @@ void SecureTransport::flush() noexcept
 
 void SecureTransport::wait(double max_s) noexcept
 {
-    if (impl_->pending.empty())
+    if (impl_->nothing_pending())
         impl_->inner->wait(max_s);
 }
 

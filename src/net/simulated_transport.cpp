@@ -4,16 +4,23 @@
 // endpoint, every connection and one min-heap of packets in flight ordered by (arrival time,
 // sender, per-link transmission number, copy), which makes delivery order a function of the seed
 // and of each sender's own order of sends.
+//
+// Costs: no allocation per datagram through send() and poll_into() once the network has carried
+// its largest datagram and as many at once as it carries now. A datagram's bytes travel in one
+// buffer from send() to the receiver's event; buffers come back to a free list of the network
+// (`spare_buffers`) when a packet is lost or dropped, or delivered to a caller of poll_into()
+// (which swaps its previous buffer in), and send() and duplication draw from it; the map nodes
+// of early reliable packets (`held`) are recycled the same way; the packets in flight and the
+// event queues live in vectors that keep their storage.
 
 #include <pliant/net/simulated_transport.h>
 
 #include <algorithm>
 #include <cmath>
-#include <deque>
 #include <map>
 #include <mutex>
-#include <queue>
 #include <utility>
+#include <vector>
 
 namespace pliant::net
 {
@@ -77,12 +84,14 @@ struct Link
     double uniform() noexcept { return static_cast<double>(splitmix64(rng) >> 11) * 0x1.0p-53; }
 };
 
+using HeldPackets = std::map<std::uint32_t, Packet>;
+
 struct ChannelState
 {
     std::uint32_t next_reliable_send = 0;
     std::uint32_t next_unreliable_send = 1;
     std::uint32_t next_reliable_recv = 0;
-    std::map<std::uint32_t, Packet> held;  // reliable packets that arrived early
+    HeldPackets held;  // reliable packets that arrived early
     std::uint32_t last_unreliable_recv = 0;
 };
 
@@ -95,13 +104,55 @@ struct Connection
     PeerStats stats;
 };
 
+// A FIFO of events on a ring that keeps its storage (std::deque frees a block and allocates
+// another every few events, even when its length stays put). A popped slot is left empty: poll()
+// moves its event out, poll_into() recycles the buffer it swapped in.
+class EventQueue
+{
+public:
+    [[nodiscard]] bool empty() const noexcept { return size_ == 0; }
+    [[nodiscard]] TransportEvent& front() noexcept { return slots_[head_]; }
+    void push_back(TransportEvent&& ev)
+    {
+        if (size_ == slots_.size())
+            grow();
+        slots_[(head_ + size_) % slots_.size()] = std::move(ev);
+        ++size_;
+    }
+    void pop_front() noexcept
+    {
+        head_ = (head_ + 1) % slots_.size();
+        --size_;
+    }
+    void clear() noexcept
+    {
+        slots_.clear();
+        head_ = 0;
+        size_ = 0;
+    }
+
+private:
+    void grow()
+    {
+        std::vector<TransportEvent> bigger(std::max<std::size_t>(16, 2 * slots_.size()));
+        for (std::size_t k = 0; k < size_; ++k)
+            bigger[k] = std::move(slots_[(head_ + k) % slots_.size()]);
+        slots_ = std::move(bigger);
+        head_ = 0;
+    }
+
+    std::vector<TransportEvent> slots_;
+    std::size_t head_ = 0;
+    std::size_t size_ = 0;
+};
+
 struct Endpoint
 {
     bool open = false;
     Address address;
     std::uint32_t next_handle = 1;
     std::map<std::uint32_t, Connection> connections;
-    std::deque<TransportEvent> events;
+    EventQueue events;
 };
 
 }  // namespace
@@ -115,8 +166,67 @@ struct SimulatedNetwork::Impl
     std::int64_t now = 0;
     std::vector<Endpoint> endpoints{1};  // index 0 unused: ids start at 1
     std::map<std::pair<int, int>, Link> links;
-    std::priority_queue<Packet, std::vector<Packet>, LaterFirst> in_flight;
+    // A min-heap by LaterFirst, through std::push_heap and std::pop_heap as std::priority_queue
+    // does (so the same order), kept as a vector so that a packet can be moved out of its top.
+    std::vector<Packet> in_flight;
     SimulatedTotals totals;
+    // Datagram buffers (empty, with capacity) and map nodes of `held`, for reuse: the network's,
+    // since a buffer goes from the sender's send() to the receiver's caller and back.
+    std::vector<std::vector<std::byte>> spare_buffers;
+    std::vector<HeldPackets::node_type> spare_nodes;
+    std::size_t largest_sent = 0;  // bytes, for reserve_target()
+
+    void push_in_flight(Packet p)
+    {
+        in_flight.push_back(std::move(p));
+        std::push_heap(in_flight.begin(), in_flight.end(), LaterFirst{});
+    }
+
+    Packet pop_in_flight()
+    {
+        std::pop_heap(in_flight.begin(), in_flight.end(), LaterFirst{});
+        Packet p = std::move(in_flight.back());
+        in_flight.pop_back();
+        return p;
+    }
+
+    // Datagram buffers are reserved for the largest datagram sent so far, up to this; the spares
+    // all have that room (recycle() drops smaller ones), so once the largest size has been seen
+    // and every buffer has gone round once, no buffer grows.
+    static constexpr std::size_t k_reserve_cap = std::size_t{64} << 10;
+
+    [[nodiscard]] std::size_t reserve_target() const noexcept
+    {
+        return std::min(largest_sent, k_reserve_cap);
+    }
+
+    // An empty buffer with room for `size` bytes: the last spare, or a new one.
+    std::vector<std::byte> take_buffer(std::size_t size)
+    {
+        largest_sent = std::max(largest_sent, size);
+        std::vector<std::byte> out;
+        if (!spare_buffers.empty())
+        {
+            out = std::move(spare_buffers.back());
+            spare_buffers.pop_back();
+        }
+        if (out.capacity() < size)
+            out.reserve(std::max(size, reserve_target()));
+        return out;
+    }
+
+    // Keeps `buffer`'s storage for a later datagram if it has room for the largest so far (and is
+    // not one grown past k_reserve_cap for an outsized datagram); `buffer` is left empty.
+    void recycle(std::vector<std::byte>& buffer)
+    {
+        const std::size_t room = buffer.capacity();
+        if (room != 0 && room >= reserve_target() && room <= k_reserve_cap)
+        {
+            buffer.clear();
+            spare_buffers.push_back(std::move(buffer));
+        }
+        buffer = {};
+    }
 
     Link& link(int from, int to)
     {
@@ -158,6 +268,7 @@ struct SimulatedNetwork::Impl
     }
 
     // Puts `p` (from, to, kind, payload filled in) on the wire with its fate drawn from the link.
+    // A lost packet's buffer is recycled.
     void transmit(Packet p)
     {
         Link& l = link(p.from, p.to);
@@ -173,6 +284,7 @@ struct SimulatedNetwork::Impl
                 if (++attempt >= settings.max_attempts)
                 {
                     give_up(p, t);
+                    recycle(p.data);
                     return;
                 }
                 t += retransmit_us(l.settings);
@@ -183,6 +295,7 @@ struct SimulatedNetwork::Impl
         else if (l.uniform() < l.settings.loss)
         {
             ++totals.lost;
+            recycle(p.data);
             return;
         }
         bool reordered = false;
@@ -191,13 +304,18 @@ struct SimulatedNetwork::Impl
         if (l.settings.duplicate > 0.0 && l.uniform() < l.settings.duplicate)
         {
             ++totals.duplicated;
+            // The header copied, the bytes into a spare buffer.
+            std::vector<std::byte> bytes = std::move(p.data);
             Packet copy = p;
+            p.data = std::move(bytes);
+            copy.data = take_buffer(p.data.size());
+            copy.data.assign(p.data.begin(), p.data.end());
             copy.copy = 1;
             bool r2 = false;
             copy.arrival_us = t + one_way_delay(l, r2);
-            in_flight.push(std::move(copy));
+            push_in_flight(std::move(copy));
         }
-        in_flight.push(std::move(p));
+        push_in_flight(std::move(p));
     }
 
     // The link lost a reliable packet max_attempts times: both ends time out.
@@ -209,13 +327,13 @@ struct SimulatedNetwork::Impl
         a.from = p.from;
         a.to = p.from;
         a.to_handle = p.from_handle;
-        in_flight.push(a);
+        push_in_flight(a);
         Packet b = a;
         b.to = p.to;
         b.to_handle = p.to_handle;
         b.copy = 1;
         if (p.to_handle != 0)
-            in_flight.push(b);
+            push_in_flight(b);
     }
 
     void close(int ep, std::uint32_t handle, DisconnectReason reason)
@@ -231,8 +349,9 @@ struct SimulatedNetwork::Impl
     }
 
     // Hands a reliable packet to the connection, releasing any that now come in order. The
-    // connection is looked up again each time: a Disconnect released here erases it.
-    void accept_reliable(int ep, std::uint32_t handle, Packet p)
+    // connection is looked up again each time: a Disconnect released here erases it. `p` is
+    // moved from unless it is a duplicate (or its connection is gone).
+    void accept_reliable(int ep, std::uint32_t handle, Packet& p)
     {
         Endpoint& e = endpoints[static_cast<std::size_t>(ep)];
         const auto channel = static_cast<std::size_t>(p.channel);
@@ -244,7 +363,18 @@ struct SimulatedNetwork::Impl
             if (p.seq < ch.next_reliable_recv || ch.held.count(p.seq) != 0)
                 return;  // a duplicate
             const std::uint32_t seq = p.seq;
-            ch.held.emplace(seq, std::move(p));
+            if (spare_nodes.empty())
+            {
+                ch.held.emplace(seq, std::move(p));
+            }
+            else
+            {
+                HeldPackets::node_type node = std::move(spare_nodes.back());
+                spare_nodes.pop_back();
+                node.key() = seq;
+                node.mapped() = std::move(p);
+                ch.held.insert(std::move(node));
+            }
         }
         while (true)
         {
@@ -255,10 +385,12 @@ struct SimulatedNetwork::Impl
             auto h = ch.held.find(ch.next_reliable_recv);
             if (h == ch.held.end())
                 return;
-            Packet q = std::move(h->second);
-            ch.held.erase(h);
+            HeldPackets::node_type node = ch.held.extract(h);
+            Packet q = std::move(node.mapped());
+            spare_nodes.push_back(std::move(node));
             ++ch.next_reliable_recv;
-            handle_in_order(ep, handle, std::move(q));
+            handle_in_order(ep, handle, q);
+            recycle(q.data);
         }
     }
 
@@ -276,7 +408,7 @@ struct SimulatedNetwork::Impl
         e.events.push_back(std::move(ev));
     }
 
-    void handle_in_order(int ep, std::uint32_t handle, Packet q)
+    void handle_in_order(int ep, std::uint32_t handle, Packet& q)
     {
         Endpoint& e = endpoints[static_cast<std::size_t>(ep)];
         auto it = e.connections.find(handle);
@@ -293,11 +425,12 @@ struct SimulatedNetwork::Impl
         }
         else if (c.connected)
         {
-            deliver(e, c, handle, std::move(q));
+            deliver(e, c, handle, q);
         }
     }
 
-    void deliver(Endpoint& e, Connection& c, std::uint32_t handle, Packet q)
+    // Queues `q`'s bytes (its buffer, moved) as a Received event.
+    void deliver(Endpoint& e, Connection& c, std::uint32_t handle, Packet& q)
     {
         c.stats.bytes_received += q.data.size();
         ++c.stats.packets_received;
@@ -310,7 +443,8 @@ struct SimulatedNetwork::Impl
         e.events.push_back(std::move(ev));
     }
 
-    void arrive(Packet p)
+    // `p` is moved from if delivered or held; its caller recycles what is left.
+    void arrive(Packet& p)
     {
         const int ep = p.to;
         Endpoint& e = endpoints[static_cast<std::size_t>(ep)];
@@ -342,7 +476,6 @@ struct SimulatedNetwork::Impl
         case PacketKind::Disconnect:
         case PacketKind::Data: break;
         }
-        // Read before `p` is moved into a call beside it (the arguments' order is unspecified).
         const auto to = p.to_handle;
         auto it = e.connections.find(to);
         if (it == e.connections.end())
@@ -351,13 +484,13 @@ struct SimulatedNetwork::Impl
         mark_connected(e, c, to, p.from_handle);
         if (p.kind != PacketKind::Data)
         {
-            accept_reliable(ep, to, std::move(p));
+            accept_reliable(ep, to, p);
             return;
         }
         ChannelState& ch = c.channels[static_cast<std::size_t>(p.channel)];
         switch (p.delivery)
         {
-        case Delivery::Reliable: accept_reliable(ep, to, std::move(p)); return;
+        case Delivery::Reliable: accept_reliable(ep, to, p); return;
         case Delivery::Unreliable:
             if (!c.connected || p.seq <= ch.last_unreliable_recv)
             {
@@ -365,11 +498,11 @@ struct SimulatedNetwork::Impl
                 return;
             }
             ch.last_unreliable_recv = p.seq;
-            deliver(e, c, to, std::move(p));
+            deliver(e, c, to, p);
             return;
         case Delivery::Unsequenced:
             if (c.connected)
-                deliver(e, c, to, std::move(p));
+                deliver(e, c, to, p);
             return;
         }
     }
@@ -394,11 +527,11 @@ struct SimulatedNetwork::Impl
 
     void deliver_due()
     {
-        while (!in_flight.empty() && in_flight.top().arrival_us <= now)
+        while (!in_flight.empty() && in_flight.front().arrival_us <= now)
         {
-            Packet p = in_flight.top();
-            in_flight.pop();
-            arrive(std::move(p));
+            Packet p = pop_in_flight();
+            arrive(p);
+            recycle(p.data);  // neither delivered nor held: stale, a duplicate, or no connection
         }
     }
 };
@@ -429,7 +562,7 @@ public:
                 t.to = c.remote;
                 t.to_handle = c.remote_handle;
                 t.arrival_us = net_.now + to_us(net_.settings.connect_timeout_s);
-                net_.in_flight.push(t);
+                net_.push_in_flight(t);
             }
         }
         e.connections.clear();
@@ -475,7 +608,7 @@ public:
             t.to = id_;
             t.to_handle = handle;
             t.arrival_us = net_.now + to_us(net_.settings.connect_timeout_s);
-            net_.in_flight.push(t);
+            net_.push_in_flight(t);
             return PeerHandle{handle};
         }
         Packet p;
@@ -515,6 +648,7 @@ public:
             p.seq = ch.next_reliable_send++;
         else if (delivery == Delivery::Unreliable)
             p.seq = ch.next_unreliable_send++;
+        p.data = net_.take_buffer(bytes.size());
         p.data.assign(bytes.begin(), bytes.end());
         c.stats.bytes_sent += bytes.size();
         ++c.stats.packets_sent;
@@ -532,6 +666,26 @@ public:
         TransportEvent ev = std::move(e.events.front());
         e.events.pop_front();
         return ev;
+    }
+
+    /// As poll(), with the datagram's buffer swapped into `out.data` and `out`'s previous buffer
+    /// kept by the network for a later send: nothing is allocated.
+    bool poll_into(TransportEvent& out, int /*timeout_ms*/) noexcept override
+    {
+        const std::lock_guard lock(net_.mutex);
+        net_.deliver_due();
+        Endpoint& e = self();
+        if (e.events.empty())
+            return false;
+        TransportEvent& ev = e.events.front();
+        out.kind = ev.kind;
+        out.peer = ev.peer;
+        out.channel = ev.channel;
+        out.reason = ev.reason;
+        out.data.swap(ev.data);
+        net_.recycle(ev.data);
+        e.events.pop_front();
+        return true;
     }
 
     void flush() noexcept override {}
@@ -647,14 +801,14 @@ void SimulatedNetwork::suspend(const Address& a)
         own.from = c.remote;
         own.to = ep;
         own.to_handle = h;
-        impl_->in_flight.push(own);
+        impl_->push_in_flight(own);
         if (c.remote_handle != 0)
         {
             Packet far = own;
             far.from = ep;
             far.to = c.remote;
             far.to_handle = c.remote_handle;
-            impl_->in_flight.push(far);
+            impl_->push_in_flight(far);
         }
     }
 }
@@ -677,7 +831,7 @@ bool SimulatedNetwork::advance_to_next_arrival()
     const std::lock_guard lock(impl_->mutex);
     if (impl_->in_flight.empty())
         return false;
-    impl_->now = std::max(impl_->now, impl_->in_flight.top().arrival_us);
+    impl_->now = std::max(impl_->now, impl_->in_flight.front().arrival_us);
     return true;
 }
 

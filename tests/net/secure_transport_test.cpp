@@ -3,7 +3,8 @@
 // SecureTransport (issue 7 item 4): keys derive deterministically; peers with the same passphrase
 // exchange both channels intact; a wrong passphrase is refused with nothing delivered; tampered,
 // replayed (same or new connection) and too-old datagrams are dropped and counted; reordering
-// within the window is accepted; (stream, counter) nonces never repeat; the Messenger works
+// within the window is accepted; (stream, counter) nonces never repeat; poll_into() (which
+// recycles the datagrams' buffers) gives poll()'s events over a bad network; the Messenger works
 // through it; the same over ENet on 127.0.0.1, whose connection attempts are rate-limited.
 // A `Tap` decorator between SecureTransport and the inner transport plays the attacker: it
 // records, mutates, holds back and injects datagrams. Every loop is bounded; the simulated
@@ -545,6 +546,180 @@ TEST(SecureTransport, NetworkDuplicatesAndReorderingDeliverEveryDatagramOnce)
     EXPECT_EQ(got, want);
     EXPECT_GT(p.b->secure_stats(p.b_to_a)->replayed, 0u) << "the network duplicated some";
     EXPECT_EQ(p.b->peers().size(), 1u) << "duplicates are not held against the peer";
+}
+
+/// Datagram `i` of secure_exchange(): 4..303 bytes, its number in the first 4.
+std::vector<std::byte> numbered_payload(std::uint32_t i)
+{
+    std::vector<std::byte> out = seeded_payload(4 + (i * 53u) % 300u, i);
+    std::memcpy(out.data(), &i, 4);
+    return out;
+}
+
+/// One event as SecureTransport's caller saw it, with who polled it and the virtual time.
+struct SecureSeen
+{
+    int who = 0;
+    std::int64_t t_us = 0;
+    TransportEvent::Kind kind = TransportEvent::Kind::Received;
+    PeerHandle peer;
+    Channel channel = Channel::Control;
+    DisconnectReason reason = DisconnectReason::None;
+    std::vector<std::byte> data;
+    friend bool operator==(const SecureSeen&, const SecureSeen&) = default;
+};
+
+struct SecureExchange
+{
+    std::vector<SecureSeen> events;
+    SecureStats a_totals;
+    SecureStats b_totals;
+    SimulatedTotals net;
+    std::size_t received = 0;
+    std::size_t corrupt = 0;  ///< Received datagrams whose bytes are not what was sent
+};
+
+/// Two SecureTransports straight over a bad simulated network (no Tap: the simulated transport's
+/// own poll_into is used below), from connect to disconnect: 500 datagrams each way of every
+/// delivery, drained with poll() or, when `into`, with poll_into() into one reused event.
+SecureExchange secure_exchange(std::uint64_t seed, bool into)
+{
+    SimulatedNetworkSettings ns;
+    ns.seed = seed;
+    ns.link = LinkSettings{.latency_s = 0.01,
+                           .jitter_s = 0.005,
+                           .loss = 0.1,
+                           .duplicate = 0.15,
+                           .reorder = 0.15,
+                           .reorder_delay_s = 0.02};
+    SimulatedNetwork net(ns);
+    SecureSettings settings;
+    settings.clock = [&net] { return net.now_us(); };
+    SecureTransport a(net.create_endpoint(), key_of("correct horse"), settings);
+    SecureTransport b(net.create_endpoint(), key_of("correct horse"), settings);
+    (void)a.open({}).value();
+    const Address addr_b = b.open({}).value();
+    SecureExchange out;
+    TransportEvent reused;
+    PeerHandle b_to_a;
+    bool a_up = false;
+    const auto drain = [&](int who, Transport& t)
+    {
+        for (int k = 0; k < 100000; ++k)
+        {
+            if (into)
+            {
+                if (!t.poll_into(reused))
+                    return;
+            }
+            else
+            {
+                auto ev = t.poll();
+                if (!ev)
+                    return;
+                reused = std::move(*ev);
+            }
+            out.events.push_back(SecureSeen{who, net.now_us(), reused.kind, reused.peer,
+                                            reused.channel, reused.reason, reused.data});
+            if (reused.kind == TransportEvent::Kind::Connected && who == 0)
+                a_up = true;
+            if (reused.kind == TransportEvent::Kind::Connected && who == 1)
+                b_to_a = reused.peer;
+            if (reused.kind != TransportEvent::Kind::Received)
+                continue;
+            ++out.received;
+            std::uint32_t i = 0;
+            if (reused.data.size() >= 4)
+                std::memcpy(&i, reused.data.data(), 4);
+            if (reused.data != numbered_payload(i))
+                ++out.corrupt;
+        }
+    };
+    const PeerHandle a_to_b = a.connect(addr_b).value();
+    for (int step = 0; step < 3000 && !(a_up && b_to_a.value != 0); ++step)
+    {
+        net.advance(0.001);
+        drain(0, a);
+        drain(1, b);
+    }
+    for (std::uint32_t i = 0; i < 500; ++i)
+    {
+        const Delivery d = i % 3 == 0 ? Delivery::Reliable
+                                      : (i % 3 == 1 ? Delivery::Unreliable : Delivery::Unsequenced);
+        const Channel c = i % 2 == 0 ? Channel::Control : Channel::State;
+        (void)a.send(a_to_b, c, numbered_payload(i), d);
+        (void)b.send(b_to_a, c, numbered_payload(i + 1000), d);
+        net.advance(0.002);
+        drain(0, a);
+        drain(1, b);
+    }
+    for (int step = 0; step < 500; ++step)
+    {
+        net.advance(0.002);
+        drain(0, a);
+        drain(1, b);
+    }
+    a.disconnect(a_to_b, DisconnectReason::Quit);
+    for (int step = 0; step < 1000; ++step)
+    {
+        net.advance(0.002);
+        drain(0, a);
+        drain(1, b);
+    }
+    out.a_totals = a.totals();
+    out.b_totals = b.totals();
+    out.net = net.totals();
+    return out;
+}
+
+void expect_same_secure_counts(const SecureStats& x, const SecureStats& y)
+{
+    EXPECT_EQ(x.opened, y.opened);
+    EXPECT_EQ(x.auth_failures, y.auth_failures);
+    EXPECT_EQ(x.malformed, y.malformed);
+    EXPECT_EQ(x.replayed, y.replayed);
+    EXPECT_EQ(x.too_old, y.too_old);
+    EXPECT_EQ(x.early, y.early);
+    EXPECT_EQ(x.hello_repeats, y.hello_repeats);
+    EXPECT_EQ(x.refused, y.refused);
+}
+
+// poll_into() receives from the inner transport into one reused event, opens in place and swaps
+// the plaintext's buffer into the caller's event (recycling the caller's previous one): the
+// events, bytes, order and timing, and every counter here and in the network, are poll()'s.
+TEST(SecureTransport, PollIntoGivesTheEventsOfPollOverABadNetwork)
+{
+    for (const std::uint64_t seed : {3u, 11u})
+    {
+        const SecureExchange by_poll = secure_exchange(seed, false);
+        const SecureExchange by_into = secure_exchange(seed, true);
+        ASSERT_EQ(by_poll.events.size(), by_into.events.size()) << "seed " << seed;
+        for (std::size_t k = 0; k < by_poll.events.size(); ++k)
+            ASSERT_TRUE(by_poll.events[k] == by_into.events[k])
+                << "seed " << seed << " event " << k;
+        EXPECT_EQ(by_poll.corrupt, 0u);
+        EXPECT_EQ(by_into.corrupt, 0u);
+        expect_same_secure_counts(by_poll.a_totals, by_into.a_totals);
+        expect_same_secure_counts(by_poll.b_totals, by_into.b_totals);
+        EXPECT_EQ(by_poll.net.transmissions, by_into.net.transmissions);
+        EXPECT_EQ(by_poll.net.lost, by_into.net.lost);
+        EXPECT_EQ(by_poll.net.duplicated, by_into.net.duplicated);
+        EXPECT_EQ(by_poll.net.reordered, by_into.net.reordered);
+        EXPECT_EQ(by_poll.net.delivered, by_into.net.delivered);
+        EXPECT_EQ(by_poll.net.dropped_stale, by_into.net.dropped_stale);
+        // The scenario did what it is for: both ends connected and disconnected, datagrams were
+        // lost, and the network's duplicates were dropped here.
+        const auto kinds = [&](TransportEvent::Kind kind)
+        {
+            return std::count_if(by_into.events.begin(), by_into.events.end(),
+                                 [kind](const SecureSeen& e) { return e.kind == kind; });
+        };
+        EXPECT_EQ(kinds(TransportEvent::Kind::Connected), 2);
+        EXPECT_EQ(kinds(TransportEvent::Kind::Disconnected), 2);
+        EXPECT_GT(by_into.received, 600u);
+        EXPECT_GT(by_into.net.lost, 50u);
+        EXPECT_GT(by_into.b_totals.replayed + by_into.a_totals.replayed, 20u);
+    }
 }
 
 TEST(SecureTransport, NoncesNeverRepeatAndKeysAreFreshPerConnection)

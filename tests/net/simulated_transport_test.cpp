@@ -2,13 +2,15 @@
 // SPDX-FileCopyrightText: 2026 pliant contributors
 // SimulatedNetwork: connection life cycle, determinism for a seed, loss/duplication/reordering
 // measured at the receiver against the settings, the reliable channel in order exactly once under
-// 20 % loss, timeouts, and endpoints on separate threads. Everything runs on the virtual clock.
+// 20 % loss, timeouts, endpoints on separate threads, and poll_into() (which recycles the
+// datagrams' buffers) giving poll()'s events. Everything runs on the virtual clock.
 
 #include <pliant/core/hash.h>
 #include <pliant/net/simulated_transport.h>
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cstring>
 #include <thread>
@@ -163,6 +165,167 @@ TEST(SimulatedTransport, DeterministicForASeed)
     const std::uint64_t first = trace(42);
     EXPECT_EQ(trace(42), first);
     EXPECT_NE(trace(43), first);
+}
+
+/// One event as a caller saw it, with who polled it and the virtual time.
+struct SeenEvent
+{
+    int who = 0;
+    std::int64_t t_us = 0;
+    TransportEvent::Kind kind = TransportEvent::Kind::Received;
+    PeerHandle peer;
+    Channel channel = Channel::Control;
+    DisconnectReason reason = DisconnectReason::None;
+    std::vector<std::byte> data;
+    friend bool operator==(const SeenEvent&, const SeenEvent&) = default;
+};
+
+std::size_t varied_size(std::uint32_t seq)
+{
+    return 4 + (seq * 53u) % 300u;
+}
+
+/// What exchange() saw.
+struct Exchange
+{
+    std::vector<SeenEvent> events;
+    SimulatedTotals totals;
+    PeerStats a_stats;
+    PeerStats b_stats;
+    std::size_t received = 0;
+    std::size_t corrupt = 0;  ///< Received datagrams whose bytes are not what was sent
+};
+
+/// A bad-network exchange (latency, jitter, loss, duplication, reordering) from connect to
+/// disconnect: both ways, every delivery, datagrams of 4..303 bytes in varying order of size,
+/// every event drained with poll() or, when `into`, with poll_into() into one reused event.
+Exchange exchange(std::uint64_t seed, bool into)
+{
+    SimulatedNetworkSettings s;
+    s.seed = seed;
+    s.link = LinkSettings{.latency_s = 0.02,
+                          .jitter_s = 0.01,
+                          .loss = 0.2,
+                          .duplicate = 0.15,
+                          .reorder = 0.15,
+                          .reorder_delay_s = 0.03};
+    Pair p(s);
+    Exchange out;
+    TransportEvent reused;
+    const auto drain = [&](int who, Transport& t)
+    {
+        for (int k = 0; k < 100000; ++k)
+        {
+            if (into)
+            {
+                if (!t.poll_into(reused))
+                    return;
+            }
+            else
+            {
+                auto ev = t.poll();
+                if (!ev)
+                    return;
+                reused = std::move(*ev);
+            }
+            out.events.push_back(SeenEvent{who, p.net.now_us(), reused.kind, reused.peer,
+                                           reused.channel, reused.reason, reused.data});
+            if (reused.kind == TransportEvent::Kind::Connected && who == 1)
+                p.b_to_a = reused.peer;
+            if (reused.kind != TransportEvent::Kind::Received)
+                continue;
+            ++out.received;
+            const std::uint32_t seq = reused.data.size() >= 4 ? seq_of(reused.data) : 0;
+            if (reused.data != payload(seq, varied_size(seq)))
+                ++out.corrupt;
+        }
+    };
+    p.a_to_b = p.a->connect(p.addr_b).value();
+    for (int step = 0; step < 1000 && p.b_to_a.value == 0; ++step)
+    {
+        p.net.advance(0.001);
+        drain(0, *p.a);
+        drain(1, *p.b);
+    }
+    for (std::uint32_t i = 0; i < 600; ++i)
+    {
+        const Delivery d = i % 3 == 0 ? Delivery::Reliable
+                                      : (i % 3 == 1 ? Delivery::Unreliable : Delivery::Unsequenced);
+        const Channel c = i % 2 == 0 ? Channel::Control : Channel::State;
+        (void)p.a->send(p.a_to_b, c, payload(i, varied_size(i)), d);
+        (void)p.b->send(p.b_to_a, c, payload(i + 1000, varied_size(i + 1000)), d);
+        p.net.advance(0.002);
+        drain(0, *p.a);
+        drain(1, *p.b);
+    }
+    for (int step = 0; step < 500; ++step)
+    {
+        p.net.advance(0.002);
+        drain(0, *p.a);
+        drain(1, *p.b);
+    }
+    out.a_stats = p.a->stats(p.a_to_b).value_or(PeerStats{});
+    out.b_stats = p.b->stats(p.b_to_a).value_or(PeerStats{});
+    p.a->disconnect(p.a_to_b, DisconnectReason::Quit);
+    for (int step = 0; step < 1000; ++step)
+    {
+        p.net.advance(0.002);
+        drain(0, *p.a);
+        drain(1, *p.b);
+    }
+    out.totals = p.net.totals();
+    return out;
+}
+
+void expect_same_counts(const PeerStats& x, const PeerStats& y)
+{
+    EXPECT_EQ(x.bytes_sent, y.bytes_sent);
+    EXPECT_EQ(x.bytes_received, y.bytes_received);
+    EXPECT_EQ(x.packets_sent, y.packets_sent);
+    EXPECT_EQ(x.packets_received, y.packets_received);
+}
+
+// poll_into() recycles the datagrams' buffers (the caller's previous one goes back to the network,
+// which sends the next datagrams in it): the events, their bytes, order and timing, and every
+// counter are those of poll(), which hands each buffer over for good.
+TEST(SimulatedTransport, PollIntoGivesTheEventsOfPoll)
+{
+    for (const std::uint64_t seed : {42u, 7u})
+    {
+        const Exchange by_poll = exchange(seed, false);
+        const Exchange by_into = exchange(seed, true);
+        ASSERT_EQ(by_poll.events.size(), by_into.events.size()) << "seed " << seed;
+        for (std::size_t k = 0; k < by_poll.events.size(); ++k)
+            ASSERT_TRUE(by_poll.events[k] == by_into.events[k])
+                << "seed " << seed << " event " << k;
+        EXPECT_EQ(by_poll.corrupt, 0u);
+        EXPECT_EQ(by_into.corrupt, 0u);
+        const SimulatedTotals& x = by_poll.totals;
+        const SimulatedTotals& y = by_into.totals;
+        EXPECT_EQ(x.transmissions, y.transmissions);
+        EXPECT_EQ(x.lost, y.lost);
+        EXPECT_EQ(x.duplicated, y.duplicated);
+        EXPECT_EQ(x.reordered, y.reordered);
+        EXPECT_EQ(x.retransmitted, y.retransmitted);
+        EXPECT_EQ(x.delivered, y.delivered);
+        EXPECT_EQ(x.dropped_stale, y.dropped_stale);
+        expect_same_counts(by_poll.a_stats, by_into.a_stats);
+        expect_same_counts(by_poll.b_stats, by_into.b_stats);
+        // The scenario did what it is for: both ends connected and disconnected, and the network
+        // lost, duplicated, reordered and dropped stale packets.
+        const auto kinds = [&](TransportEvent::Kind kind)
+        {
+            return std::count_if(by_into.events.begin(), by_into.events.end(),
+                                 [kind](const SeenEvent& e) { return e.kind == kind; });
+        };
+        EXPECT_EQ(kinds(TransportEvent::Kind::Connected), 2);
+        EXPECT_EQ(kinds(TransportEvent::Kind::Disconnected), 2);
+        EXPECT_GT(by_into.received, 700u);
+        EXPECT_GT(y.lost, 100u);
+        EXPECT_GT(y.duplicated, 50u);
+        EXPECT_GT(y.reordered, 50u);
+        EXPECT_GT(y.dropped_stale, 0u);
+    }
 }
 
 struct Arrivals
@@ -345,50 +508,62 @@ TEST(SimulatedTransport, ALinkThatLosesEverythingTimesOutBothEnds)
 }
 
 // Endpoints on their own threads (peers as threads of one process) while the main thread drives
-// the clock: every reliable message arrives in order. Run under TSan to check the locking.
+// the clock: every reliable message arrives in order, received with poll() and with poll_into()
+// (whose buffers go back to the network and on to the sender's thread). Run under TSan to check
+// the locking.
 TEST(SimulatedTransport, EndpointsOnSeparateThreads)
 {
-    SimulatedNetworkSettings s;
-    s.link = LinkSettings{.latency_s = 0.002, .jitter_s = 0.001, .loss = 0.1};
-    Pair p(s);
-    ASSERT_NO_FATAL_FAILURE(p.connect());
-    constexpr std::uint32_t n = 500;
-    std::atomic<bool> done{false};
-    std::vector<std::uint32_t> got;
-    std::thread receiver(
-        [&]()
-        {
-            for (int spin = 0; spin < 5000000 && got.size() < n; ++spin)
-            {
-                if (auto ev = p.b->poll())
-                {
-                    if (ev->kind == TransportEvent::Kind::Received)
-                        got.push_back(seq_of(ev->data));
-                }
-                else
-                {
-                    std::this_thread::yield();
-                }
-            }
-            done = true;
-        });
-    std::thread sender(
-        [&]()
-        {
-            for (std::uint32_t i = 0; i < n; ++i)
-                (void)p.a->send(p.a_to_b, Channel::Control, payload(i), Delivery::Reliable);
-        });
-    sender.join();
-    for (int step = 0; step < 100000 && !done; ++step)
+    for (const bool into : {false, true})
     {
-        p.net.advance(0.001);
-        std::this_thread::yield();
+        SCOPED_TRACE(into ? "poll_into" : "poll");
+        SimulatedNetworkSettings s;
+        s.link = LinkSettings{.latency_s = 0.002, .jitter_s = 0.001, .loss = 0.1};
+        Pair p(s);
+        ASSERT_NO_FATAL_FAILURE(p.connect());
+        constexpr std::uint32_t n = 500;
+        std::atomic<bool> done{false};
+        std::vector<std::uint32_t> got;
+        std::thread receiver(
+            [&]()
+            {
+                TransportEvent reused;
+                for (int spin = 0; spin < 5000000 && got.size() < n; ++spin)
+                {
+                    bool any = false;
+                    if (into)
+                    {
+                        any = p.b->poll_into(reused);
+                    }
+                    else if (auto ev = p.b->poll())
+                    {
+                        any = true;
+                        reused = std::move(*ev);
+                    }
+                    if (!any)
+                        std::this_thread::yield();
+                    else if (reused.kind == TransportEvent::Kind::Received)
+                        got.push_back(seq_of(reused.data));
+                }
+                done = true;
+            });
+        std::thread sender(
+            [&]()
+            {
+                for (std::uint32_t i = 0; i < n; ++i)
+                    (void)p.a->send(p.a_to_b, Channel::Control, payload(i), Delivery::Reliable);
+            });
+        sender.join();
+        for (int step = 0; step < 100000 && !done; ++step)
+        {
+            p.net.advance(0.001);
+            std::this_thread::yield();
+        }
+        done = true;
+        receiver.join();
+        ASSERT_EQ(got.size(), n);
+        for (std::uint32_t i = 0; i < n; ++i)
+            EXPECT_EQ(got[i], i);
     }
-    done = true;
-    receiver.join();
-    ASSERT_EQ(got.size(), n);
-    for (std::uint32_t i = 0; i < n; ++i)
-        EXPECT_EQ(got[i], i);
 }
 
 }  // namespace

@@ -134,6 +134,9 @@ public:
     core::Result<void> send(PeerHandle peer, Channel channel, std::span<const std::byte> bytes,
                             Delivery delivery) noexcept override;
     std::optional<TransportEvent> poll(int timeout_ms = 0) noexcept override;
+    /// As poll(), allocating nothing once its buffers have grown: the decrypted datagram's vector
+    /// is swapped into `out.data`, and `out`'s previous vector is kept for a later datagram.
+    bool poll_into(TransportEvent& out, int timeout_ms = 0) noexcept override;
     void flush() noexcept override;
     /// Returns at once while decrypted events are pending, else waits on the inner transport.
     void wait(double max_s) noexcept override;

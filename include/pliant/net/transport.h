@@ -132,10 +132,13 @@ public:
     virtual std::optional<TransportEvent> poll(int timeout_ms = 0) noexcept = 0;
 
     /// poll() into a caller's event, for a receive loop that allocates nothing per datagram:
-    /// EnetTransport copies a datagram into `out.data`'s storage. \return whether an event came
-    /// (`out` then equals what poll() would have returned; otherwise its contents are
-    /// unspecified). The default moves poll()'s event into `out` (SimulatedTransport and
-    /// SecureTransport hand over a vector made per datagram when it was sent or decrypted).
+    /// EnetTransport copies a datagram into `out.data`'s storage (ENet itself still allocates a
+    /// packet per datagram); SimulatedTransport and SecureTransport (beyond its inner transport)
+    /// swap the datagram's vector into `out.data` and keep `out`'s previous vector for a later
+    /// datagram, so once their buffers have grown they allocate nothing per datagram, sent or
+    /// received. \return whether an event came (`out` then equals what poll() would have
+    /// returned; otherwise its contents are unspecified). The default moves poll()'s event into
+    /// `out`.
     virtual bool poll_into(TransportEvent& out, int timeout_ms = 0) noexcept;
 
     /// Sends queued packets now (poll() also does).
