@@ -383,7 +383,7 @@ void GridRenderer::draw(const DrawSettings& settings, int width, int height) con
         s.run_normal_pass();
     const CameraMatrices cam = camera(settings.camera, width, height);
     set_draw_uniforms(s.program, settings, cam, static_cast<float>(s.max_abs_value));
-    gl::glUniform1i(s.program.uniform("u_nx"), s.nx);
+    gl::glUniform1i(s.program.location(DrawUniform::Nx), s.nx);
     gl::glBindVertexArray(s.normal_source == GridNormals::PassToBuffer ? s.attrib_vao : s.vao);
     gl::glActiveTexture(GL_TEXTURE0);
     gl::glBindTexture(GL_TEXTURE_2D, s.positions);

@@ -33,6 +33,27 @@ core::Result<GLuint> compile(GLenum stage, const char* source, const char* name)
 
 }  // namespace
 
+const char* draw_uniform_name(DrawUniform u) noexcept
+{
+    switch (u)
+    {
+    case DrawUniform::ViewProjection: return "u_view_projection";
+    case DrawUniform::Eye: return "u_eye";
+    case DrawUniform::ColorMode: return "u_color_mode";
+    case DrawUniform::Shading: return "u_shading";
+    case DrawUniform::Flat: return "u_flat";
+    case DrawUniform::BaseColor: return "u_base_color";
+    case DrawUniform::WireColor: return "u_wire_color";
+    case DrawUniform::Palette: return "u_palette";
+    case DrawUniform::ValueRange: return "u_value_range";
+    case DrawUniform::Ambient: return "u_ambient";
+    case DrawUniform::Specular: return "u_specular";
+    case DrawUniform::Shininess: return "u_shininess";
+    case DrawUniform::Nx: return "u_nx";
+    }
+    return "";
+}
+
 core::Result<Program> Program::create(const char* vertex_source, const char* fragment_source,
                                       const char* name)
 {
@@ -64,6 +85,9 @@ core::Result<Program> Program::create(const char* vertex_source, const char* fra
         return core::fail(core::ErrorCode::GraphicsError,
                           std::string("Program: ") + name + " does not link: " + log.data());
     }
+    for (std::size_t u = 0; u < k_draw_uniforms; ++u)
+        program.locations_[u] =
+            gl::glGetUniformLocation(program.id_, draw_uniform_name(static_cast<DrawUniform>(u)));
     return program;
 }
 
@@ -72,16 +96,16 @@ void set_draw_uniforms(const Program& program, const DrawSettings& settings,
 {
     gl::glUseProgram(program.id());
     const std::array<float, 16> vp = camera.view_projection.to_float();
-    gl::glUniformMatrix4fv(program.uniform("u_view_projection"), 1, GL_FALSE, vp.data());
-    gl::glUniform3f(program.uniform("u_eye"), static_cast<float>(camera.eye.x),
+    gl::glUniformMatrix4fv(program.location(DrawUniform::ViewProjection), 1, GL_FALSE, vp.data());
+    gl::glUniform3f(program.location(DrawUniform::Eye), static_cast<float>(camera.eye.x),
                     static_cast<float>(camera.eye.y), static_cast<float>(camera.eye.z));
-    gl::glUniform1i(program.uniform("u_color_mode"), static_cast<GLint>(settings.color));
-    gl::glUniform1i(program.uniform("u_shading"), static_cast<GLint>(settings.shading));
-    gl::glUniform1i(program.uniform("u_flat"), 0);
+    gl::glUniform1i(program.location(DrawUniform::ColorMode), static_cast<GLint>(settings.color));
+    gl::glUniform1i(program.location(DrawUniform::Shading), static_cast<GLint>(settings.shading));
+    gl::glUniform1i(program.location(DrawUniform::Flat), 0);
     const Rgb& b = settings.base_color;
-    gl::glUniform3f(program.uniform("u_base_color"), b.r, b.g, b.b);
+    gl::glUniform3f(program.location(DrawUniform::BaseColor), b.r, b.g, b.b);
     const Rgb& w = settings.wire_color;
-    gl::glUniform3f(program.uniform("u_wire_color"), w.r, w.g, w.b);
+    gl::glUniform3f(program.location(DrawUniform::WireColor), w.r, w.g, w.b);
     std::array<float, 24> palette{};
     for (std::uint32_t i = 0; i < 8; ++i)
     {
@@ -90,13 +114,13 @@ void set_draw_uniforms(const Program& program, const DrawSettings& settings,
         palette[i * 3 + 1] = c.g;
         palette[i * 3 + 2] = c.b;
     }
-    gl::glUniform3fv(program.uniform("u_palette"), 8, palette.data());
+    gl::glUniform3fv(program.location(DrawUniform::Palette), 8, palette.data());
     const float range =
         settings.displacement_range > 0.0F ? settings.displacement_range : value_range;
-    gl::glUniform1f(program.uniform("u_value_range"), range > 0.0F ? range : 1.0F);
-    gl::glUniform1f(program.uniform("u_ambient"), settings.ambient);
-    gl::glUniform1f(program.uniform("u_specular"), settings.specular);
-    gl::glUniform1f(program.uniform("u_shininess"), settings.shininess);
+    gl::glUniform1f(program.location(DrawUniform::ValueRange), range > 0.0F ? range : 1.0F);
+    gl::glUniform1f(program.location(DrawUniform::Ambient), settings.ambient);
+    gl::glUniform1f(program.location(DrawUniform::Specular), settings.specular);
+    gl::glUniform1f(program.location(DrawUniform::Shininess), settings.shininess);
 }
 
 Rgb owner_color(std::uint32_t owner) noexcept

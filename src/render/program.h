@@ -10,12 +10,38 @@
 
 #include "render/gl_api.h"
 
+#include <array>
+#include <cstddef>
+#include <cstdint>
 #include <initializer_list>
 #include <string>
 #include <utility>
 
 namespace pliant::render
 {
+
+/// The uniforms set at every draw (set_draw_uniforms, draw_passes, the grid renderer's `u_nx`):
+/// a Program looks them up once when it links, so a frame does no look-up by name.
+enum class DrawUniform : std::uint8_t
+{
+    ViewProjection,
+    Eye,
+    ColorMode,
+    Shading,
+    Flat,
+    BaseColor,
+    WireColor,
+    Palette,
+    ValueRange,
+    Ambient,
+    Specular,
+    Shininess,
+    Nx,
+};
+inline constexpr std::size_t k_draw_uniforms = 13;
+
+/// The GLSL name of `u` ("u_view_projection", ...).
+[[nodiscard]] const char* draw_uniform_name(DrawUniform u) noexcept;
 
 class Program
 {
@@ -25,23 +51,32 @@ public:
     static core::Result<Program> create(const char* vertex_source, const char* fragment_source,
                                         const char* name);
     ~Program();
-    Program(Program&& o) noexcept : id_(std::exchange(o.id_, 0U)) {}
+    Program(Program&& o) noexcept : id_(std::exchange(o.id_, 0U)), locations_(o.locations_) {}
     Program& operator=(Program&& o) noexcept
     {
         std::swap(id_, o.id_);
+        std::swap(locations_, o.locations_);
         return *this;
     }
     Program(const Program&) = delete;
     Program& operator=(const Program&) = delete;
 
     [[nodiscard]] GLuint id() const noexcept { return id_; }
+    /// Looks `name` up (set-up code; a draw uses location()).
     [[nodiscard]] GLint uniform(const char* name) const noexcept
     {
         return gl::glGetUniformLocation(id_, name);
     }
+    /// The location of draw uniform `u`, looked up when the program linked: -1 where the program
+    /// has none (or the compiler dropped it as unused), which glUniform* ignores.
+    [[nodiscard]] GLint location(DrawUniform u) const noexcept
+    {
+        return locations_[static_cast<std::size_t>(u)];
+    }
 
 private:
     GLuint id_ = 0;
+    std::array<GLint, k_draw_uniforms> locations_{};
 };
 
 /// `source` with each snippet inserted, in order, after its `#version 330 core` line (GLSL has no
@@ -77,11 +112,11 @@ void draw_passes(const Program& program, const DrawSettings& settings, int width
     gl::glPolygonOffset(1.0F, 1.0F);
     draw_triangles();
     gl::glDisable(GL_POLYGON_OFFSET_FILL);
-    gl::glUniform1i(program.uniform("u_flat"), 1);
+    gl::glUniform1i(program.location(DrawUniform::Flat), 1);
     gl::glPolygonMode(GL_FRONT_AND_BACK, GL_LINE);
     draw_triangles();
     gl::glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
-    gl::glUniform1i(program.uniform("u_flat"), 0);
+    gl::glUniform1i(program.location(DrawUniform::Flat), 0);
 }
 
 }  // namespace pliant::render

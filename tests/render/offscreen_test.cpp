@@ -8,11 +8,16 @@
 #include <pliant/render/grid_renderer.h>
 
 #include "gl_fixture.h"
+#include "render/program.h"
 #include "sphere_grid.h"
 #include "support/test_paths.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
+#include <string>
+#include <utility>
+#include <vector>
 
 namespace pliant::test
 {
@@ -32,6 +37,42 @@ render::Image small_sphere(int width, int height)
     s.background = {0.1F, 0.2F, 0.3F};
     renderer->draw(s, width, height);
     return fb->read_rgba8();
+}
+
+// A program looks its draw uniforms up when it links (so a frame does no look-up by name): each
+// location is GL's own for that name, -1 for a uniform the program lacks, and a move keeps them.
+TEST_F(GlTest, AProgramLooksItsDrawUniformsUpWhenItLinks)
+{
+    const char* vertex = R"(#version 330 core
+uniform mat4 u_view_projection;
+uniform int u_nx;
+void main() { gl_Position = u_view_projection * vec4(float(u_nx), 0.0, 0.0, 1.0); }
+)";
+    const char* fragment = R"(#version 330 core
+uniform vec3 u_eye;
+uniform vec3 u_palette[8];
+uniform float u_shininess;
+out vec4 frag_color;
+void main() { frag_color = vec4(u_eye + u_palette[3] * u_shininess, 1.0); }
+)";
+    auto made = render::Program::create(vertex, fragment, "test");
+    ASSERT_TRUE(made) << made.error().message;
+    const render::Program program = std::move(*made);
+    std::vector<std::string> names;
+    std::size_t present = 0;
+    for (std::size_t k = 0; k < render::k_draw_uniforms; ++k)
+    {
+        const auto u = static_cast<render::DrawUniform>(k);
+        names.emplace_back(render::draw_uniform_name(u));
+        EXPECT_EQ(program.location(u), program.uniform(render::draw_uniform_name(u)))
+            << names.back();
+        present += program.location(u) >= 0 ? 1 : 0;
+    }
+    EXPECT_EQ(present, 5U);  // the five the shaders use
+    EXPECT_GE(program.location(render::DrawUniform::Palette), 0);
+    EXPECT_EQ(program.location(render::DrawUniform::Flat), -1);
+    std::sort(names.begin(), names.end());
+    EXPECT_EQ(std::adjacent_find(names.begin(), names.end()), names.end());  // one name each
 }
 
 TEST_F(GlTest, ContextIsCoreProfileThreeThreeOrLater)
