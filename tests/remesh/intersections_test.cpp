@@ -656,6 +656,52 @@ TEST(SelfIntersections, StarsPairLikeBruteForce)
     EXPECT_GE(starred, 20U);
 }
 
+// A face with a corner within 1e-6 of a star's axis (not on it) and the rest far from it: its
+// image leaves the arc of its other two corners by up to eps / rho near the radius rho where it
+// crosses the fan (rho = its height over the fan's steepness K), and the wedges it crosses
+// there, outside that arc by less than (pi / 2) eps / rho, are still paired with it. (With K
+// taken three times smaller, rho grows and the widening shrinks below what the edge sweeps.)
+TEST(SelfIntersections, AFaceWithACornerNearTheAxisMeetsTheWedgesItsEdgeSweeps)
+{
+    // A steep cone (apex v at the origin, ring of radius 1 at z = -4: K = 4) of 40 sides and two
+    // narrow wedges just below angle 0.
+    mesh::TriMesh m;
+    m.positions.push_back(Vec3{0, 0, 0});
+    std::vector<double> angles{-1.9e-6, -1.3e-6};
+    for (int k = 0; k < 40; ++k)
+        angles.push_back(2.0 * 3.14159265358979323846 * k / 40.0);
+    std::sort(angles.begin(), angles.end());
+    for (const double a : angles)
+        m.positions.push_back(Vec3{std::cos(a), std::sin(a), -4.0});
+    const auto n = static_cast<std::uint32_t>(angles.size());
+    for (std::uint32_t k = 0; k < n; ++k)
+        m.faces.push_back({0, 1 + (k + 1) % n, 1 + k});
+    ASSERT_TRUE(vertex_fan_is_star(m, 0, faces_around(m, 0)));
+    // The face: a corner 3e-7 off the axis (towards negative angles) at z = -0.5, the others at
+    // radius 0.9 at angles 0 and 0.01, all at z = -0.5: it crosses the cone on the circle of
+    // radius rho = 0.5 / 4, where its edge from the near corner sits at angle -2.1e-6.
+    const auto base = static_cast<std::uint32_t>(m.positions.size());
+    m.positions.push_back(Vec3{0, -3e-7, -0.5});
+    m.positions.push_back(Vec3{0.9, 0, -0.5});
+    m.positions.push_back(Vec3{0.9 * std::cos(0.01), 0.9 * std::sin(0.01), -0.5});
+    m.faces.push_back({base, base + 1, base + 2});
+    const auto brute = brute_force_pair_list(m);
+    const auto t = static_cast<std::uint32_t>(m.faces.size() - 1);
+    // it meets the two wedges wholly below angle 0 (faces 0, from -1.9e-6 to -1.3e-6, and n - 1,
+    // up to -1.9e-6), beyond its corners' arc
+    const auto meets = [&](std::uint32_t f)
+    {
+        return std::find(brute.begin(), brute.end(), std::array<std::uint32_t, 2>{f, t}) !=
+               brute.end();
+    };
+    EXPECT_TRUE(meets(0));
+    EXPECT_TRUE(meets(n - 1));
+    EXPECT_EQ(intersecting_pairs(m), brute);
+    std::vector<std::uint8_t> touched(m.faces.size(), 0);
+    touched[t] = 1;
+    EXPECT_EQ(intersecting_pairs_touching(m, touched), brute);
+}
+
 /// `k` horizontal triangles (planes z = const) and `k` vertical ones (x = const), each
 /// horizontal one crossing each vertical one along a segment of y in [-1, 1]: k² intersecting
 /// pairs, all in one cell of the broad phase's grid.
