@@ -881,7 +881,7 @@ std::vector<std::array<std::uint32_t, 2>> pairs_among(const mesh::TriMesh& mesh,
                 if (!touched.empty())
                     crowd_touched.push_back(touched[face_at(f)]);
             }
-        tree.emplace(mesh, crowd_faces, crowd_touched);
+        tree.emplace(mesh, crowd_faces, crowd_touched, stop);
 #ifdef _OPENMP
         const auto threads = static_cast<std::size_t>(omp_get_max_threads());
 #else

@@ -102,7 +102,7 @@ bool obbs_may_overlap(const Obb& a, const Obb& b) noexcept
 }
 
 ObbTree::ObbTree(const mesh::TriMesh& mesh, std::span<const std::uint32_t> faces,
-                 std::span<const std::uint8_t> flagged)
+                 std::span<const std::uint8_t> flagged, const core::ProgressSink* stop)
 {
     const auto n = static_cast<std::uint32_t>(faces.size());
     if (n == 0)
@@ -112,12 +112,13 @@ ObbTree::ObbTree(const mesh::TriMesh& mesh, std::span<const std::uint32_t> faces
         order_[i] = i;
     nodes_.reserve(2 * ((n + k_leaf_items - 1) / k_leaf_items) + 1);
     std::vector<double> keys;
-    build(mesh, faces, flagged, 0, n, keys);
+    build(mesh, faces, flagged, 0, n, keys, stop);
 }
 
 std::uint32_t ObbTree::build(const mesh::TriMesh& mesh, std::span<const std::uint32_t> faces,
                              std::span<const std::uint8_t> flagged, std::uint32_t begin,
-                             std::uint32_t end, std::vector<double>& keys)
+                             std::uint32_t end, std::vector<double>& keys,
+                             const core::ProgressSink* stop)
 {
     const auto index = static_cast<std::uint32_t>(nodes_.size());
     nodes_.emplace_back();
@@ -173,7 +174,7 @@ std::uint32_t ObbTree::build(const mesh::TriMesh& mesh, std::span<const std::uin
         node.end = end;
         node.flagged = any_flag;
     }
-    if (end - begin <= k_leaf_items)
+    if (end - begin <= k_leaf_items || (end - begin > (1U << 16) && core::stop_requested(stop)))
         return index;
 
     // the split: the median centroid along the axis whose halves overlap least
@@ -221,8 +222,8 @@ std::uint32_t ObbTree::build(const mesh::TriMesh& mesh, std::span<const std::uin
     }
     if (best != 2)
         order_along(best);
-    const std::uint32_t left = build(mesh, faces, flagged, begin, mid, keys);
-    const std::uint32_t right = build(mesh, faces, flagged, mid, end, keys);
+    const std::uint32_t left = build(mesh, faces, flagged, begin, mid, keys, stop);
+    const std::uint32_t right = build(mesh, faces, flagged, mid, end, keys, stop);
     nodes_[index].left = left;
     nodes_[index].right = right;
     return index;

@@ -8,12 +8,16 @@
 // grid enumerates about the square of their number; boxes oriented along the faces separate
 // them (Gottschalk, Lin and Manocha 1996, "OBBTree"). docs/remesh.md §3.3.
 
+#include <pliant/core/progress.h>
 #include <pliant/core/vec3.h>
 #include <pliant/mesh/tri_mesh.h>
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <vector>
 
@@ -36,6 +40,27 @@ struct Obb
 /// (whose cross product is near zero).
 [[nodiscard]] bool obbs_may_overlap(const Obb& a, const Obb& b) noexcept;
 
+/// A lower bound of the squared distance from p to box o: the distance to the box grown by 1e-12
+/// of p's and the centre's coordinates plus the half extents, a hundred times the rounding of
+/// the bound and of the box's fit, so no point of the box is nearer than it.
+[[nodiscard]] inline double obb_distance2_below(const Obb& o, const core::Vec3& p) noexcept
+{
+    const core::Vec3 d = p - o.centre;
+    const auto magnitude = [](const core::Vec3& v) {
+        return std::max({std::fabs(v.x), std::fabs(v.y), std::fabs(v.z)});
+    };
+    const double slack =
+        1e-12 * (magnitude(p) + magnitude(o.centre) + o.half[0] + o.half[1] + o.half[2]);
+    double sum = 0.0;
+    for (int k = 0; k < 3; ++k)
+    {
+        const double out = std::fabs(core::dot(d, o.axis[k])) - o.half[k] - slack;
+        if (out > 0.0)
+            sum += out * out;
+    }
+    return sum;
+}
+
 /// The tree over n items, item i being face `faces[i]` of a mesh. Each node's box holds every
 /// corner of its items' faces, up to the rounding of the fit (about 1e-15 of the corners'
 /// magnitude, which obbs_may_overlap's slack covers a thousand times). Nodes split their
@@ -46,9 +71,11 @@ class ObbTree
 {
 public:
     /// `flagged`: one flag per item, or empty (every item flagged); pairs of two unflagged items
-    /// are skipped whole subtrees at a time.
+    /// are skipped whole subtrees at a time. `stop`: polled at every node of more than 2^16
+    /// items; once it asks, that node stays a leaf of all its items (the tree stays valid, but
+    /// slow to search: the caller, which owns the sink, discards it).
     ObbTree(const mesh::TriMesh& mesh, std::span<const std::uint32_t> faces,
-            std::span<const std::uint8_t> flagged);
+            std::span<const std::uint8_t> flagged, const core::ProgressSink* stop = nullptr);
 
     /// A share of the work: the pairs within node a (a == b), or across nodes a and b.
     struct Job
@@ -67,6 +94,13 @@ public:
     /// every node).
     template <typename Pair, typename Halted>
     void visit(Job job, Pair&& pair, Halted&& halted) const;
+
+    /// The least item_distance2(i) over the items (+inf for none), searching nearer boxes first
+    /// and skipping boxes whose obb_distance2_below is not below the best so far. Where
+    /// item_distance2 is at least the squared distance from p to the item's face up to a relative
+    /// 1e-14, the result is the least value over every item, as a search of them all would give.
+    template <typename ItemDistance2>
+    [[nodiscard]] double nearest2(const core::Vec3& p, ItemDistance2&& item_distance2) const;
 
     [[nodiscard]] std::size_t node_count() const noexcept { return nodes_.size(); }
 
@@ -88,7 +122,8 @@ private:
 
     std::uint32_t build(const mesh::TriMesh& mesh, std::span<const std::uint32_t> faces,
                         std::span<const std::uint8_t> flagged, std::uint32_t begin,
-                        std::uint32_t end, std::vector<double>& keys);
+                        std::uint32_t end, std::vector<double>& keys,
+                        const core::ProgressSink* stop);
     void expand(Job job, int depth, int max_depth, std::vector<Job>& out) const;
 
     std::vector<Node> nodes_;
@@ -137,6 +172,38 @@ void ObbTree::visit(Job job, Pair&& pair, Halted&& halted) const
         visit({job.a, b.left}, pair, halted);
         visit({job.a, b.right}, pair, halted);
     }
+}
+
+template <typename ItemDistance2>
+double ObbTree::nearest2(const core::Vec3& p, ItemDistance2&& item_distance2) const
+{
+    double best = std::numeric_limits<double>::infinity();
+    if (nodes_.empty())
+        return best;
+    // Median splits: the depth is at most log2(n) + 2, so 128 entries hold any tree.
+    std::array<std::uint32_t, 128> stack{};
+    std::size_t top = 0;
+    stack[top++] = 0;
+    while (top > 0)
+    {
+        const Node& n = nodes_[stack[--top]];
+        if (obb_distance2_below(n.box, p) >= best)
+            continue;
+        if (n.leaf())
+        {
+            for (std::uint32_t i = n.begin; i < n.end; ++i)
+                best = std::min(best, item_distance2(order_[i]));
+            continue;
+        }
+        const double dl = obb_distance2_below(nodes_[n.left].box, p);
+        const double dr = obb_distance2_below(nodes_[n.right].box, p);
+        if (top + 2 > stack.size())
+            continue;  // cannot happen (the depth bound above)
+        // the farther child first, so the nearer one is searched first
+        stack[top++] = dl < dr ? n.right : n.left;
+        stack[top++] = dl < dr ? n.left : n.right;
+    }
+    return best;
 }
 
 }  // namespace pliant::remesh::detail

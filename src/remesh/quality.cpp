@@ -6,16 +6,24 @@
 // median splits along the longest axis of the triangle centroids, with up to 4 triangles per
 // leaf; a nearest-point query descends the nearer child first and prunes any box farther than
 // the best distance so far. Alternatives rejected: a uniform grid (poor on meshes with very
-// uneven triangle sizes, such as the thin fins of real models).
+// uneven triangle sizes, such as the thin fins of real models). A surface made mostly of long
+// slanted slivers (a finely divided cylinder) is searched through a tree of oriented boxes
+// instead (obb_tree.h): their axis-aligned boxes are far larger than they are and overlap by the
+// hundred, so a query opened that many leaves.
 
 #include <pliant/remesh/quality.h>
+
+#include "remesh/obb_tree.h"
+#include "remesh/quality_internal.h"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <optional>
 #include <random>
+#include <span>
 #include <vector>
 
 namespace pliant::remesh
@@ -207,6 +215,47 @@ private:
     const core::ProgressSink* stop_;
 };
 
+/// The nearest-point search of a surface: the axis-aligned BVH, or the oriented-box tree.
+class Nearest
+{
+public:
+    Nearest(const mesh::TriMesh& m, const core::ProgressSink* stop, bool oriented) : m_(m)
+    {
+        if (oriented)
+        {
+            faces_.resize(m.faces.size());
+            std::iota(faces_.begin(), faces_.end(), 0U);
+            obb_.emplace(m, faces_, std::span<const std::uint8_t>{}, stop);
+        }
+        else
+        {
+            bvh_.emplace(m, stop);
+        }
+    }
+
+    /// Squared distance from p to the surface.
+    [[nodiscard]] double nearest2(const Vec3& p) const noexcept
+    {
+        if (bvh_)
+            return bvh_->nearest2(p);
+        return obb_->nearest2(p,
+                              [&](std::uint32_t f)
+                              {
+                                  const auto& t = m_.faces[f];
+                                  const Vec3 q =
+                                      closest_on_triangle(p, m_.positions[t[0]], m_.positions[t[1]],
+                                                          m_.positions[t[2]]);
+                                  return core::dot(p - q, p - q);
+                              });
+    }
+
+private:
+    const mesh::TriMesh& m_;
+    std::optional<Bvh> bvh_;
+    std::vector<std::uint32_t> faces_;
+    std::optional<detail::ObbTree> obb_;
+};
+
 /// Vertices plus `count` area-weighted random points of `m`.
 std::vector<Vec3> sample_points(const mesh::TriMesh& m, std::size_t count, std::uint64_t seed)
 {
@@ -246,7 +295,7 @@ std::vector<Vec3> sample_points(const mesh::TriMesh& m, std::size_t count, std::
 
 /// `progress` gets the fraction done mapped onto [base, base + span], once per block of samples
 /// (reported between parallel loops, from the calling thread).
-DirectedDistance directed(const mesh::TriMesh& from, const Bvh& to, const DistanceSettings& s,
+DirectedDistance directed(const mesh::TriMesh& from, const Nearest& to, const DistanceSettings& s,
                           double& sum_sq, core::ProgressSink* progress, double base, double span)
 {
     const std::size_t n =
@@ -292,8 +341,30 @@ double point_triangle_distance(const core::Vec3& p, const core::Vec3& a, const c
     return core::norm(p - closest_on_triangle(p, a, b, c));
 }
 
-SurfaceDistance surface_distance(const mesh::TriMesh& reference, const mesh::TriMesh& other,
-                                 const DistanceSettings& settings, core::ProgressSink* progress)
+bool detail::mostly_slanted_slivers(const mesh::TriMesh& m) noexcept
+{
+    // A face's box surface against its area: about 4 for a triangle lying in an axis plane, up
+    // to about 10 for one at a slant, 2L/w for a sliver of length L and width w at a slant (a
+    // sliver along an axis keeps a tight box).
+    std::size_t loose = 0;
+    for (const auto& t : m.faces)
+    {
+        const Vec3& a = m.positions[t[0]];
+        const Vec3& b = m.positions[t[1]];
+        const Vec3& c = m.positions[t[2]];
+        const double area = 0.5 * core::norm(core::cross(b - a, c - a));
+        const double dx = std::max({a.x, b.x, c.x}) - std::min({a.x, b.x, c.x});
+        const double dy = std::max({a.y, b.y, c.y}) - std::min({a.y, b.y, c.y});
+        const double dz = std::max({a.z, b.z, c.z}) - std::min({a.z, b.z, c.z});
+        loose += 2.0 * (dx * dy + dy * dz + dz * dx) > 64.0 * area ? 1 : 0;
+    }
+    return 4 * loose > m.faces.size();
+}
+
+SurfaceDistance detail::surface_distance_with(const mesh::TriMesh& reference,
+                                              const mesh::TriMesh& other,
+                                              const DistanceSettings& settings,
+                                              core::ProgressSink* progress, SearchBoxes boxes)
 {
     SurfaceDistance out;
     if (reference.positions.empty() || other.positions.empty() || reference.faces.empty() ||
@@ -306,10 +377,15 @@ SurfaceDistance surface_distance(const mesh::TriMesh& reference, const mesh::Tri
         hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
     }
     out.diagonal = core::norm(hi - lo);
-    const Bvh ref_bvh(reference, progress);
+    const auto oriented = [&](const mesh::TriMesh& m)
+    {
+        return boxes == SearchBoxes::Oriented ||
+               (boxes == SearchBoxes::Auto && mostly_slanted_slivers(m));
+    };
+    const Nearest ref_bvh(reference, progress, oriented(reference));
     if (core::stop_requested(progress))
         return out;  // the caller was stopped: its result is not used
-    const Bvh other_bvh(other, progress);
+    const Nearest other_bvh(other, progress, oriented(other));
     if (core::stop_requested(progress))
         return out;
     double sq_a = 0.0, sq_b = 0.0;
@@ -331,6 +407,13 @@ SurfaceDistance surface_distance(const mesh::TriMesh& reference, const mesh::Tri
             out.rms > out.diagonal * 1e-15 ? 20.0 * std::log10(out.diagonal / out.rms) : 300.0;
     }
     return out;
+}
+
+SurfaceDistance surface_distance(const mesh::TriMesh& reference, const mesh::TriMesh& other,
+                                 const DistanceSettings& settings, core::ProgressSink* progress)
+{
+    return detail::surface_distance_with(reference, other, settings, progress,
+                                         detail::SearchBoxes::Auto);
 }
 
 AreaSpread area_spread(const mesh::TriMesh& mesh) noexcept

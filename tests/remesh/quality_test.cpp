@@ -9,11 +9,16 @@
 
 #include <gtest/gtest.h>
 
+#include "remesh/obb_tree.h"
+#include "remesh/quality_internal.h"
 #include "shapes.h"
 
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <random>
+#include <utility>
+#include <vector>
 
 namespace pliant::remesh
 {
@@ -104,6 +109,100 @@ TEST(SurfaceDistance, IcosphereAgainstFinerSphere)
     const SurfaceDistance same = surface_distance(coarse, coarse);
     EXPECT_LT(same.rms, 1e-12);
     EXPECT_GT(same.psnr_db, 200.0);
+}
+
+/// A frustum of `sides` sides (rings of radius 1 at z = 0 and 0.5 at z = 1, the top one turned by
+/// 0.3 rad, fan caps): long slanted slivers side by side.
+mesh::TriMesh sliver_frustum(std::uint32_t sides)
+{
+    mesh::TriMesh m;
+    m.positions = {Vec3{0, 0, 0}, Vec3{0, 0, 1}};
+    for (std::uint32_t ring = 0; ring < 2; ++ring)
+        for (std::uint32_t k = 0; k < sides; ++k)
+        {
+            const double a = 2.0 * 3.14159265358979323846 * k / sides + 0.3 * ring;
+            const double r = ring == 0 ? 1.0 : 0.5;
+            m.positions.push_back(
+                Vec3{r * std::cos(a), r * std::sin(a), static_cast<double>(ring)});
+        }
+    for (std::uint32_t k = 0; k < sides; ++k)
+    {
+        const std::uint32_t b0 = 2 + k, b1 = 2 + (k + 1) % sides;
+        const std::uint32_t t0 = b0 + sides, t1 = b1 + sides;
+        m.faces.push_back({0, b1, b0});
+        m.faces.push_back({1, t0, t1});
+        m.faces.push_back({b0, b1, t1});
+        m.faces.push_back({b0, t1, t0});
+    }
+    return m;
+}
+
+// A surface of slanted slivers is searched through oriented boxes, others through axis-aligned
+// ones; both find the nearest points brute force finds, and the same distances as each other.
+TEST(SurfaceDistance, OrientedBoxesFindTheNearestPointsAlignedOnesFind)
+{
+    const mesh::TriMesh frustum = sliver_frustum(400);
+    EXPECT_TRUE(detail::mostly_slanted_slivers(frustum));
+    EXPECT_FALSE(detail::mostly_slanted_slivers(scenes::icosphere(3)));
+    EXPECT_FALSE(detail::mostly_slanted_slivers(sliver_frustum(12)));  // wide faces
+    // The tree's nearest-point search against brute force, exactly: points in the box around
+    // the frustum and points just off its sides (their nearest points inside slivers).
+    std::vector<std::uint32_t> all(frustum.faces.size());
+    for (std::uint32_t f = 0; f < all.size(); ++f)
+        all[f] = f;
+    const detail::ObbTree tree(frustum, all, {});
+    const auto distance2 = [&](const Vec3& p, std::uint32_t f)
+    {
+        const auto& t = frustum.faces[f];
+        const double d = point_triangle_distance(p, frustum.positions[t[0]],
+                                                 frustum.positions[t[1]], frustum.positions[t[2]]);
+        return d * d;
+    };
+    std::mt19937_64 rng(9);
+    std::uniform_real_distribution<double> u(-1.3, 1.3), unit(0.0, 1.0);
+    for (int i = 0; i < 400; ++i)
+    {
+        Vec3 p{u(rng), u(rng), 0.5 + 0.6 * u(rng)};
+        if (i % 2 == 1)
+        {
+            // beside a random side face, 1e-3 off its plane
+            const auto& t = frustum.faces[4 * (rng() % 400) + 2 + rng() % 2];
+            const Vec3 a = frustum.positions[t[0]], b = frustum.positions[t[1]],
+                       c = frustum.positions[t[2]];
+            double s = unit(rng), w = unit(rng);
+            if (s + w > 1.0)
+            {
+                s = 1.0 - s;
+                w = 1.0 - w;
+            }
+            const Vec3 n = core::normalized(core::cross(b - a, c - a));
+            p = a + (b - a) * s + (c - a) * w + n * (i % 4 == 1 ? 1e-3 : -1e-3);
+        }
+        double brute = std::numeric_limits<double>::infinity();
+        for (std::uint32_t f = 0; f < all.size(); ++f)
+            brute = std::min(brute, distance2(p, f));
+        EXPECT_EQ(tree.nearest2(p, [&](std::uint32_t f) { return distance2(p, f); }), brute) << i;
+    }
+    // whole surfaces: a frustum against a sphere through it, and two spheres
+    mesh::TriMesh ball = scenes::icosphere(3);
+    for (Vec3& p : ball.positions)
+        p = p * 0.7 + Vec3{0.2, 0.1, 0.5};
+    for (const auto& [a, b] : {std::pair{frustum, ball}, std::pair{ball, frustum},
+                               std::pair{scenes::icosphere(3), ball}})
+    {
+        const DistanceSettings s{2000, 5};
+        const SurfaceDistance aligned =
+            detail::surface_distance_with(a, b, s, nullptr, detail::SearchBoxes::Aligned);
+        const SurfaceDistance oriented =
+            detail::surface_distance_with(a, b, s, nullptr, detail::SearchBoxes::Oriented);
+        EXPECT_NEAR(oriented.rms, aligned.rms, 1e-12 * aligned.rms);
+        EXPECT_NEAR(oriented.hausdorff, aligned.hausdorff, 1e-12 * aligned.hausdorff);
+        EXPECT_NEAR(oriented.reference_to_other.mean, aligned.reference_to_other.mean,
+                    1e-12 * aligned.reference_to_other.mean);
+        EXPECT_NEAR(oriented.other_to_reference.mean, aligned.other_to_reference.mean,
+                    1e-12 * aligned.other_to_reference.mean);
+        EXPECT_GT(aligned.rms, 0.01);
+    }
 }
 
 TEST(AreaSpread, UniformAndSkewed)

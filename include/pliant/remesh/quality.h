@@ -10,8 +10,11 @@
 /// Distances: each surface is sampled at all its vertices plus area-weighted random points
 /// (fixed seed, so results are repeatable); each sample's exact distance to the other surface
 /// is found through a bounding-volume hierarchy over its triangles (exact point-triangle
-/// distance, Ericson 2005 §5.1.5). RMS pools the squared distances of both directions; the
-/// Hausdorff distance is the larger of the two directed maxima over the samples.
+/// distance, Ericson 2005 §5.1.5): axis-aligned boxes, or oriented ones for a surface made
+/// mostly of slivers at a slant to the axes (a finely divided cone or cylinder), whose
+/// axis-aligned boxes are loose; the same distances either way. RMS pools the squared distances of
+/// both directions; the Hausdorff distance is the larger of the two directed maxima over the
+/// samples.
 
 #include <pliant/core/progress.h>
 #include <pliant/mesh/tri_mesh.h>
