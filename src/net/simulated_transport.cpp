@@ -6,16 +6,18 @@
 // and of each sender's own order of sends.
 //
 // Costs: no allocation per datagram through send() and poll_into() once the network has carried
-// its largest datagram and as many at once as it carries now. A datagram's bytes travel in one
-// buffer from send() to the receiver's event; buffers come back to a free list of the network
-// (`spare_buffers`) when a packet is lost or dropped, or delivered to a caller of poll_into()
-// (which swaps its previous buffer in), and send() and duplication draw from it; the map nodes
-// of early reliable packets (`held`) are recycled the same way; the packets in flight and the
-// event queues live in vectors that keep their storage.
+// as many datagrams of each size class (powers of two from 64 bytes to 64 KiB) at once as it
+// carries now. A datagram's bytes travel in one buffer from send() to the receiver's event;
+// buffers come back to the network's free lists (`spare_buffers`, one per size class) when a packet
+// is lost or dropped, or delivered to a caller of poll_into() (which swaps its previous buffer in),
+// and send() and duplication draw from it; the map nodes of early reliable packets (`held`) are
+// recycled the same way; the packets in flight and the event queues live in vectors that keep their
+// storage.
 
 #include <pliant/net/simulated_transport.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 #include <mutex>
@@ -170,11 +172,17 @@ struct SimulatedNetwork::Impl
     // does (so the same order), kept as a vector so that a packet can be moved out of its top.
     std::vector<Packet> in_flight;
     SimulatedTotals totals;
-    // Datagram buffers (empty, with capacity) and map nodes of `held`, for reuse: the network's,
-    // since a buffer goes from the sender's send() to the receiver's caller and back.
-    std::vector<std::vector<std::byte>> spare_buffers;
+    // Datagram buffers (empty, with capacity) by size class, and map nodes of `held`, for reuse:
+    // the network's, since a buffer goes from the sender's send() to the receiver's caller and
+    // back. Class c holds buffers of at least 2^(c + k_min_shift) bytes and less than twice
+    // that, so a datagram takes a buffer less than twice its size (rounded up to 64 bytes).
+    // (One pool reserved for the largest datagram so far gave every small datagram a buffer of
+    // up to 64 KiB: at level 8 the model's messages set that size, and the bytes in flight were
+    // spread over so much memory that `pliant_bench_session --cpu` ran up to a third slower.)
+    static constexpr int k_min_shift = 6;  // 64 bytes
+    static constexpr int k_classes = 11;   // 64 bytes to 64 KiB
+    std::array<std::vector<std::vector<std::byte>>, k_classes> spare_buffers;
     std::vector<HeldPackets::node_type> spare_nodes;
-    std::size_t largest_sent = 0;  // bytes, for reserve_target()
 
     void push_in_flight(Packet p)
     {
@@ -190,40 +198,51 @@ struct SimulatedNetwork::Impl
         return p;
     }
 
-    // Datagram buffers are reserved for the largest datagram sent so far, up to this; the spares
-    // all have that room (recycle() drops smaller ones), so once the largest size has been seen
-    // and every buffer has gone round once, no buffer grows.
-    static constexpr std::size_t k_reserve_cap = std::size_t{64} << 10;
-
-    [[nodiscard]] std::size_t reserve_target() const noexcept
+    [[nodiscard]] static std::size_t class_bytes(int c) noexcept
     {
-        return std::min(largest_sent, k_reserve_cap);
+        return std::size_t{1} << (c + k_min_shift);
     }
 
-    // An empty buffer with room for `size` bytes: the last spare, or a new one.
+    // An empty buffer with room for `size` bytes: a spare of the least class that holds it (or
+    // of the next), or a new one of that class's size. Datagrams over 64 KiB get a buffer of
+    // their own size, which recycle() frees.
     std::vector<std::byte> take_buffer(std::size_t size)
     {
-        largest_sent = std::max(largest_sent, size);
+        int c = 0;
+        while (c < k_classes && class_bytes(c) < size)
+            ++c;
         std::vector<std::byte> out;
-        if (!spare_buffers.empty())
+        if (c == k_classes)
         {
-            out = std::move(spare_buffers.back());
-            spare_buffers.pop_back();
+            out.reserve(size);
+            return out;
         }
-        if (out.capacity() < size)
-            out.reserve(std::max(size, reserve_target()));
+        for (int k = c; k < std::min(c + 2, k_classes); ++k)
+        {
+            auto& spares = spare_buffers[static_cast<std::size_t>(k)];
+            if (!spares.empty())
+            {
+                out = std::move(spares.back());
+                spares.pop_back();
+                return out;
+            }
+        }
+        out.reserve(class_bytes(c));
         return out;
     }
 
-    // Keeps `buffer`'s storage for a later datagram if it has room for the largest so far (and is
-    // not one grown past k_reserve_cap for an outsized datagram); `buffer` is left empty.
+    // Keeps `buffer`'s storage for a later datagram, in the greatest class its capacity holds
+    // (none under 64 bytes or over 64 KiB: freed); `buffer` is left empty.
     void recycle(std::vector<std::byte>& buffer)
     {
         const std::size_t room = buffer.capacity();
-        if (room != 0 && room >= reserve_target() && room <= k_reserve_cap)
+        if (room >= class_bytes(0) && room < 2 * class_bytes(k_classes - 1))
         {
+            int c = 0;
+            while (c + 1 < k_classes && class_bytes(c + 1) <= room)
+                ++c;
             buffer.clear();
-            spare_buffers.push_back(std::move(buffer));
+            spare_buffers[static_cast<std::size_t>(c)].push_back(std::move(buffer));
         }
         buffer = {};
     }

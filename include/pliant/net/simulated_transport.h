@@ -24,9 +24,9 @@
 /// - No bandwidth limit is modelled (issue 7 may add one).
 /// - Buffers: a datagram's bytes travel in one vector from send() to the receiver's event, and
 ///   the network recycles vectors (lost and dropped packets', and the previous vector of an event
-///   given to poll_into()), so send() and poll_into() allocate nothing per datagram once the
-///   network has carried its largest datagram and as many at once as it carries now. poll()
-///   hands its vector over for good.
+///   given to poll_into(), kept by size class: powers of two from 64 bytes to 64 KiB), so send()
+///   and poll_into() allocate nothing per datagram once the network has carried as many
+///   datagrams of each class at once as it carries now. poll() hands its vector over for good.
 ///
 /// Threading: the network's state is guarded by one mutex, so each endpoint may live on its own
 /// thread (peers as threads of one process); each endpoint itself is single-threaded, as every
