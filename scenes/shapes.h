@@ -188,6 +188,35 @@ inline mesh::TriMesh ellipsoid(double a = 2.0, double b = 1.0, double c = 0.5, i
     return m;
 }
 
+/// A closed frustum of `sides` sides: rings of radius 1 at z = 0 and `top` at z = 1, the top one
+/// turned by `twist` radians, and fan caps around (0, 0, 0) and (0, 0, 1). For many sides its
+/// sides are long slivers at a slant to the axes, side by side, and its caps fans of slivers.
+inline mesh::TriMesh frustum(std::uint32_t sides, double top = 0.5, double twist = 0.3)
+{
+    mesh::TriMesh m;
+    m.positions = {core::Vec3{0, 0, 0}, core::Vec3{0, 0, 1}};
+    for (std::uint32_t k = 0; k < sides; ++k)
+    {
+        const double a = 2.0 * 3.14159265358979323846 * k / sides;
+        m.positions.push_back(core::Vec3{std::cos(a), std::sin(a), 0.0});
+    }
+    for (std::uint32_t k = 0; k < sides; ++k)
+    {
+        const double a = 2.0 * 3.14159265358979323846 * k / sides + twist;
+        m.positions.push_back(core::Vec3{top * std::cos(a), top * std::sin(a), 1.0});
+    }
+    for (std::uint32_t k = 0; k < sides; ++k)
+    {
+        const std::uint32_t b0 = 2 + k, b1 = 2 + (k + 1) % sides;
+        const std::uint32_t t0 = b0 + sides, t1 = b1 + sides;
+        m.faces.push_back({0, b1, b0});
+        m.faces.push_back({1, t0, t1});
+        m.faces.push_back({b0, b1, t1});
+        m.faces.push_back({b0, t1, t0});
+    }
+    return m;
+}
+
 /// Two unit balls (centres at x = ±1.5) joined by a cylindrical neck of radius 0.3 along the x
 /// axis: closed genus 0, and not star-shaped about any point (rays leaving the neck re-enter a
 /// ball). `segments` vertices per ring; 2 + segments·rings vertices.

@@ -723,34 +723,6 @@ mesh::TriMesh crossing_stacks(std::uint32_t k)
 // ---------------------------------------------------------------------------------------------
 // crowded cells: the oriented-box tree
 
-/// A frustum of `sides` sides: rings of radius 1 at z = 0 and `top` at z = 1, the top one turned
-/// by `twist` radians, and fan caps (stars). Its sides are long slanted slivers side by side.
-mesh::TriMesh frustum(std::uint32_t sides, double top = 0.5, double twist = 0.3)
-{
-    mesh::TriMesh m;
-    m.positions = {Vec3{0, 0, 0}, Vec3{0, 0, 1}};
-    for (std::uint32_t k = 0; k < sides; ++k)
-    {
-        const double a = 2.0 * 3.14159265358979323846 * k / sides;
-        m.positions.push_back(Vec3{std::cos(a), std::sin(a), 0.0});
-    }
-    for (std::uint32_t k = 0; k < sides; ++k)
-    {
-        const double a = 2.0 * 3.14159265358979323846 * k / sides + twist;
-        m.positions.push_back(Vec3{top * std::cos(a), top * std::sin(a), 1.0});
-    }
-    for (std::uint32_t k = 0; k < sides; ++k)
-    {
-        const std::uint32_t b0 = 2 + k, b1 = 2 + (k + 1) % sides;
-        const std::uint32_t t0 = b0 + sides, t1 = b1 + sides;
-        m.faces.push_back({0, b1, b0});
-        m.faces.push_back({1, t0, t1});
-        m.faces.push_back({b0, b1, t1});
-        m.faces.push_back({b0, t1, t0});
-    }
-    return m;
-}
-
 /// `b`'s faces appended to `a`'s, its positions mapped by `f`.
 template <typename Map>
 mesh::TriMesh joined(mesh::TriMesh a, const mesh::TriMesh& b, Map f)
@@ -848,24 +820,26 @@ TEST(OrientedBoxes, SharingAPointIsNeverApartAndAGapAcrossAPlaneIs)
 TEST(SelfIntersections, TheOrientedBoxTreePairsLikeBruteForce)
 {
     std::vector<std::pair<std::string, mesh::TriMesh>> cases;
-    cases.emplace_back("frustum", frustum(48));
+    cases.emplace_back("frustum", scenes::frustum(48));
     {
-        mesh::TriMesh m = frustum(48);
+        mesh::TriMesh m = scenes::frustum(48);
         m.positions[2 + 5] = Vec3{-0.4, 0.1, 0.6};        // a ring vertex through the far side
         m.positions[2 + 48 + 30] = Vec3{0.2, 0.2, -0.3};  // and one through the bottom cap
         cases.emplace_back("dented frustum", std::move(m));
     }
     // slivers crossing slivers: a second frustum turned on its side through the first
-    cases.emplace_back("crossed frustums", joined(frustum(40), frustum(40, 0.3, -0.4),
-                                                  [](const Vec3& p) {
-                                                      return Vec3{p.z - 0.5, p.y * 0.8, p.x + 0.4};
-                                                  }));
+    cases.emplace_back("crossed frustums",
+                       joined(scenes::frustum(40), scenes::frustum(40, 0.3, -0.4),
+                              [](const Vec3& p) {
+                                  return Vec3{p.z - 0.5, p.y * 0.8, p.x + 0.4};
+                              }));
     // touching: the second frustum's bottom ring laid on the first's top cap
-    cases.emplace_back("stacked frustums", joined(frustum(40, 0.5, 0.0), frustum(40, 0.5, 0.2),
-                                                  [](const Vec3& p) {
-                                                      return Vec3{p.x * 0.5, p.y * 0.5, p.z + 1.0};
-                                                  }));
-    cases.emplace_back("frustum through a sphere", joined(frustum(48), scenes::icosphere(2),
+    cases.emplace_back("stacked frustums",
+                       joined(scenes::frustum(40, 0.5, 0.0), scenes::frustum(40, 0.5, 0.2),
+                              [](const Vec3& p) {
+                                  return Vec3{p.x * 0.5, p.y * 0.5, p.z + 1.0};
+                              }));
+    cases.emplace_back("frustum through a sphere", joined(scenes::frustum(48), scenes::icosphere(2),
                                                           [](const Vec3& p) {
                                                               return p * 0.6 + Vec3{0.5, 0.1, 0.7};
                                                           }));
@@ -873,7 +847,7 @@ TEST(SelfIntersections, TheOrientedBoxTreePairsLikeBruteForce)
     cases.emplace_back("crossing stacks", crossing_stacks(12));
     {
         // a touching pair far from the origin, copied around a frustum
-        mesh::TriMesh m = frustum(24);
+        mesh::TriMesh m = scenes::frustum(24);
         std::mt19937 rng(3);
         std::uniform_real_distribution<double> offset(-1e4, 1e4);
         for (int k = 0; k < 12; ++k)
@@ -895,7 +869,8 @@ TEST(SelfIntersections, TheOrientedBoxTreePairsLikeBruteForce)
     for (int k = 0; k < 6; ++k)
     {
         // jittered frustums: slivers folding into their neighbours
-        mesh::TriMesh m = frustum(32 + 8 * static_cast<std::uint32_t>(k), 0.3 + 0.1 * k, 0.2 * k);
+        mesh::TriMesh m =
+            scenes::frustum(32 + 8 * static_cast<std::uint32_t>(k), 0.3 + 0.1 * k, 0.2 * k);
         std::uniform_real_distribution<double> jitter(-0.05, 0.05);
         for (Vec3& p : m.positions)
             if (rng() % 4 == 0)
@@ -973,7 +948,7 @@ TEST(SelfIntersections, SlantedSliversSideBySideArePairedByTheTree)
 {
     for (const bool dented : {false, true})
     {
-        mesh::TriMesh m = frustum(800, 0.5, 0.4);
+        mesh::TriMesh m = scenes::frustum(800, 0.5, 0.4);
         if (dented)
         {
             m.positions[2 + 100] = Vec3{-0.5, -0.2, 0.5};

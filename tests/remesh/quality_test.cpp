@@ -111,40 +111,14 @@ TEST(SurfaceDistance, IcosphereAgainstFinerSphere)
     EXPECT_GT(same.psnr_db, 200.0);
 }
 
-/// A frustum of `sides` sides (rings of radius 1 at z = 0 and 0.5 at z = 1, the top one turned by
-/// 0.3 rad, fan caps): long slanted slivers side by side.
-mesh::TriMesh sliver_frustum(std::uint32_t sides)
-{
-    mesh::TriMesh m;
-    m.positions = {Vec3{0, 0, 0}, Vec3{0, 0, 1}};
-    for (std::uint32_t ring = 0; ring < 2; ++ring)
-        for (std::uint32_t k = 0; k < sides; ++k)
-        {
-            const double a = 2.0 * 3.14159265358979323846 * k / sides + 0.3 * ring;
-            const double r = ring == 0 ? 1.0 : 0.5;
-            m.positions.push_back(
-                Vec3{r * std::cos(a), r * std::sin(a), static_cast<double>(ring)});
-        }
-    for (std::uint32_t k = 0; k < sides; ++k)
-    {
-        const std::uint32_t b0 = 2 + k, b1 = 2 + (k + 1) % sides;
-        const std::uint32_t t0 = b0 + sides, t1 = b1 + sides;
-        m.faces.push_back({0, b1, b0});
-        m.faces.push_back({1, t0, t1});
-        m.faces.push_back({b0, b1, t1});
-        m.faces.push_back({b0, t1, t0});
-    }
-    return m;
-}
-
 // A surface of slanted slivers is searched through oriented boxes, others through axis-aligned
 // ones; both find the nearest points brute force finds, and the same distances as each other.
 TEST(SurfaceDistance, OrientedBoxesFindTheNearestPointsAlignedOnesFind)
 {
-    const mesh::TriMesh frustum = sliver_frustum(400);
+    const mesh::TriMesh frustum = scenes::frustum(400);
     EXPECT_TRUE(detail::mostly_slanted_slivers(frustum));
     EXPECT_FALSE(detail::mostly_slanted_slivers(scenes::icosphere(3)));
-    EXPECT_FALSE(detail::mostly_slanted_slivers(sliver_frustum(12)));  // wide faces
+    EXPECT_FALSE(detail::mostly_slanted_slivers(scenes::frustum(12)));  // wide faces
     // The tree's nearest-point search against brute force, exactly: points in the box around
     // the frustum and points just off its sides (their nearest points inside slivers).
     std::vector<std::uint32_t> all(frustum.faces.size());
