@@ -514,7 +514,7 @@ private:
     // so that ENet's next VERIFY_CONNECT is acknowledged and the connection completes here too;
     // resetting it would leave the dialer sending into a connection we no longer have until its
     // own timeout (5-30 s). A spoofed CONNECT's source never sees VERIFY_CONNECT, so it cannot
-    // send this.
+    // send this. The next VERIFY_CONNECT is also made due now (hasten_verify).
     void note_answer(unsigned peer_id, unsigned session, const ENetAddress& from) noexcept
     {
         if (peer_id >= host_->peerCount)
@@ -522,7 +522,39 @@ private:
         ENetPeer* p = &host_->peers[peer_id];
         if (p->state == ENET_PEER_STATE_ACKNOWLEDGING_CONNECT && p->address.host == from.host &&
             p->address.port == from.port && session == p->incomingSessionID)
+        {
             answered_[p] = p->connectID;
+            hasten_verify(*p);
+        }
+    }
+
+    // ENet resends VERIFY_CONNECT when its timer runs out: the peer's round-trip estimate, 500 ms
+    // on a connection with no sample yet, doubled at each resend. The dialer's answer says it is
+    // connected, so its acknowledgement was lost (or comes in this very datagram, which then
+    // removes the command before ENet's check), and waiting for the timer only keeps the
+    // connection half-open here (ENet drops the dialer's data meanwhile, and a session's greeting
+    // with it). Makes the command due at ENet's next check (after this datagram is read, in this
+    // enet_host_service or the next): its timeout is set to the time since it was sent
+    // (ENet doubles that at the resend), unless it went less than k_verify_hasten_ms ago or is
+    // due anyway. Only fields of <enet/enet.h>'s public structures are touched, as ENet's own
+    // check reads them (its protocol.c, enet_protocol_check_timeouts).
+    void hasten_verify(ENetPeer& p) noexcept
+    {
+        for (ENetListIterator it = enet_list_begin(&p.sentReliableCommands);
+             it != enet_list_end(&p.sentReliableCommands); it = enet_list_next(it))
+        {
+            auto* c = reinterpret_cast<ENetOutgoingCommand*>(it);
+            if ((c->command.header.command & ENET_PROTOCOL_COMMAND_MASK) !=
+                ENET_PROTOCOL_COMMAND_VERIFY_CONNECT)
+                continue;
+            const enet_uint32 since = ENET_TIME_DIFFERENCE(host_->serviceTime, c->sentTime);
+            if (since < k_verify_hasten_ms || since >= c->roundTripTimeout)
+                return;
+            c->roundTripTimeout = since;
+            p.nextTimeout = host_->serviceTime;
+            ++counters_.verify_hastened;
+            return;
+        }
     }
 
     // Resets incoming handshakes that were never acknowledged (spoofed or dead sources), so ENet

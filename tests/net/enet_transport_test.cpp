@@ -19,6 +19,7 @@
 
 #include "net/sample_messages.h"
 
+#include <algorithm>
 #include <array>
 #include <cerrno>
 #include <chrono>
@@ -415,57 +416,76 @@ TEST(EnetTransport, ConnectingToAClosedPortTimesOut)
     EXPECT_EQ(ev->peer, h);
     EXPECT_EQ(ev->reason, DisconnectReason::TimedOut);
 }
-
-// A lost acknowledgement of VERIFY_CONNECT. ENet's handshake: the dialer's CONNECT, the
-// acceptor's VERIFY_CONNECT (retransmitted at 0.5 s, 1.5 s, ... until acknowledged), the
-// dialer's acknowledgement. The dialer is connected once VERIFY_CONNECT arrives; the acceptor
-// only once the acknowledgement does. A relay between them drops the dialer's first two
-// datagrams that lead with an acknowledgement (those of VERIFY_CONNECT and its first
-// retransmission), so the acceptor is still half-open when half_open_timeout_ms (1.2 s) passes,
-// while the dialer is already sending. The acceptor must keep the connection (the dialer's
-// datagrams prove it received VERIFY_CONNECT) so that the retransmission at 1.5 s completes it;
-// resetting it, as for a spoofed CONNECT, would leave the dialer sending into nothing.
-TEST(EnetTransport, AHandshakeWhoseAcknowledgementIsLostCompletes)
+// ENet's handshake: the dialer's CONNECT, the acceptor's VERIFY_CONNECT (resent on ENet's timer:
+// 0.5 s, then doubling, until acknowledged), the dialer's acknowledgement. The dialer is
+// connected once VERIFY_CONNECT arrives; the acceptor only once the acknowledgement does, and it
+// drops the dialer's data until then. HandshakeRelay sits between the two transports on
+// 127.0.0.1 (two plain UDP sockets the test pumps: the dialer dials `front`, `back` talks to the
+// acceptor), drops the dialer's datagrams that lead with an acknowledgement (ENet command 1)
+// while `drop_ack` says so, and notes the sent-time field of every VERIFY_CONNECT the acceptor
+// sends (ENet stamps it from the acceptor's own clock, in ms).
+struct HandshakeRelay
 {
-    auto acceptor = make_enet_transport();
-    auto dialer = make_enet_transport();
-    auto ra = acceptor->open(Address{{127, 0, 0, 1}, 0});
-    auto rd = dialer->open(Address{{127, 0, 0, 1}, 0});
-    const int front = ::socket(AF_INET, SOCK_DGRAM | SOCK_NONBLOCK, 0);  // the dialer's side
-    const int back = ::socket(AF_INET, SOCK_DGRAM | SOCK_NONBLOCK, 0);   // the acceptor's side
-    sockaddr_in any{};
-    any.sin_family = AF_INET;
-    any.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    if (!ra || !rd || front < 0 || back < 0 ||
-        ::bind(front, reinterpret_cast<sockaddr*>(&any), sizeof(any)) != 0 ||
-        ::bind(back, reinterpret_cast<sockaddr*>(&any), sizeof(any)) != 0)
+    std::unique_ptr<Transport> acceptor = make_enet_transport();
+    std::unique_ptr<Transport> dialer = make_enet_transport();
+    int front = ::socket(AF_INET, SOCK_DGRAM | SOCK_NONBLOCK, 0);  // the dialer's side
+    int back = ::socket(AF_INET, SOCK_DGRAM | SOCK_NONBLOCK, 0);   // the acceptor's side
+    sockaddr_in to_acceptor{};
+    sockaddr_in to_dialer{};
+    Address front_address;
+    bool ok = false;
+    std::function<bool()> drop_ack;
+    int acks_dropped = 0;
+    std::vector<std::uint16_t> verify_sent;  // sent-time fields of the VERIFY_CONNECTs relayed
+    std::array<std::uint8_t, 4096> buf{};
+
+    HandshakeRelay()
+    {
+        auto ra = acceptor->open(Address{{127, 0, 0, 1}, 0});
+        auto rd = dialer->open(Address{{127, 0, 0, 1}, 0});
+        sockaddr_in any{};
+        any.sin_family = AF_INET;
+        any.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+        if (!ra || !rd || front < 0 || back < 0 ||
+            ::bind(front, reinterpret_cast<sockaddr*>(&any), sizeof(any)) != 0 ||
+            ::bind(back, reinterpret_cast<sockaddr*>(&any), sizeof(any)) != 0)
+            return;
+        sockaddr_in front_addr{};
+        socklen_t len = sizeof(front_addr);
+        ::getsockname(front, reinterpret_cast<sockaddr*>(&front_addr), &len);
+        front_address = Address{{127, 0, 0, 1}, ntohs(front_addr.sin_port)};
+        to_acceptor = any;
+        to_acceptor.sin_port = htons(ra->port);
+        to_dialer = any;
+        to_dialer.sin_port = htons(rd->port);
+        ok = true;
+    }
+    ~HandshakeRelay()
     {
         ::close(front);
         ::close(back);
-        GTEST_SKIP() << "cannot bind UDP on 127.0.0.1";
     }
-    sockaddr_in front_addr{};
-    socklen_t len = sizeof(front_addr);
-    ::getsockname(front, reinterpret_cast<sockaddr*>(&front_addr), &len);
-    sockaddr_in to_acceptor = any;
-    to_acceptor.sin_port = htons(ra->port);
-    sockaddr_in to_dialer = any;
-    to_dialer.sin_port = htons(rd->port);
+    HandshakeRelay(const HandshakeRelay&) = delete;
+    HandshakeRelay& operator=(const HandshakeRelay&) = delete;
 
-    int acks_dropped = 0;
-    std::array<std::uint8_t, 4096> buf{};
-    // Moves what waits on the relay's sockets; drops the dialer's first two acknowledgements.
-    const auto relay = [&]
+    // ENet header: 2 bytes (peer id and flags), 2 more (the sent time) with the sent-time flag;
+    // then commands, each led by its number in the low nibble.
+    [[nodiscard]] std::size_t first_command(std::size_t n) const
+    {
+        const std::size_t at = (buf[0] & 0x80) != 0 ? 4 : 2;
+        return at < n ? at : n;
+    }
+
+    // Moves what waits on the relay's sockets, both ways.
+    void pump()
     {
         for (int k = 0; k < 64; ++k)
         {
             const ssize_t n = ::recv(front, buf.data(), buf.size(), 0);
             if (n <= 0)
                 break;
-            // ENet header: 2 bytes (peer id and flags), 2 more with the sent-time flag; then
-            // commands, acknowledgements first (command number 1 in the low nibble).
-            const std::size_t at = (buf[0] & 0x80) != 0 ? 4 : 2;
-            if (static_cast<std::size_t>(n) > at && (buf[at] & 0x0F) == 1 && acks_dropped < 2)
+            const std::size_t at = first_command(static_cast<std::size_t>(n));
+            if (at < static_cast<std::size_t>(n) && (buf[at] & 0x0F) == 1 && drop_ack && drop_ack())
             {
                 ++acks_dropped;
                 continue;
@@ -478,13 +498,31 @@ TEST(EnetTransport, AHandshakeWhoseAcknowledgementIsLostCompletes)
             const ssize_t n = ::recv(back, buf.data(), buf.size(), 0);
             if (n <= 0)
                 break;
+            // VERIFY_CONNECT (3) follows the acknowledgement of CONNECT (8 bytes) or leads.
+            std::size_t at = first_command(static_cast<std::size_t>(n));
+            while (at < static_cast<std::size_t>(n) && (buf[at] & 0x0F) == 1)
+                at += 8;
+            if ((buf[0] & 0x80) != 0 && at < static_cast<std::size_t>(n) && (buf[at] & 0x0F) == 3)
+                verify_sent.push_back(static_cast<std::uint16_t>((buf[2] << 8) | buf[3]));
             (void)::sendto(front, buf.data(), static_cast<std::size_t>(n), 0,
                            reinterpret_cast<const sockaddr*>(&to_dialer), sizeof(to_dialer));
         }
-    };
+    }
+};
 
-    const PeerHandle h =
-        dialer->connect(Address{{127, 0, 0, 1}, ntohs(front_addr.sin_port)}).value();
+// The acceptor is still half-open when half_open_timeout_ms (1.2 s) passes, while the dialer is
+// already sending: the relay drops every acknowledgement for the first 2 s. The acceptor must
+// keep the connection (the dialer's datagrams prove it received VERIFY_CONNECT) so that a later
+// VERIFY_CONNECT completes it; resetting it, as for a spoofed CONNECT, would leave the dialer
+// sending into nothing.
+TEST(EnetTransport, AHandshakeWhoseAcknowledgementIsLostCompletes)
+{
+    HandshakeRelay r;
+    if (!r.ok)
+        GTEST_SKIP() << "cannot bind UDP on 127.0.0.1";
+    const auto dialled = Clock::now();
+    r.drop_ack = [&] { return Clock::now() < dialled + std::chrono::milliseconds(2000); };
+    const PeerHandle h = r.dialer->connect(r.front_address).value();
     bool dialer_connected = false;
     bool sent = false;
     std::optional<PeerHandle> accepted;
@@ -493,13 +531,14 @@ TEST(EnetTransport, AHandshakeWhoseAcknowledgementIsLostCompletes)
     const auto end = Clock::now() + k_deadline;
     while (Clock::now() < end && got.empty())
     {
-        relay();
-        while (auto e = dialer->poll(0))
+        r.pump();
+        while (auto e = r.dialer->poll(0))
             dialer_connected =
                 dialer_connected || (e->kind == TransportEvent::Kind::Connected && e->peer == h);
         if (dialer_connected && !sent)
-            sent = static_cast<bool>(dialer->send(h, Channel::Control, hello, Delivery::Reliable));
-        while (auto e = acceptor->poll(1))
+            sent =
+                static_cast<bool>(r.dialer->send(h, Channel::Control, hello, Delivery::Reliable));
+        while (auto e = r.acceptor->poll(1))
         {
             if (e->kind == TransportEvent::Kind::Connected)
                 accepted = e->peer;
@@ -507,15 +546,68 @@ TEST(EnetTransport, AHandshakeWhoseAcknowledgementIsLostCompletes)
                 got = e->data;
         }
     }
-    ::close(front);
-    ::close(back);
-    EXPECT_EQ(acks_dropped, 2);
+    EXPECT_GE(r.acks_dropped, 1);
     EXPECT_TRUE(dialer_connected);
     EXPECT_TRUE(accepted.has_value()) << "the acceptor reset a handshake the dialer had completed";
     EXPECT_EQ(got, hello);
-    const EnetCounters c = enet_counters(*acceptor).value();
+    const EnetCounters c = enet_counters(*r.acceptor).value();
     EXPECT_EQ(c.half_open_reset, 0u);
     EXPECT_EQ(c.half_open_kept, 1u);
+}
+
+// The dialer's answer on a half-open connection also makes the acceptor resend VERIFY_CONNECT
+// at once (k_verify_hasten_ms after the last copy at the earliest), not at ENet's timer. The
+// relay drops the first two acknowledgements; the dialer, once connected, sends a datagram
+// every 10 ms, as a session's repeated greeting does. ENet never resends sooner than 500 ms on
+// a connection with no round-trip sample, and doubles that at each resend, so two consecutive
+// VERIFY_CONNECTs less than 500 ms apart on the acceptor's own clock were hastened. Two
+// chances, so one scheduler stall past ENet's timer cannot hide it.
+TEST(EnetTransport, ADialersAnswerBringsTheNextVerifyForward)
+{
+    HandshakeRelay r;
+    if (!r.ok)
+        GTEST_SKIP() << "cannot bind UDP on 127.0.0.1";
+    r.drop_ack = [&] { return r.acks_dropped < 2; };
+    const PeerHandle h = r.dialer->connect(r.front_address).value();
+    bool dialer_connected = false;
+    std::optional<PeerHandle> accepted;
+    std::size_t received = 0;
+    const std::vector<std::byte> hello{std::byte{4}, std::byte{5}};
+    auto next_send = Clock::now();
+    const auto end = Clock::now() + k_deadline;
+    while (Clock::now() < end && received == 0)
+    {
+        r.pump();
+        while (auto e = r.dialer->poll(0))
+            dialer_connected =
+                dialer_connected || (e->kind == TransportEvent::Kind::Connected && e->peer == h);
+        if (dialer_connected && Clock::now() >= next_send)
+        {
+            (void)r.dialer->send(h, Channel::State, hello, Delivery::Unsequenced);
+            r.dialer->flush();
+            next_send = Clock::now() + std::chrono::milliseconds(10);
+        }
+        while (auto e = r.acceptor->poll(1))
+        {
+            if (e->kind == TransportEvent::Kind::Connected)
+                accepted = e->peer;
+            else if (e->kind == TransportEvent::Kind::Received && e->data == hello)
+                ++received;
+        }
+    }
+    EXPECT_EQ(r.acks_dropped, 2);
+    ASSERT_TRUE(dialer_connected);
+    ASSERT_TRUE(accepted.has_value());
+    EXPECT_GE(received, 1u);
+    const EnetCounters c = enet_counters(*r.acceptor).value();
+    EXPECT_GE(c.verify_hastened, 1u);
+    ASSERT_GE(r.verify_sent.size(), 2u);
+    std::uint32_t shortest = 1U << 16U;
+    for (std::size_t k = 1; k < r.verify_sent.size(); ++k)
+        shortest = std::min<std::uint32_t>(
+            shortest, static_cast<std::uint16_t>(r.verify_sent[k] - r.verify_sent[k - 1]));
+    EXPECT_LT(shortest, 500u) << r.verify_sent.size() << " VERIFY_CONNECTs";
+    EXPECT_GE(shortest, k_verify_hasten_ms) << "resent sooner than the rate limit";
 }
 
 }  // namespace
