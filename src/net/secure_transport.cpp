@@ -693,11 +693,7 @@ bool SecureTransport::poll_into(TransportEvent& out, int timeout_ms) noexcept
     if (!s.fill_pending(timeout_ms))
         return false;
     TransportEvent& ev = s.pending[s.pending_head];
-    out.kind = ev.kind;
-    out.peer = ev.peer;
-    out.channel = ev.channel;
-    out.reason = ev.reason;
-    out.data.swap(ev.data);
+    swap_into(out, ev);
     s.recycle(ev.data);
     s.pop_pending();
     return true;

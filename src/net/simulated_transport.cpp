@@ -697,11 +697,7 @@ public:
         if (e.events.empty())
             return false;
         TransportEvent& ev = e.events.front();
-        out.kind = ev.kind;
-        out.peer = ev.peer;
-        out.channel = ev.channel;
-        out.reason = ev.reason;
-        out.data.swap(ev.data);
+        swap_into(out, ev);
         net_.recycle(ev.data);
         e.events.pop_front();
         return true;

@@ -858,7 +858,7 @@ std::vector<std::array<std::uint32_t, 2>> pairs_among(const mesh::TriMesh& mesh,
         std::size_t ungrouped = 0;
         for (std::size_t i = r0; i < r1; ++i)
             ungrouped += group_of(cells[i].face) == k_no_star ? 1 : 0;
-        if (ungrouped <= crowded_cell || ungrouped == 0)
+        if (ungrouped <= crowded_cell)
             continue;
         run_crowded[static_cast<std::size_t>(r)] = 1;
         if (crowded.empty())

@@ -103,6 +103,18 @@ struct TransportEvent
     std::vector<std::byte> data;
 };
 
+/// Hands a queued event to a caller of Transport::poll_into: copies `from`'s fields into `out`
+/// and swaps their data vectors, so `out` gets the datagram and `from.data` holds `out`'s
+/// previous buffer, for the transport to keep for a later datagram.
+inline void swap_into(TransportEvent& out, TransportEvent& from) noexcept
+{
+    out.kind = from.kind;
+    out.peer = from.peer;
+    out.channel = from.channel;
+    out.reason = from.reason;
+    out.data.swap(from.data);
+}
+
 class Transport
 {
 public:
