@@ -21,6 +21,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include "net/exchange_harness.h"
 #include "net/sample_messages.h"
 #include "support/test_paths.h"
 
@@ -548,40 +549,16 @@ TEST(SecureTransport, NetworkDuplicatesAndReorderingDeliverEveryDatagramOnce)
     EXPECT_EQ(p.b->peers().size(), 1u) << "duplicates are not held against the peer";
 }
 
-/// Datagram `i` of secure_exchange(): 4..303 bytes, its number in the first 4.
-std::vector<std::byte> numbered_payload(std::uint32_t i)
-{
-    std::vector<std::byte> out = seeded_payload(4 + (i * 53u) % 300u, i);
-    std::memcpy(out.data(), &i, 4);
-    return out;
-}
-
-/// One event as SecureTransport's caller saw it, with who polled it and the virtual time.
-struct SecureSeen
-{
-    int who = 0;
-    std::int64_t t_us = 0;
-    TransportEvent::Kind kind = TransportEvent::Kind::Received;
-    PeerHandle peer;
-    Channel channel = Channel::Control;
-    DisconnectReason reason = DisconnectReason::None;
-    std::vector<std::byte> data;
-    friend bool operator==(const SecureSeen&, const SecureSeen&) = default;
-};
-
 struct SecureExchange
 {
-    std::vector<SecureSeen> events;
+    test::ExchangeRun run;
     SecureStats a_totals;
     SecureStats b_totals;
     SimulatedTotals net;
-    std::size_t received = 0;
-    std::size_t corrupt = 0;  ///< Received datagrams whose bytes are not what was sent
 };
 
 /// Two SecureTransports straight over a bad simulated network (no Tap: the simulated transport's
-/// own poll_into is used below), from connect to disconnect: 500 datagrams each way of every
-/// delivery, drained with poll() or, when `into`, with poll_into() into one reused event.
+/// own poll_into is used below), through test::run_exchange: 500 datagrams each way.
 SecureExchange secure_exchange(std::uint64_t seed, bool into)
 {
     SimulatedNetworkSettings ns;
@@ -600,72 +577,7 @@ SecureExchange secure_exchange(std::uint64_t seed, bool into)
     (void)a.open({}).value();
     const Address addr_b = b.open({}).value();
     SecureExchange out;
-    TransportEvent reused;
-    PeerHandle b_to_a;
-    bool a_up = false;
-    const auto drain = [&](int who, Transport& t)
-    {
-        for (int k = 0; k < 100000; ++k)
-        {
-            if (into)
-            {
-                if (!t.poll_into(reused))
-                    return;
-            }
-            else
-            {
-                auto ev = t.poll();
-                if (!ev)
-                    return;
-                reused = std::move(*ev);
-            }
-            out.events.push_back(SecureSeen{who, net.now_us(), reused.kind, reused.peer,
-                                            reused.channel, reused.reason, reused.data});
-            if (reused.kind == TransportEvent::Kind::Connected && who == 0)
-                a_up = true;
-            if (reused.kind == TransportEvent::Kind::Connected && who == 1)
-                b_to_a = reused.peer;
-            if (reused.kind != TransportEvent::Kind::Received)
-                continue;
-            ++out.received;
-            std::uint32_t i = 0;
-            if (reused.data.size() >= 4)
-                std::memcpy(&i, reused.data.data(), 4);
-            if (reused.data != numbered_payload(i))
-                ++out.corrupt;
-        }
-    };
-    const PeerHandle a_to_b = a.connect(addr_b).value();
-    for (int step = 0; step < 3000 && !(a_up && b_to_a.value != 0); ++step)
-    {
-        net.advance(0.001);
-        drain(0, a);
-        drain(1, b);
-    }
-    for (std::uint32_t i = 0; i < 500; ++i)
-    {
-        const Delivery d = i % 3 == 0 ? Delivery::Reliable
-                                      : (i % 3 == 1 ? Delivery::Unreliable : Delivery::Unsequenced);
-        const Channel c = i % 2 == 0 ? Channel::Control : Channel::State;
-        (void)a.send(a_to_b, c, numbered_payload(i), d);
-        (void)b.send(b_to_a, c, numbered_payload(i + 1000), d);
-        net.advance(0.002);
-        drain(0, a);
-        drain(1, b);
-    }
-    for (int step = 0; step < 500; ++step)
-    {
-        net.advance(0.002);
-        drain(0, a);
-        drain(1, b);
-    }
-    a.disconnect(a_to_b, DisconnectReason::Quit);
-    for (int step = 0; step < 1000; ++step)
-    {
-        net.advance(0.002);
-        drain(0, a);
-        drain(1, b);
-    }
+    out.run = test::run_exchange(net, a, b, addr_b, 500, into);
     out.a_totals = a.totals();
     out.b_totals = b.totals();
     out.net = net.totals();
@@ -693,12 +605,12 @@ TEST(SecureTransport, PollIntoGivesTheEventsOfPollOverABadNetwork)
     {
         const SecureExchange by_poll = secure_exchange(seed, false);
         const SecureExchange by_into = secure_exchange(seed, true);
-        ASSERT_EQ(by_poll.events.size(), by_into.events.size()) << "seed " << seed;
-        for (std::size_t k = 0; k < by_poll.events.size(); ++k)
-            ASSERT_TRUE(by_poll.events[k] == by_into.events[k])
+        ASSERT_EQ(by_poll.run.events.size(), by_into.run.events.size()) << "seed " << seed;
+        for (std::size_t k = 0; k < by_poll.run.events.size(); ++k)
+            ASSERT_TRUE(by_poll.run.events[k] == by_into.run.events[k])
                 << "seed " << seed << " event " << k;
-        EXPECT_EQ(by_poll.corrupt, 0u);
-        EXPECT_EQ(by_into.corrupt, 0u);
+        EXPECT_EQ(by_poll.run.corrupt, 0u);
+        EXPECT_EQ(by_into.run.corrupt, 0u);
         expect_same_secure_counts(by_poll.a_totals, by_into.a_totals);
         expect_same_secure_counts(by_poll.b_totals, by_into.b_totals);
         EXPECT_EQ(by_poll.net.transmissions, by_into.net.transmissions);
@@ -711,12 +623,12 @@ TEST(SecureTransport, PollIntoGivesTheEventsOfPollOverABadNetwork)
         // lost, and the network's duplicates were dropped here.
         const auto kinds = [&](TransportEvent::Kind kind)
         {
-            return std::count_if(by_into.events.begin(), by_into.events.end(),
-                                 [kind](const SecureSeen& e) { return e.kind == kind; });
+            return std::count_if(by_into.run.events.begin(), by_into.run.events.end(),
+                                 [kind](const test::SeenEvent& e) { return e.kind == kind; });
         };
         EXPECT_EQ(kinds(TransportEvent::Kind::Connected), 2);
         EXPECT_EQ(kinds(TransportEvent::Kind::Disconnected), 2);
-        EXPECT_GT(by_into.received, 600u);
+        EXPECT_GT(by_into.run.received, 600u);
         EXPECT_GT(by_into.net.lost, 50u);
         EXPECT_GT(by_into.b_totals.replayed + by_into.a_totals.replayed, 20u);
     }

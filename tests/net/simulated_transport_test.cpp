@@ -3,12 +3,15 @@
 // SimulatedNetwork: connection life cycle, determinism for a seed, loss/duplication/reordering
 // measured at the receiver against the settings, the reliable channel in order exactly once under
 // 20 % loss, timeouts, endpoints on separate threads, and poll_into() (which recycles the
-// datagrams' buffers) giving poll()'s events. Everything runs on the virtual clock.
+// datagrams' buffers) giving poll()'s events (the exchange of net/exchange_harness.h, shared with
+// SecureTransport's test). Everything runs on the virtual clock.
 
 #include <pliant/core/hash.h>
 #include <pliant/net/simulated_transport.h>
 
 #include <gtest/gtest.h>
+
+#include "net/exchange_harness.h"
 
 #include <algorithm>
 #include <atomic>
@@ -167,38 +170,17 @@ TEST(SimulatedTransport, DeterministicForASeed)
     EXPECT_NE(trace(43), first);
 }
 
-/// One event as a caller saw it, with who polled it and the virtual time.
-struct SeenEvent
-{
-    int who = 0;
-    std::int64_t t_us = 0;
-    TransportEvent::Kind kind = TransportEvent::Kind::Received;
-    PeerHandle peer;
-    Channel channel = Channel::Control;
-    DisconnectReason reason = DisconnectReason::None;
-    std::vector<std::byte> data;
-    friend bool operator==(const SeenEvent&, const SeenEvent&) = default;
-};
-
-std::size_t varied_size(std::uint32_t seq)
-{
-    return 4 + (seq * 53u) % 300u;
-}
-
-/// What exchange() saw.
+/// What exchange() saw, and both ends' counters before the disconnect.
 struct Exchange
 {
-    std::vector<SeenEvent> events;
+    test::ExchangeRun run;
     SimulatedTotals totals;
     PeerStats a_stats;
     PeerStats b_stats;
-    std::size_t received = 0;
-    std::size_t corrupt = 0;  ///< Received datagrams whose bytes are not what was sent
 };
 
-/// A bad-network exchange (latency, jitter, loss, duplication, reordering) from connect to
-/// disconnect: both ways, every delivery, datagrams of 4..303 bytes in varying order of size,
-/// every event drained with poll() or, when `into`, with poll_into() into one reused event.
+/// test::run_exchange over a bad network (latency, jitter, 20 % loss, duplication, reordering):
+/// 600 datagrams each way.
 Exchange exchange(std::uint64_t seed, bool into)
 {
     SimulatedNetworkSettings s;
@@ -211,68 +193,12 @@ Exchange exchange(std::uint64_t seed, bool into)
                           .reorder_delay_s = 0.03};
     Pair p(s);
     Exchange out;
-    TransportEvent reused;
-    const auto drain = [&](int who, Transport& t)
-    {
-        for (int k = 0; k < 100000; ++k)
-        {
-            if (into)
-            {
-                if (!t.poll_into(reused))
-                    return;
-            }
-            else
-            {
-                auto ev = t.poll();
-                if (!ev)
-                    return;
-                reused = std::move(*ev);
-            }
-            out.events.push_back(SeenEvent{who, p.net.now_us(), reused.kind, reused.peer,
-                                           reused.channel, reused.reason, reused.data});
-            if (reused.kind == TransportEvent::Kind::Connected && who == 1)
-                p.b_to_a = reused.peer;
-            if (reused.kind != TransportEvent::Kind::Received)
-                continue;
-            ++out.received;
-            const std::uint32_t seq = reused.data.size() >= 4 ? seq_of(reused.data) : 0;
-            if (reused.data != payload(seq, varied_size(seq)))
-                ++out.corrupt;
-        }
-    };
-    p.a_to_b = p.a->connect(p.addr_b).value();
-    for (int step = 0; step < 1000 && p.b_to_a.value == 0; ++step)
-    {
-        p.net.advance(0.001);
-        drain(0, *p.a);
-        drain(1, *p.b);
-    }
-    for (std::uint32_t i = 0; i < 600; ++i)
-    {
-        const Delivery d = i % 3 == 0 ? Delivery::Reliable
-                                      : (i % 3 == 1 ? Delivery::Unreliable : Delivery::Unsequenced);
-        const Channel c = i % 2 == 0 ? Channel::Control : Channel::State;
-        (void)p.a->send(p.a_to_b, c, payload(i, varied_size(i)), d);
-        (void)p.b->send(p.b_to_a, c, payload(i + 1000, varied_size(i + 1000)), d);
-        p.net.advance(0.002);
-        drain(0, *p.a);
-        drain(1, *p.b);
-    }
-    for (int step = 0; step < 500; ++step)
-    {
-        p.net.advance(0.002);
-        drain(0, *p.a);
-        drain(1, *p.b);
-    }
-    out.a_stats = p.a->stats(p.a_to_b).value_or(PeerStats{});
-    out.b_stats = p.b->stats(p.b_to_a).value_or(PeerStats{});
-    p.a->disconnect(p.a_to_b, DisconnectReason::Quit);
-    for (int step = 0; step < 1000; ++step)
-    {
-        p.net.advance(0.002);
-        drain(0, *p.a);
-        drain(1, *p.b);
-    }
+    out.run = test::run_exchange(p.net, *p.a, *p.b, p.addr_b, 600, into,
+                                 [&](PeerHandle a_to_b, PeerHandle b_to_a)
+                                 {
+                                     out.a_stats = p.a->stats(a_to_b).value_or(PeerStats{});
+                                     out.b_stats = p.b->stats(b_to_a).value_or(PeerStats{});
+                                 });
     out.totals = p.net.totals();
     return out;
 }
@@ -294,12 +220,12 @@ TEST(SimulatedTransport, PollIntoGivesTheEventsOfPoll)
     {
         const Exchange by_poll = exchange(seed, false);
         const Exchange by_into = exchange(seed, true);
-        ASSERT_EQ(by_poll.events.size(), by_into.events.size()) << "seed " << seed;
-        for (std::size_t k = 0; k < by_poll.events.size(); ++k)
-            ASSERT_TRUE(by_poll.events[k] == by_into.events[k])
+        ASSERT_EQ(by_poll.run.events.size(), by_into.run.events.size()) << "seed " << seed;
+        for (std::size_t k = 0; k < by_poll.run.events.size(); ++k)
+            ASSERT_TRUE(by_poll.run.events[k] == by_into.run.events[k])
                 << "seed " << seed << " event " << k;
-        EXPECT_EQ(by_poll.corrupt, 0u);
-        EXPECT_EQ(by_into.corrupt, 0u);
+        EXPECT_EQ(by_poll.run.corrupt, 0u);
+        EXPECT_EQ(by_into.run.corrupt, 0u);
         const SimulatedTotals& x = by_poll.totals;
         const SimulatedTotals& y = by_into.totals;
         EXPECT_EQ(x.transmissions, y.transmissions);
@@ -315,12 +241,12 @@ TEST(SimulatedTransport, PollIntoGivesTheEventsOfPoll)
         // lost, duplicated, reordered and dropped stale packets.
         const auto kinds = [&](TransportEvent::Kind kind)
         {
-            return std::count_if(by_into.events.begin(), by_into.events.end(),
-                                 [kind](const SeenEvent& e) { return e.kind == kind; });
+            return std::count_if(by_into.run.events.begin(), by_into.run.events.end(),
+                                 [kind](const test::SeenEvent& e) { return e.kind == kind; });
         };
         EXPECT_EQ(kinds(TransportEvent::Kind::Connected), 2);
         EXPECT_EQ(kinds(TransportEvent::Kind::Disconnected), 2);
-        EXPECT_GT(by_into.received, 700u);
+        EXPECT_GT(by_into.run.received, 700u);
         EXPECT_GT(y.lost, 100u);
         EXPECT_GT(y.duplicated, 50u);
         EXPECT_GT(y.reordered, 50u);
