@@ -628,6 +628,16 @@ TEST(SecureTransport, PollIntoGivesTheEventsOfPollOverABadNetwork)
         };
         EXPECT_EQ(kinds(TransportEvent::Kind::Connected), 2);
         EXPECT_EQ(kinds(TransportEvent::Kind::Disconnected), 2);
+        // b hears why a left. poll() reads the inner transport through its poll_into too, so a
+        // field both paths lose is invisible to the comparison above.
+        EXPECT_EQ(std::count_if(by_into.run.events.begin(), by_into.run.events.end(),
+                                [](const test::SeenEvent& e)
+                                {
+                                    return e.who == 1 &&
+                                           e.kind == TransportEvent::Kind::Disconnected &&
+                                           e.reason == DisconnectReason::Quit;
+                                }),
+                  1);
         EXPECT_GT(by_into.run.received, 600u);
         EXPECT_GT(by_into.net.lost, 50u);
         EXPECT_GT(by_into.b_totals.replayed + by_into.a_totals.replayed, 20u);
