@@ -24,10 +24,12 @@
 #include <cerrno>
 #include <chrono>
 #include <cmath>
+#include <cstddef>
 #include <cstring>
 #include <deque>
 #include <map>
 #include <mutex>
+#include <vector>
 
 namespace pliant::net
 {
@@ -154,6 +156,7 @@ public:
                               "cannot bind UDP " + to_string(bind) + reason);
         }
         host_->intercept = &EnetTransport::intercept;
+        acked_.assign(host_->peerCount, Acked{});
         total_.tokens = settings_.connect_burst_total;
         total_.last = Clock::now();
         ENetAddress bound{};
@@ -237,6 +240,7 @@ public:
             return true;
         }
         ENetEvent ev{};
+        resend_lost();
         t_servicing = this;
         const int r = enet_host_service(host_, &ev,
                                         timeout_ms < 0 ? 0u : static_cast<enet_uint32>(timeout_ms));
@@ -452,6 +456,7 @@ public:
                  ENET_PROTOCOL_HEADER_SESSION_MASK) >>
                 ENET_PROTOCOL_HEADER_SESSION_SHIFT;
             self->note_answer(peer_id, session, host->receivedAddress);
+            self->note_acks(peer_id, session);
             return 0;
         }
         return self->admit(host->receivedAddress) ? 0 : 1;  // 1: consumed, never answered
@@ -554,6 +559,160 @@ private:
             p.nextTimeout = host_->serviceTime;
             ++counters_.verify_hastened;
             return;
+        }
+    }
+
+    // The newest transmission a peer has acknowledged (EnetSettings::fast_retransmit): its ENet
+    // sent time, and the channel and reliable sequence number of the command acknowledged, which
+    // order the commands of one datagram or of one millisecond's burst (ENet numbers a channel's
+    // reliable commands in the order it sends them). Kept per ENet peer slot, for one connection
+    // (connect_id).
+    struct Acked
+    {
+        enet_uint32 connect_id = 0;
+        bool valid = false;
+        enet_uint32 sent = 0;  // ENet time, ms
+        enet_uint32 rtt = 0;   // ms, from that transmission to its acknowledgement
+        enet_uint8 channel = 0;
+        enet_uint16 sequence = 0;
+    };
+
+    // Was `c` sent before the newest transmission acknowledged, `a`?
+    static bool sent_before(const ENetOutgoingCommand& c, const Acked& a) noexcept
+    {
+        if (ENET_TIME_LESS(c.sentTime, a.sent))
+            return true;
+        return c.sentTime == a.sent && c.command.header.channelID == a.channel &&
+               static_cast<std::int16_t>(
+                   static_cast<std::uint16_t>(c.reliableSequenceNumber - a.sequence)) < 0;
+    }
+
+    // A datagram addressed to peer slot `peer_id`, before ENet reads it: notes the newest
+    // transmission its ACKNOWLEDGE commands name. Only a connected peer's datagrams from its
+    // address with its session bits count (ENet's own test before it takes an acknowledgement);
+    // the commands are walked as ENet walks them (sizes from enet_protocol_command_size, data
+    // lengths from their headers), stopping at anything ENet would stop at. Nothing is written
+    // to ENet's state here.
+    void note_acks(unsigned peer_id, unsigned session) noexcept
+    {
+        if (!settings_.fast_retransmit || peer_id >= acked_.size())
+            return;
+        const ENetPeer& p = host_->peers[peer_id];
+        const ENetAddress& from = host_->receivedAddress;
+        if ((p.state != ENET_PEER_STATE_CONNECTED && p.state != ENET_PEER_STATE_DISCONNECT_LATER) ||
+            from.host != p.address.host || from.port != p.address.port ||
+            session != p.incomingSessionID)
+            return;
+        const enet_uint8* data = host_->receivedData;
+        const std::size_t length = host_->receivedDataLength;
+        const unsigned flags = ((static_cast<unsigned>(data[0]) << 8) | data[1]) &
+                               static_cast<unsigned>(ENET_PROTOCOL_HEADER_FLAG_MASK);
+        if ((flags & ENET_PROTOCOL_HEADER_FLAG_COMPRESSED) != 0)
+            return;  // pliant sets no compressor: ENet drops it
+        std::size_t at = (flags & ENET_PROTOCOL_HEADER_FLAG_SENT_TIME) != 0
+                             ? sizeof(ENetProtocolHeader)
+                             : offsetof(ENetProtocolHeader, sentTime);
+        if (host_->checksum != nullptr)
+            at += sizeof(enet_uint32);
+        Acked& a = acked_[peer_id];
+        if (a.connect_id != p.connectID)
+            a = Acked{p.connectID};
+        const enet_uint32 now = host_->serviceTime;
+        for (int guard = 0; guard < ENET_PROTOCOL_MAXIMUM_PACKET_COMMANDS &&
+                            at + sizeof(ENetProtocolCommandHeader) <= length;
+             ++guard)
+        {
+            ENetProtocol c{};
+            std::memcpy(&c, data + at, std::min(sizeof(c), length - at));
+            const unsigned number = c.header.command & ENET_PROTOCOL_COMMAND_MASK;
+            const std::size_t size = number < ENET_PROTOCOL_COMMAND_COUNT
+                                         ? enet_protocol_command_size(c.header.command)
+                                         : 0;
+            if (size == 0 || at + size > length)
+                return;
+            at += size;
+            switch (number)
+            {
+            case ENET_PROTOCOL_COMMAND_ACKNOWLEDGE:
+            {
+                // The 16 low bits of our clock when we sent it, widened as ENet widens them.
+                enet_uint32 sent = ENET_NET_TO_HOST_16(c.acknowledge.receivedSentTime);
+                sent |= now & 0xFFFF0000u;
+                if ((sent & 0x8000u) > (now & 0x8000u))
+                    sent -= 0x10000u;
+                if (ENET_TIME_LESS(now, sent))
+                    break;  // from the future: ENet ignores it too
+                const enet_uint16 sequence =
+                    ENET_NET_TO_HOST_16(c.acknowledge.receivedReliableSequenceNumber);
+                const bool newer = !a.valid || ENET_TIME_GREATER(sent, a.sent) ||
+                                   (sent == a.sent && c.header.channelID == a.channel &&
+                                    static_cast<std::int16_t>(
+                                        static_cast<std::uint16_t>(sequence - a.sequence)) > 0);
+                if (newer)
+                {
+                    a.valid = true;
+                    a.sent = sent;
+                    a.rtt = ENET_TIME_DIFFERENCE(now, sent);
+                    a.channel = c.header.channelID;
+                    a.sequence = sequence;
+                }
+                break;
+            }
+            case ENET_PROTOCOL_COMMAND_SEND_RELIABLE:
+                at += ENET_NET_TO_HOST_16(c.sendReliable.dataLength);
+                break;
+            case ENET_PROTOCOL_COMMAND_SEND_UNRELIABLE:
+                at += ENET_NET_TO_HOST_16(c.sendUnreliable.dataLength);
+                break;
+            case ENET_PROTOCOL_COMMAND_SEND_UNSEQUENCED:
+                at += ENET_NET_TO_HOST_16(c.sendUnsequenced.dataLength);
+                break;
+            case ENET_PROTOCOL_COMMAND_SEND_FRAGMENT:
+            case ENET_PROTOCOL_COMMAND_SEND_UNRELIABLE_FRAGMENT:
+                at += ENET_NET_TO_HOST_16(c.sendFragment.dataLength);
+                break;
+            default: break;
+            }
+        }
+    }
+
+    // Before each service: every reliable command still unacknowledged that was sent before the
+    // newest transmission its peer acknowledged, and has waited that transmission's round trip
+    // plus the reordering allowance, is taken as lost and made due at ENet's next check, as
+    // hasten_verify does (its timeout set to the time since it was sent; ENet doubles that at
+    // the resend). ENet keeps sentReliableCommands in the order it sent them, so the walk stops
+    // at the first command too young or sent after the acknowledged one.
+    void resend_lost() noexcept
+    {
+        if (!settings_.fast_retransmit)
+            return;
+        const enet_uint32 now = enet_time_get();
+        for (auto& [h, conn] : connections_)
+        {
+            ENetPeer* p = conn.peer;
+            if (!conn.connected || p == nullptr)
+                continue;
+            const auto slot = static_cast<std::size_t>(p - host_->peers);
+            const Acked& a = acked_[slot];
+            if (!a.valid || a.connect_id != p->connectID)
+                continue;
+            const enet_uint32 wait =
+                a.rtt + std::max<enet_uint32>(k_reorder_min_ms, p->roundTripTime / 4);
+            for (ENetListIterator it = enet_list_begin(&p->sentReliableCommands);
+                 it != enet_list_end(&p->sentReliableCommands); it = enet_list_next(it))
+            {
+                auto* c = reinterpret_cast<ENetOutgoingCommand*>(it);
+                if (ENET_TIME_GREATER(c->sentTime, a.sent))
+                    break;
+                const enet_uint32 since = ENET_TIME_DIFFERENCE(now, c->sentTime);
+                if (since < wait)
+                    break;
+                if (!sent_before(*c, a) || since >= c->roundTripTimeout)
+                    continue;  // not known lost, or due at ENet's timer anyway
+                c->roundTripTimeout = std::max<enet_uint32>(since, 1);
+                p->nextTimeout = now;
+                ++counters_.fast_retransmits;
+            }
         }
     }
 
@@ -699,6 +858,7 @@ private:
     };
     std::map<const ENetPeer*, HalfOpen> half_open_;
     std::map<const ENetPeer*, enet_uint32> answered_;  // half-open, the dialer answered: connect id
+    std::vector<Acked> acked_;                         // by ENet peer slot (fast_retransmit)
     Clock::time_point last_scan_{};
     Clock::time_point last_sweep_{};  ///< of sources_, when full (admit)
     Clock::time_point last_warning_{};

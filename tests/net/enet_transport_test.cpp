@@ -23,9 +23,12 @@
 #include <array>
 #include <cerrno>
 #include <chrono>
+#include <cstdio>
 #include <cstring>
+#include <deque>
 #include <functional>
 #include <optional>
+#include <span>
 #include <thread>
 #include <vector>
 
@@ -422,12 +425,13 @@ TEST(EnetTransport, ConnectingToAClosedPortTimesOut)
 // drops the dialer's data until then. HandshakeRelay sits between the two transports on
 // 127.0.0.1 (two plain UDP sockets the test pumps: the dialer dials `front`, `back` talks to the
 // acceptor), drops the dialer's datagrams that lead with an acknowledgement (ENet command 1)
-// while `drop_ack` says so, and notes the sent-time field of every VERIFY_CONNECT the acceptor
-// sends (ENet stamps it from the acceptor's own clock, in ms).
+// while `drop_ack` says so, and those `drop_forward` picks, notes the sent-time field of every
+// VERIFY_CONNECT the acceptor sends (ENet stamps it from the acceptor's own clock, in ms), and
+// holds every datagram `delay` before passing it on (in order: the delay is the same for all).
 struct HandshakeRelay
 {
-    std::unique_ptr<Transport> acceptor = make_enet_transport();
-    std::unique_ptr<Transport> dialer = make_enet_transport();
+    std::unique_ptr<Transport> acceptor;
+    std::unique_ptr<Transport> dialer;
     int front = ::socket(AF_INET, SOCK_DGRAM | SOCK_NONBLOCK, 0);  // the dialer's side
     int back = ::socket(AF_INET, SOCK_DGRAM | SOCK_NONBLOCK, 0);   // the acceptor's side
     sockaddr_in to_acceptor{};
@@ -436,10 +440,21 @@ struct HandshakeRelay
     bool ok = false;
     std::function<bool()> drop_ack;
     int acks_dropped = 0;
+    /// Sees each datagram from the dialer (after drop_ack); true drops it.
+    std::function<bool(std::span<const std::uint8_t>)> drop_forward;
     std::vector<std::uint16_t> verify_sent;  // sent-time fields of the VERIFY_CONNECTs relayed
+    std::chrono::milliseconds delay{0};      // one way, each way
+    struct Held
+    {
+        Clock::time_point due;
+        bool to_acceptor = false;
+        std::vector<std::uint8_t> bytes;
+    };
+    std::deque<Held> held;
     std::array<std::uint8_t, 4096> buf{};
 
-    HandshakeRelay()
+    explicit HandshakeRelay(const EnetSettings& settings = {})
+        : acceptor(make_enet_transport(settings)), dialer(make_enet_transport(settings))
     {
         auto ra = acceptor->open(Address{{127, 0, 0, 1}, 0});
         auto rd = dialer->open(Address{{127, 0, 0, 1}, 0});
@@ -476,7 +491,26 @@ struct HandshakeRelay
         return at < n ? at : n;
     }
 
-    // Moves what waits on the relay's sockets, both ways.
+    // On to the acceptor (`forward`) or back to the dialer, now or after `delay`.
+    void pass(bool forward, std::size_t n)
+    {
+        if (delay.count() > 0)
+        {
+            held.push_back(Held{Clock::now() + delay,
+                                forward,
+                                {buf.begin(), buf.begin() + static_cast<std::ptrdiff_t>(n)}});
+            return;
+        }
+        send(forward, buf.data(), n);
+    }
+    void send(bool forward, const std::uint8_t* data, std::size_t n) const
+    {
+        const sockaddr_in& to = forward ? to_acceptor : to_dialer;
+        (void)::sendto(forward ? back : front, data, n, 0, reinterpret_cast<const sockaddr*>(&to),
+                       sizeof(to));
+    }
+
+    // Moves what waits on the relay's sockets, both ways, and what is due of the held.
     void pump()
     {
         for (int k = 0; k < 64; ++k)
@@ -484,14 +518,16 @@ struct HandshakeRelay
             const ssize_t n = ::recv(front, buf.data(), buf.size(), 0);
             if (n <= 0)
                 break;
-            const std::size_t at = first_command(static_cast<std::size_t>(n));
-            if (at < static_cast<std::size_t>(n) && (buf[at] & 0x0F) == 1 && drop_ack && drop_ack())
+            const auto len = static_cast<std::size_t>(n);
+            const std::size_t at = first_command(len);
+            if (at < len && (buf[at] & 0x0F) == 1 && drop_ack && drop_ack())
             {
                 ++acks_dropped;
                 continue;
             }
-            (void)::sendto(back, buf.data(), static_cast<std::size_t>(n), 0,
-                           reinterpret_cast<const sockaddr*>(&to_acceptor), sizeof(to_acceptor));
+            if (drop_forward && drop_forward(std::span<const std::uint8_t>(buf.data(), len)))
+                continue;
+            pass(true, len);
         }
         for (int k = 0; k < 64; ++k)
         {
@@ -504,8 +540,13 @@ struct HandshakeRelay
                 at += 8;
             if ((buf[0] & 0x80) != 0 && at < static_cast<std::size_t>(n) && (buf[at] & 0x0F) == 3)
                 verify_sent.push_back(static_cast<std::uint16_t>((buf[2] << 8) | buf[3]));
-            (void)::sendto(front, buf.data(), static_cast<std::size_t>(n), 0,
-                           reinterpret_cast<const sockaddr*>(&to_dialer), sizeof(to_dialer));
+            pass(false, static_cast<std::size_t>(n));
+        }
+        const auto now = Clock::now();
+        while (!held.empty() && held.front().due <= now)
+        {
+            send(held.front().to_acceptor, held.front().bytes.data(), held.front().bytes.size());
+            held.pop_front();
         }
     }
 };
@@ -608,6 +649,114 @@ TEST(EnetTransport, ADialersAnswerBringsTheNextVerifyForward)
             shortest, static_cast<std::uint16_t>(r.verify_sent[k] - r.verify_sent[k - 1]));
     EXPECT_LT(shortest, 500u) << r.verify_sent.size() << " VERIFY_CONNECTs";
     EXPECT_GE(shortest, k_verify_hasten_ms) << "resent sooner than the rate limit";
+}
+
+// A reliable message whose first four copies are lost, among messages sent every 10 ms through a
+// relay that holds every datagram 60 ms each way (a 120 ms round trip).
+struct RepeatedLoss
+{
+    bool connected = false;
+    std::vector<std::uint32_t> received;  // message numbers, in the order they arrived
+    std::vector<std::uint16_t> copies;    // sent-time fields of the watched message's datagrams
+    std::uint64_t fast_retransmits = 0;
+};
+
+constexpr std::uint32_t k_loss_messages = 100;
+constexpr std::uint32_t k_loss_watched = 30;  // after 30 round-trip samples
+constexpr std::size_t k_loss_dropped = 4;
+
+std::vector<std::byte> numbered(std::uint32_t k)
+{
+    std::vector<std::byte> m(64, std::byte{0});
+    const char tag[4] = {'L', 'O', 'S', 'T'};
+    std::memcpy(m.data(), tag, 4);
+    std::memcpy(m.data() + 4, &k, 4);
+    return m;
+}
+
+RepeatedLoss lose_one_message_repeatedly(bool fast_retransmit)
+{
+    EnetSettings settings;
+    settings.fast_retransmit = fast_retransmit;
+    HandshakeRelay r(settings);
+    RepeatedLoss out;
+    if (!r.ok)
+        return out;
+    r.delay = std::chrono::milliseconds(60);
+    std::vector<std::uint8_t> watched(64);
+    std::memcpy(watched.data(), numbered(k_loss_watched).data(), watched.size());
+    r.drop_forward = [&](std::span<const std::uint8_t> b)
+    {
+        if (std::search(b.begin(), b.end(), watched.begin(), watched.end()) == b.end())
+            return false;
+        out.copies.push_back((b[0] & 0x80) != 0 ? static_cast<std::uint16_t>((b[2] << 8) | b[3])
+                                                : std::uint16_t{0});
+        return out.copies.size() <= k_loss_dropped;
+    };
+    const PeerHandle h = r.dialer->connect(r.front_address).value();
+    std::uint32_t sent = 0;
+    auto next_send = Clock::now();
+    const auto end = Clock::now() + k_deadline;
+    while (Clock::now() < end && out.received.size() < k_loss_messages)
+    {
+        r.pump();
+        while (auto e = r.dialer->poll(0))
+            out.connected =
+                out.connected || (e->kind == TransportEvent::Kind::Connected && e->peer == h);
+        if (out.connected && sent < k_loss_messages && Clock::now() >= next_send)
+        {
+            (void)r.dialer->send(h, Channel::Control, numbered(sent++), Delivery::Reliable);
+            r.dialer->flush();
+            next_send += std::chrono::milliseconds(10);
+        }
+        while (auto e = r.acceptor->poll(1))
+            if (e->kind == TransportEvent::Kind::Received && e->data.size() == 64)
+            {
+                std::uint32_t k = 0;
+                std::memcpy(&k, e->data.data() + 4, 4);
+                out.received.push_back(k);
+            }
+    }
+    out.fast_retransmits = enet_counters(*r.dialer).value().fast_retransmits;
+    return out;
+}
+
+// ENet alone resends a lost reliable command when its timer runs out (at least a round trip),
+// and doubles that timer at every resend: four losses of one command cost at least
+// 1 + 2 + 4 + 8 round trips, 1.8 s here. With fast_retransmit each copy is resent once
+// commands sent after it are acknowledged and it has waited a round trip and a quarter: about
+// 4 x 150 ms. Both runs must deliver every message, in order; the gap from the first copy to the
+// one that got through, on the sender's own clock (ENet's sent-time field), tells them apart
+// with room for a slow machine either way.
+TEST(EnetTransport, AReliableCommandLostRepeatedlyIsResentOnLaterAcknowledgements)
+{
+    std::vector<std::uint32_t> all(k_loss_messages);
+    for (std::uint32_t k = 0; k < k_loss_messages; ++k)
+        all[k] = k;
+    for (const bool fast : {true, false})
+    {
+        const RepeatedLoss run = lose_one_message_repeatedly(fast);
+        if (!run.connected && run.copies.empty())
+            GTEST_SKIP() << "cannot bind UDP on 127.0.0.1, or no connection through the relay";
+        SCOPED_TRACE(fast ? "fast_retransmit" : "ENet's timer alone");
+        EXPECT_EQ(run.received, all);
+        ASSERT_GT(run.copies.size(), k_loss_dropped);
+        const auto gap = static_cast<std::uint16_t>(run.copies[k_loss_dropped] - run.copies[0]);
+        std::printf("%s: copy %zu of the message went %u ms after the first (%llu fast resends)\n",
+                    fast ? "fast_retransmit" : "ENet's timer", k_loss_dropped + 1,
+                    static_cast<unsigned>(gap),
+                    static_cast<unsigned long long>(run.fast_retransmits));
+        if (fast)
+        {
+            EXPECT_LT(gap, 1200u) << run.copies.size() << " copies";
+            EXPECT_GE(run.fast_retransmits, 2u);
+        }
+        else
+        {
+            EXPECT_GE(gap, 1200u) << run.copies.size() << " copies";
+            EXPECT_EQ(run.fast_retransmits, 0u);
+        }
+    }
 }
 
 }  // namespace

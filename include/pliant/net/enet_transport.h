@@ -29,6 +29,13 @@
 /// acknowledgement of the copy completes the connection within a round trip; until it does,
 /// ENet drops the dialer's data here.
 ///
+/// Lost reliable commands are resent when later ones are acknowledged (`fast_retransmit`): the
+/// intercept also reads the ACKNOWLEDGE commands of each connected peer's datagrams (nothing
+/// else of them), and before each service a command sent before the newest one acknowledged
+/// that has waited that one's round trip plus a quarter of the estimate is made due at once,
+/// instead of at ENet's timer, which doubles at every resend (docs/protocol.md §2, "Lost
+/// reliable commands").
+///
 /// Threading: single-threaded (ENet's FAQ: an ENetHost must not be used from two threads).
 /// Keep calling poll() while waiting: an unserviced host stops acknowledging, and its peers time
 /// it out after `timeout_min_ms`.
@@ -73,6 +80,12 @@ struct EnetSettings
     /// everything"): the session streams newest-wins states and has its own per-peer cap
     /// (SessionSettings::bandwidth_cap_mbit_s). true: ENet's defaults.
     bool throttle_unreliable = false;
+    /// Resend a reliable command as soon as a command sent after it has been acknowledged and
+    /// it has waited that command's round trip plus a reordering allowance (a quarter of the
+    /// round-trip estimate, at least k_reorder_min_ms), as RACK does for TCP (RFC 8985), instead
+    /// of only at ENet's timer: the round-trip estimate plus four deviations (three round trips
+    /// on a young connection), doubled at every resend. false: ENet's timer alone.
+    bool fast_retransmit = true;
 };
 
 /// Counters of the connection-attempt filter since open().
@@ -90,12 +103,18 @@ struct EnetCounters
     /// max_peers_per_source from that address.
     std::uint64_t refused_full = 0;
     std::uint64_t refused_per_source = 0;
+    /// Reliable commands resent before ENet's timer because a later one was acknowledged
+    /// (EnetSettings::fast_retransmit).
+    std::uint64_t fast_retransmits = 0;
 };
 
 /// A half-open connection's VERIFY_CONNECT is resent early on the dialer's answer only if its
 /// last copy went at least this long ago, ms: a dialer sending every frame does not make it
 /// resend every frame, and a copy still on its way is not chased by another.
 inline constexpr std::uint32_t k_verify_hasten_ms = 50;
+
+/// The least reordering allowance of EnetSettings::fast_retransmit, ms.
+inline constexpr std::uint32_t k_reorder_min_ms = 2;
 
 /// The counters of a transport made by make_enet_transport(); nothing for another transport.
 [[nodiscard]] std::optional<EnetCounters> enet_counters(const Transport& transport) noexcept;
