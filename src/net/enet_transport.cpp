@@ -241,10 +241,12 @@ public:
         }
         ENetEvent ev{};
         resend_lost();
+        widen_windows();
         t_servicing = this;
         const int r = enet_host_service(host_, &ev,
                                         timeout_ms < 0 ? 0u : static_cast<enet_uint32>(timeout_ms));
         t_servicing = nullptr;
+        widen_windows();  // ENet resets them on a peer's BANDWIDTH_LIMIT
         reset_half_open();
         if (r <= 0)
             return false;
@@ -333,7 +335,10 @@ public:
     void flush() noexcept override
     {
         if (host_ != nullptr)
+        {
+            widen_windows();
             enet_host_flush(host_);
+        }
     }
 
     // On the socket, to the nanosecond (ENet's own wait, enet_socket_wait, counts whole
@@ -714,6 +719,22 @@ private:
                 ++counters_.fast_retransmits;
             }
         }
+    }
+
+    // Raises every connection's reliable window to reliable_window_bytes. ENet sets it at the
+    // handshake and again on each BANDWIDTH_LIMIT command (which every peer sends to all its
+    // peers whenever one comes or goes), from the hosts' bandwidth limits, at most
+    // ENET_PROTOCOL_MAXIMUM_WINDOW_SIZE; it is read only by ENet's own sender, against the
+    // reliable data in transit (its protocol.c, enet_protocol_check_outgoing_commands), and
+    // travels nowhere. So it is set again before each service and flush and after each service.
+    void widen_windows() noexcept
+    {
+        const enet_uint32 w = settings_.reliable_window_bytes;
+        if (w <= ENET_PROTOCOL_MAXIMUM_WINDOW_SIZE)
+            return;
+        for (auto& [h, c] : connections_)
+            if (c.connected && c.peer != nullptr && c.peer->windowSize < w)
+                c.peer->windowSize = w;
     }
 
     // Resets incoming handshakes that were never acknowledged (spoofed or dead sources), so ENet

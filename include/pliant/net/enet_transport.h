@@ -86,6 +86,14 @@ struct EnetSettings
     /// of only at ENet's timer: the round-trip estimate plus four deviations (three round trips
     /// on a young connection), doubled at every resend. false: ENet's timer alone.
     bool fast_retransmit = true;
+    /// Reliable data a connection may have unacknowledged, bytes. ENet's own window is at most
+    /// 64 KiB (its protocol's largest), which caps a reliable transfer at 64 KiB per round trip:
+    /// 0.3 MB/s at a 200 ms round trip, seconds for a Welcome's model and state at level 6 and
+    /// above. A larger value here raises each connection's window to it (and keeps it there
+    /// when ENet recomputes it, as it does whenever a peer comes or goes); 0 or at most 64 KiB:
+    /// ENet's window. What a session queues for a joiner is bounded too (256 KiB,
+    /// docs/session.md §2), so a larger window than that changes nothing there.
+    std::uint32_t reliable_window_bytes = 256 * 1024;
 };
 
 /// Counters of the connection-attempt filter since open().
