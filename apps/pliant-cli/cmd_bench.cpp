@@ -62,7 +62,7 @@ struct Suite
 };
 
 // Cheapest first, so that a quick run shows results early.
-constexpr std::array<Suite, 10> k_suites{{
+constexpr std::array<Suite, 11> k_suites{{
     {"subdiv", "subdiv", "bench_subdiv",
      "butterfly refinement 6->7..9->10 vs OpenMesh and a STREAM copy"},
     {"net", "net", "bench_net",
@@ -81,6 +81,10 @@ constexpr std::array<Suite, 10> k_suites{{
      "--latency"},
     {"cpu", "session", "pliant_bench_session",
      "all the work of each peer per simulated second against one peer alone, levels 6..8", "--cpu"},
+    {"join", "session", "pliant_bench_session",
+     "4 peers joining over ENet through a lossy 100 ms relay: ENet's timers against the "
+     "transport's",
+     "--join"},
     {"render", "render", "bench_render",
      "fps at 1280x720, texture path vs vertex buffers (offscreen OpenGL)"},
     {"remesh", "remesh", "bench_remesh", "PSNR and seconds per phase per mesh and level"},

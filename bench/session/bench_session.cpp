@@ -16,6 +16,9 @@
 //   6 7 8)
 //   pliant_bench_session --cpu [levels...]   (all the work of each peer per simulated second
 //   against one peer alone, on a 0.5 ms LAN; default levels 6 7 8)
+//   pliant_bench_session --join [levels...] [--loss P] [--runs N]   (how long a master, two
+//   participants and a viewer take to join over ENet through an impairing relay, with ENet's
+//   own retransmission and window and with the transport's; default levels 5 6)
 //   --help prints the usage (k_usage); an unknown option or a level out of range exits 2.
 // --json/--csv rows (bench/common/bench_report.h), sized by the number of peers (1..4): per
 // coupling ("exact", "fast", "fast 1 kHz") the step seconds per simulated second of the busiest
@@ -35,6 +38,7 @@
 
 #include "bench_report.h"
 #include "grid_shapes.h"
+#include "impair_relay.h"
 
 #include <algorithm>
 #include <array>
@@ -75,6 +79,7 @@ constexpr const char* k_usage =
     "       pliant_bench_session --steps [levels...] [--copy-accept] [--random-points N]\n"
     "       pliant_bench_session --latency [levels...] [--enet]\n"
     "       pliant_bench_session --cpu [levels...]\n"
+    "       pliant_bench_session --join [levels...] [--loss P] [--runs N]\n"
     "Session numbers for docs/session.md: all peers in one thread over a simulated network (5 ms\n"
     "one-way latency), one thread per peer.\n"
     "  levels...    grid levels 1..10 (--coarse: 3..10). Without a mode, per level and peer count\n"
@@ -108,6 +113,15 @@ constexpr const char* k_usage =
     "               second in the steady state, against one peer alone in its session, 1..4\n"
     "               participants, exact and fast coupling, on a 0.5 ms LAN, best of 3 runs\n"
     "               (default levels 6 7 8; --quick: level 6, one run)\n"
+    "  --join       a master, two participants and a viewer join at once over ENet on\n"
+    "               127.0.0.1 through a relay that delays each datagram 100-120 ms each way,\n"
+    "               duplicates 1 %, holds 2 % back 20 ms and loses --loss; when the joiners hold\n"
+    "               the model, when all are partitioned, when the full mesh is up (median and\n"
+    "               worst), with ENet's own retransmission timer and 64 KiB window, with the\n"
+    "               transport's fast retransmit, and with its 256 KiB window too (runs\n"
+    "               alternate; default levels 5 6; --quick: 5, 3 runs)\n"
+    "  --loss P     with --join: the probability a datagram is lost, 0..0.5 (default 0.1)\n"
+    "  --runs N     with --join: joins per level and configuration, 1..1000 (default 10)\n"
     "  --seconds S  seconds measured by --stream and --coarse after 0.5 s of warm-up,\n"
     "               > 0 and <= 3600 (default 2)\n"
     "  --quick      short runs: the default suite at levels 5 6, --steps and --latency at 6\n"
@@ -121,6 +135,10 @@ constexpr int k_coarsest = 2;
 constexpr int k_max_random_layouts = 1000;
 /// The longest --seconds: an hour of simulated streaming.
 constexpr double k_max_seconds = 3600.0;
+/// The most --runs of --join.
+constexpr int k_max_join_runs = 1000;
+/// A --join run that has not meshed by then is counted as not meshed, s.
+constexpr double k_join_limit_s = 20.0;
 
 sim::MembraneSettings material()
 {
@@ -1557,6 +1575,212 @@ bool latency_suite(bench::Report& report, const std::vector<int>& levels, bool e
     return all_seen;
 }
 
+// How long a join through the impairing relay took, s from the joiners' first dial; -1: not
+// within k_join_limit_s.
+struct JoinTimes
+{
+    bool opened = false;
+    double ready = -1.0;        // the last joiner holds the model
+    double partitioned = -1.0;  // every peer holds the master's newest partition, which seats
+                                // both participants
+    double meshed = -1.0;       // and every pair is connected, every simulating peer's leaf states
+                                // arriving at every other peer (the impaired test's `meshed`)
+    std::uint64_t fast_retransmits = 0;
+};
+
+// A master, two participants (points a third of the faces apart) and a viewer on ENet, each
+// behind its own port of one relay (tests/session/impair_relay.h, as the impaired test), fast
+// coupling at 4 ms steps, all pumped in this thread with the wall clock.
+JoinTimes run_join(int level, double loss, std::uint64_t seed, const net::EnetSettings& es)
+{
+    constexpr std::size_t k_simulating = 3;
+    JoinTimes out;
+    std::vector<std::unique_ptr<net::Transport>> transports;
+    pliant::test::ImpairSettings impair;
+    impair.loss = loss;
+    impair.seed = seed;
+    pliant::test::ImpairRelay relay(impair);
+    std::vector<std::uint16_t> relay_port;
+    for (std::size_t k = 0; k <= k_simulating; ++k)
+    {
+        transports.push_back(net::make_enet_transport(es));
+        const auto a = transports.back()->open(net::Address{{127, 0, 0, 1}, 0});
+        if (!a)
+            return out;
+        relay_port.push_back(relay.add_target(a->port));
+        if (relay_port.back() == 0)
+            return out;
+    }
+    if (!relay.start())
+        return out;
+    out.opened = true;
+    const core::TetraGrid grid = core::TetraGrid::create(level).value();
+    const auto faces = static_cast<std::uint32_t>(grid.face_count());
+    sim::MembraneSettings m = material();
+    m.fixed_dt = 4e-3;
+    session::SessionSettings set;
+    set.coupling = session::Coupling::Fast;
+    set.listen_port = relay_port[0];
+    std::vector<std::unique_ptr<session::Session>> peers;
+    peers.push_back(
+        session::Session::host(*transports[0], grid, scenes::sphere_grid(grid, 1.0), m, set)
+            .value());
+    const net::Address master{{127, 0, 0, 1}, relay_port[0]};
+    for (std::size_t k = 1; k <= k_simulating; ++k)
+    {
+        const bool viewer = k == k_simulating;
+        set.listen_port = relay_port[k];
+        peers.push_back(session::Session::join(*transports[k], master,
+                                               viewer ? net::Role::Viewer : net::Role::Participant,
+                                               set)
+                            .value());
+        if (!viewer)
+            peers.back()->set_points_of_interest(
+                {net::Target{net::TargetKind::Face,
+                             static_cast<std::uint32_t>(k) * faces / 3U,
+                             {0, 0, 0},
+                             0.0}});
+    }
+    const auto t0 = std::chrono::steady_clock::now();
+    auto elapsed = [&]
+    { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
+    auto partitioned = [&]
+    {
+        const auto owners = peers[0]->owners();
+        for (std::size_t k = 1; k < peers.size(); ++k)
+            if (!peers[k]->ready() || peers[k]->epoch() != peers[0]->epoch() ||
+                (k < k_simulating &&
+                 std::find(owners.begin(), owners.end(), peers[k]->id()) == owners.end()))
+                return false;
+        return true;
+    };
+    auto meshed = [&]
+    {
+        for (std::size_t k = 0; k < peers.size(); ++k)
+            for (std::size_t j = 0; j < peers.size(); ++j)
+            {
+                if (j == k)
+                    continue;
+                bool ok = false;
+                for (const session::PeerStatus& o : peers[k]->peer_status())
+                    if (o.id == peers[j]->id())
+                        ok = o.connected && (j >= k_simulating || o.streams_to_us);
+                if (!ok)
+                    return false;
+            }
+        return true;
+    };
+    for (int it = 0; it < 50'000'000 && out.meshed < 0.0; ++it)
+    {
+        const double now = elapsed();
+        if (now > k_join_limit_s)
+            break;
+        for (auto& p : peers)
+            p->poll();
+        for (auto& p : peers)
+            p->advance(now);
+        if (out.ready < 0.0 &&
+            std::all_of(peers.begin() + 1, peers.end(), [](const auto& p) { return p->ready(); }))
+            out.ready = now;
+        if (out.partitioned < 0.0 && partitioned())
+            out.partitioned = now;
+        if (out.partitioned >= 0.0 && meshed())
+            out.meshed = now;
+    }
+    for (const auto& t : transports)
+        out.fast_retransmits += net::enet_counters(*t).value().fast_retransmits;
+    return out;
+}
+
+bool join_suite(bench::Report& report, const std::vector<int>& levels, double loss, int runs)
+{
+    struct Config
+    {
+        const char* name;
+        bool fast_retransmit;
+        std::uint32_t window;
+    };
+    const std::array<Config, 3> configs{{{"ENet alone", false, 0},
+                                         {"fast retransmit", true, 0},
+                                         {"fast retransmit + 256 KiB window", true, 256 * 1024}}};
+    report.meta("network",
+                "ENet on 127.0.0.1 through tests/session/impair_relay.h: 100 ms + 0-20 ms each "
+                "way, 1 % duplicated, 2 % held back 20 ms");
+    std::printf(
+        "# a master, 2 participants and a viewer join at once through the relay, %.0f %% loss; "
+        "runs per row: %d, alternating; seconds from the first dial, median / worst\n",
+        loss * 100.0, runs);
+    std::printf(
+        "level configuration                    | joiners hold the model | all partitioned | "
+        "full mesh     | not meshed | fast resends per run\n");
+    bool all_meshed = true;
+    for (const int level : levels)
+    {
+        std::array<std::vector<double>, 3> ready, parted, meshed;
+        std::array<int, 3> missed{};
+        std::array<std::uint64_t, 3> resent{};
+        for (int run = 0; run < runs; ++run)
+            for (std::size_t c = 0; c < configs.size(); ++c)
+            {
+                net::EnetSettings es;
+                es.connect_rate_per_source = 0.0;  // every peer reaches the others from 127.0.0.1
+                es.connect_rate_total = 0.0;
+                es.fast_retransmit = configs[c].fast_retransmit;
+                es.reliable_window_bytes = configs[c].window;
+                const JoinTimes t =
+                    run_join(level, loss, 1000 + static_cast<std::uint64_t>(run), es);
+                if (!t.opened)
+                {
+                    std::fprintf(stderr,
+                                 "pliant_bench_session: cannot bind UDP sockets on 127.0.0.1\n");
+                    return false;
+                }
+                resent[c] += t.fast_retransmits;
+                if (t.meshed < 0.0)
+                {
+                    ++missed[c];
+                    continue;
+                }
+                ready[c].push_back(t.ready);
+                parted[c].push_back(t.partitioned);
+                meshed[c].push_back(t.meshed);
+            }
+        for (std::size_t c = 0; c < configs.size(); ++c)
+        {
+            auto median = [](std::vector<double> v)
+            {
+                if (v.empty())
+                    return -1.0;
+                std::sort(v.begin(), v.end());
+                const std::size_t n = v.size();
+                return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+            };
+            auto worst = [](const std::vector<double>& v)
+            { return v.empty() ? -1.0 : *std::max_element(v.begin(), v.end()); };
+            all_meshed = all_meshed && missed[c] == 0;
+            const double per_run = static_cast<double>(resent[c]) / runs;
+            std::printf(
+                "%5d %-32s | %8.2f / %5.2f | %6.2f / %5.2f | %5.2f / %5.2f | %10d | %8.0f\n", level,
+                configs[c].name, median(ready[c]), worst(ready[c]), median(parted[c]),
+                worst(parted[c]), median(meshed[c]), worst(meshed[c]), missed[c], per_run);
+            std::fflush(stdout);
+            const std::string name = std::string("join: ") + configs[c].name;
+            report.add(name, level, loss * 100.0, "% loss", "full_mesh_median_s", median(meshed[c]),
+                       "s");
+            report.add(name, level, loss * 100.0, "% loss", "full_mesh_worst_s", worst(meshed[c]),
+                       "s");
+            report.add(name, level, loss * 100.0, "% loss", "model_held_median_s", median(ready[c]),
+                       "s");
+            report.add(name, level, loss * 100.0, "% loss", "not_meshed", missed[c], "runs");
+        }
+    }
+    if (!all_meshed)
+        std::fprintf(stderr,
+                     "pliant_bench_session: a join did not reach its full mesh within %.0f s\n",
+                     k_join_limit_s);
+    return all_meshed;
+}
+
 }  // namespace
 
 int main(int argc, char** argv)
@@ -1572,7 +1796,8 @@ int main(int argc, char** argv)
         Coarse,
         Steps,
         Latency,
-        Cpu
+        Cpu,
+        Join
     };
     Mode mode = Mode::Sessions;
     const char* mode_option = nullptr;
@@ -1581,6 +1806,8 @@ int main(int argc, char** argv)
     bool enet = false;
     bool copy_accept = false;
     const char* random_arg = nullptr;
+    const char* loss_arg = nullptr;
+    const char* runs_arg = nullptr;
     for (int k = 1; k < argc; ++k)
     {
         const std::string a = argv[k];
@@ -1589,6 +1816,7 @@ int main(int argc, char** argv)
                        : a == "--steps"   ? Mode::Steps
                        : a == "--latency" ? Mode::Latency
                        : a == "--cpu"     ? Mode::Cpu
+                       : a == "--join"    ? Mode::Join
                                           : Mode::Sessions;
         if (m != Mode::Sessions)
         {
@@ -1607,6 +1835,13 @@ int main(int argc, char** argv)
             if (k + 1 >= argc)
                 return usage.error("--random-points needs a number of layouts");
             random_arg = argv[++k];
+        }
+        else if (a == "--loss" || a == "--runs")
+        {
+            if (k + 1 >= argc)
+                return usage.error(a +
+                                   (a == "--loss" ? " needs a probability" : " needs a number"));
+            (a == "--loss" ? loss_arg : runs_arg) = argv[++k];
         }
         else if (a == "--seconds")
         {
@@ -1658,6 +1893,38 @@ int main(int argc, char** argv)
         if (!seconds)
             return 2;
         stream_seconds = *seconds;
+    }
+    double join_loss = 0.1;
+    int join_runs = 0;
+    if (loss_arg != nullptr || runs_arg != nullptr)
+    {
+        if (mode != Mode::Join)
+            return usage.error(std::string(loss_arg != nullptr ? "--loss" : "--runs") +
+                               " applies to --join only");
+        if (loss_arg != nullptr)
+        {
+            const auto loss = usage.number_in("--loss", loss_arg, 0.0, 0.5);
+            if (!loss)
+                return 2;
+            join_loss = *loss;
+        }
+        if (runs_arg != nullptr)
+        {
+            const auto runs = usage.int_in("--runs", runs_arg, 1, k_max_join_runs);
+            if (!runs)
+                return 2;
+            join_runs = *runs;
+        }
+    }
+    if (mode == Mode::Join)
+    {
+        if (levels.empty())
+            levels = report.quick() ? std::vector<int>{5} : std::vector<int>{5, 6};
+        if (join_runs == 0)
+            join_runs = report.quick() ? 3 : 10;
+        report.set_suite("join");
+        const bool meshed = join_suite(report, levels, join_loss, join_runs);
+        return report.write() && meshed ? 0 : 1;
     }
     if (mode == Mode::Steps)
     {

@@ -37,6 +37,19 @@ if(PLIANT_BUILD_BENCH AND EXISTS ${PROJECT_SOURCE_DIR}/bench/CMakeLists.txt)
                           "\n +0\\.0 +4 +4 +fast \\| +[0-9.]+ / +[0-9.]+ \\|" --latency 4
                           --enet)
         set_tests_properties(bench_session_latency_enet_level_4 PROPERTIES TIMEOUT 120)
+        # Joins through the impairing relay at level 4 without loss (about 3 s): every
+        # configuration's run reaches its full mesh (the program exits 1 otherwise), the last
+        # row closes the table.
+        pliant_bench_args(bench_session_join_level_4 pliant_bench_session 0 STDOUT
+                          "\n +4 fast retransmit \\+ 256 KiB window +\\| +[0-9.]+ / +[0-9.]+ \\|.* 0 \\| +[0-9]+\n$"
+                          --join 4 --loss 0 --runs 1)
+        set_tests_properties(bench_session_join_level_4 PROPERTIES TIMEOUT 120)
+        pliant_bench_args(bench_args_session_loss_without_join pliant_bench_session 2
+                          STDERR "^pliant_bench_session: --loss applies to --join only\nusage: "
+                          --latency 4 --loss 0.1)
+        pliant_bench_args(bench_args_session_loss_out_of_range pliant_bench_session 2
+                          STDERR "^pliant_bench_session: --loss '0\\.9' is not a number >= 0 and <= 0\\.5"
+                          --join 4 --loss 0.9)
         pliant_bench_args(bench_args_session_copy_accept_without_steps pliant_bench_session 2
                           STDERR "^pliant_bench_session: --copy-accept applies to --steps only\nusage: "
                           --latency 4 --copy-accept)
