@@ -38,7 +38,7 @@
 
 #include "bench_report.h"
 #include "grid_shapes.h"
-#include "impair_relay.h"
+#include "relay_session.h"
 
 #include <algorithm>
 #include <array>
@@ -1588,106 +1588,43 @@ struct JoinTimes
     std::uint64_t fast_retransmits = 0;
 };
 
-// A master, two participants (points a third of the faces apart) and a viewer on ENet, each
-// behind its own port of one relay (tests/session/impair_relay.h, as the impaired test), fast
-// coupling at 4 ms steps, all pumped in this thread with the wall clock.
+// A master, two participants and a viewer on ENet, every datagram through the impairing relay
+// (tests/session/relay_session.h, as the impaired test), fast coupling at 4 ms steps, all pumped
+// in this thread with the wall clock.
 JoinTimes run_join(int level, double loss, std::uint64_t seed, const net::EnetSettings& es)
 {
-    constexpr std::size_t k_simulating = 3;
     JoinTimes out;
-    std::vector<std::unique_ptr<net::Transport>> transports;
-    pliant::test::ImpairSettings impair;
-    impair.loss = loss;
-    impair.seed = seed;
-    pliant::test::ImpairRelay relay(impair);
-    std::vector<std::uint16_t> relay_port;
-    for (std::size_t k = 0; k <= k_simulating; ++k)
-    {
-        transports.push_back(net::make_enet_transport(es));
-        const auto a = transports.back()->open(net::Address{{127, 0, 0, 1}, 0});
-        if (!a)
-            return out;
-        relay_port.push_back(relay.add_target(a->port));
-        if (relay_port.back() == 0)
-            return out;
-    }
-    if (!relay.start())
-        return out;
-    out.opened = true;
+    pliant::test::RelaySession rs;
+    rs.impair.loss = loss;
+    rs.impair.seed = seed;
+    rs.enet = es;
     const core::TetraGrid grid = core::TetraGrid::create(level).value();
-    const auto faces = static_cast<std::uint32_t>(grid.face_count());
     sim::MembraneSettings m = material();
     m.fixed_dt = 4e-3;
-    session::SessionSettings set;
-    set.coupling = session::Coupling::Fast;
-    set.listen_port = relay_port[0];
-    std::vector<std::unique_ptr<session::Session>> peers;
-    peers.push_back(
-        session::Session::host(*transports[0], grid, scenes::sphere_grid(grid, 1.0), m, set)
-            .value());
-    const net::Address master{{127, 0, 0, 1}, relay_port[0]};
-    for (std::size_t k = 1; k <= k_simulating; ++k)
-    {
-        const bool viewer = k == k_simulating;
-        set.listen_port = relay_port[k];
-        peers.push_back(session::Session::join(*transports[k], master,
-                                               viewer ? net::Role::Viewer : net::Role::Participant,
-                                               set)
-                            .value());
-        if (!viewer)
-            peers.back()->set_points_of_interest(
-                {net::Target{net::TargetKind::Face,
-                             static_cast<std::uint32_t>(k) * faces / 3U,
-                             {0, 0, 0},
-                             0.0}});
-    }
+    if (!rs.start(grid, m))
+        return out;
+    out.opened = true;
     const auto t0 = std::chrono::steady_clock::now();
     auto elapsed = [&]
     { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
-    auto partitioned = [&]
-    {
-        const auto owners = peers[0]->owners();
-        for (std::size_t k = 1; k < peers.size(); ++k)
-            if (!peers[k]->ready() || peers[k]->epoch() != peers[0]->epoch() ||
-                (k < k_simulating &&
-                 std::find(owners.begin(), owners.end(), peers[k]->id()) == owners.end()))
-                return false;
-        return true;
-    };
-    auto meshed = [&]
-    {
-        for (std::size_t k = 0; k < peers.size(); ++k)
-            for (std::size_t j = 0; j < peers.size(); ++j)
-            {
-                if (j == k)
-                    continue;
-                bool ok = false;
-                for (const session::PeerStatus& o : peers[k]->peer_status())
-                    if (o.id == peers[j]->id())
-                        ok = o.connected && (j >= k_simulating || o.streams_to_us);
-                if (!ok)
-                    return false;
-            }
-        return true;
-    };
     for (int it = 0; it < 50'000'000 && out.meshed < 0.0; ++it)
     {
         const double now = elapsed();
         if (now > k_join_limit_s)
             break;
-        for (auto& p : peers)
+        for (auto& p : rs.peers)
             p->poll();
-        for (auto& p : peers)
+        for (auto& p : rs.peers)
             p->advance(now);
-        if (out.ready < 0.0 &&
-            std::all_of(peers.begin() + 1, peers.end(), [](const auto& p) { return p->ready(); }))
+        if (out.ready < 0.0 && std::all_of(rs.peers.begin() + 1, rs.peers.end(),
+                                           [](const auto& p) { return p->ready(); }))
             out.ready = now;
-        if (out.partitioned < 0.0 && partitioned())
+        if (out.partitioned < 0.0 && rs.partitioned())
             out.partitioned = now;
-        if (out.partitioned >= 0.0 && meshed())
+        if (out.partitioned >= 0.0 && rs.meshed())
             out.meshed = now;
     }
-    for (const auto& t : transports)
+    for (const auto& t : rs.transports)
         out.fast_retransmits += net::enet_counters(*t).value().fast_retransmits;
     return out;
 }
@@ -1723,8 +1660,6 @@ bool join_suite(bench::Report& report, const std::vector<int>& levels, double lo
             for (std::size_t c = 0; c < configs.size(); ++c)
             {
                 net::EnetSettings es;
-                es.connect_rate_per_source = 0.0;  // every peer reaches the others from 127.0.0.1
-                es.connect_rate_total = 0.0;
                 es.fast_retransmit = configs[c].fast_retransmit;
                 es.reliable_window_bytes = configs[c].window;
                 const JoinTimes t =
