@@ -765,6 +765,88 @@ TEST(EnetTransport, AReliableCommandLostRepeatedlyIsResentOnLaterAcknowledgement
     }
 }
 
+// The transport reads the ACKNOWLEDGE commands of every datagram from a connected peer's address
+// before ENet does (fast_retransmit). Mangled copies of the dialer's real datagrams (its peer id
+// and session bits kept, so they pass as its own; random bytes laid out as commands, below, up to
+// 1,400 bytes) reach the acceptor, 16 per real datagram once 20 messages have gone through (both
+// sides connected), 2,048 in all. The reading must stay within each datagram whatever its
+// commands claim (AddressSanitizer in the sanitizer build), and the acceptor must go on polling.
+// ENet takes the mangled bytes too, and may take a forged acknowledgement for a real command
+// (the channel then stalls), so only the reading is checked, and that the connection was up for
+// it: a smoke test of hostile bytes, as the decoder's fuzz target is for pliant's own.
+TEST(EnetTransport, MangledDatagramsFromAConnectedPeerAreReadSafely)
+{
+    HandshakeRelay r;
+    if (!r.ok)
+        GTEST_SKIP() << "cannot bind UDP on 127.0.0.1";
+    std::uint32_t x = 2026;
+    auto next = [&x] { return (x = x * 1664525u + 1013904223u) >> 8; };
+    int mangled = 0;
+    bool connected = false;
+    std::size_t received = 0;  // 20 first: both sides connected, acknowledgements flowing
+    std::vector<std::uint8_t> copy(1400);
+    r.drop_forward = [&](std::span<const std::uint8_t> b)
+    {
+        for (int k = 0; k < 16 && received >= 20 && mangled < 2048 && b.size() >= 2; ++k, ++mangled)
+        {
+            const std::size_t head = (b[0] & 0x80) != 0 ? 4 : 2;
+            const std::size_t n = head + 24 + next() % (copy.size() - head - 24);
+            copy[0] = b[0];
+            copy[1] = b[1];
+            for (std::size_t i = 2; i < n; ++i)
+                copy[i] = static_cast<std::uint8_t>(next());
+            // Laid out as commands that look right to the end: acknowledgements, and data
+            // commands whose lengths lie, on channels the peer does not have (ENet stops
+            // reading the datagram at the first of those, the transport's reading goes on);
+            // never a DISCONNECT, which would end the connection and the reading with it.
+            constexpr std::array<std::uint8_t, 5> numbers{1, 6, 7, 8, 9};
+            constexpr std::array<std::size_t, 10> sizes{0, 8, 0, 0, 0, 0, 6, 8, 24, 8};
+            for (std::size_t at = head; at + 24 <= n;)
+            {
+                const std::uint8_t number = numbers[next() % numbers.size()];
+                copy[at] = static_cast<std::uint8_t>(number | (next() & 0xC0));
+                copy[at + 1] = number == 1 ? static_cast<std::uint8_t>(next())
+                                           : static_cast<std::uint8_t>(2 + next() % 250);
+                at += sizes[number] + (number == 1 ? 0 : next() % 64);
+                if (at + 24 > n && at + 6 <= n)
+                {
+                    copy[at] = 6;  // the rest behind a command ENet stops at
+                    copy[at + 1] = 7;
+                }
+            }
+            r.send(true, copy.data(), n);
+        }
+        return false;
+    };
+    const PeerHandle h = r.dialer->connect(r.front_address).value();
+    int sent = 0;
+    bool closed = false;
+    const auto end = Clock::now() + std::chrono::seconds(3);
+    while (Clock::now() < end && (mangled < 2048 || sent < 300))
+    {
+        r.pump();
+        while (auto e = r.dialer->poll(0))
+            connected = connected || (e->kind == TransportEvent::Kind::Connected && e->peer == h);
+        if (connected && sent < 300)
+        {
+            (void)r.dialer->send(h, Channel::Control, numbered(static_cast<std::uint32_t>(sent++)),
+                                 Delivery::Reliable);
+            r.dialer->flush();
+        }
+        while (auto e = r.acceptor->poll(1))
+        {
+            received += e->kind == TransportEvent::Kind::Received ? 1 : 0;
+            closed = closed || e->kind == TransportEvent::Kind::Disconnected;
+        }
+    }
+    EXPECT_TRUE(connected);
+    EXPECT_GE(received, 20u);
+    EXPECT_FALSE(closed) << "a mangled datagram closed the connection: the rest were not read";
+    EXPECT_EQ(mangled, 2048) << "the relay saw too few of the dialer's datagrams";
+    std::printf("%d mangled datagrams; %d messages sent, %zu received; the connection %s\n",
+                mangled, sent, received, closed ? "closed" : "stayed");
+}
+
 // Hands ENet 20 reliable messages of 32 KiB at once, to a peer 100 ms away each way, and
 // returns the datagram bytes the relay saw from the sender within 100 ms of the first large
 // one: no acknowledgement can be back by then, so that is what the reliable window let out
